@@ -1,0 +1,82 @@
+#pragma once
+/// Obstacles as signed distance fields with a rigid, possibly keyframed, transform.
+///
+/// phi(p) < 0 inside the obstacle, > 0 outside, |grad phi| = 1 near the surface. Because the
+/// field is 1-Lipschitz, a point at distance d cannot reach the surface by moving less than d:
+/// the solver uses that as conservative continuous collision detection.
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <memory>
+#include <vector>
+
+namespace papersim::collision {
+
+/// Axis-aligned box in world space [m].
+struct Aabb {
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300);
+  Eigen::Vector3d hi = Eigen::Vector3d::Constant(-1e300);
+  void extend(const Eigen::Vector3d& p) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  /// Distance between two boxes (0 when they overlap) [m].
+  double distance_to(const Aabb& other) const;
+};
+
+/// A rigid pose at a time: world point = rotation * local point + translation.
+struct Keyframe {
+  double time = 0.0;                                        ///< [s]
+  Eigen::Vector3d translation = Eigen::Vector3d::Zero();   ///< [m]
+  Eigen::Quaterniond rotation = Eigen::Quaterniond::Identity();
+};
+
+/// Piecewise-linear rigid motion: translation interpolated linearly, rotation by slerp; held
+/// constant before the first and after the last keyframe. One keyframe = a fixed pose.
+class RigidMotion {
+ public:
+  RigidMotion() = default;
+  /// @throw std::invalid_argument when keyframe times are not increasing.
+  explicit RigidMotion(std::vector<Keyframe> keyframes);
+  Eigen::Isometry3d pose(double t) const;
+  const std::vector<Keyframe>& keyframes() const { return m_keyframes; }
+
+ private:
+  std::vector<Keyframe> m_keyframes;
+};
+
+/// An obstacle: a signed distance field in its local frame, a motion and a friction coefficient.
+class Collider {
+ public:
+  virtual ~Collider() = default;
+
+  /// Signed distance [m] of world point p at time t [s]; writes the unit outward gradient when
+  /// `gradient` is not null. Thread-safe.
+  double distance(const Eigen::Vector3d& p, double t, Eigen::Vector3d* gradient = nullptr) const;
+
+  /// World bounding box of the obstacle's surface at time t.
+  Aabb bounds(double t) const;
+
+  /// Velocity of the obstacle's material point that is at world point p at time t [m/s].
+  Eigen::Vector3d velocity(const Eigen::Vector3d& p, double t) const;
+
+  double friction = 0.3;  ///< Coulomb coefficient sheet-obstacle [-]
+  RigidMotion motion;     ///< world pose over time
+
+ protected:
+  /// Signed distance in the local frame; gradient (unit, local frame) when not null.
+  virtual double local_distance(const Eigen::Vector3d& p, Eigen::Vector3d* gradient) const = 0;
+  /// Local bounding box of the surface.
+  virtual Aabb local_bounds() const = 0;
+};
+
+/// The plane z = 0 of the local frame (normal +z, solid below). Analytic: no grid.
+class PlaneCollider : public Collider {
+ protected:
+  double local_distance(const Eigen::Vector3d& p, Eigen::Vector3d* gradient) const override;
+  Aabb local_bounds() const override;
+
+ public:
+  double half_size = 1e3;  ///< half extent in x and y of the bounding box [m]
+};
+
+}  // namespace papersim::collision

@@ -1,0 +1,31 @@
+#pragma once
+/// Errors of the remesh module: typed exceptions for bad input and I/O, and an invariant check.
+#include <stdexcept>
+#include <string>
+
+namespace papersim::remesh {
+
+/// A mesh that breaks a requirement (NaN, non-manifold edge, degenerate face, missing data).
+struct MeshError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+/// A file that cannot be opened, read or written.
+struct IoError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+}  // namespace papersim::remesh
+
+#if defined(PAPERSIM_ENABLE_ASSERTS)
+#define PAPERSIM_ASSERT(cond, msg)                                                      \
+  do {                                                                                  \
+    if (!(cond))                                                                        \
+      throw std::logic_error(std::string("papersim invariant failed: ") + #cond + " (" + \
+                             (msg) + ") at " + __FILE__ + ":" + std::to_string(__LINE__)); \
+  } while (0)
+#else
+#define PAPERSIM_ASSERT(cond, msg) \
+  do {                             \
+  } while (0)
+#endif

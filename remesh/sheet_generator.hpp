@@ -1,0 +1,33 @@
+#pragma once
+/// Rectangular sheets with no preferred grain.
+#include <cstdint>
+
+#include "remesh/sheet_mesh.hpp"
+
+namespace papersim::remesh {
+
+enum class Triangulation {
+  alternating,  ///< diagonals alternate in a checkerboard ("union jack" per 2x2 block)
+  random,       ///< each cell's diagonal drawn from the seed
+  regular,      ///< every diagonal the same way (has a grain; for tests only)
+};
+
+/// Options of make_rectangle.
+struct RectangleOptions {
+  double width = 0.210;   ///< [m] along material x
+  double height = 0.297;  ///< [m] along material y
+  int nx = 21;            ///< vertices along x (>= 2)
+  int ny = 30;            ///< vertices along y (>= 2)
+  Triangulation triangulation = Triangulation::alternating;
+  std::uint64_t seed = 0;  ///< for Triangulation::random
+  double jitter = 0.0;     ///< interior vertices moved by up to jitter x spacing [-], in [0, 0.4]
+};
+
+/// A rectangle [0, width] x [0, height] in material coordinates.
+/// @throw MeshError when an option is out of range.
+SheetMesh make_rectangle(const RectangleOptions& options);
+
+/// Vertex counts (nx, ny) for a target edge length [m] on a width x height sheet.
+Eigen::Vector2i grid_for_edge_length(double width, double height, double edge_length);
+
+}  // namespace papersim::remesh
