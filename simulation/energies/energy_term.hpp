@@ -1,0 +1,48 @@
+#pragma once
+/// The common interface of every term of the incremental potential
+/// (inertia, gravity, damping, stretching, strain limit, bending, handles, contact, friction).
+///
+/// Positions are a flat vector x of size 3N (vertex v at x[3v..3v+2]) [m]. Each term evaluates
+/// its elements on fixed-size Eigen types and adds PSD element Hessians to the assembler.
+#include <Eigen/Core>
+#include <limits>
+#include <string>
+
+#include "simulation/sparse_matrix.hpp"
+
+namespace papersim::simulation {
+
+/// What a term may need to know about the step being solved.
+struct StepContext {
+  double time_t0 = 0.0;  ///< start of the step [s]
+  double h = 1e-3;       ///< step length [s]
+  const Eigen::VectorXd* x_t0 = nullptr;  ///< positions at the step start (3N) [m]
+  const Eigen::VectorXd* v_t0 = nullptr;  ///< velocities at the step start (3N) [m/s]
+  double time_t1() const { return time_t0 + h; }
+};
+
+class EnergyTerm {
+ public:
+  virtual ~EnergyTerm() = default;
+  /// Short name for statistics ("stretch", "bend", ...).
+  virtual std::string name() const = 0;
+  /// Declares every element's vertices so the Hessian pattern can be built.
+  virtual void add_pattern(SparsityBuilder& pattern) const = 0;
+  /// Called once at the start of each time step (lagged quantities, active sets).
+  virtual void begin_step(const StepContext& /*ctx*/, const Eigen::VectorXd& /*x_t0*/) {}
+  /// Value [J]; +infinity when x is infeasible for this term.
+  virtual double value(const Eigen::VectorXd& x) const = 0;
+  /// Adds the gradient [J/m] to `gradient` and, when `hessian` is not null, PSD element
+  /// Hessians [J/m^2].
+  virtual void add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd& gradient,
+                               BlockSymmetricMatrix* hessian) const = 0;
+  /// Largest alpha in (0, 1] such that x + a dx stays feasible for all a in [0, alpha]
+  /// (continuous collision detection). Default: no constraint.
+  virtual double max_step(const Eigen::VectorXd& /*x*/, const Eigen::VectorXd& /*dx*/) const {
+    return 1.0;
+  }
+};
+
+constexpr double INF = std::numeric_limits<double>::infinity();
+
+}  // namespace papersim::simulation

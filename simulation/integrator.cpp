@@ -1,0 +1,167 @@
+#include "simulation/integrator.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <sstream>
+
+#include "simulation/errors.hpp"
+
+namespace papersim::simulation {
+
+namespace {
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+double max_vertex_norm(const Eigen::VectorXd& d) {
+  double m = 0;
+  for (int v = 0; v < d.size() / 3; ++v) m = std::max(m, d.segment<3>(3 * v).squaredNorm());
+  return std::sqrt(m);
+}
+
+}  // namespace
+
+Eigen::MatrixX3d SheetState::positions_matrix() const {
+  return Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(
+      positions.data(), num_vertices(), 3);
+}
+
+Eigen::MatrixX3d SheetState::velocities_matrix() const {
+  return Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(
+      velocities.data(), num_vertices(), 3);
+}
+
+Eigen::VectorXd flatten(const Eigen::MatrixX3d& m) {
+  Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor> r = m;
+  return Eigen::Map<const Eigen::VectorXd>(r.data(), r.size());
+}
+
+Integrator::Integrator(int num_vertices, std::vector<std::unique_ptr<EnergyTerm>> terms,
+                       const NewtonParams& params)
+    : m_terms(std::move(terms)), m_params(params) {
+  SparsityBuilder pattern(num_vertices);
+  for (const auto& t : m_terms) t->add_pattern(pattern);
+  m_hessian = BlockSymmetricMatrix(pattern.finish());
+}
+
+EnergyTerm* Integrator::find(const std::string& name) const {
+  for (const auto& t : m_terms)
+    if (t->name() == name) return t.get();
+  return nullptr;
+}
+
+double Integrator::energy(const Eigen::VectorXd& x) const {
+  double e = 0;
+  for (const auto& t : m_terms) {
+    e += t->value(x);
+    if (!std::isfinite(e)) return INF;
+  }
+  return e;
+}
+
+NewtonResult Integrator::solve(const StepContext& ctx, Eigen::VectorXd& x, StepStats& stats) {
+  NewtonResult r;
+  Eigen::VectorXd g(x.size());
+  double e = energy(x);
+  if (!std::isfinite(e)) {
+    r.failure = "the start of the step is infeasible";
+    return r;
+  }
+  for (r.iterations = 1; r.iterations <= m_params.max_iterations; ++r.iterations) {
+    auto t0 = std::chrono::steady_clock::now();
+    g.setZero();
+    m_hessian.set_zero();
+    for (const auto& t : m_terms) t->add_derivatives(x, g, &m_hessian);
+    stats.seconds_assembly += seconds_since(t0);
+    t0 = std::chrono::steady_clock::now();
+    // Element Hessians are PSD and inertia makes the sum definite; a tiny shift covers
+    // round-off in the static limit (no inertia, e.g. huge h).
+    double shift = 0;
+    while (!m_solver.factorize(m_hessian, m_pattern_id)) {
+      const double next = shift == 0 ? 1e-10 : 10 * shift;
+      m_hessian.add_diagonal(Eigen::VectorXd::Constant(x.size(), next - shift));
+      shift = next;
+      if (shift > 1e3) throw NumericError("newton: the Hessian cannot be factored");
+    }
+    const Eigen::VectorXd dx = m_solver.solve(-g);
+    stats.seconds_solve += seconds_since(t0);
+    r.residual = max_vertex_norm(dx) / ctx.h;
+    if (!dx.allFinite()) {
+      r.failure = "NaN in the Newton direction";
+      return r;
+    }
+    if (r.residual < m_params.tolerance) {
+      r.converged = true;
+      return r;
+    }
+    t0 = std::chrono::steady_clock::now();
+    double alpha = 1.0;
+    for (const auto& t : m_terms) alpha = std::min(alpha, t->max_step(x, dx));
+    const double slope = g.dot(dx);
+    double e_new = INF;
+    Eigen::VectorXd x_new;
+    for (; alpha > 1e-12; alpha *= 0.5) {
+      x_new = x + alpha * dx;
+      e_new = energy(x_new);
+      ++r.line_search_evaluations;
+      if (std::isfinite(e_new) && e_new <= e + m_params.armijo * alpha * slope) break;
+    }
+    stats.seconds_line_search += seconds_since(t0);
+    if (!(alpha > 1e-12)) {
+      // No decrease along the direction: converged to round-off when the step is tiny.
+      if (r.residual * alpha < m_params.tolerance || std::abs(slope) < 1e-14 * std::abs(e)) {
+        r.converged = true;
+        return r;
+      }
+      r.failure = "line search found no decrease";
+      return r;
+    }
+    x = x_new;
+    e = e_new;
+  }
+  --r.iterations;
+  std::ostringstream s;
+  s << "no convergence in " << m_params.max_iterations << " iterations (residual " << r.residual
+    << " m/s)";
+  r.failure = s.str();
+  return r;
+}
+
+bool Integrator::advance(SheetState& state, double h, int depth, StepStats& stats) {
+  StepContext ctx;
+  ctx.time_t0 = state.time;
+  ctx.h = h;
+  const Eigen::VectorXd x_t0 = state.positions, v_t0 = state.velocities;
+  ctx.x_t0 = &x_t0;
+  ctx.v_t0 = &v_t0;
+  for (const auto& t : m_terms) t->begin_step(ctx, x_t0);
+  Eigen::VectorXd x = x_t0;
+  const NewtonResult r = solve(ctx, x, stats);
+  stats.newton_iterations += r.iterations;
+  stats.line_search_evaluations += r.line_search_evaluations;
+  stats.residual = std::max(stats.residual, r.residual);
+  if (!r.converged) {
+    ++stats.failed_solves;
+    if (depth >= m_params.max_halvings) {
+      std::ostringstream s;
+      s << "time step failed at t = " << state.time << " s with h = " << h << " s: " << r.failure;
+      throw NumericError(s.str());
+    }
+    return advance(state, 0.5 * h, depth + 1, stats) && advance(state, 0.5 * h, depth + 1, stats);
+  }
+  state.velocities = (x - x_t0) / h;
+  state.positions = x;
+  state.time += h;
+  ++stats.substeps;
+  if (!state.positions.allFinite()) throw NumericError("NaN in the positions after a step");
+  return true;
+}
+
+StepStats Integrator::step(SheetState& state, double h) {
+  StepStats stats;
+  advance(state, h, 0, stats);
+  return stats;
+}
+
+}  // namespace papersim::simulation

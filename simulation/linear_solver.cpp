@@ -1,0 +1,84 @@
+#include "simulation/linear_solver.hpp"
+
+#include <cholmod.h>
+
+#include <cmath>
+#include <string>
+
+#include "simulation/errors.hpp"
+
+namespace papersim::simulation {
+
+struct LinearSolver::Impl {
+  cholmod_common common;
+  cholmod_factor* factor = nullptr;
+  long pattern_id = -1;
+  int n = 0;
+  Impl() {
+    cholmod_start(&common);
+    common.print = 0;  // library code stays silent; failures are returned or thrown
+    common.error_handler = nullptr;
+  }
+  ~Impl() {
+    if (factor) cholmod_free_factor(&factor, &common);
+    cholmod_finish(&common);
+  }
+  /// A cholmod_sparse view of our arrays (no copy).
+  cholmod_sparse view(const BlockSymmetricMatrix& A) {
+    cholmod_sparse s{};
+    s.nrow = s.ncol = A.size();
+    s.nzmax = A.values().size();
+    s.p = const_cast<int*>(A.column_starts().data());
+    s.i = const_cast<int*>(A.row_indices().data());
+    s.x = const_cast<double*>(A.values().data());
+    s.stype = 1;
+    s.itype = CHOLMOD_INT;
+    s.xtype = CHOLMOD_REAL;
+    s.dtype = CHOLMOD_DOUBLE;
+    s.sorted = 1;
+    s.packed = 1;
+    return s;
+  }
+};
+
+LinearSolver::LinearSolver() : m_impl(std::make_unique<Impl>()) {}
+LinearSolver::~LinearSolver() = default;
+
+bool LinearSolver::factorize(const BlockSymmetricMatrix& A, long pattern_id) {
+  for (double v : A.values())
+    if (!std::isfinite(v)) throw NumericError("linear solver: the matrix holds NaN or inf");
+  auto& c = m_impl->common;
+  cholmod_sparse s = m_impl->view(A);
+  if (!m_impl->factor || pattern_id != m_impl->pattern_id || m_impl->n != A.size()) {
+    if (m_impl->factor) cholmod_free_factor(&m_impl->factor, &c);
+    m_impl->factor = cholmod_analyze(&s, &c);
+    if (!m_impl->factor) throw NumericError("linear solver: CHOLMOD analysis failed");
+    m_impl->pattern_id = pattern_id;
+    m_impl->n = A.size();
+    ++m_analyses;
+  }
+  const int ok = cholmod_factorize(&s, m_impl->factor, &c);
+  if (!ok && c.status != CHOLMOD_NOT_POSDEF)
+    throw NumericError("linear solver: CHOLMOD factorisation failed, status " +
+                       std::to_string(c.status));
+  return c.status != CHOLMOD_NOT_POSDEF && m_impl->factor->minor == m_impl->factor->n;
+}
+
+Eigen::VectorXd LinearSolver::solve(const Eigen::VectorXd& b) {
+  auto& c = m_impl->common;
+  cholmod_dense rhs{};
+  rhs.nrow = b.size();
+  rhs.ncol = 1;
+  rhs.nzmax = b.size();
+  rhs.d = b.size();
+  rhs.x = const_cast<double*>(b.data());
+  rhs.xtype = CHOLMOD_REAL;
+  rhs.dtype = CHOLMOD_DOUBLE;
+  cholmod_dense* x = cholmod_solve(CHOLMOD_A, m_impl->factor, &rhs, &c);
+  if (!x) throw NumericError("linear solver: CHOLMOD solve failed");
+  Eigen::VectorXd out = Eigen::Map<Eigen::VectorXd>(static_cast<double*>(x->x), b.size());
+  cholmod_free_dense(&x, &c);
+  return out;
+}
+
+}  // namespace papersim::simulation

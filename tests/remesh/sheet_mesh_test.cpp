@@ -1,0 +1,94 @@
+#include <gtest/gtest.h>
+
+#include "remesh/errors.hpp"
+#include "remesh/sheet_generator.hpp"
+#include "remesh/sheet_mesh.hpp"
+
+using namespace papersim::remesh;
+
+TEST(SheetMesh, RectangleCountsAndArea) {
+  for (auto tri : {Triangulation::alternating, Triangulation::random, Triangulation::regular}) {
+    RectangleOptions o;
+    o.nx = 5;
+    o.ny = 7;
+    o.triangulation = tri;
+    o.jitter = 0.3;
+    o.seed = 3;
+    const SheetMesh m = make_rectangle(o);
+    EXPECT_EQ(m.num_vertices(), 35);
+    EXPECT_EQ(m.num_faces(), 48);
+    // Euler characteristic of a disk: V - E + F = 1.
+    EXPECT_EQ(m.num_vertices() - m.num_edges() + m.num_faces(), 1);
+    const Eigen::MatrixX2d X = m.material_coords();
+    const Eigen::MatrixX3i F = m.faces();
+    double area = 0;
+    for (int f = 0; f < F.rows(); ++f) {
+      const Eigen::Vector2d e1 = X.row(F(f, 1)) - X.row(F(f, 0));
+      const Eigen::Vector2d e2 = X.row(F(f, 2)) - X.row(F(f, 0));
+      const double a = 0.5 * (e1.x() * e2.y() - e1.y() * e2.x());
+      EXPECT_GT(a, 0.0) << "faces are counter-clockwise";
+      area += a;
+    }
+    EXPECT_NEAR(area, o.width * o.height, 1e-14);
+  }
+}
+
+TEST(SheetMesh, AlternatingHasNoGrain) {
+  RectangleOptions o;
+  o.nx = 11;
+  o.ny = 11;
+  const SheetMesh m = make_rectangle(o);
+  const Hinges h = interior_hinges(m);
+  const Eigen::MatrixX2d X = m.material_coords();
+  int up = 0, down = 0;
+  for (int e = 0; e < h.vertices.rows(); ++e) {
+    const Eigen::Vector2d d = X.row(h.vertices(e, 1)) - X.row(h.vertices(e, 0));
+    if (std::abs(d.x()) > 1e-12 && std::abs(d.y()) > 1e-12) (d.x() * d.y() > 0 ? up : down)++;
+  }
+  EXPECT_EQ(up, down);
+}
+
+TEST(SheetMesh, HingesAreConsistent) {
+  RectangleOptions o;
+  o.nx = 4;
+  o.ny = 3;
+  const SheetMesh m = make_rectangle(o);
+  const Hinges h = interior_hinges(m);
+  const int boundary_edges = 2 * (o.nx - 1) + 2 * (o.ny - 1);
+  EXPECT_EQ(h.vertices.rows(), m.num_edges() - boundary_edges);
+  const Eigen::MatrixX3i F = m.faces();
+  const Eigen::MatrixX3i fh = face_hinges(m, h);
+  for (int e = 0; e < h.vertices.rows(); ++e) {
+    // (v0, v1, a) is a face in counter-clockwise order.
+    const int fa = h.faces(e, 0);
+    bool found = false;
+    for (int k = 0; k < 3; ++k)
+      found |= F(fa, k) == h.vertices(e, 0) && F(fa, (k + 1) % 3) == h.vertices(e, 1) &&
+               F(fa, (k + 2) % 3) == h.vertices(e, 2);
+    EXPECT_TRUE(found);
+  }
+  int referenced = 0;
+  for (int f = 0; f < fh.rows(); ++f)
+    for (int k = 0; k < 3; ++k) referenced += fh(f, k) >= 0;
+  EXPECT_EQ(referenced, 2 * h.vertices.rows());
+}
+
+TEST(SheetMesh, RejectsBadInput) {
+  Eigen::MatrixX2d X(4, 2);
+  X << 0, 0, 1, 0, 0, 1, 2, 0;
+  Eigen::MatrixX3i F(1, 3);
+  F << 0, 1, 3;  // collinear: zero area
+  EXPECT_THROW(SheetMesh(X, F), MeshError);
+  X(1, 0) = std::nan("");
+  F << 0, 1, 2;
+  EXPECT_THROW(SheetMesh(X, F), MeshError);
+  // Three faces on one edge: non-manifold.
+  Eigen::MatrixX2d Y(5, 2);
+  Y << 0, 0, 1, 0, 0.5, 1, 0.5, -1, 0.5, 0.5;
+  Eigen::MatrixX3i G(3, 3);
+  G << 0, 1, 2, 1, 0, 3, 0, 1, 4;
+  EXPECT_THROW(SheetMesh(Y, G), MeshError);
+  RectangleOptions o;
+  o.nx = 1;
+  EXPECT_THROW(make_rectangle(o), MeshError);
+}

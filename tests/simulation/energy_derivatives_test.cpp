@@ -1,0 +1,203 @@
+// Finite-difference tests of the gradient and Hessian of every energy term.
+#include <gtest/gtest.h>
+
+#include <memory>
+#include <random>
+
+#include "collision/collider.hpp"
+#include "remesh/sheet_generator.hpp"
+#include "simulation/energies/bending_energy.hpp"
+#include "simulation/energies/contact_energy.hpp"
+#include "simulation/energies/handle_energy.hpp"
+#include "simulation/energies/membrane_energy.hpp"
+#include "simulation/energies/vertex_energies.hpp"
+
+using namespace papersim;
+using namespace papersim::simulation;
+
+namespace {
+
+struct Fixture {
+  remesh::SheetMesh mesh;
+  Eigen::VectorXd x0;  // initial world positions
+  Eigen::VectorXd x;   // a deformed state
+};
+
+/// A 5 x 6 sheet, 10 x 12 cm, lifted to z = 2 mm and deformed smoothly (bent, slightly
+/// stretched so that the strain-limit barrier and tension are active on some faces).
+Fixture make_fixture(double stretch = 1.0, double bend = 8.0, double noise = 2e-4) {
+  remesh::RectangleOptions o;
+  o.width = 0.1;
+  o.height = 0.12;
+  o.nx = 5;
+  o.ny = 6;
+  o.jitter = 0.2;
+  o.seed = 7;
+  Fixture f{remesh::make_rectangle(o), {}, {}};
+  const Eigen::MatrixX2d X = f.mesh.material_coords();
+  f.x0.resize(3 * X.rows());
+  f.x.resize(3 * X.rows());
+  std::mt19937 rng(1);
+  std::uniform_real_distribution<double> u(-1, 1);
+  for (int v = 0; v < X.rows(); ++v) {
+    const double s = X(v, 0), t = X(v, 1);
+    f.x0.segment<3>(3 * v) << s, t, 2e-3;
+    // Cylinder of curvature `bend` about the y axis, stretched along y, plus noise.
+    f.x.segment<3>(3 * v) << std::sin(bend * s) / bend, stretch * t,
+        2e-3 + (1 - std::cos(bend * s)) / bend;
+    f.x.segment<3>(3 * v) += noise * Eigen::Vector3d(u(rng), u(rng), u(rng));
+  }
+  return f;
+}
+
+Eigen::MatrixXd dense(const BlockSymmetricMatrix& A) {
+  const int n = A.size();
+  Eigen::MatrixXd M = Eigen::MatrixXd::Zero(n, n);
+  for (int c = 0; c < n; ++c)
+    for (int k = A.column_starts()[c]; k < A.column_starts()[c + 1]; ++k) {
+      const int r = A.row_indices()[k];
+      M(r, c) = M(c, r) = A.values()[k];
+    }
+  return M;
+}
+
+/// Central differences of value against the gradient, and of the gradient against the
+/// Hessian. Step 1e-7 m: truncation O(h^2 f''') and round-off O(eps f / h) both far below
+/// the tolerances for positions of order 0.1 m. Terms with a log barrier near its singularity
+/// have large third derivatives and take a smaller step.
+void check_derivatives(const EnergyTerm& term, int nv, const Eigen::VectorXd& x,
+                       double tol_grad = 1e-6, double tol_hess = 1e-5, bool check_hessian = true,
+                       double step = 1e-7) {
+  SparsityBuilder pattern(nv);
+  term.add_pattern(pattern);
+  BlockSymmetricMatrix H(pattern.finish());
+  Eigen::VectorXd g = Eigen::VectorXd::Zero(x.size());
+  term.add_derivatives(x, g, &H);
+  Eigen::VectorXd g_fd(x.size());
+  Eigen::MatrixXd H_fd(x.size(), x.size());
+  for (int i = 0; i < x.size(); ++i) {
+    Eigen::VectorXd xp = x, xm = x;
+    xp[i] += step;
+    xm[i] -= step;
+    g_fd[i] = (term.value(xp) - term.value(xm)) / (2 * step);
+    Eigen::VectorXd gp = Eigen::VectorXd::Zero(x.size()), gm = gp;
+    term.add_derivatives(xp, gp, nullptr);
+    term.add_derivatives(xm, gm, nullptr);
+    H_fd.col(i) = (gp - gm) / (2 * step);
+  }
+  const double gscale = std::max(g.norm(), 1e-12);
+  EXPECT_LT((g - g_fd).norm() / gscale, tol_grad) << term.name() << " gradient";
+  if (check_hessian) {
+    const Eigen::MatrixXd Hd = dense(H);
+    const double hscale = std::max(H_fd.norm(), 1e-12);
+    EXPECT_LT((Hd - H_fd).norm() / hscale, tol_hess) << term.name() << " Hessian";
+  }
+}
+
+}  // namespace
+
+TEST(EnergyDerivatives, Membrane) {
+  // Stretched by 0.3% along y: tension everywhere, so the clamped compressive stress is not in
+  // play and the Hessian is exact; the strain-limit barrier (active above 0.25%) contributes.
+  Fixture f = make_fixture(1.0028, 2.0, 2e-6);
+  Material m;
+  MembraneEnergy e(f.mesh.material_coords(), f.mesh.faces(), m);
+  const Eigen::MatrixX2d s = e.principal_stretches(f.x);
+  EXPECT_GT(s.col(0).maxCoeff(), 1.0025) << "barrier active on some face";
+  EXPECT_LT(s.col(0).maxCoeff(), 1.005);
+  check_derivatives(e, f.mesh.num_vertices(), f.x, 1e-6, 1e-4, true, 1e-8);
+}
+
+TEST(EnergyDerivatives, MembraneRejectsStatesPastTheLimit) {
+  Fixture f = make_fixture(1.006);
+  MembraneEnergy e(f.mesh.material_coords(), f.mesh.faces(), Material{});
+  EXPECT_EQ(e.value(f.x), INF);
+}
+
+TEST(EnergyDerivatives, BendingExactHessian) {
+  Fixture f = make_fixture();
+  Material m;
+  remesh::SheetMesh mesh = f.mesh;
+  Eigen::MatrixX3d k = Eigen::MatrixX3d::Constant(mesh.num_faces(), 3, 0.0);
+  k.col(0).setConstant(3.0);  // some plastic curvature
+  mesh.set_plastic_curvature(k);
+  mesh.set_damage(Eigen::VectorXd::Constant(mesh.num_faces(), 0.5));
+  BendingEnergy e(mesh, m, BendingHessian::exact);
+  check_derivatives(e, mesh.num_vertices(), f.x);
+}
+
+TEST(EnergyDerivatives, BendingGaussNewtonIsTheExactHessianAtRest) {
+  // At the rest shape (flat, no plastic curvature) dE/dtheta = 0, so Gauss-Newton is exact.
+  Fixture f = make_fixture(1.0, 1e-9);
+  BendingEnergy e(f.mesh, Material{}, BendingHessian::gauss_newton);
+  check_derivatives(e, f.mesh.num_vertices(), f.x0, 1.0, 1e-5);
+}
+
+TEST(EnergyDerivatives, VertexTerms) {
+  Fixture f = make_fixture();
+  const Eigen::VectorXd m = lumped_masses(f.mesh.material_coords(), f.mesh.faces(), 0.08);
+  EXPECT_NEAR(m.sum(), 0.08 * 0.1 * 0.12, 1e-15);
+  const Eigen::VectorXd v = Eigen::VectorXd::Constant(f.x.size(), 0.3);
+  StepContext ctx;
+  ctx.h = 2e-3;
+  ctx.x_t0 = &f.x0;
+  ctx.v_t0 = &v;
+  InertiaEnergy inertia(m);
+  inertia.begin_step(ctx, f.x0);
+  DampingEnergy damping(m, 2.0);
+  damping.begin_step(ctx, f.x0);
+  GravityEnergy gravity(m, Eigen::Vector3d(0, 0, -9.8));
+  check_derivatives(inertia, f.mesh.num_vertices(), f.x);
+  check_derivatives(damping, f.mesh.num_vertices(), f.x);
+  check_derivatives(gravity, f.mesh.num_vertices(), f.x, 1e-6, 1.0);
+}
+
+TEST(EnergyDerivatives, Handles) {
+  Fixture f = make_fixture();
+  HandleSpec a;
+  a.material_point << 0.031, 0.047;
+  a.keyframes = {{0.0, Eigen::Vector3d::Zero()}, {1.0, Eigen::Vector3d(0, 0, 0.05)}};
+  HandleSpec b;
+  b.material_point << 0.1, 0.0;  // a corner
+  HandleEnergy e(f.mesh, f.x0, {a, b});
+  StepContext ctx;
+  ctx.time_t0 = 0.4;
+  ctx.h = 0.1;
+  e.begin_step(ctx, f.x0);
+  EXPECT_NEAR((e.target(0, 0.5) - e.point(0, f.x0)).z(), 0.025, 1e-15);
+  check_derivatives(e, f.mesh.num_vertices(), f.x);
+}
+
+TEST(EnergyDerivatives, GroundContactAndFriction) {
+  Fixture f = make_fixture();
+  // Every vertex within the barrier range of the ground (z in (0, dhat)) and sliding.
+  Eigen::VectorXd x0 = f.x0, x = f.x0;
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(0.1, 0.9);
+  for (int v = 0; v < f.mesh.num_vertices(); ++v) {
+    x0[3 * v + 2] = 5e-4 * u(rng);
+    x[3 * v + 2] = 5e-4 * u(rng);
+    x[3 * v] += (v % 3) * 7e-4;  // some vertices stick (below eps), some slide
+  }
+  auto ground = std::make_shared<collision::PlaneCollider>();
+  ground->friction = 0.4;
+  // eps_velocity h = 1 mm, so that the finite-difference step (0.1 um) is far below the scale
+  // on which the friction smoothing changes.
+  ContactParams params;
+  params.eps_velocity = 1.0;
+  ObstacleContactEnergy e(Eigen::VectorXd::Constant(f.mesh.num_vertices(), 4e-4), {ground}, params);
+  const Eigen::VectorXd v = Eigen::VectorXd::Zero(x.size());
+  StepContext ctx;
+  ctx.h = 1e-3;
+  ctx.x_t0 = &x0;
+  ctx.v_t0 = &v;
+  e.begin_step(ctx, x0);
+  EXPECT_EQ(e.active_friction(), f.mesh.num_vertices());
+  check_derivatives(e, f.mesh.num_vertices(), x, 1e-6, 1e-4);
+  // CCD: a step that would push vertices through the ground is cut before they reach it.
+  Eigen::VectorXd dx = Eigen::VectorXd::Zero(x.size());
+  for (int k = 0; k < f.mesh.num_vertices(); ++k) dx[3 * k + 2] = -0.01;
+  const double alpha = e.max_step(x, dx);
+  EXPECT_GT(alpha, 0.0);
+  for (int k = 0; k < f.mesh.num_vertices(); ++k) EXPECT_GT(x[3 * k + 2] + alpha * dx[3 * k + 2], 0.0);
+}
