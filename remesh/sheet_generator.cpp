@@ -1,6 +1,9 @@
 #include "remesh/sheet_generator.hpp"
 
+#include <Eigen/Core>
 #include <algorithm>
+#include <array>
+#include <vector>
 #include <cmath>
 #include <random>
 #include <string>
@@ -57,6 +60,107 @@ SheetMesh make_rectangle(const RectangleOptions& o) {
       }
     }
   return SheetMesh(material, faces);
+}
+
+namespace {
+
+struct Circle {
+  Eigen::Vector2d centre;
+  double radius2;
+};
+
+Circle circumcircle(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c) {
+  const Eigen::Vector2d ab = b - a, ac = c - a;
+  const double d = 2 * (ab.x() * ac.y() - ab.y() * ac.x());
+  const Eigen::Vector2d o(
+      (ac.y() * ab.squaredNorm() - ab.y() * ac.squaredNorm()) / d,
+      (ab.x() * ac.squaredNorm() - ac.x() * ab.squaredNorm()) / d);
+  return {a + o, o.squaredNorm()};
+}
+
+}  // namespace
+
+Eigen::MatrixX3i delaunay_triangulation(const Eigen::MatrixX2d& P) {
+  const int n = static_cast<int>(P.rows());
+  const Eigen::Vector2d lo = P.colwise().minCoeff(), hi = P.colwise().maxCoeff();
+  const double span = (hi - lo).maxCoeff() * 10;
+  const Eigen::Vector2d mid = 0.5 * (lo + hi);
+  std::vector<Eigen::Vector2d> pts(n);
+  for (int i = 0; i < n; ++i) pts[i] = P.row(i);
+  pts.push_back(mid + Eigen::Vector2d(-span, -span));  // super triangle
+  pts.push_back(mid + Eigen::Vector2d(span, -span));
+  pts.push_back(mid + Eigen::Vector2d(0, span));
+  struct Tri {
+    std::array<int, 3> v;
+    Circle c;
+  };
+  std::vector<Tri> tris{{{n, n + 1, n + 2}, circumcircle(pts[n], pts[n + 1], pts[n + 2])}};
+  for (int p = 0; p < n; ++p) {
+    std::vector<std::array<int, 2>> edges;
+    std::vector<Tri> keep;
+    keep.reserve(tris.size() + 2);
+    for (const Tri& t : tris) {
+      if ((pts[p] - t.c.centre).squaredNorm() < t.c.radius2 * (1 - 1e-12)) {
+        for (int k = 0; k < 3; ++k) edges.push_back({t.v[k], t.v[(k + 1) % 3]});
+      } else {
+        keep.push_back(t);
+      }
+    }
+    // Boundary of the cavity: edges that appear once.
+    for (size_t i = 0; i < edges.size(); ++i) {
+      bool shared = false;
+      for (size_t j = 0; j < edges.size(); ++j)
+        if (i != j && edges[i][0] == edges[j][1] && edges[i][1] == edges[j][0]) shared = true;
+      if (!shared)
+        keep.push_back({{edges[i][0], edges[i][1], p},
+                        circumcircle(pts[edges[i][0]], pts[edges[i][1]], pts[p])});
+    }
+    tris.swap(keep);
+  }
+  std::vector<Eigen::Vector3i> out;
+  for (const Tri& t : tris) {
+    if (t.v[0] >= n || t.v[1] >= n || t.v[2] >= n) continue;
+    const Eigen::Vector2d e1 = pts[t.v[1]] - pts[t.v[0]], e2 = pts[t.v[2]] - pts[t.v[0]];
+    const double area2 = e1.x() * e2.y() - e1.y() * e2.x();
+    if (std::abs(area2) < 1e-10 * std::max(e1.squaredNorm(), e2.squaredNorm())) continue;
+    out.emplace_back(t.v[0], t.v[1], t.v[2]);
+  }
+  Eigen::MatrixX3i F(out.size(), 3);
+  for (size_t f = 0; f < out.size(); ++f) F.row(f) = out[f].transpose();
+  return F;
+}
+
+SheetMesh make_rotated_lattice(const LatticeOptions& o) {
+  if (!(o.width > 0 && o.height > 0 && o.edge_length > 0))
+    throw MeshError("lattice: width, height and edge_length must be > 0");
+  const double h = o.edge_length;
+  std::vector<Eigen::Vector2d> pts;
+  // Boundary: evenly spaced points on the four sides.
+  const int nx = std::max(1, static_cast<int>(std::lround(o.width / h)));
+  const int ny = std::max(1, static_cast<int>(std::lround(o.height / h)));
+  for (int i = 0; i < nx; ++i) {
+    pts.emplace_back(o.width * i / nx, 0.0);
+    pts.emplace_back(o.width * (nx - i) / nx, o.height);
+  }
+  for (int j = 0; j < ny; ++j) {
+    pts.emplace_back(o.width, o.height * j / ny);
+    pts.emplace_back(0.0, o.height * (ny - j) / ny);
+  }
+  // Interior: the rotated lattice, kept half a spacing away from the boundary.
+  const Eigen::Vector2d a1(h * std::cos(o.angle), h * std::sin(o.angle));
+  const Eigen::Vector2d a2(-a1.y(), a1.x());
+  const int range = static_cast<int>(std::ceil((o.width + o.height) / h)) + 2;
+  const Eigen::Vector2d centre(0.5 * o.width, 0.5 * o.height);
+  for (int i = -range; i <= range; ++i)
+    for (int j = -range; j <= range; ++j) {
+      const Eigen::Vector2d p = centre + i * a1 + j * a2 + 0.25 * (a1 + a2);
+      if (p.x() > 0.5 * h && p.x() < o.width - 0.5 * h && p.y() > 0.5 * h &&
+          p.y() < o.height - 0.5 * h)
+        pts.push_back(p);
+    }
+  Eigen::MatrixX2d P(pts.size(), 2);
+  for (size_t i = 0; i < pts.size(); ++i) P.row(i) = pts[i].transpose();
+  return SheetMesh(P, delaunay_triangulation(P));
 }
 
 Eigen::Vector2i grid_for_edge_length(double width, double height, double edge_length) {

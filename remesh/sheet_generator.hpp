@@ -27,6 +27,24 @@ struct RectangleOptions {
 /// @throw MeshError when an option is out of range.
 SheetMesh make_rectangle(const RectangleOptions& options);
 
+/// Options of make_rotated_lattice.
+struct LatticeOptions {
+  double width = 0.210;       ///< [m] along material x
+  double height = 0.297;      ///< [m] along material y
+  double edge_length = 5e-3;  ///< lattice spacing [m]
+  double angle = 0.5235987755982988;  ///< angle of the lattice (the mesh grain) to material x [rad]
+};
+
+/// A rectangle [0, width] x [0, height] meshed by the Delaunay triangulation of a square lattice
+/// rotated by `angle` plus evenly spaced boundary points: a mesh whose grain is at an angle to
+/// the sheet's edges (for orientation tests).
+/// @throw MeshError when an option is out of range.
+SheetMesh make_rotated_lattice(const LatticeOptions& options);
+
+/// Delaunay triangulation of points in the plane (Bowyer-Watson), #F by 3, counter-clockwise.
+/// Meant for the few thousand points of test sheets: O(n^2).
+Eigen::MatrixX3i delaunay_triangulation(const Eigen::MatrixX2d& points);
+
 /// Vertex counts (nx, ny) for a target edge length [m] on a width x height sheet.
 Eigen::Vector2i grid_for_edge_length(double width, double height, double edge_length);
 

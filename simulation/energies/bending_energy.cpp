@@ -4,6 +4,7 @@
 #include <Eigen/LU>
 #include <Eigen/SVD>
 #include <Eigen/Cholesky>
+#include <Eigen/QR>
 #include <algorithm>
 #include <cmath>
 #include <string>
@@ -14,6 +15,9 @@
 namespace papersim::simulation {
 
 namespace {
+
+/// Weight of the fit residual against the plate energy (see build_stencil).
+constexpr double HOURGLASS_WEIGHT = 10.0;
 
 /// Row of B for hinge (p0, p1, pa, pb): theta = row . (K_xx, K_yy, K_xy) for z = p^T K p / 2.
 Eigen::RowVector3d hinge_row(const Eigen::Vector2d& p0, const Eigen::Vector2d& p1,
@@ -69,8 +73,11 @@ void BendingEnergy::build_stencil(int f, const Eigen::MatrixX3i& fh, const Eigen
         face.hinges.push_back(fh(g, k));
   };
   add_face_hinges(f);
-  // Rank test of the stencil: a boundary face borrows its neighbours' hinges, then the hinges
-  // of faces sharing a vertex, until its curvature is determined.
+  // Stencil: the face's own hinges and those of its edge neighbours (up to nine), then of
+  // faces sharing a vertex while the curvature is not determined (boundary faces).
+  const std::vector<int> mine = face.hinges;
+  for (int h : mine)
+    for (int s = 0; s < 2; ++s) add_face_hinges(m_hinges.faces(h, s));
   auto rows = [&]() {
     Eigen::MatrixXd B(face.hinges.size(), 3);
     for (size_t i = 0; i < face.hinges.size(); ++i) {
@@ -84,11 +91,6 @@ void BendingEnergy::build_stencil(int f, const Eigen::MatrixX3i& fh, const Eigen
     Eigen::JacobiSVD<Eigen::MatrixXd> svd(rows());
     return svd.singularValues()[2] > 1e-6 * svd.singularValues()[0];
   };
-  if (!determined()) {
-    const std::vector<int> own = face.hinges;
-    for (int h : own)
-      for (int s = 0; s < 2; ++s) add_face_hinges(m_hinges.faces(h, s));
-  }
   for (int ring = 0; ring < 2 && !determined(); ++ring) {
     std::vector<int> verts;
     for (int h : face.hinges)
@@ -105,7 +107,23 @@ void BendingEnergy::build_stencil(int f, const Eigen::MatrixX3i& fh, const Eigen
     throw NumericError("bending: the curvature of face " + std::to_string(f) +
                        " is not determined by its neighbourhood (too few interior edges)");
   const Eigen::MatrixXd B = rows();
+  const int ns = static_cast<int>(face.hinges.size());
   face.P = (B.transpose() * B).ldlt().solve(B.transpose());
+  // Residual of the fit, scaled to curvature units by the centroid distance across each hinge
+  // (theta ~ kappa l): zero for every constant curvature, positive for angle patterns that no
+  // smooth surface has (hourglass modes), which the fit alone would not see.
+  Eigen::VectorXd inv_l(ns);
+  for (int i = 0; i < ns; ++i) {
+    const Eigen::Vector4i v = m_hinges.vertices.row(face.hinges[i]);
+    const Eigen::Vector2d p0 = X.row(v[0]), e = (Eigen::Vector2d(X.row(v[1])) - p0).normalized();
+    auto height = [&](int k) {
+      const Eigen::Vector2d r = Eigen::Vector2d(X.row(v[k])) - p0;
+      return std::abs(e.x() * r.y() - e.y() * r.x());
+    };
+    inv_l[i] = 3.0 / (height(2) + height(3));
+  }
+  face.R = inv_l.asDiagonal() * (Eigen::MatrixXd::Identity(ns, ns) - B * face.P);
+  face.R *= std::sqrt(HOURGLASS_WEIGHT / ns);
   for (int h : face.hinges) {
     std::array<int, 4> loc;
     for (int k = 0; k < 4; ++k) {
@@ -151,7 +169,7 @@ double BendingEnergy::face_energy(const Face& face, const Eigen::VectorXd& theta
   Eigen::VectorXd t(face.hinges.size());
   for (size_t i = 0; i < face.hinges.size(); ++i) t[i] = theta[face.hinges[i]];
   const Eigen::Vector3d k = face.P * t - face.plastic;
-  return 0.5 * face.stiffness * k.dot(m_Q * k);
+  return 0.5 * face.stiffness * (k.dot(m_Q * k) + (face.R * t).squaredNorm());
 }
 
 double BendingEnergy::value(const Eigen::VectorXd& x) const {
@@ -192,7 +210,8 @@ void BendingEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd& g
     Eigen::VectorXd t(ns);
     for (int i = 0; i < ns; ++i) t[i] = theta[face.hinges[i]];
     const Eigen::Vector3d k = face.P * t - face.plastic;
-    const Eigen::VectorXd c = face.stiffness * face.P.transpose() * (m_Q * k);  // dE/dtheta
+    const Eigen::VectorXd c =
+        face.stiffness * (face.P.transpose() * (m_Q * k) + face.R.transpose() * (face.R * t));
     // Local gradient matrix: column i = grad theta_i over the face's local vertices.
     const int nv = static_cast<int>(face.vertices.size());
     Eigen::MatrixXd Jt = Eigen::MatrixXd::Zero(3 * nv, ns);
@@ -202,7 +221,8 @@ void BendingEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd& g
     const Eigen::VectorXd g = Jt * c;
     for (int a = 0; a < nv; ++a) gradient.segment<3>(3 * face.vertices[a]) += g.segment<3>(3 * a);
     if (!hessian) continue;
-    const Eigen::MatrixXd M = face.stiffness * face.P.transpose() * m_Q * face.P;
+    const Eigen::MatrixXd M =
+        face.stiffness * (face.P.transpose() * m_Q * face.P + face.R.transpose() * face.R);
     H = Jt * M * Jt.transpose();
     if (curvature_term) {
       for (int i = 0; i < ns; ++i)

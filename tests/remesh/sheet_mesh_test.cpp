@@ -92,3 +92,27 @@ TEST(SheetMesh, RejectsBadInput) {
   o.nx = 1;
   EXPECT_THROW(make_rectangle(o), MeshError);
 }
+
+TEST(SheetMesh, RotatedLatticeCoversTheRectangle) {
+  LatticeOptions o;
+  o.width = 0.1;
+  o.height = 0.03;
+  o.edge_length = 4e-3;
+  const SheetMesh m = make_rotated_lattice(o);
+  const Eigen::MatrixX2d X = m.material_coords();
+  const Eigen::MatrixX3i F = m.faces();
+  double area = 0, min_angle = M_PI;
+  for (int f = 0; f < F.rows(); ++f) {
+    Eigen::Vector2d p[3];
+    for (int k = 0; k < 3; ++k) p[k] = X.row(F(f, k));
+    const Eigen::Vector2d e1 = p[1] - p[0], e2 = p[2] - p[0];
+    area += 0.5 * (e1.x() * e2.y() - e1.y() * e2.x());
+    for (int k = 0; k < 3; ++k) {
+      const Eigen::Vector2d u = p[(k + 1) % 3] - p[k], w = p[(k + 2) % 3] - p[k];
+      min_angle = std::min(min_angle, std::acos(u.normalized().dot(w.normalized())));
+    }
+  }
+  EXPECT_NEAR(area, o.width * o.height, 1e-12);
+  EXPECT_EQ(m.num_vertices() - m.num_edges() + m.num_faces(), 1) << "a disk";
+  EXPECT_GT(min_angle, 15 * M_PI / 180) << "no slivers";
+}
