@@ -19,8 +19,22 @@ struct Aabb {
     lo = lo.cwiseMin(p);
     hi = hi.cwiseMax(p);
   }
-  /// Distance between two boxes (0 when they overlap) [m].
+  /// Distance between two boxes (0 when they overlap) [m]; +inf when either is empty.
   double distance_to(const Aabb& other) const;
+  /// Distance from point p to the box (0 inside) [m].
+  double distance_to(const Eigen::Vector3d& p) const;
+  /// True when the box holds no point (lo > hi in some axis).
+  bool is_empty() const { return (lo.array() > hi.array()).any(); }
+  /// Grow by r [m] in every direction.
+  void inflate(double r) {
+    lo.array() -= r;
+    hi.array() += r;
+  }
+  /// Grow to hold box b.
+  void extend(const Aabb& b) {
+    lo = lo.cwiseMin(b.lo);
+    hi = hi.cwiseMax(b.hi);
+  }
 };
 
 /// A rigid pose at a time: world point = rotation * local point + translation.
@@ -37,8 +51,20 @@ class RigidMotion {
   RigidMotion() = default;
   /// @throw std::invalid_argument when keyframe times are not increasing.
   explicit RigidMotion(std::vector<Keyframe> keyframes);
+  /// Pose at time t [s]: identity when there is no keyframe.
   Eigen::Isometry3d pose(double t) const;
   const std::vector<Keyframe>& keyframes() const { return m_keyframes; }
+  /// Velocity of the local origin at time t [m/s] (0 outside the keyframe range; at a keyframe
+  /// time the segment that starts there is used).
+  Eigen::Vector3d linear_velocity(double t) const;
+  /// World angular velocity at time t [rad/s] (constant over a slerp segment).
+  Eigen::Vector3d angular_velocity(double t) const;
+  /// True when the pose does not change with time (at most one keyframe, or all equal).
+  bool is_static() const;
+
+ private:
+  /// Index i of the segment [t_i, t_i+1) holding t, or -1 outside the keyframe range.
+  int segment(double t) const;
 
  private:
   std::vector<Keyframe> m_keyframes;
@@ -53,8 +79,20 @@ class Collider {
   /// `gradient` is not null. Thread-safe.
   double distance(const Eigen::Vector3d& p, double t, Eigen::Vector3d* gradient = nullptr) const;
 
+  /// Same as distance(p, t, gradient) with the pose already evaluated (pose = motion.pose(t)):
+  /// saves the keyframe search and slerp when many points are queried at one time. Thread-safe.
+  double distance_at_pose(const Eigen::Vector3d& p, const Eigen::Isometry3d& pose,
+                          Eigen::Vector3d* gradient = nullptr) const;
+
   /// World bounding box of the obstacle's surface at time t.
   Aabb bounds(double t) const;
+
+  /// A world box holding the obstacle's surface at every time in [t0, t1] [s] (conservative:
+  /// rotating segments are sampled and padded by the chord-to-arc deviation).
+  Aabb swept_bounds(double t0, double t1) const;
+
+  /// Bounding box of the surface in the collider's own frame [m].
+  Aabb bounds_local() const { return local_bounds(); }
 
   /// Velocity of the obstacle's material point that is at world point p at time t [m/s].
   Eigen::Vector3d velocity(const Eigen::Vector3d& p, double t) const;

@@ -1,0 +1,180 @@
+#include "collision/collider.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+namespace papersim::collision {
+
+// ---------------------------------------------------------------------------------------------
+// Aabb
+
+double Aabb::distance_to(const Aabb& other) const {
+  if (is_empty() || other.is_empty()) return std::numeric_limits<double>::infinity();
+  const Eigen::Vector3d gap =
+      (other.lo - hi).cwiseMax(lo - other.hi).cwiseMax(Eigen::Vector3d::Zero());
+  return gap.norm();
+}
+
+double Aabb::distance_to(const Eigen::Vector3d& p) const {
+  if (is_empty()) return std::numeric_limits<double>::infinity();
+  return (lo - p).cwiseMax(p - hi).cwiseMax(Eigen::Vector3d::Zero()).norm();
+}
+
+// ---------------------------------------------------------------------------------------------
+// RigidMotion
+
+RigidMotion::RigidMotion(std::vector<Keyframe> keyframes) : m_keyframes(std::move(keyframes)) {
+  for (size_t i = 1; i < m_keyframes.size(); ++i) {
+    if (!(m_keyframes[i].time > m_keyframes[i - 1].time))
+      throw std::invalid_argument("RigidMotion: keyframe times must increase, but keyframe " +
+                                  std::to_string(i) + " has time " +
+                                  std::to_string(m_keyframes[i].time) + " after " +
+                                  std::to_string(m_keyframes[i - 1].time));
+  }
+  for (Keyframe& k : m_keyframes) {
+    if (!(k.rotation.norm() > 0.0))
+      throw std::invalid_argument("RigidMotion: keyframe rotation quaternion has zero norm");
+    k.rotation.normalize();
+  }
+}
+
+int RigidMotion::segment(double t) const {
+  if (m_keyframes.size() < 2 || t < m_keyframes.front().time || t >= m_keyframes.back().time)
+    return -1;
+  const auto it = std::upper_bound(m_keyframes.begin(), m_keyframes.end(), t,
+                                   [](double x, const Keyframe& k) { return x < k.time; });
+  return static_cast<int>(it - m_keyframes.begin()) - 1;
+}
+
+Eigen::Isometry3d RigidMotion::pose(double t) const {
+  Eigen::Isometry3d x = Eigen::Isometry3d::Identity();
+  if (m_keyframes.empty()) return x;
+  const Keyframe* k = &m_keyframes.front();
+  if (t >= m_keyframes.back().time) k = &m_keyframes.back();
+  const int i = segment(t);
+  if (i < 0) {
+    x.linear() = k->rotation.toRotationMatrix();
+    x.translation() = k->translation;
+    return x;
+  }
+  const Keyframe& a = m_keyframes[i];
+  const Keyframe& b = m_keyframes[i + 1];
+  const double s = (t - a.time) / (b.time - a.time);
+  x.linear() = a.rotation.slerp(s, b.rotation).toRotationMatrix();
+  x.translation() = (1.0 - s) * a.translation + s * b.translation;
+  return x;
+}
+
+Eigen::Vector3d RigidMotion::linear_velocity(double t) const {
+  const int i = segment(t);
+  if (i < 0) return Eigen::Vector3d::Zero();
+  const Keyframe& a = m_keyframes[i];
+  const Keyframe& b = m_keyframes[i + 1];
+  return (b.translation - a.translation) / (b.time - a.time);
+}
+
+// Slerp from q_a to q_b turns at a constant rate about the world axis of q_b q_a^-1 (taken on
+// the short arc, as Eigen's slerp does), so omega = axis * angle / duration.
+Eigen::Vector3d RigidMotion::angular_velocity(double t) const {
+  const int i = segment(t);
+  if (i < 0) return Eigen::Vector3d::Zero();
+  const Keyframe& a = m_keyframes[i];
+  const Keyframe& b = m_keyframes[i + 1];
+  Eigen::Quaterniond rel = b.rotation * a.rotation.conjugate();
+  if (rel.w() < 0.0) rel.coeffs() = -rel.coeffs();
+  const Eigen::AngleAxisd aa(rel);
+  return aa.axis() * aa.angle() / (b.time - a.time);
+}
+
+bool RigidMotion::is_static() const {
+  for (size_t i = 1; i < m_keyframes.size(); ++i) {
+    if (m_keyframes[i].translation != m_keyframes[0].translation) return false;
+    if (std::abs(m_keyframes[i].rotation.dot(m_keyframes[0].rotation)) < 1.0) return false;
+  }
+  return true;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Collider
+
+double Collider::distance(const Eigen::Vector3d& p, double t, Eigen::Vector3d* gradient) const {
+  return distance_at_pose(p, motion.pose(t), gradient);
+}
+
+double Collider::distance_at_pose(const Eigen::Vector3d& p, const Eigen::Isometry3d& pose,
+                                  Eigen::Vector3d* gradient) const {
+  const Eigen::Vector3d local = pose.linear().transpose() * (p - pose.translation());
+  if (!gradient) return local_distance(local, nullptr);
+  Eigen::Vector3d g_local;
+  const double d = local_distance(local, &g_local);
+  *gradient = pose.linear() * g_local;
+  return d;
+}
+
+namespace {
+Aabb transformed_box(const Aabb& local, const Eigen::Isometry3d& pose) {
+  Aabb out;
+  if (local.is_empty()) return out;
+  for (int c = 0; c < 8; ++c) {
+    const Eigen::Vector3d corner((c & 1) ? local.hi.x() : local.lo.x(),
+                                 (c & 2) ? local.hi.y() : local.lo.y(),
+                                 (c & 4) ? local.hi.z() : local.lo.z());
+    out.extend(pose * corner);
+  }
+  return out;
+}
+}  // namespace
+
+Aabb Collider::bounds(double t) const { return transformed_box(local_bounds(), motion.pose(t)); }
+
+// Between samples s_k the pose moves by a translation (linear, exact for boxes) and a rotation
+// of angle a; a point at radius r from the local origin leaves the chord by at most
+// r (1 - cos(a/2)), so padding each sampled box by that bound makes the union conservative.
+Aabb Collider::swept_bounds(double t0, double t1) const {
+  const Aabb local = local_bounds();
+  Aabb out = transformed_box(local, motion.pose(t0));
+  out.extend(transformed_box(local, motion.pose(t1)));
+  if (local.is_empty() || motion.is_static() || !(t1 > t0)) return out;
+  const double radius = local.lo.cwiseAbs().cwiseMax(local.hi.cwiseAbs()).norm();
+  constexpr int SAMPLES = 32;
+  double max_angle = 0.0;
+  for (int k = 0; k <= SAMPLES; ++k) {
+    const double t = t0 + (t1 - t0) * k / SAMPLES;
+    out.extend(transformed_box(local, motion.pose(t)));
+    max_angle = std::max(max_angle, motion.angular_velocity(t).norm() * (t1 - t0) / SAMPLES);
+  }
+  // Keyframe times inside the interval are corners of the path: include them exactly.
+  for (const Keyframe& k : motion.keyframes()) {
+    if (!(k.time > t0 && k.time < t1)) continue;
+    out.extend(transformed_box(local, motion.pose(k.time)));
+    max_angle = std::max(max_angle, motion.angular_velocity(k.time).norm() * (t1 - t0) / SAMPLES);
+  }
+  out.inflate(radius * (1.0 - std::cos(0.5 * max_angle)));
+  return out;
+}
+
+// x(t) = R(t) X + c(t)  =>  dx/dt = omega x (x - c(t)) + dc/dt, analytic from the keyframes.
+Eigen::Vector3d Collider::velocity(const Eigen::Vector3d& p, double t) const {
+  const Eigen::Vector3d c = motion.pose(t).translation();
+  return motion.linear_velocity(t) + motion.angular_velocity(t).cross(p - c);
+}
+
+// ---------------------------------------------------------------------------------------------
+// PlaneCollider
+
+double PlaneCollider::local_distance(const Eigen::Vector3d& p, Eigen::Vector3d* gradient) const {
+  if (gradient) *gradient = Eigen::Vector3d::UnitZ();
+  return p.z();
+}
+
+Aabb PlaneCollider::local_bounds() const {
+  Aabb b;
+  b.lo = Eigen::Vector3d(-half_size, -half_size, 0.0);
+  b.hi = Eigen::Vector3d(half_size, half_size, 0.0);
+  return b;
+}
+
+}  // namespace papersim::collision

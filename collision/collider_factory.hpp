@@ -1,0 +1,63 @@
+#pragma once
+/// Builds obstacles from a plain description, for the scene loader (which parses JSON into a
+/// ColliderSpec; this module never sees JSON).
+#include "collision/collider.hpp"
+#include "collision/level_set_collider.hpp"
+#include "collision/shapes.hpp"
+
+#include <Eigen/Core>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace papersim::collision {
+
+/// Obstacle kinds; local frames as in shapes.hpp (plane: z = 0, solid below).
+enum class ColliderKind { plane, sphere, cylinder, capsule, box, gable, mesh };
+
+/// How the field is evaluated.
+enum class FieldKind {
+  /// Exact analytic field for the plane and the primitives (exact and the cheapest), level set
+  /// for meshes.
+  automatic,
+  /// Exact analytic field; not available for meshes.
+  analytic,
+  /// OpenVDB narrow-band level set; not available for the (unbounded) plane.
+  level_set,
+};
+
+/// A plain obstacle description; only the fields of its kind are read.
+struct ColliderSpec {
+  ColliderKind kind = ColliderKind::plane;
+  FieldKind field = FieldKind::automatic;
+  double radius = 0.05;      ///< sphere, cylinder, capsule [m]
+  double length = 0.1;       ///< cylinder, capsule (tip to tip), gable: along local x [m]
+  Eigen::Vector3d half_extents = Eigen::Vector3d::Constant(0.05);  ///< box [m]
+  double half_width = 0.05;  ///< gable: half base width along local y [m]
+  double height = 0.05;      ///< gable: ridge height along local z [m]
+  double plane_half_size = 1e3;  ///< plane: half extent of its bounding box in x and y [m]
+  std::string obj_path;      ///< mesh: closed triangle mesh, OBJ
+  double obj_scale = 1.0;    ///< mesh: factor applied to the OBJ coordinates to get metres [-]
+  LevelSetParams level_set;  ///< resolution of level-set fields (voxel size, band)
+  double friction = 0.3;     ///< Coulomb coefficient sheet-obstacle [-]
+  std::vector<Keyframe> keyframes;  ///< rigid pose over time; empty = identity pose
+};
+
+/// Builds the collider a spec describes.
+/// @throw ColliderError naming the bad value (dimension, friction, keyframe time, kind/field
+///        combination, grid too large); ColliderIoError naming the OBJ file when it cannot be
+///        read or is not closed.
+std::unique_ptr<Collider> make_collider(const ColliderSpec& spec);
+
+/// The Shape of a primitive spec. @throw ColliderError for plane and mesh.
+Shape shape_of(const ColliderSpec& spec);
+
+/// Lower-case name of a kind ("plane", "sphere", "cylinder", "capsule", "box", "gable", "mesh").
+const char* to_string(ColliderKind kind);
+/// Inverse of to_string. @throw ColliderError naming the unknown name.
+ColliderKind collider_kind_from_string(const std::string& name);
+/// "automatic", "analytic" or "level_set" and back. @throw ColliderError for an unknown name.
+const char* to_string(FieldKind field);
+FieldKind field_kind_from_string(const std::string& name);
+
+}  // namespace papersim::collision

@@ -1,0 +1,211 @@
+#include "collision/shapes.hpp"
+
+#include "collision/errors.hpp"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <string>
+
+namespace papersim::collision {
+
+namespace {
+
+double sign_of(double x) { return x < 0.0 ? -1.0 : 1.0; }
+
+void require_positive(const char* field, double value) {
+  if (!(std::isfinite(value) && value > 0.0)) {
+    std::ostringstream os;
+    os << "collider shape: " << field << " must be finite and > 0, got " << value;
+    throw ColliderError(os.str());
+  }
+}
+
+/// Signed distance of the 2D disc of radius r at q; gradient in (y, z).
+double disc_2d(const Eigen::Vector2d& q, double r, Eigen::Vector2d& g) {
+  const double n = q.norm();
+  g = n > 0.0 ? Eigen::Vector2d(q / n) : Eigen::Vector2d(0.0, 1.0);
+  return n - r;
+}
+
+/// Exact signed distance of the 2D gable triangle (base y in [-w, w] at z = 0, apex (0, h)).
+/// Outside: distance to the closest point of the three edges, gradient towards q. Inside
+/// (convex): the distance to the nearest edge line, gradient its outward normal.
+double gable_2d(const Eigen::Vector2d& q, double w, double h, Eigen::Vector2d& g) {
+  const Eigen::Vector2d v[3] = {{-w, 0.0}, {w, 0.0}, {0.0, h}};
+  double best = 1e300, inside_dist = -1e300;
+  Eigen::Vector2d best_point = q, inside_normal(0.0, -1.0);
+  bool inside = true;
+  for (int e = 0; e < 3; ++e) {
+    const Eigen::Vector2d a = v[e], b = v[(e + 1) % 3];
+    const Eigen::Vector2d ab = b - a;
+    const Eigen::Vector2d n = Eigen::Vector2d(ab.y(), -ab.x()).normalized();  // outward (CCW)
+    const double s = n.dot(q - a);
+    if (s > 0.0) inside = false;
+    if (s > inside_dist) inside_dist = s, inside_normal = n;
+    const double t = std::clamp((q - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0);
+    const Eigen::Vector2d c = a + t * ab;
+    const double dist = (q - c).norm();
+    if (dist < best) best = dist, best_point = c;
+  }
+  if (inside) {
+    g = inside_normal;
+    return inside_dist;
+  }
+  g = best > 0.0 ? Eigen::Vector2d((q - best_point) / best) : inside_normal;
+  return best;
+}
+
+/// Extrudes a 2D signed distance (d2, gradient g2 in (y, z)) along x over [-half, half]:
+/// exact for prisms (distance to the union of side walls and caps).
+double extrude(double d2, const Eigen::Vector2d& g2, double x, double half, Eigen::Vector3d* g) {
+  const double wx = d2, wy = std::abs(x) - half;
+  if (wx > 0.0 && wy > 0.0) {
+    const double d = std::hypot(wx, wy);
+    if (g) *g = Eigen::Vector3d(sign_of(x) * wy, wx * g2.x(), wx * g2.y()) / d;
+    return d;
+  }
+  if (wx >= wy) {
+    if (g) *g = Eigen::Vector3d(0.0, g2.x(), g2.y());
+    return wx;
+  }
+  if (g) *g = Eigen::Vector3d(sign_of(x), 0.0, 0.0);
+  return wy;
+}
+
+double sphere_distance(double r, const Eigen::Vector3d& p, Eigen::Vector3d* g) {
+  const double n = p.norm();
+  if (g) *g = n > 0.0 ? Eigen::Vector3d(p / n) : Eigen::Vector3d::UnitZ();
+  return n - r;
+}
+
+double cylinder_distance(const Shape& s, const Eigen::Vector3d& p, Eigen::Vector3d* g) {
+  Eigen::Vector2d g2;
+  const double d2 = disc_2d(p.tail<2>(), s.radius, g2);
+  return extrude(d2, g2, p.x(), 0.5 * s.length, g);
+}
+
+double capsule_distance(const Shape& s, const Eigen::Vector3d& p, Eigen::Vector3d* g) {
+  const double half_segment = 0.5 * s.length - s.radius;
+  const Eigen::Vector3d axis_point(std::clamp(p.x(), -half_segment, half_segment), 0.0, 0.0);
+  const Eigen::Vector3d q = p - axis_point;
+  const double n = q.norm();
+  if (g) *g = n > 0.0 ? Eigen::Vector3d(q / n) : Eigen::Vector3d::UnitZ();
+  return n - s.radius;
+}
+
+double box_distance(const Eigen::Vector3d& b, const Eigen::Vector3d& p, Eigen::Vector3d* g) {
+  const Eigen::Vector3d q = p.cwiseAbs() - b;
+  Eigen::Index i;
+  const double qmax = q.maxCoeff(&i);
+  if (qmax <= 0.0) {
+    if (g) *g = sign_of(p[i]) * Eigen::Vector3d::Unit(i);
+    return qmax;
+  }
+  const Eigen::Vector3d v = q.cwiseMax(0.0);
+  const double d = v.norm();
+  if (g) *g = Eigen::Vector3d(sign_of(p.x()) * v.x(), sign_of(p.y()) * v.y(), sign_of(p.z()) * v.z()) / d;
+  return d;
+}
+
+double gable_distance(const Shape& s, const Eigen::Vector3d& p, Eigen::Vector3d* g) {
+  Eigen::Vector2d g2;
+  const double d2 = gable_2d(p.tail<2>(), s.half_width, s.height, g2);
+  return extrude(d2, g2, p.x(), 0.5 * s.length, g);
+}
+
+}  // namespace
+
+void validate(const Shape& s) {
+  switch (s.kind) {
+    case ShapeKind::sphere: require_positive("radius", s.radius); return;
+    case ShapeKind::cylinder:
+      require_positive("radius", s.radius);
+      require_positive("length", s.length);
+      return;
+    case ShapeKind::capsule:
+      require_positive("radius", s.radius);
+      require_positive("length", s.length);
+      if (s.length < 2.0 * s.radius)
+        throw ColliderError("collider shape: capsule length (tip to tip) " +
+                            std::to_string(s.length) + " must be >= 2 radius = " +
+                            std::to_string(2.0 * s.radius));
+      return;
+    case ShapeKind::box:
+      require_positive("half_extents.x", s.half_extents.x());
+      require_positive("half_extents.y", s.half_extents.y());
+      require_positive("half_extents.z", s.half_extents.z());
+      return;
+    case ShapeKind::gable:
+      require_positive("half_width", s.half_width);
+      require_positive("height", s.height);
+      require_positive("length", s.length);
+      return;
+  }
+  throw ColliderError("collider shape: unknown kind " + std::to_string(static_cast<int>(s.kind)));
+}
+
+double shape_distance(const Shape& s, const Eigen::Vector3d& p, Eigen::Vector3d* g) {
+  switch (s.kind) {
+    case ShapeKind::sphere: return sphere_distance(s.radius, p, g);
+    case ShapeKind::cylinder: return cylinder_distance(s, p, g);
+    case ShapeKind::capsule: return capsule_distance(s, p, g);
+    case ShapeKind::box: return box_distance(s.half_extents, p, g);
+    case ShapeKind::gable: return gable_distance(s, p, g);
+  }
+  return 0.0;
+}
+
+Aabb shape_bounds(const Shape& s) {
+  Aabb b;
+  switch (s.kind) {
+    case ShapeKind::sphere: b.hi = Eigen::Vector3d::Constant(s.radius); break;
+    case ShapeKind::cylinder:
+    case ShapeKind::capsule: b.hi = Eigen::Vector3d(0.5 * s.length, s.radius, s.radius); break;
+    case ShapeKind::box: b.hi = s.half_extents; break;
+    case ShapeKind::gable:
+      b.lo = Eigen::Vector3d(-0.5 * s.length, -s.half_width, 0.0);
+      b.hi = Eigen::Vector3d(0.5 * s.length, s.half_width, s.height);
+      return b;
+  }
+  b.lo = -b.hi;
+  return b;
+}
+
+double shape_smallest_feature(const Shape& s) {
+  switch (s.kind) {
+    case ShapeKind::sphere: return s.radius;
+    case ShapeKind::cylinder: return std::min(s.radius, 0.5 * s.length);
+    case ShapeKind::capsule: return s.radius;
+    case ShapeKind::box: return s.half_extents.minCoeff();
+    case ShapeKind::gable: return std::min({s.half_width, s.height, 0.5 * s.length});
+  }
+  return 0.0;
+}
+
+double shape_surface_area(const Shape& s) {
+  const double r = s.radius, l = s.length;
+  const Eigen::Vector3d& e = s.half_extents;
+  switch (s.kind) {
+    case ShapeKind::sphere: return 4.0 * M_PI * r * r;
+    case ShapeKind::cylinder: return 2.0 * M_PI * r * (r + l);
+    case ShapeKind::capsule: return 4.0 * M_PI * r * r + 2.0 * M_PI * r * (l - 2.0 * r);
+    case ShapeKind::box: return 8.0 * (e.x() * e.y() + e.y() * e.z() + e.z() * e.x());
+    case ShapeKind::gable: {
+      const double slant = std::hypot(s.half_width, s.height);
+      return (2.0 * s.half_width + 2.0 * slant) * l + 2.0 * s.half_width * s.height;
+    }
+  }
+  return 0.0;
+}
+
+AnalyticCollider::AnalyticCollider(const Shape& shape) : m_shape(shape) { validate(m_shape); }
+
+double AnalyticCollider::local_distance(const Eigen::Vector3d& p, Eigen::Vector3d* g) const {
+  return shape_distance(m_shape, p, g);
+}
+
+Aabb AnalyticCollider::local_bounds() const { return shape_bounds(m_shape); }
+
+}  // namespace papersim::collision

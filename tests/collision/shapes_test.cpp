@@ -1,0 +1,156 @@
+#include "collision/errors.hpp"
+#include "collision/shapes.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <random>
+#include <vector>
+
+namespace pc = papersim::collision;
+
+namespace {
+
+using Triangle = std::array<Eigen::Vector3d, 3>;
+
+/// Closest point on triangle abc to p (Ericson, Real-Time Collision Detection, 5.1.5).
+Eigen::Vector3d closest_on_triangle(const Eigen::Vector3d& p, const Triangle& t) {
+  const Eigen::Vector3d &a = t[0], &b = t[1], &c = t[2];
+  const Eigen::Vector3d ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= 0 && d2 <= 0) return a;
+  const Eigen::Vector3d bp = p - b;
+  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0 && d4 <= d3) return b;
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) return a + d1 / (d1 - d3) * ab;
+  const Eigen::Vector3d cp = p - c;
+  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= 0 && d5 <= d6) return c;
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + d2 / (d2 - d6) * ac;
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0)
+    return b + (d4 - d3) / ((d4 - d3) + (d5 - d6)) * (c - b);
+  const double denom = 1.0 / (va + vb + vc);
+  return a + ab * (vb * denom) + ac * (vc * denom);
+}
+
+double unsigned_distance(const Eigen::Vector3d& p, const std::vector<Triangle>& tris) {
+  double best = 1e300;
+  for (const Triangle& t : tris) best = std::min(best, (p - closest_on_triangle(p, t)).norm());
+  return best;
+}
+
+/// The gable prism as triangles (exact: it is a polyhedron).
+std::vector<Triangle> gable_triangles(double w, double h, double l) {
+  const double x0 = -l / 2, x1 = l / 2;
+  const Eigen::Vector3d a0(x0, -w, 0), b0(x0, w, 0), c0(x0, 0, h);
+  const Eigen::Vector3d a1(x1, -w, 0), b1(x1, w, 0), c1(x1, 0, h);
+  return {{a0, c0, b0}, {a1, b1, c1}, {a0, b0, b1}, {a0, b1, a1},
+          {b0, c0, c1}, {b0, c1, b1}, {c0, a0, a1}, {c0, a1, c1}};
+}
+
+std::vector<Triangle> box_triangles(const Eigen::Vector3d& e) {
+  std::vector<Triangle> tris;
+  for (int axis = 0; axis < 3; ++axis)
+    for (double s : {-1.0, 1.0}) {
+      const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+      Eigen::Vector3d q[4];
+      for (int k = 0; k < 4; ++k) {
+        q[k][axis] = s * e[axis];
+        q[k][u] = ((k == 1 || k == 2) ? 1 : -1) * e[u];
+        q[k][v] = (k >= 2 ? 1 : -1) * e[v];
+      }
+      tris.push_back({q[0], q[1], q[2]});
+      tris.push_back({q[0], q[2], q[3]});
+    }
+  return tris;
+}
+
+/// Checks |phi| against a brute-force polyhedron distance and the gradient against a central
+/// difference at random points around the shape.
+void check_polyhedron(const pc::Shape& s, const std::vector<Triangle>& tris) {
+  std::mt19937 rng(7);
+  pc::Aabb b = pc::shape_bounds(s);
+  b.inflate(0.02);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  for (int i = 0; i < 2000; ++i) {
+    const Eigen::Vector3d p = b.lo + (b.hi - b.lo).cwiseProduct(Eigen::Vector3d(u(rng), u(rng), u(rng)));
+    Eigen::Vector3d g;
+    const double d = pc::shape_distance(s, p, &g);
+    ASSERT_NEAR(std::abs(d), unsigned_distance(p, tris), 1e-12) << p.transpose();
+    ASSERT_NEAR(g.norm(), 1.0, 1e-12);
+    const double h = 1e-7;
+    Eigen::Vector3d fd;
+    for (int k = 0; k < 3; ++k) {
+      const Eigen::Vector3d e = Eigen::Vector3d::Unit(k) * h;
+      fd[k] = (pc::shape_distance(s, p + e, nullptr) - pc::shape_distance(s, p - e, nullptr)) / (2 * h);
+    }
+    // The field is smooth except on the medial axis: count disagreements, allow a few.
+    if ((fd - g).norm() > 1e-5) {
+      static int kinks = 0;
+      ASSERT_LT(++kinks, 40) << "gradient mismatch at " << p.transpose();
+    }
+  }
+}
+
+}  // namespace
+
+TEST(Shapes, BoxMatchesPolyhedronDistance) {
+  pc::Shape s;
+  s.kind = pc::ShapeKind::box;
+  s.half_extents = {0.03, 0.02, 0.01};
+  check_polyhedron(s, box_triangles(s.half_extents));
+  EXPECT_NEAR(pc::shape_distance(s, {0, 0, 0}, nullptr), -0.01, 1e-15);
+}
+
+TEST(Shapes, GableMatchesPolyhedronDistance) {
+  pc::Shape s;
+  s.kind = pc::ShapeKind::gable;
+  s.half_width = 0.04;
+  s.height = 0.03;
+  s.length = 0.2;
+  check_polyhedron(s, gable_triangles(s.half_width, s.height, s.length));
+  Eigen::Vector3d g;
+  EXPECT_NEAR(pc::shape_distance(s, {0.0, 0.0, 0.05}, &g), 0.02, 1e-15);  // above the ridge
+  EXPECT_NEAR((g - Eigen::Vector3d::UnitZ()).norm(), 0.0, 1e-15);
+}
+
+TEST(Shapes, RoundShapes) {
+  pc::Shape s;
+  Eigen::Vector3d g;
+  s.kind = pc::ShapeKind::sphere;
+  s.radius = 0.05;
+  EXPECT_NEAR(pc::shape_distance(s, {0.03, 0.04, 0.12}, &g), 0.13 - 0.05, 1e-15);
+  EXPECT_NEAR((g - Eigen::Vector3d(0.03, 0.04, 0.12) / 0.13).norm(), 0.0, 1e-15);
+  s.kind = pc::ShapeKind::cylinder;
+  s.length = 0.2;
+  EXPECT_NEAR(pc::shape_distance(s, {0.05, 0.0, 0.08}, &g), 0.03, 1e-15);   // side
+  EXPECT_NEAR(pc::shape_distance(s, {0.13, 0.0, 0.01}, &g), 0.03, 1e-15);   // cap
+  EXPECT_NEAR((g - Eigen::Vector3d::UnitX()).norm(), 0.0, 1e-15);
+  EXPECT_NEAR(pc::shape_distance(s, {0.13, 0.0, 0.09}, &g), 0.05, 1e-15);   // rim: 3-4-5
+  EXPECT_NEAR(pc::shape_distance(s, {0.0, 0.0, 0.0}, &g), -0.05, 1e-15);
+  s.kind = pc::ShapeKind::capsule;
+  EXPECT_NEAR(pc::shape_distance(s, {0.13, 0.0, 0.0}, &g), 0.03, 1e-15);    // tip at x = 0.1
+  EXPECT_NEAR(pc::shape_distance(s, {0.0, 0.06, 0.0}, &g), 0.01, 1e-15);
+  EXPECT_NEAR((g - Eigen::Vector3d::UnitY()).norm(), 0.0, 1e-15);
+}
+
+TEST(Shapes, InvalidDimensionsNameTheField) {
+  pc::Shape s;
+  s.kind = pc::ShapeKind::gable;
+  s.height = -1.0;
+  try {
+    pc::AnalyticCollider c(s);
+    FAIL() << "expected ColliderError";
+  } catch (const pc::ColliderError& e) {
+    EXPECT_NE(std::string(e.what()).find("height"), std::string::npos) << e.what();
+  }
+  s.kind = pc::ShapeKind::capsule;
+  s.radius = 0.1;
+  s.length = 0.1;
+  EXPECT_THROW(pc::AnalyticCollider{s}, pc::ColliderError);
+}
