@@ -1,0 +1,15 @@
+# Writes templates_data.hpp: every render_templates/ file as a raw string literal.
+# Usage: cmake -DOUT=... -DFILES="a;b" -P embed_templates.cmake
+set(content "// generated from render_templates/ by scenegen/embed_templates.cmake\n#pragma once\n")
+string(APPEND content "namespace papersim::scenegen {\nstruct EmbeddedTemplate { const char* name; const char* text; };\n")
+string(APPEND content "inline const EmbeddedTemplate EMBEDDED_TEMPLATES[] = {\n")
+string(REPLACE "|" ";" FILES "${FILES}")
+foreach(f IN LISTS FILES)
+  file(READ "${f}" text)
+  get_filename_component(name "${f}" NAME)
+  string(APPEND content "  {\"${name}\", R\"SGTPL(${text})SGTPL\"},\n")
+endforeach()
+string(APPEND content "};\n}  // namespace papersim::scenegen\n")
+file(WRITE "${OUT}.tmp" "${content}")
+file(COPY_FILE "${OUT}.tmp" "${OUT}" ONLY_IF_DIFFERENT)
+file(REMOVE "${OUT}.tmp")

@@ -1,0 +1,200 @@
+#include "scenegen/image_io.hpp"
+
+#include <png.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <memory>
+
+#include <ImfChannelList.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfInputFile.h>
+#include <ImfOutputFile.h>
+
+#include "scenegen/errors.hpp"
+
+namespace papersim::scenegen {
+namespace {
+
+// libpng reports through longjmp; its default handler would also print to stderr.
+void png_error_quiet(png_structp png, png_const_charp) { png_longjmp(png, 1); }
+void png_warning_quiet(png_structp, png_const_charp) {}
+
+struct FileCloser {
+  void operator()(FILE* f) const { if (f) std::fclose(f); }
+};
+
+bool starts_with(const std::string& path, const unsigned char* sig, std::size_t n) {
+  std::ifstream in(path, std::ios::binary);
+  std::vector<unsigned char> buf(n);
+  if (!in.read(reinterpret_cast<char*>(buf.data()), static_cast<std::streamsize>(n))) return false;
+  return std::memcmp(buf.data(), sig, n) == 0;
+}
+
+/// Decode a PNG into 16-bit samples (8-bit samples are widened by x257).
+std::vector<std::uint16_t> decode(const std::string& path, int& w, int& h, int& c, int& bits) {
+  std::unique_ptr<FILE, FileCloser> fp(std::fopen(path.c_str(), "rb"));
+  if (!fp) throw IoError("cannot open image '" + path + "'");
+  if (!is_png_file(path)) throw IoError("'" + path + "' is not a PNG file");
+  png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, nullptr, png_error_quiet, png_warning_quiet);
+  png_infop info = png_create_info_struct(png);
+  std::vector<std::uint16_t> out;
+  if (setjmp(png_jmpbuf(png))) {
+    png_destroy_read_struct(&png, &info, nullptr);
+    throw IoError("cannot decode PNG '" + path + "'");
+  }
+  png_init_io(png, fp.get());
+  png_read_info(png, info);
+  png_set_expand(png);  // palette -> RGB, low-bit grey -> 8 bit, tRNS -> alpha
+  png_set_swap(png);    // 16-bit samples in host (little-endian) order
+  png_read_update_info(png, info);
+  w = static_cast<int>(png_get_image_width(png, info));
+  h = static_cast<int>(png_get_image_height(png, info));
+  c = png_get_channels(png, info);
+  bits = png_get_bit_depth(png, info);
+  const std::size_t rowbytes = png_get_rowbytes(png, info);
+  std::vector<unsigned char> buf(rowbytes * h);
+  std::vector<png_bytep> rows(h);
+  for (int y = 0; y < h; ++y) rows[y] = buf.data() + rowbytes * y;
+  png_read_image(png, rows.data());
+  png_destroy_read_struct(&png, &info, nullptr);
+  out.resize(std::size_t(w) * h * c);
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    if (bits == 16) {
+      std::uint16_t v;
+      std::memcpy(&v, buf.data() + 2 * i, 2);
+      out[i] = v;
+    } else {
+      out[i] = static_cast<std::uint16_t>(buf[i] * 257);
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+bool is_png_file(const std::string& path) {
+  static const unsigned char sig[8] = {0x89, 'P', 'N', 'G', 0x0D, 0x0A, 0x1A, 0x0A};
+  return starts_with(path, sig, 8);
+}
+
+bool is_jpeg_file(const std::string& path) {
+  static const unsigned char sig[3] = {0xFF, 0xD8, 0xFF};
+  return starts_with(path, sig, 3);
+}
+
+std::vector<std::uint16_t> read_png16(const std::string& path, int& w, int& h, int& c) {
+  int bits = 0;
+  return decode(path, w, h, c, bits);
+}
+
+ImageF read_png(const std::string& path) {
+  int w = 0, h = 0, c = 0, bits = 0;
+  const auto raw = decode(path, w, h, c, bits);
+  ImageF img(w, h, c);
+  for (std::size_t i = 0; i < raw.size(); ++i) img.data[i] = raw[i] / 65535.0f;
+  return img;
+}
+
+void write_png(const std::string& path, const ImageF& image, int bits) {
+  std::unique_ptr<FILE, FileCloser> fp(std::fopen(path.c_str(), "wb"));
+  if (!fp) throw IoError("cannot write image '" + path + "'");
+  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, png_error_quiet, png_warning_quiet);
+  png_infop info = png_create_info_struct(png);
+  if (setjmp(png_jmpbuf(png))) {
+    png_destroy_write_struct(&png, &info);
+    throw IoError("cannot encode PNG '" + path + "'");
+  }
+  png_init_io(png, fp.get());
+  const int type = image.channels == 1 ? PNG_COLOR_TYPE_GRAY
+                   : image.channels == 3 ? PNG_COLOR_TYPE_RGB : PNG_COLOR_TYPE_RGBA;
+  png_set_IHDR(png, info, image.width, image.height, bits, type, PNG_INTERLACE_NONE,
+               PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+  png_write_info(png, info);
+  const int bytes = bits / 8;
+  const double maxv = bits == 16 ? 65535.0 : 255.0;
+  std::vector<unsigned char> row(std::size_t(image.width) * image.channels * bytes);
+  for (int y = 0; y < image.height; ++y) {
+    for (int i = 0; i < image.width * image.channels; ++i) {
+      const double v = std::clamp(static_cast<double>(image.data[std::size_t(y) * image.width * image.channels + i]), 0.0, 1.0);
+      const auto q = static_cast<unsigned>(std::lround(v * maxv));
+      if (bytes == 2) {
+        row[2 * i] = static_cast<unsigned char>(q >> 8);  // PNG is big-endian
+        row[2 * i + 1] = static_cast<unsigned char>(q & 0xFF);
+      } else {
+        row[i] = static_cast<unsigned char>(q);
+      }
+    }
+    png_write_row(png, row.data());
+  }
+  png_write_end(png, nullptr);
+  png_destroy_write_struct(&png, &info);
+  if (std::fflush(fp.get()) != 0) throw IoError("cannot write image '" + path + "'");
+}
+
+void write_exr(const std::string& path, const ImageF& image, const std::vector<std::string>& names) {
+  try {
+    Imf::Header header(image.width, image.height);
+    header.compression() = Imf::ZIP_COMPRESSION;
+    for (const auto& n : names) header.channels().insert(n, Imf::Channel(Imf::FLOAT));
+    Imf::OutputFile file(path.c_str(), header);
+    Imf::FrameBuffer fb;
+    const std::size_t xs = sizeof(float) * image.channels, ys = xs * image.width;
+    for (std::size_t c = 0; c < names.size(); ++c)
+      fb.insert(names[c], Imf::Slice(Imf::FLOAT, (char*)(image.data.data() + c), xs, ys));
+    file.setFrameBuffer(fb);
+    file.writePixels(image.height);
+  } catch (const std::exception& e) {
+    throw IoError("cannot write EXR '" + path + "': " + e.what());
+  }
+}
+
+ImageF read_exr(const std::string& path, const std::vector<std::string>& names) {
+  try {
+    Imf::InputFile file(path.c_str());
+    const auto dw = file.header().dataWindow();
+    ImageF img(dw.max.x - dw.min.x + 1, dw.max.y - dw.min.y + 1, static_cast<int>(names.size()));
+    Imf::FrameBuffer fb;
+    const std::size_t xs = sizeof(float) * img.channels, ys = xs * img.width;
+    for (std::size_t c = 0; c < names.size(); ++c)
+      fb.insert(names[c], Imf::Slice(Imf::FLOAT, (char*)(img.data.data() + c) - (dw.min.x * xs + dw.min.y * ys), xs, ys));
+    file.setFrameBuffer(fb);
+    file.readPixels(dw.min.y, dw.max.y);
+    return img;
+  } catch (const std::exception& e) {
+    throw IoError("cannot read EXR '" + path + "': " + e.what());
+  }
+}
+
+void write_npy(const std::string& path, const ImageF& image) {
+  std::ofstream out(path, std::ios::binary);
+  if (!out) throw IoError("cannot write '" + path + "'");
+  std::string header = "{'descr': '<f4', 'fortran_order': False, 'shape': (" +
+                       std::to_string(image.height) + ", " + std::to_string(image.width) + ", " +
+                       std::to_string(image.channels) + "), }";
+  const std::size_t total = 10 + header.size() + 1;
+  header.append((64 - total % 64) % 64, ' ');
+  header += '\n';
+  const auto len = static_cast<std::uint16_t>(header.size());
+  out.write("\x93NUMPY\x01\x00", 8);
+  out.put(static_cast<char>(len & 0xFF));
+  out.put(static_cast<char>(len >> 8));
+  out << header;
+  out.write(reinterpret_cast<const char*>(image.data.data()),
+            static_cast<std::streamsize>(image.data.size() * sizeof(float)));
+  if (!out) throw IoError("cannot write '" + path + "'");
+}
+
+double srgb_to_linear(double v) {
+  return v <= 0.04045 ? v / 12.92 : std::pow((v + 0.055) / 1.055, 2.4);
+}
+double linear_to_srgb(double v) {
+  v = std::clamp(v, 0.0, 1.0);
+  return v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1.0 / 2.4) - 0.055;
+}
+
+}  // namespace papersim::scenegen

@@ -1,0 +1,514 @@
+#include "scenegen/job.hpp"
+
+#include <fcntl.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <csignal>
+#include <thread>
+
+#include <algorithm>
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "scenegen/errors.hpp"
+#include "scenegen/geometry.hpp"
+#include "scenegen/image_io.hpp"
+#include "scenegen/meta.hpp"
+#include "scenegen/resting_pose.hpp"
+#include "scenegen/scene_draw.hpp"
+#include "scenegen/sheet_obj.hpp"
+#include "scenegen/templates.hpp"
+
+#ifndef PAPERSIM_VERSION
+#define PAPERSIM_VERSION "unknown"
+#endif
+
+namespace papersim::scenegen {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+thread_local std::string g_failed_meta;
+
+void write_text(const fs::path& path, const std::string& text) {
+  std::ofstream out(path, std::ios::binary);
+  out << text;
+  if (!out.flush()) throw IoError("cannot write '" + path.string() + "'");
+}
+
+template <class Writer>
+void write_with(const fs::path& path, Writer&& writer) {
+  std::ofstream out(path, std::ios::binary);
+  if (!out) throw IoError("cannot write '" + path.string() + "'");
+  writer(out);
+  if (!out.flush()) throw IoError("cannot write '" + path.string() + "'");
+}
+
+std::string lower_ext(const fs::path& p) {
+  std::string e = p.extension().string();
+  std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return std::tolower(c); });
+  return e;
+}
+
+/// Sorted PNG / JPEG files of a folder. @throw IoError when it cannot be listed or is empty.
+std::vector<fs::path> image_files(const std::string& dir, const std::string& what) {
+  std::error_code ec;
+  std::vector<fs::path> files;
+  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string e = lower_ext(it->path());
+    if (it->is_regular_file() && (e == ".png" || e == ".jpg" || e == ".jpeg")) files.push_back(it->path());
+  }
+  if (ec) throw IoError("cannot list " + what + " folder '" + dir + "': " + ec.message());
+  if (files.empty()) throw InputError(what + " folder '" + dir + "' has no PNG or JPEG file");
+  std::sort(files.begin(), files.end());
+  return files;
+}
+
+/// Check that an image is a readable PNG or JPEG. @throw IoError / InputError
+void check_image(const fs::path& p, const std::string& what) {
+  if (!fs::is_regular_file(p)) throw IoError(what + " '" + p.string() + "' does not exist");
+  if (is_png_file(p.string())) {
+    read_png(p.string());  // throws when truncated or corrupt
+    return;
+  }
+  if (!is_jpeg_file(p.string()))
+    throw InputError(what + " '" + p.string() + "' is not a readable PNG or JPEG image");
+}
+
+std::uint64_t fnv1a_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::uint64_t h = 1469598103934665603ULL;
+  char buf[65536];
+  while (in.read(buf, sizeof buf) || in.gcount() > 0) {
+    for (std::streamsize i = 0; i < in.gcount(); ++i)
+      h = (h ^ static_cast<unsigned char>(buf[i])) * 1099511628211ULL;
+    if (!in) break;
+  }
+  return h;
+}
+
+std::string hex(std::uint64_t v) {
+  std::ostringstream s;
+  s << std::hex << v;
+  return s.str();
+}
+
+json options_json(const SampleOptions& o, const std::vector<RawPass>& raw, int doc_w, int doc_h) {
+  json passes = json::array(), raws = json::array();
+  for (Pass p : o.passes) passes.push_back(pass_name(p));
+  for (RawPass r : raw) raws.push_back(raw_pass_name(r));
+  const int gw = o.backward.grid_width > 0 ? o.backward.grid_width : o.width;
+  const int gh = o.backward.grid_height > 0 ? o.backward.grid_height : o.height;
+  return {{"passes", passes}, {"raw_renders", raws}, {"width", o.width}, {"height", o.height},
+          {"quality", quality_name(o.quality)}, {"fine_passes", o.fine_passes},
+          {"backward", {{"grid_width", gw}, {"grid_height", gh},
+                        {"tolerance_pixels", o.backward.tolerance_pixels}}},
+          {"document_render", doc_w > 0 ? json{{"width_px", doc_w}, {"height_px", doc_h}} : json()}};
+}
+
+/// Copy the document into the job; returns its file name there and its meta.json entry.
+std::pair<std::string, json> place_document(const SampleOptions& o, const SheetMesh& mesh,
+                                            const fs::path& job, int threads, const std::string& tpl_dir) {
+  fs::path src;
+  if (!o.document.empty()) src = o.document;
+  else if (!o.documents_dir.empty()) {
+    const auto files = image_files(o.documents_dir, "documents");
+    Rng rng(o.seed, "document-choice");
+    src = files[static_cast<std::size_t>(rng.randint(0, static_cast<int>(files.size()) - 1))];
+  }
+  if (!src.empty()) {
+    check_image(src, "document");
+    const std::string name = "document" + std::string(is_png_file(src.string()) ? ".png" : ".jpg");
+    fs::copy_file(src, job / name, fs::copy_options::overwrite_existing);
+    return {name, {{"source", "file"}, {"file", src.filename().string()}, {"fnv1a64", hex(fnv1a_file(src.string()))}}};
+  }
+  DocumentParams dp;
+  dp.page_width_mm = mesh.width * 1000.0;
+  dp.page_height_mm = mesh.height * 1000.0;
+  dp.dpi = o.document_dpi;
+  const DocumentLayout doc = generate_document(o.seed, dp);
+  for (const auto& [name, path] : document_font_files()) fs::copy_file(path, job / name, fs::copy_options::overwrite_existing);
+  write_text(job / "document.inc", template_text("document.inc", tpl_dir));
+  write_with(job / "document.pov", [&](std::ostream& out) { write_document_pov(out, doc); });
+  write_with(job / "document.ini", [&](std::ostream& out) { write_document_ini(out, doc.width_px(), doc.height_px(), 0); });
+  (void)threads;
+  json j = to_json(doc);
+  j["source"] = "built-in";
+  return {"document.png", j};
+}
+
+void remove_quietly(const fs::path& p) {
+  std::error_code ec;
+  fs::remove_all(p, ec);
+}
+
+}  // namespace
+
+double RunReport::total() const {
+  double t = 0;
+  for (const auto& s : seconds) t += s.second;
+  return t;
+}
+
+const std::string& failed_meta() { return g_failed_meta; }
+
+void prepare_job(const SampleOptions& o, const std::string& job_dir) {
+  if (o.width < 8 || o.height < 8) throw InputError("image size must be at least 8 x 8");
+  const SheetMesh mesh = read_sheet_obj(o.mesh_path);
+  const Stage stage = find_resting_pose(mesh);
+  Rng cam_rng(o.seed, "camera");
+  const CameraChoice choice = choose_camera(mesh, stage, o.width, o.height, o.camera, cam_rng);
+
+  json meta;
+  meta["scenegen_version"] = PAPERSIM_VERSION;
+  meta["seed"] = o.seed;
+  meta["mesh"] = {{"file", fs::path(o.mesh_path).filename().string()},
+                  {"fnv1a64", hex(fnv1a_file(o.mesh_path))}, {"vertices", mesh.num_vertices()},
+                  {"faces", mesh.num_faces()}, {"width_m", mesh.width}, {"height_m", mesh.height},
+                  {"size_from_header", mesh.size_from_header}};
+  meta["stage"] = to_json(stage);
+  meta["camera"] = to_json(choice, o.camera);
+  if (!choice.valid) {
+    meta["status"] = "failed";
+    meta["failure"] = "no valid camera direction: none of the 26 candidates sees the whole sheet "
+                      "in frame (2% margin) without self-occlusion and backfacing";
+    g_failed_meta = meta.dump(2) + "\n";
+    throw NoValidCameraError("mesh '" + o.mesh_path + "': " + meta["failure"].get<std::string>());
+  }
+
+  const fs::path final_dir(job_dir), tmp = final_dir.string() + ".partial";
+  remove_quietly(tmp);
+  std::error_code ec;
+  fs::create_directories(tmp, ec);
+  if (ec) throw IoError("cannot create job folder '" + tmp.string() + "': " + ec.message());
+  try {
+    SceneDescription scene;
+    scene.camera = choice.camera;
+    scene.stage = stage;
+    scene.quality = quality_settings(o.quality);
+    scene.sheet_width = mesh.width;
+    scene.sheet_height = mesh.height;
+    Rng light_rng(o.seed, "lighting"), bg_rng(o.seed, "background"), paper_rng(o.seed, "paper");
+    scene.lighting = draw_lighting(light_rng, stage, stage.centre_of_mass, o.rig);
+    std::vector<std::string> bg_images;
+    std::vector<fs::path> bg_files;
+    if (!o.backgrounds_dir.empty()) {
+      bg_files = image_files(o.backgrounds_dir, "backgrounds");
+      for (const auto& f : bg_files) bg_images.push_back(f.string());
+    }
+    scene.background = draw_background(bg_rng, bg_images);
+    if (scene.background.kind == "image") {
+      const fs::path src = scene.background.image;
+      check_image(src, "background image");
+      scene.background.image = "background" + std::string(is_png_file(src.string()) ? ".png" : ".jpg");
+      fs::copy_file(src, tmp / scene.background.image, fs::copy_options::overwrite_existing);
+    }
+    scene.paper = draw_paper(paper_rng);
+    set_coords_encoding(scene, mesh);
+    const auto [doc_file, doc_meta] = place_document(o, mesh, tmp, o.threads, o.templates_dir);
+    scene.document_file = doc_file;
+
+    for (const char* name : {"main.pov", "passes.inc", "paper.inc", "backgrounds.inc", "lights.inc"})
+      write_text(tmp / name, template_text(name, o.templates_dir));
+    write_with(tmp / "sheet.inc", [&](std::ostream& out) { write_sheet_inc(out, mesh, vertex_normals(mesh)); });
+    write_with(tmp / "scene.inc", [&](std::ostream& out) { write_scene_inc(out, scene); });
+    write_with(tmp / "sheet.obj", [&](std::ostream& out) { write_sheet_obj(out, mesh); });
+    const auto raw = raw_passes_for(o.passes, o.fine_passes);
+    std::string run_sh = "#!/bin/sh\n# Renders this job with POV-Ray 3.7 alone; then: scenegen finish THIS_DIR --out DIR\nset -e\ncd \"$(dirname \"$0\")\"\n";
+    if (fs::exists(tmp / "document.ini")) run_sh += "povray document.ini\n";
+    for (RawPass r : raw) {
+      const std::string ini = raw_pass_name(r) + ".ini";
+      write_with(tmp / ini, [&](std::ostream& out) { write_pass_ini(out, r, o.width, o.height, scene.quality, o.threads); });
+      run_sh += "povray " + ini + "\n";
+    }
+    write_text(tmp / "run.sh", run_sh);
+    fs::permissions(tmp / "run.sh", fs::perms::owner_exec | fs::perms::group_exec | fs::perms::others_exec, fs::perm_options::add);
+
+    meta["status"] = "ok";
+    meta["image"] = {{"width", o.width}, {"height", o.height}};
+    meta["quality"] = quality_name(o.quality);
+    meta["quality_settings"] = {{"radiosity", scene.quality.radiosity}, {"area_samples", scene.quality.area_samples},
+                                {"antialias", scene.quality.antialias}, {"ambient", scene.quality.ambient}};
+    meta["lighting"] = to_json(scene.lighting);
+    meta["background"] = to_json(scene.background);
+    meta["background"]["gap_m"] = scene.background_gap;
+    meta["paper"] = to_json(scene.paper);
+    meta["document"] = doc_meta;
+    meta["encoding"] = {{"coords_min", to_json(scene.coords_min)}, {"coords_span", scene.coords_span},
+                        {"uv_encoding", UV_ENCODING}, {"fine_factor", FINE_FACTOR}};
+    json job = options_json(o, raw, doc_meta.value("width_px", 0), doc_meta.value("height_px", 0));
+    job["meta"] = meta;
+    job["document_file"] = doc_file;
+    write_text(tmp / "job.json", job.dump(2) + "\n");
+    remove_quietly(final_dir);
+    fs::rename(tmp, final_dir, ec);
+    if (ec) throw IoError("cannot rename job folder into '" + final_dir.string() + "': " + ec.message());
+  } catch (...) {
+    remove_quietly(tmp);
+    throw;
+  }
+}
+
+namespace {
+
+/// Start POV-Ray on one .ini in the job folder, output to <name>.log. @throw RenderError
+pid_t start_povray(const fs::path& job_rel, const std::string& povray, const std::string& ini) {
+  const fs::path job = fs::absolute(job_rel);
+  const std::string log = (job / (fs::path(ini).stem().string() + ".log")).string();
+  const pid_t pid = fork();
+  if (pid < 0) throw RenderError("cannot start POV-Ray (fork failed)");
+  if (pid == 0) {
+    if (chdir(job.c_str()) != 0) _exit(126);
+    const int fd = open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    if (fd >= 0) { dup2(fd, 1); dup2(fd, 2); close(fd); }
+    execlp(povray.c_str(), povray.c_str(), ini.c_str(), static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  return pid;
+}
+
+/// Turn a finished POV-Ray's exit status into success or a RenderError with its log's tail.
+void check_povray(const fs::path& job, const std::string& povray, const std::string& ini, int status) {
+  if (WIFEXITED(status) && WEXITSTATUS(status) == 127)
+    throw RenderError("cannot run POV-Ray '" + povray + "' (is povray 3.7 installed?)");
+  if (WIFEXITED(status) && WEXITSTATUS(status) == 0) return;
+  const std::string log = (fs::absolute(job) / (fs::path(ini).stem().string() + ".log")).string();
+  std::ifstream in(log);
+  std::string line, tail;
+  std::vector<std::string> lines;
+  while (std::getline(in, line)) lines.push_back(line);
+  for (std::size_t i = lines.size() > 8 ? lines.size() - 8 : 0; i < lines.size(); ++i) tail += "\n  " + lines[i];
+  throw RenderError("POV-Ray failed on " + ini + " (log " + log + "):" + tail);
+}
+
+json read_job(const fs::path& job) {
+  std::ifstream in(job / "job.json");
+  if (!in) throw IoError("'" + job.string() + "' is not a scenegen job folder (no job.json)");
+  try {
+    return json::parse(in);
+  } catch (const json::exception& e) {
+    throw IoError("cannot parse '" + (job / "job.json").string() + "': " + e.what());
+  }
+}
+
+}  // namespace
+
+RunReport run_job(const std::string& job_dir, const RunOptions& run) {
+  const fs::path job(job_dir);
+  const json j = read_job(job);
+  std::vector<std::string> inis;
+  if (fs::exists(job / "document.ini")) inis.push_back("document.ini");
+  for (const auto& r : j.at("raw_renders")) inis.push_back(r.get<std::string>() + ".ini");
+  // Renders are single-threaded POV-Ray processes run side by side: multi-threaded radiosity
+  // is not reproducible, one thread is. The document page comes first (the others read it);
+  // the longest renders (photo, shading) start first.
+  std::vector<std::size_t> order;
+  for (std::size_t i = inis.size(); i-- > 0;) order.push_back(i);
+  if (!inis.empty() && inis[0] == "document.ini") std::rotate(order.begin(), order.end() - 1, order.end());
+  const int slots = std::max(1, run.parallel > 0 ? run.parallel : static_cast<int>(std::thread::hardware_concurrency()));
+  RunReport report;
+  report.seconds.resize(inis.size());
+  struct Running { pid_t pid; std::size_t index; std::chrono::steady_clock::time_point t0; };
+  std::vector<Running> running;
+  std::size_t next = 0;
+  int done = 0;
+  const auto name_of = [&](std::size_t i) { return fs::path(inis[i]).stem().string(); };
+  const auto kill_all = [&] { for (auto& r : running) { kill(r.pid, SIGTERM); waitpid(r.pid, nullptr, 0); } };
+  try {
+    while (next < order.size() || !running.empty()) {
+      const bool barrier = !running.empty() && inis[running.front().index] == "document.ini";
+      while (next < order.size() && static_cast<int>(running.size()) < slots && !barrier) {
+        const std::size_t i = order[next++];
+        if (run.progress) run.progress({name_of(i), static_cast<int>(next), static_cast<int>(inis.size()), -1.0});
+        running.push_back({start_povray(job, run.povray, inis[i]), i, std::chrono::steady_clock::now()});
+        if (inis[i] == "document.ini") break;
+      }
+      bool reaped = false;
+      for (std::size_t k = 0; k < running.size(); ++k) {
+        int status = 0;
+        if (waitpid(running[k].pid, &status, WNOHANG) != running[k].pid) continue;
+        const Running r = running[k];
+        running.erase(running.begin() + static_cast<long>(k));
+        check_povray(job, run.povray, inis[r.index], status);
+        const double sec = std::chrono::duration<double>(std::chrono::steady_clock::now() - r.t0).count();
+        report.seconds[r.index] = {name_of(r.index), sec};
+        ++done;
+        if (run.progress) run.progress({name_of(r.index), done, static_cast<int>(inis.size()), sec});
+        reaped = true;
+        break;
+      }
+      if (!reaped) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+  } catch (...) {
+    kill_all();
+    throw;
+  }
+  return report;
+}
+
+namespace {
+
+ImageF to_srgb(const ImageF& linear) {
+  ImageF out = linear;
+  for (float& v : out.data) v = static_cast<float>(linear_to_srgb(v));
+  return out;
+}
+
+ImageF channel(const ImageF& img, int c) {
+  ImageF out(img.width, img.height, 1);
+  for (std::size_t p = 0; p < std::size_t(img.width) * img.height; ++p) out.data[p] = img.data[p * img.channels + c];
+  return out;
+}
+
+void finish_into(const fs::path& job, const fs::path& stage) {
+  const json j = read_job(job);
+  json meta = j.at("meta");
+  std::vector<std::string> passes;
+  for (const auto& p : j.at("passes")) passes.push_back(p.get<std::string>());
+  const auto has = [&](const std::string& p) { return std::find(passes.begin(), passes.end(), p) != passes.end(); };
+  const bool fine = j.at("fine_passes").get<bool>();
+  const auto raw = [&](RawPass r) {
+    const fs::path p = job / raw_file(r);
+    if (!fs::exists(p)) throw IoError("raw render '" + p.string() + "' missing: run the job first");
+    return p.string();
+  };
+  json files = json::object();
+  ImageF uv, mask;
+  if (has("uv") || has("mask") || has("backward") || has("coords") || has("normal")) {
+    uv = decode_uv(raw(RawPass::uv), fine && has("uv") ? raw(RawPass::uv_fine) : "");
+    mask = channel(uv, 2);
+  }
+  if (has("uv")) {
+    write_exr((stage / "uv.exr").string(), uv, {"R", "G", "B"});
+    files["uv.exr"] = "float32 R = u, G = v (material x / width, y / height), B = mask";
+  }
+  if (has("mask")) {
+    write_png((stage / "mask.png").string(), mask, 8);
+    files["mask.png"] = "8-bit grey, 255 where the sheet is seen";
+  }
+  if (has("coords")) {
+    const json& e = meta.at("encoding");
+    const Eigen::Vector3d lo(e["coords_min"][0], e["coords_min"][1], e["coords_min"][2]);
+    const ImageF xyz = decode_coords(raw(RawPass::coords), fine ? raw(RawPass::coords_fine) : "",
+                                     lo, e.at("coords_span").get<double>(), mask);
+    write_exr((stage / "coords.exr").string(), xyz, {"R", "G", "B"});
+    files["coords.exr"] = "float32 R, G, B = world x, y, z [m], 0 outside the sheet";
+  }
+  if (has("normal")) {
+    write_exr((stage / "normal.exr").string(), decode_normal(raw(RawPass::normal), mask), {"R", "G", "B"});
+    files["normal.exr"] = "float32 unit world normal turned towards the camera, 0 outside the sheet";
+  }
+  if (has("albedo")) {
+    write_png((stage / "albedo.png").string(), to_srgb(decode_linear(raw(RawPass::albedo))), 16);
+    files["albedo.png"] = "16-bit sRGB document colour times paper colour, unlit, background 0";
+  }
+  if (has("shading")) {
+    write_png((stage / "shading.png").string(), to_srgb(decode_linear(raw(RawPass::shading))), 16);
+    files["shading.png"] = "16-bit sRGB photo lighting on white paper (relief kept), background 0";
+  }
+  if (has("image")) {
+    write_png((stage / "image.png").string(), read_png(raw(RawPass::image)), 8);
+    files["image.png"] = "8-bit sRGB photo";
+  }
+  if (has("backward")) {
+    const SheetMesh mesh = read_sheet_obj((job / "sheet.obj").string());
+    BackwardParams bp;
+    bp.grid_width = j["backward"]["grid_width"];
+    bp.grid_height = j["backward"]["grid_height"];
+    bp.tolerance_pixels = j["backward"]["tolerance_pixels"];
+    const ImageF map = backward_map(mesh, camera_from_json(meta.at("camera")), uv, bp);
+    write_exr((stage / "backward.exr").string(), map, {"R", "G", "B"});
+    write_npy((stage / "backward.npy").string(), map);
+    files["backward.exr"] = "float32 grid over the flat page (row 0 = top): R, G = pixel x, y, B = visible";
+    files["backward.npy"] = "float32 (grid_height, grid_width, 3): pixel x, y, visible";
+    meta["backward"] = j["backward"];
+  }
+  const std::string doc = j.at("document_file").get<std::string>();
+  if (fs::exists(job / doc)) {
+    // Re-encoded: POV-Ray's PNG carries a creation time, which would break reproducibility.
+    if (is_png_file((job / doc).string())) write_png((stage / doc).string(), read_png((job / doc).string()), 8);
+    else fs::copy_file(job / doc, stage / doc, fs::copy_options::overwrite_existing);
+    files[doc] = "the flat document page (sRGB)";
+  }
+  meta["passes"] = j.at("passes");
+  meta["fine_passes"] = fine;
+  files["meta.json"] = "this file";
+  meta["files"] = files;
+  write_text(stage / "meta.json", meta.dump(2) + "\n");
+}
+
+/// Move every file of `stage` into `out` (rename), then remove `stage`.
+void publish(const fs::path& stage, const fs::path& out) {
+  std::vector<fs::path> files;
+  for (const auto& e : fs::directory_iterator(stage)) files.push_back(e.path());
+  std::sort(files.begin(), files.end());
+  for (const auto& f : files) {
+    std::error_code ec;
+    fs::rename(f, out / f.filename(), ec);
+    if (ec) throw IoError("cannot move '" + f.string() + "' into '" + out.string() + "': " + ec.message());
+  }
+  remove_quietly(stage);
+}
+
+}  // namespace
+
+void finish_job(const std::string& job_dir, const std::string& out_dir) {
+  const fs::path out(out_dir);
+  std::error_code ec;
+  const bool created = !fs::exists(out);
+  fs::create_directories(out, ec);
+  if (ec) throw IoError("cannot create '" + out_dir + "': " + ec.message());
+  const fs::path stage = out / ".scenegen-stage";
+  remove_quietly(stage);
+  fs::create_directories(stage);
+  try {
+    finish_into(job_dir, stage);
+    publish(stage, out);
+  } catch (...) {
+    remove_quietly(stage);
+    if (created) remove_quietly(out);
+    throw;
+  }
+}
+
+RunReport render_sample(const SampleOptions& options, const std::string& out_dir,
+                        const RunOptions& run, bool keep_job) {
+  const fs::path out(out_dir);
+  const bool created = !fs::exists(out);
+  std::error_code ec;
+  fs::create_directories(out, ec);
+  if (ec) throw IoError("cannot create '" + out_dir + "': " + ec.message());
+  const fs::path job = out / ".scenegen-job";
+  try {
+    try {
+      prepare_job(options, job.string());
+    } catch (const NoValidCameraError&) {
+      write_text(out / "meta.json", failed_meta());
+      throw;
+    }
+    RunReport report = run_job(job.string(), run);
+    finish_job(job.string(), out_dir);
+    if (keep_job) {
+      remove_quietly(out / "job");
+      fs::rename(job, out / "job");
+    } else {
+      remove_quietly(job);
+    }
+    return report;
+  } catch (const NoValidCameraError&) {
+    remove_quietly(job);
+    throw;
+  } catch (...) {
+    remove_quietly(job);
+    if (created) remove_quietly(out);
+    throw;
+  }
+}
+
+}  // namespace papersim::scenegen

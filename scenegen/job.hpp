@@ -1,0 +1,82 @@
+#pragma once
+/// A sample from mesh to files: `prepare` writes a self-contained POV-Ray job folder, `run`
+/// renders it with POV-Ray alone, `finish` decodes the raw renders into the final files;
+/// `render_sample` = prepare + run + finish with no partial output on failure.
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "scenegen/camera.hpp"
+#include "scenegen/decode.hpp"
+#include "scenegen/document.hpp"
+#include "scenegen/passes.hpp"
+#include "scenegen/pov_writer.hpp"
+
+namespace papersim::scenegen {
+
+/// Everything that defines a sample. Same options and seed: identical files.
+struct SampleOptions {
+  std::string mesh_path;           ///< sheet OBJ with vt
+  std::string document;            ///< PNG / JPEG page; empty: documents_dir or built-in
+  std::string documents_dir;       ///< draw the page from this folder's PNG / JPEG files
+  std::string backgrounds_dir;     ///< add image backgrounds from this folder
+  std::uint64_t seed = 0;
+  int width = 1024;                ///< [pixels]
+  int height = 1440;               ///< [pixels]
+  std::vector<Pass> passes = all_passes();
+  Quality quality = Quality::final;
+  bool fine_passes = true;         ///< float32-exact uv / coords (two renders each)
+  std::string rig;                 ///< light rig; empty: drawn
+  CameraParams camera;
+  BackwardParams backward;
+  double document_dpi = 100.0;     ///< built-in page raster [dpi]: ~1 texel per pixel at 1024 x 1440
+  int threads = 1;                 ///< threads per POV-Ray process (1: reproducible radiosity)
+  std::string templates_dir;       ///< empty: the templates embedded in the binary
+};
+
+/// What a pass render reports while a job runs.
+struct PassProgress {
+  std::string pass;
+  int index = 0, total = 0;  ///< 1-based index of the render
+  double seconds = 0.0;      ///< < 0 when the pass starts, its duration when it ends
+};
+using ProgressCallback = std::function<void(const PassProgress&)>;
+
+/// Run-time settings (not part of the sample).
+struct RunOptions {
+  std::string povray = "povray";  ///< POV-Ray 3.7 executable
+  ProgressCallback progress;      ///< may be empty
+  int parallel = 0;               ///< POV-Ray processes at once (0: one per core)
+};
+
+/// Timings of a run [s], per render in order (wall time of each POV-Ray process).
+struct RunReport {
+  std::vector<std::pair<std::string, double>> seconds;
+  double total() const;
+};
+
+/// Write a job folder (scene files, templates, fonts, document, one .ini per render, run.sh,
+/// job.json). The folder is written under a temporary name and renamed into place.
+/// @throw InputError / IoError for bad input, NoValidCameraError (with the failed meta.json
+///        text in its what() context, see failed_meta) when no camera direction is valid.
+void prepare_job(const SampleOptions& options, const std::string& job_dir);
+
+/// Render every pass of a prepared job with POV-Ray (document page first).
+/// @throw RenderError when POV-Ray fails (its log is in the job folder).
+RunReport run_job(const std::string& job_dir, const RunOptions& run);
+
+/// Decode the raw renders of a job into the final files of `out_dir` (created if needed;
+/// files are written under temporary names and renamed). @throw IoError
+void finish_job(const std::string& job_dir, const std::string& out_dir);
+
+/// prepare + run + finish. On failure nothing is left in `out_dir` except, when no camera is
+/// valid, a meta.json with status "failed" and the evaluation of every candidate.
+/// @param keep_job  keep the job folder as out_dir/job
+RunReport render_sample(const SampleOptions& options, const std::string& out_dir,
+                        const RunOptions& run, bool keep_job = false);
+
+/// meta.json text of the last NoValidCameraError thrown by prepare_job in this thread.
+const std::string& failed_meta();
+
+}  // namespace papersim::scenegen

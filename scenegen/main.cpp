@@ -1,0 +1,133 @@
+// scenegen: POV-Ray scenes for the photo and every pixel-exact ground-truth pass of a sheet.
+// Thin CLI: parse, call the library, report. Only main catches.
+#include <cstdio>
+#include <iostream>
+#include <string>
+
+#include <CLI/CLI.hpp>
+
+#include <fstream>
+
+#include "scenegen/errors.hpp"
+#include "scenegen/example_sheets.hpp"
+#include "scenegen/job.hpp"
+
+namespace sg = papersim::scenegen;
+
+namespace {
+
+struct Cli {
+  sg::SampleOptions sample;
+  std::string out, passes = "all", quality = "final", size = "1024x1440", backward_grid = "121x177";
+  std::string job, povray = "povray";
+  bool exact16 = false, keep_job = false, quiet = false;
+  int parallel = 0;
+};
+
+void parse_size(const std::string& s, int& w, int& h, const std::string& what, bool allow_full) {
+  if (allow_full && s == "full") { w = h = 0; return; }
+  const auto x = s.find('x');
+  try {
+    if (x == std::string::npos) throw std::invalid_argument(s);
+    w = std::stoi(s.substr(0, x));
+    h = std::stoi(s.substr(x + 1));
+  } catch (const std::logic_error&) {
+    throw sg::InputError(what + " '" + s + "' is not WIDTHxHEIGHT");
+  }
+  if (w < 2 || h < 2) throw sg::InputError(what + " '" + s + "' is too small");
+}
+
+void add_sample_options(CLI::App* app, Cli& c) {
+  app->add_option("mesh", c.sample.mesh_path, "sheet OBJ (v, vt = material UV, f)")->required();
+  app->add_option("--document", c.sample.document, "document page (PNG or JPEG); default: built-in generator");
+  app->add_option("--documents", c.sample.documents_dir, "folder of PNG/JPEG pages to draw from");
+  app->add_option("--backgrounds", c.sample.backgrounds_dir, "folder of PNG/JPEG background images (added to the procedural ones)");
+  app->add_option("--seed", c.sample.seed, "sample seed (camera, lights, background, paper, document)")->capture_default_str();
+  app->add_option("--size", c.size, "image size WIDTHxHEIGHT [pixels]")->capture_default_str();
+  app->add_option("--passes", c.passes, "comma list of image,shading,albedo,uv,coords,normal,mask,backward, or all")->capture_default_str();
+  app->add_option("--quality", c.quality, "draft | final (photo and shading pass only)")->capture_default_str();
+  app->add_option("--rig", c.sample.rig, "light rig three-point|rim|softbox|natural (default: drawn)");
+  app->add_option("--backward-grid", c.backward_grid, "backward map grid WIDTHxHEIGHT over the page, or 'full' (image size)")->capture_default_str();
+  app->add_flag("--exact16", c.exact16, "skip the fine uv/coords renders (16-bit precision instead of float32)");
+  app->add_option("--dpi", c.sample.document_dpi, "built-in page resolution [dpi]")->capture_default_str();
+  app->add_option("--threads", c.sample.threads, "threads per POV-Ray process (1 keeps radiosity reproducible; 0: all cores)")->capture_default_str();
+  app->add_option("--templates", c.sample.templates_dir, "use POV-Ray templates from this folder instead of the built-in copy");
+}
+
+void finalise(Cli& c) {
+  parse_size(c.size, c.sample.width, c.sample.height, "--size", false);
+  parse_size(c.backward_grid, c.sample.backward.grid_width, c.sample.backward.grid_height, "--backward-grid", true);
+  c.sample.passes = sg::parse_passes(c.passes);
+  c.sample.quality = sg::parse_quality(c.quality);
+  c.sample.fine_passes = !c.exact16;
+}
+
+sg::RunOptions run_options(const Cli& c) {
+  sg::RunOptions run;
+  run.povray = c.povray;
+  run.parallel = c.parallel;
+  if (!c.quiet)
+    run.progress = [](const sg::PassProgress& p) {
+      if (p.seconds < 0) std::cerr << "[" << p.index << "/" << p.total << "] rendering " << p.pass << " ..." << std::endl;
+      else std::fprintf(stderr, "[%d/%d] %s done in %.2f s\n", p.index, p.total, p.pass.c_str(), p.seconds);
+    };
+  return run;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"scenegen: POV-Ray scenes and pixel-exact ground-truth passes for a sheet mesh"};
+  app.require_subcommand(1);
+  Cli c;
+  auto* render = app.add_subcommand("render", "prepare + run POV-Ray + finish: a whole sample in --out");
+  add_sample_options(render, c);
+  render->add_option("--out", c.out, "sample folder")->required();
+  render->add_option("--povray", c.povray, "POV-Ray 3.7 executable")->capture_default_str();
+  render->add_option("--parallel", c.parallel, "POV-Ray processes at once (0: one per core)")->capture_default_str();
+  render->add_flag("--keep-job", c.keep_job, "keep the POV-Ray job folder as OUT/job");
+  render->add_flag("--quiet", c.quiet, "no progress on stderr");
+  auto* prepare = app.add_subcommand("prepare", "write a self-contained POV-Ray job folder (run it with its run.sh)");
+  add_sample_options(prepare, c);
+  prepare->add_option("--out", c.out, "job folder")->required();
+  auto* finish = app.add_subcommand("finish", "decode a rendered job folder into the sample files");
+  finish->add_option("job", c.job, "job folder (rendered)")->required();
+  finish->add_option("--out", c.out, "sample folder")->required();
+  auto* run = app.add_subcommand("run", "render a prepared job folder with POV-Ray");
+  run->add_option("job", c.job, "job folder")->required();
+  run->add_option("--povray", c.povray, "POV-Ray 3.7 executable")->capture_default_str();
+  run->add_option("--parallel", c.parallel, "POV-Ray processes at once (0: one per core)")->capture_default_str();
+  std::string example_kind;
+  auto* example = app.add_subcommand("example", "write a synthetic sheet OBJ (flat, cylinder, fold, bump)");
+  example->add_option("kind", example_kind, "flat | cylinder | fold | bump")->required();
+  example->add_option("--out", c.out, "OBJ file")->required();
+  CLI11_PARSE(app, argc, argv);
+  try {
+    if (render->parsed()) {
+      finalise(c);
+      const auto report = sg::render_sample(c.sample, c.out, run_options(c), c.keep_job);
+      std::printf("wrote %s (%.2f s of POV-Ray)\n", c.out.c_str(), report.total());
+    } else if (prepare->parsed()) {
+      finalise(c);
+      sg::prepare_job(c.sample, c.out);
+      std::printf("wrote job %s (render it with %s/run.sh, then scenegen finish)\n", c.out.c_str(), c.out.c_str());
+    } else if (run->parsed()) {
+      const auto report = sg::run_job(c.job, run_options(c));
+      std::printf("rendered %s (%.2f s)\n", c.job.c_str(), report.total());
+    } else if (example->parsed()) {
+      std::ofstream out(c.out);
+      sg::write_sheet_obj(out, sg::make_example_sheet(example_kind));
+      if (!out.flush()) throw sg::IoError("cannot write '" + c.out + "'");
+    } else if (finish->parsed()) {
+      sg::finish_job(c.job, c.out);
+      std::printf("wrote %s\n", c.out.c_str());
+    }
+  } catch (const sg::NoValidCameraError& e) {
+    std::cerr << "scenegen: " << e.what() << " (recorded in meta.json)\n";
+    return 3;
+  } catch (const std::exception& e) {
+    std::cerr << "scenegen: " << e.what() << "\n";
+    return 2;
+  }
+  return 0;
+}

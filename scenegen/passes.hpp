@@ -1,0 +1,27 @@
+#pragma once
+/// The passes a sample can have and the POV-Ray renders ("raw passes") each one needs.
+#include <string>
+#include <vector>
+
+namespace papersim::scenegen {
+
+/// User-visible outputs.
+enum class Pass { image, shading, albedo, uv, coords, normal, mask, backward };
+
+/// POV-Ray renders. The number is SG_PASS in render_templates/passes.inc.
+enum class RawPass { image = 1, shading = 2, albedo = 3, uv = 4, uv_fine = 5, coords = 6,
+                     coords_fine = 7, normal = 8 };
+
+std::string pass_name(Pass p);
+std::string raw_pass_name(RawPass p);
+/// Raw file name in the job folder (POV-Ray may only write to its working directory).
+std::string raw_file(RawPass p);
+/// All passes in output order.
+std::vector<Pass> all_passes();
+/// Parse "image,uv,..." (or "all"). @throw InputError naming an unknown pass.
+std::vector<Pass> parse_passes(const std::string& list);
+/// The raw renders the passes need, in render order (exact passes first, photo last).
+/// @param fine  add the fine uv / coords renders (float32 precision instead of 16 bits)
+std::vector<RawPass> raw_passes_for(const std::vector<Pass>& passes, bool fine);
+
+}  // namespace papersim::scenegen

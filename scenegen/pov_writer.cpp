@@ -1,0 +1,204 @@
+#include "scenegen/pov_writer.hpp"
+
+#include <cstdio>
+#include <ostream>
+
+#include "scenegen/errors.hpp"
+
+namespace papersim::scenegen {
+namespace {
+
+/// Shortest text that reads back as the same double.
+std::string num(double v) {
+  if (v == 0.0) v = 0.0;  // no "-0"
+  char buf[40];
+  for (int prec = 6; prec <= 17; ++prec) {
+    std::snprintf(buf, sizeof buf, "%.*g", prec, v);
+    if (std::strtod(buf, nullptr) == v) break;
+  }
+  return buf;
+}
+
+std::string vec(const Eigen::Vector3d& v) {
+  return "<" + num(v.x()) + ", " + num(v.y()) + ", " + num(v.z()) + ">";
+}
+
+int background_kind_id(const std::string& kind) {
+  const char* kinds[] = {"wood", "marble", "granite", "fabric", "cork", "concrete", "image"};
+  for (int i = 0; i < 7; ++i)
+    if (kind == kinds[i]) return i + 1;
+  throw InputError("unknown background kind '" + kind + "'");
+}
+
+std::string image_type(const std::string& file) {
+  const auto dot = file.rfind('.');
+  const std::string ext = dot == std::string::npos ? "" : file.substr(dot + 1);
+  return (ext == "jpg" || ext == "jpeg" || ext == "JPG" || ext == "JPEG") ? "jpeg" : "png";
+}
+
+void write_camera(std::ostream& out, const Camera& cam) {
+  // POV-Ray traces direction + x0 right + y0 up with x0 = (i + 0.5) / W - 0.5 and
+  // y0 = 0.5 - (j + 0.5) / H at pixel (i, j): the pinhole of Camera::project.
+  out << "#declare SG_Cam_Location = " << vec(cam.position) << ";\n"
+      << "#declare SG_Cam_Direction = " << vec(cam.forward) << ";\n"
+      << "#declare SG_Cam_Right = " << vec(cam.right * (cam.width / cam.focal_px)) << ";\n"
+      << "#declare SG_Cam_Up = " << vec(cam.up * (cam.height / cam.focal_px)) << ";\n";
+}
+
+void write_lighting(std::ostream& out, const SceneDescription& s) {
+  const LightingDraw& l = s.lighting;
+  out << "// lighting: rig " << l.rig << ", rotated " << num(l.rotation_deg) << " deg, "
+      << l.temperature << "\n"
+      << "#declare SG_Light_Colour = " << vec(l.colour) << ";\n"
+      << "#declare SG_Sky = " << num(l.sky) << ";\n"
+      << "#declare SG_Area_Samples = " << s.quality.area_samples << ";\n"
+      << "#declare SG_Area_Adaptive = " << s.quality.area_adaptive << ";\n"
+      << "#macro SG_Lights()\n";
+  for (const Light& light : l.lights)
+    out << "  SG_Light(" << vec(light.position) << ", " << num(light.size) << ", "
+        << num(light.intensity) << ", " << num(light.fade_distance) << ")  // " << light.name
+        << ", " << num(light.power) << " W\n";
+  out << "#end\n";
+}
+
+void write_background(std::ostream& out, const SceneDescription& s) {
+  const BackgroundDraw& b = s.background;
+  const Stage& st = s.stage;
+  out << "// background: " << b.kind << "\n"
+      << "#declare SG_Bg_Kind = " << background_kind_id(b.kind) << ";\n"
+      << "#declare SG_Bg_Colour_A = " << vec(b.colour_a) << ";\n"
+      << "#declare SG_Bg_Colour_B = " << vec(b.colour_b) << ";\n"
+      << "#declare SG_Bg_Scale = " << num(b.scale) << ";\n"
+      << "#declare SG_Bg_Rotation = " << num(b.rotation_deg) << ";\n"
+      << "#declare SG_Bg_Offset = <" << num(b.offset.x()) << ", " << num(b.offset.y()) << ">;\n"
+      << "#declare SG_Bg_Roughness = " << num(b.roughness) << ";\n"
+      << "#declare SG_Bg_Noise_Offset = " << vec(b.noise_offset) << ";\n"
+      << "#declare SG_Bg_Gap = " << num(s.background_gap) << ";\n";
+  if (b.kind == "image")
+    out << "#declare SG_Bg_Image_File = \"" << b.image << "\";\n"
+        << "#declare SG_Bg_Image_Size = " << num(b.image_size) << ";\n"
+        << "#macro SG_Bg_Image_Type() " << image_type(b.image) << " #end\n";
+  out << "#declare SG_Stage_Transform = transform { matrix <" << num(st.ex.x()) << ", " << num(st.ex.y()) << ", "
+      << num(st.ex.z()) << ", " << num(st.ey.x()) << ", " << num(st.ey.y()) << ", "
+      << num(st.ey.z()) << ", " << num(st.up.x()) << ", " << num(st.up.y()) << ", "
+      << num(st.up.z()) << ", " << num(st.origin.x()) << ", " << num(st.origin.y()) << ", "
+      << num(st.origin.z()) << "> }\n";
+}
+
+void write_paper(std::ostream& out, const SceneDescription& s) {
+  const PaperDraw& p = s.paper;
+  out << "#declare SG_Sheet_Width = " << num(s.sheet_width) << ";\n"
+      << "#declare SG_Sheet_Height = " << num(s.sheet_height) << ";\n"
+      << "#declare SG_Document_File = \"" << s.document_file << "\";\n"
+      << "#macro SG_Document_Type() " << image_type(s.document_file) << " #end\n"
+      << "#declare SG_Paper_Colour = " << vec(p.colour) << ";\n"
+      << "#declare SG_Ink_Floor = " << num(p.ink_floor) << ";\n"
+      << "#declare SG_Wave_Amplitude = " << num(p.wave_amplitude) << ";\n"
+      << "#declare SG_Wave_Scale = " << num(p.wave_scale) << ";\n"
+      << "#declare SG_Wave_Offset = " << vec(p.wave_offset) << ";\n"
+      << "#declare SG_Grain_Amplitude = " << num(p.grain_amplitude) << ";\n"
+      << "#declare SG_Grain_Scale = " << num(p.grain_scale) << ";\n"
+      << "#declare SG_Grain_Offset = " << vec(p.grain_offset) << ";\n"
+      << "#declare SG_Crease_Strength = " << num(p.crease_strength) << ";\n"
+      << "#declare SG_Crease_Scale = " << num(p.crease_scale) << ";\n"
+      << "#declare SG_Crease_Offset = " << vec(p.crease_offset) << ";\n"
+      << "#declare SG_Roughness_Ink = " << num(p.roughness_ink) << ";\n"
+      << "#declare SG_Roughness_Paper = " << num(p.roughness_paper) << ";\n";
+}
+
+}  // namespace
+
+QualitySettings quality_settings(Quality q) {
+  QualitySettings s;
+  if (q == Quality::final) {
+    s.radiosity = true;
+    s.area_samples = 3;
+    s.area_adaptive = 1;
+    s.antialias = true;
+    s.ambient = 0.0;
+  } else {
+    s.area_samples = 2;
+  }
+  return s;
+}
+
+Quality parse_quality(const std::string& name) {
+  if (name == "draft") return Quality::draft;
+  if (name == "final") return Quality::final;
+  throw InputError("unknown quality '" + name + "' (draft, final)");
+}
+
+std::string quality_name(Quality q) { return q == Quality::final ? "final" : "draft"; }
+
+void set_coords_encoding(SceneDescription& scene, const SheetMesh& mesh) {
+  const Eigen::Vector3d lo = mesh.positions.colwise().minCoeff().transpose();
+  const Eigen::Vector3d hi = mesh.positions.colwise().maxCoeff().transpose();
+  const double extent = std::max((hi - lo).maxCoeff(), 1e-3);
+  scene.coords_span = extent / 0.98;
+  scene.coords_min = lo - Eigen::Vector3d::Constant(0.01 * scene.coords_span);
+}
+
+void write_sheet_inc(std::ostream& out, const SheetMesh& mesh, const Eigen::MatrixX3d& normals) {
+  const int nv = mesh.num_vertices();
+  out << "// papersim scenegen: the sheet, world positions [m], unit normals, exact material UV\n"
+      << "#declare SG_Sheet_Mesh = mesh2 {\n  vertex_vectors { " << nv;
+  for (int i = 0; i < nv; ++i) out << ",\n    " << vec(mesh.positions.row(i).transpose());
+  out << " }\n  normal_vectors { " << nv;
+  for (int i = 0; i < nv; ++i) out << ",\n    " << vec(normals.row(i).transpose());
+  out << " }\n  uv_vectors { " << nv;
+  for (int i = 0; i < nv; ++i) out << ",\n    <" << num(mesh.uv(i, 0)) << ", " << num(mesh.uv(i, 1)) << ">";
+  out << " }\n  face_indices { " << mesh.num_faces();
+  for (int f = 0; f < mesh.num_faces(); ++f)
+    out << ",\n    <" << mesh.faces(f, 0) << ", " << mesh.faces(f, 1) << ", " << mesh.faces(f, 2) << ">";
+  out << " }\n}\n";
+}
+
+void write_scene_inc(std::ostream& out, const SceneDescription& s) {
+  out << "// papersim scenegen: per-sample declarations (generated; see meta.json)\n";
+  write_camera(out, s.camera);
+  out << "#declare SG_Radiosity = " << (s.quality.radiosity ? 1 : 0) << ";\n"
+      << "#declare SG_Radiosity_Count = " << s.quality.radiosity_count << ";\n"
+      << "#declare SG_Radiosity_Error = " << num(s.quality.radiosity_error) << ";\n"
+      << "#declare SG_Ambient = " << num(s.quality.ambient) << ";\n"
+      << "#declare SG_Coords_Min = " << vec(s.coords_min) << ";\n"
+      << "#declare SG_Coords_Span = " << num(s.coords_span) << ";\n";
+  write_lighting(out, s);
+  write_background(out, s);
+  write_paper(out, s);
+}
+
+void write_pass_ini(std::ostream& out, RawPass pass, int width, int height,
+                    const QualitySettings& quality, int threads) {
+  const bool photo = pass == RawPass::image;
+  out << "; papersim scenegen: " << raw_pass_name(pass) << " pass\n"
+      << "Input_File_Name=main.pov\n"
+      << "Output_File_Name=" << raw_file(pass) << "\n"
+      << "Output_File_Type=N\n"
+      << "Width=" << width << "\nHeight=" << height << "\n"
+      << "Declare=SG_PASS=" << static_cast<int>(pass) << "\n"
+      // Ground truth: linear 16-bit. Photo: 8-bit sRGB.
+      << "Bits_Per_Color=" << (photo ? 8 : 16) << "\n"
+      << "File_Gamma=" << (photo ? "sRGB" : "1.0") << "\n"
+      << "Output_Alpha=Off\n"
+      << "Jitter=Off\n";
+  if (photo && quality.antialias)
+    out << "Antialias=On\nSampling_Method=2\nAntialias_Threshold=" << num(quality.antialias_threshold)
+        << "\nAntialias_Depth=" << quality.antialias_depth << "\n";
+  else
+    out << "Antialias=Off\n";
+  out << "Display=Off\nVerbose=Off\nPause_When_Done=Off\nWarning_Level=0\n";
+  if (threads > 0) out << "Work_Threads=" << threads << "\n";
+}
+
+void write_document_ini(std::ostream& out, int width_px, int height_px, int threads) {
+  out << "; papersim scenegen: built-in document page\n"
+      << "Input_File_Name=document.pov\nOutput_File_Name=document.png\nOutput_File_Type=N\n"
+      << "Width=" << width_px << "\nHeight=" << height_px << "\n"
+      << "Bits_Per_Color=8\nFile_Gamma=sRGB\nOutput_Alpha=Off\n"
+      << "Antialias=On\nSampling_Method=2\nAntialias_Threshold=0.05\nAntialias_Depth=3\nJitter=Off\n"
+      << "Display=Off\nVerbose=Off\nPause_When_Done=Off\nWarning_Level=0\n";
+  // No radiosity: multi-threaded rendering of the page is reproducible.
+  if (threads > 0) out << "Work_Threads=" << threads << "\n";
+}
+
+}  // namespace papersim::scenegen

@@ -1,0 +1,70 @@
+#pragma once
+/// Writers of the generated POV-Ray text: the sheet as a mesh2, the per-sample scene.inc and
+/// one .ini per pass. All take std::ostream& so the text is golden-file tested.
+#include <iosfwd>
+#include <string>
+
+#include <Eigen/Core>
+
+#include "scenegen/camera.hpp"
+#include "scenegen/passes.hpp"
+#include "scenegen/resting_pose.hpp"
+#include "scenegen/scene_draw.hpp"
+#include "scenegen/sheet_obj.hpp"
+
+namespace papersim::scenegen {
+
+/// Render quality of the lit passes (image, shading). Ground-truth passes ignore it.
+enum class Quality { draft, final };
+
+/// Settings of the lit passes per quality.
+struct QualitySettings {
+  bool radiosity = false;          ///< final: radiosity (1 bounce)
+  int radiosity_count = 35;        ///< rays per radiosity sample
+  double radiosity_error = 1.8;    ///< error_bound
+  int area_samples = 1;            ///< area light samples per side (1: point lights)
+  int area_adaptive = 1;           ///< adaptive depth of area lights
+  bool antialias = false;          ///< image pass only (non-jittered adaptive supersampling)
+  double antialias_threshold = 0.1;
+  int antialias_depth = 1;        ///< 1: corner samples shared by neighbouring pixels (cheap)
+  double ambient = 0.12;           ///< ambient fill when radiosity is off
+};
+/// Settings used for a quality level.
+QualitySettings quality_settings(Quality q);
+/// "draft" / "final". @throw InputError for other names.
+Quality parse_quality(const std::string& name);
+std::string quality_name(Quality q);
+
+/// Everything scene.inc declares for one sample.
+struct SceneDescription {
+  Camera camera;
+  Stage stage;
+  LightingDraw lighting;
+  BackgroundDraw background;
+  PaperDraw paper;
+  QualitySettings quality;
+  double sheet_width = 0.21, sheet_height = 0.297;  ///< [m]
+  std::string document_file = "document.png";      ///< in the job folder
+  Eigen::Vector3d coords_min = Eigen::Vector3d::Zero();  ///< coords pass offset [m]
+  double coords_span = 1.0;                              ///< coords pass scale [m]
+  double background_gap = 3e-4;  ///< background slab below the support plane [m]
+};
+
+/// Coords pass encoding: offset and span such that (p - min) / span is in [0.01, 0.99).
+void set_coords_encoding(SceneDescription& scene, const SheetMesh& mesh);
+
+/// `#declare SG_Sheet_Mesh = mesh2 {...}` with vertex, normal and uv vectors (17 digits).
+void write_sheet_inc(std::ostream& out, const SheetMesh& mesh, const Eigen::MatrixX3d& normals);
+
+/// scene.inc: every per-sample declaration used by render_templates/main.pov.
+void write_scene_inc(std::ostream& out, const SceneDescription& scene);
+
+/// One pass's .ini: size, output file, antialiasing, gamma, bit depth, threads.
+/// @param threads  POV-Ray worker threads (0: POV-Ray's default)
+void write_pass_ini(std::ostream& out, RawPass pass, int width, int height,
+                    const QualitySettings& quality, int threads);
+
+/// The built-in document's .ini (antialiased, 8-bit sRGB PNG).
+void write_document_ini(std::ostream& out, int width_px, int height_px, int threads);
+
+}  // namespace papersim::scenegen

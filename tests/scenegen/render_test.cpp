@@ -1,0 +1,279 @@
+// End-to-end tests: POV-Ray renders a small sample (128 x 180) and the passes are checked
+// against the mesh: exactness of UV / coords / normals, backward map, determinism, failures.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <memory>
+
+#include <nlohmann/json.hpp>
+
+#include "scenegen/decode.hpp"
+#include "scenegen/errors.hpp"
+#include "scenegen/geometry.hpp"
+#include "scenegen/image_io.hpp"
+#include "scenegen/job.hpp"
+#include "scenegen/meta.hpp"
+#include "scenegen/random.hpp"
+#include "test_support.hpp"
+
+namespace papersim::scenegen {
+namespace {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+json read_json(const fs::path& p) {
+  std::ifstream in(p);
+  return json::parse(in);
+}
+
+/// One sample rendered for the whole suite: a sheet bent on a cylinder, smooth document.
+class RenderedSample : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    s_dir = std::make_unique<test::TempDir>("render");
+    SampleOptions o;
+    o.mesh_path = test::write_example(*s_dir, "cylinder", "cylinder.obj");
+    o.document = test::write_smooth_document(*s_dir, 420, 594);
+    o.seed = 4;
+    o.width = 128;
+    o.height = 180;
+    o.quality = Quality::draft;
+    render_sample(o, s_dir->str("sample"), RunOptions{});
+  }
+  static void TearDownTestSuite() { s_dir.reset(); }
+  static fs::path sample() { return s_dir->path() / "sample"; }
+  static std::unique_ptr<test::TempDir> s_dir;
+};
+std::unique_ptr<test::TempDir> RenderedSample::s_dir;
+
+TEST_F(RenderedSample, WritesEveryFile) {
+  for (const char* f : {"image.png", "shading.png", "albedo.png", "uv.exr", "coords.exr",
+                        "normal.exr", "mask.png", "backward.exr", "backward.npy", "meta.json",
+                        "document.png"})
+    EXPECT_TRUE(fs::exists(sample() / f)) << f;
+  EXPECT_FALSE(fs::exists(sample() / ".scenegen-job"));
+}
+
+TEST_F(RenderedSample, UvCoordsAndNormalsAreExact) {
+  const SheetMesh mesh = read_sheet_obj(s_dir->str("cylinder.obj"));
+  const UvLocator locator(mesh);
+  const json meta = read_json(sample() / "meta.json");
+  const Camera cam = camera_from_json(meta["camera"]);
+  const ImageF uv = read_exr((sample() / "uv.exr").string(), {"R", "G", "B"});
+  const ImageF xyz = read_exr((sample() / "coords.exr").string(), {"R", "G", "B"});
+  const ImageF nrm = read_exr((sample() / "normal.exr").string(), {"R", "G", "B"});
+  const Eigen::MatrixX3d vn = vertex_normals(mesh);
+  std::vector<std::pair<int, int>> mask_pixels;
+  for (int y = 0; y < uv.height; ++y)
+    for (int x = 0; x < uv.width; ++x)
+      if (uv.at(x, y, 2) > 0.5f) mask_pixels.emplace_back(x, y);
+  ASSERT_GT(mask_pixels.size(), 5000u);
+  Rng rng(2024);
+  double max_world = 0, max_px = 0, max_len = 0, max_dir = 0;
+  for (int i = 0; i < 1000; ++i) {
+    const auto [x, y] = mask_pixels[static_cast<std::size_t>(rng.randint(0, static_cast<int>(mask_pixels.size()) - 1))];
+    const Eigen::Vector2d t(uv.at(x, y, 0), uv.at(x, y, 1));
+    const auto hit = locator.locate(t, 1e-6);
+    ASSERT_TRUE(hit) << "uv outside the sheet at " << x << "," << y;
+    Eigen::Vector3d p = Eigen::Vector3d::Zero(), n = Eigen::Vector3d::Zero();
+    for (int k = 0; k < 3; ++k) {
+      p += hit->barycentric[k] * Eigen::Vector3d(mesh.positions.row(mesh.faces(hit->face, k)));
+      n += hit->barycentric[k] * Eigen::Vector3d(vn.row(mesh.faces(hit->face, k)));
+    }
+    const Eigen::Vector3d c(xyz.at(x, y, 0), xyz.at(x, y, 1), xyz.at(x, y, 2));
+    max_world = std::max(max_world, (p - c).norm());
+    max_px = std::max(max_px, (cam.project(p) - Eigen::Vector2d(x + 0.5, y + 0.5)).norm());
+    const Eigen::Vector3d r(nrm.at(x, y, 0), nrm.at(x, y, 1), nrm.at(x, y, 2));
+    max_len = std::max(max_len, std::abs(r.norm() - 1.0));
+    n.normalize();
+    if (n.dot(cam.position - p) < 0) n = -n;  // the pass turns normals to the camera
+    max_dir = std::max(max_dir, (r.normalized() - n).norm());
+  }
+  std::cout << "[exactness] 1000 mask pixels: max |world(uv) - coords| = " << max_world
+            << " m, max reprojection error = " << max_px << " px, max ||n| - 1| = " << max_len
+            << ", max |n - n_mesh| = " << max_dir << "\n";
+  EXPECT_LT(max_world, 1e-4);
+  EXPECT_LT(max_px, 0.5);
+  EXPECT_LT(max_len, 1e-3);
+  EXPECT_LT(max_dir, 1e-3);
+}
+
+TEST_F(RenderedSample, BackgroundIsZeroAndMaskMatchesUv) {
+  const ImageF uv = read_exr((sample() / "uv.exr").string(), {"R", "G", "B"});
+  const ImageF xyz = read_exr((sample() / "coords.exr").string(), {"R", "G", "B"});
+  const ImageF mask = read_png((sample() / "mask.png").string());
+  int inside = 0;
+  for (int y = 0; y < uv.height; ++y)
+    for (int x = 0; x < uv.width; ++x) {
+      const bool m = mask.at(x, y, 0) > 0.5f;
+      EXPECT_EQ(m, uv.at(x, y, 2) > 0.5f);
+      if (!m) {
+        EXPECT_EQ(uv.at(x, y, 0), 0.0f);
+        EXPECT_EQ(xyz.at(x, y, 0), 0.0f);
+      }
+      inside += m;
+    }
+  EXPECT_GT(inside, 0);
+  EXPECT_LT(inside, uv.width * uv.height);
+}
+
+TEST_F(RenderedSample, BackwardMapReproducesTheFlatDocument) {
+  const json meta = read_json(sample() / "meta.json");
+  const ImageF albedo = read_png((sample() / "albedo.png").string());
+  const ImageF mask = read_png((sample() / "mask.png").string());
+  const ImageF back = read_exr((sample() / "backward.exr").string(), {"R", "G", "B"});
+  ASSERT_EQ(back.width, 121);
+  ASSERT_EQ(back.height, 177);
+  const ImageF flat = unwarp(albedo, mask, back);
+  const ImageF doc = read_png(s_dir->str("document.png"));
+  const double floor = meta["paper"]["ink_floor"];
+  double se = 0;
+  int n = 0;
+  for (int r = 0; r < back.height; ++r)
+    for (int c = 0; c < back.width; ++c) {
+      if (back.at(c, r, 2) < 0.5f) continue;
+      // The page point (u, v) in the document image (row 0 = top), bilinear.
+      const double u = c / 120.0, v = 1.0 - r / 176.0;
+      ImageF one(1, 1, 1);
+      one.at(0, 0, 0) = 1.0f;
+      float d[3];
+      const double px = std::clamp(u * doc.width, 0.5, doc.width - 0.5);
+      const double py = std::clamp((1 - v) * doc.height, 0.5, doc.height - 0.5);
+      ImageF dmask(doc.width, doc.height, 1);
+      std::fill(dmask.data.begin(), dmask.data.end(), 1.0f);
+      sample_masked(doc, dmask, px, py, d);
+      for (int k = 0; k < 3; ++k) {
+        const double expected = linear_to_srgb(meta["paper"]["colour"][k].get<double>() *
+                                               (floor + (1 - floor) * srgb_to_linear(d[k])));
+        se += std::pow(flat.at(c, r, k) - expected, 2);
+        ++n;
+      }
+    }
+  ASSERT_GT(n, 3 * 121 * 177 / 2);
+  const double psnr = 10 * std::log10(1.0 / (se / n));
+  std::cout << "[backward] visible page points " << n / 3 << " of " << 121 * 177
+            << ", PSNR of the unwarped albedo = " << psnr << " dB\n";
+  EXPECT_GE(psnr, 30.0);
+}
+
+TEST_F(RenderedSample, MetaRecordsEveryDraw) {
+  const json m = read_json(sample() / "meta.json");
+  EXPECT_EQ(m["status"], "ok");
+  EXPECT_EQ(m["seed"], 4);
+  for (const char* k : {"inclination_deg", "azimuth_deg", "roll_deg", "position", "forward", "up", "focal_px"})
+    EXPECT_TRUE(m["camera"].contains(k)) << k;
+  EXPECT_EQ(m["camera"]["candidates"].size(), 26u);
+  for (const char* k : {"rig", "rotation_deg", "temperature", "colour", "exposure", "lights"})
+    EXPECT_TRUE(m["lighting"].contains(k)) << k;
+  for (const char* k : {"kind", "colour_a", "scale", "rotation_deg", "offset_m", "roughness", "noise_seed"})
+    EXPECT_TRUE(m["background"].contains(k)) << k;
+  for (const char* k : {"colour", "wave_seed", "grain_seed", "crease_seed", "crease_strength", "crease_scale",
+                        "roughness_ink", "roughness_paper"})
+    EXPECT_TRUE(m["paper"].contains(k)) << k;
+  EXPECT_EQ(m["document"]["source"], "file");
+  EXPECT_TRUE(m["stage"]["stable"].get<bool>());
+}
+
+std::vector<std::string> sample_files(const fs::path& dir) {
+  std::vector<std::string> names;
+  for (const auto& e : fs::directory_iterator(dir)) names.push_back(e.path().filename().string());
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+TEST(Render, SameSeedIdenticalFilesDifferentSeedDifferentDraws) {
+  test::TempDir dir("determinism");
+  SampleOptions o;
+  o.mesh_path = test::write_example(dir, "bump", "bump.obj");
+  o.seed = 9;
+  o.width = 96;
+  o.height = 136;
+  o.quality = Quality::final;  // radiosity, area lights, antialiasing
+  o.document_dpi = 60;
+  render_sample(o, dir.str("a"), RunOptions{});
+  render_sample(o, dir.str("b"), RunOptions{});
+  const auto files = sample_files(dir.path() / "a");
+  ASSERT_EQ(files, sample_files(dir.path() / "b"));
+  ASSERT_GE(files.size(), 11u);
+  for (const auto& f : files)
+    EXPECT_TRUE(test::file_bytes(dir.path() / "a" / f) == test::file_bytes(dir.path() / "b" / f)) << f;
+  o.seed = 10;
+  prepare_job(o, dir.str("job10"));
+  const json a = read_json(dir.path() / "a" / "meta.json");
+  const json c = read_json(dir.path() / "job10" / "job.json")["meta"];
+  EXPECT_NE(a["camera"]["roll_deg"], c["camera"]["roll_deg"]);
+  EXPECT_NE(a["lighting"]["rotation_deg"], c["lighting"]["rotation_deg"]);
+  EXPECT_NE(a["paper"]["grain_seed"], c["paper"]["grain_seed"]);
+  EXPECT_NE(a["background"]["noise_seed"], c["background"]["noise_seed"]);
+  EXPECT_NE(a["document"]["seed"], c["document"]["seed"]);
+}
+
+template <class Error>
+void expect_failure_leaves_nothing(SampleOptions o, const test::TempDir& dir, const std::string& needle) {
+  const std::string out = dir.str("out");
+  try {
+    render_sample(o, out, RunOptions{});
+    FAIL() << "expected a failure";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(fs::exists(out)) << "partial sample left in " << out;
+}
+
+TEST(Render, MissingMeshFails) {
+  test::TempDir dir("missing");
+  SampleOptions o;
+  o.mesh_path = dir.str("nope.obj");
+  expect_failure_leaves_nothing<IoError>(o, dir, "cannot open mesh");
+}
+
+TEST(Render, MeshWithoutVtFails) {
+  test::TempDir dir("novt");
+  std::ofstream(dir.str("novt.obj")) << "v 0 0 0\nv 0.2 0 0\nv 0 0.3 0\nf 1 2 3\n";
+  SampleOptions o;
+  o.mesh_path = dir.str("novt.obj");
+  expect_failure_leaves_nothing<InputError>(o, dir, "no texture coordinates");
+}
+
+TEST(Render, UnreadableDocumentFails) {
+  test::TempDir dir("baddoc");
+  SampleOptions o;
+  o.mesh_path = test::write_example(dir, "flat", "flat.obj");
+  o.width = 64;
+  o.height = 90;
+  std::ofstream(dir.str("page.png")) << "this is not an image";
+  o.document = dir.str("page.png");
+  expect_failure_leaves_nothing<InputError>(o, dir, "not a readable PNG or JPEG");
+  o.document = dir.str("missing.png");
+  expect_failure_leaves_nothing<IoError>(o, dir, "does not exist");
+  // A truncated PNG.
+  const std::string good = test::write_smooth_document(dir, 32, 32);
+  const std::string bytes = test::file_bytes(good);
+  std::ofstream(dir.str("cut.png"), std::ios::binary) << bytes.substr(0, bytes.size() / 2);
+  o.document = dir.str("cut.png");
+  expect_failure_leaves_nothing<IoError>(o, dir, "cannot decode PNG");
+}
+
+TEST(Render, NoValidCameraIsRecordedInMetaAndNothingElse) {
+  test::TempDir dir("nocamera");
+  ExampleSheetParams p;
+  p.fold_angle_deg = 178.0;
+  p.fold_x = -0.01;
+  SampleOptions o;
+  o.mesh_path = test::write_example(dir, "fold", "folded.obj", p);
+  o.width = 64;
+  o.height = 90;
+  const std::string out = dir.str("out");
+  EXPECT_THROW(render_sample(o, out, RunOptions{}), NoValidCameraError);
+  EXPECT_EQ(sample_files(out), std::vector<std::string>{"meta.json"});
+  const json m = read_json(fs::path(out) / "meta.json");
+  EXPECT_EQ(m["status"], "failed");
+  EXPECT_FALSE(m["camera"]["valid"].get<bool>());
+  EXPECT_EQ(m["camera"]["candidates"].size(), 26u);
+}
+
+}  // namespace
+}  // namespace papersim::scenegen
