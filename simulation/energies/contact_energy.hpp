@@ -2,8 +2,9 @@
 /// Contact of sheet vertices with obstacles (signed distance fields) and Coulomb friction.
 ///
 /// Contact: E = sum_v sum_o kappa A_v b(phi_o(x_v), dhat) with the IPC log barrier b
-/// (Li et al. 2020, eq. 6); kappa = stiffness / dhat^2 so that `stiffness` is a pressure scale
-/// [Pa]. The Hessian keeps b'' grad phi grad phi^T and drops b' Hess phi (exact for planes; for
+/// (Li et al. 2020, eq. 6); kappa = stiffness / dhat, so that the contact pressure at gap d is
+/// stiffness |b'(d)| / dhat: `stiffness` is the pressure at about half the thickness [Pa]. A
+/// sheet resting under its weight rho_A g with stiffness = rho_A g sits at about 0.55 dhat. The Hessian keeps b'' grad phi grad phi^T and drops b' Hess phi (exact for planes; for
 /// curved obstacles the dropped term is the obstacle curvature times the contact force).
 /// Friction (lagged per time step, IPC eqs. 14-16): normal force magnitudes and tangent bases
 /// are frozen at the step start; the tangential slip u = T^T (x - x_t0 - h v_obstacle) pays
@@ -19,8 +20,8 @@
 namespace papersim::simulation {
 
 struct ContactParams {
-  double dhat = 5e-4;          ///< barrier activation distance (contact thickness) [m]
-  double stiffness = 1.0;      ///< pressure scale of the barrier [Pa]
+  double dhat = 3e-4;          ///< barrier activation distance (contact thickness) [m]
+  double stiffness = 1.0;      ///< pressure scale of the barrier [Pa] (see above)
   double eps_velocity = 1e-3;  ///< slip speed below which friction is static-like [m/s]
 };
 
@@ -55,7 +56,7 @@ class ObstacleContactEnergy : public EnergyTerm {
     Eigen::Vector3d origin;            // x_t0 + h v_obstacle [m]
   };
   bool near_bounds(int o, const Eigen::Vector3d& p) const;
-  double kappa(int v) const { return m_params.stiffness / (m_params.dhat * m_params.dhat) * m_area[v]; }
+  double kappa(int v) const { return m_params.stiffness / m_params.dhat * m_area[v]; }
 
   Eigen::VectorXd m_area;
   std::vector<std::shared_ptr<const collision::Collider>> m_obstacles;

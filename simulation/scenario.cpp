@@ -1,0 +1,60 @@
+#include "simulation/scenario.hpp"
+
+#include <random>
+
+#include "simulation/errors.hpp"
+
+namespace papersim::simulation {
+
+namespace {
+
+/// Uniform draws from a 64-bit Mersenne Twister. std::uniform_real_distribution is not
+/// specified bit-for-bit across standard libraries, so draws are made from raw 53-bit integers.
+class Draw {
+ public:
+  explicit Draw(std::uint64_t seed) : m_rng(seed) {}
+  double uniform(double a, double b) { return a + (b - a) * unit(); }
+  double unit() { return static_cast<double>(m_rng() >> 11) * 0x1.0p-53; }
+  bool chance(double p) { return unit() < p; }
+
+ private:
+  std::mt19937_64 m_rng;
+};
+
+/// Pull (SCENARIOS.md): an A4 sheet on the ground; two points (one with probability 5%) anywhere
+/// on it are lifted linearly to U[0.03, 0.08] m over 1 s under gravity U[-100, -9.8] m/s^2.
+Scene pull(std::uint64_t seed) {
+  Draw d(seed);
+  Scene s;
+  s.name = "pull";
+  s.scenario = "pull";
+  s.seed = static_cast<long long>(seed);
+  s.sheet.position = Eigen::Vector3d(0, 0, 1e-3);
+  s.gravity = Eigen::Vector3d(0, 0, d.uniform(-100, -9.8));
+  s.duration = 1.0;
+  s.time_step = 5e-3;
+  s.ground = true;
+  s.ground_friction = 0.3;
+  const int points = d.chance(0.05) ? 1 : 2;
+  for (int i = 0; i < points; ++i) {
+    HandleSpec h;
+    h.material_point = Eigen::Vector2d(d.uniform(0, s.sheet.width), d.uniform(0, s.sheet.height));
+    const double lift = d.uniform(0.03, 0.08);
+    h.keyframes = {{0.0, Eigen::Vector3d::Zero()}, {1.0, Eigen::Vector3d(0, 0, lift)}};
+    s.handles.push_back(h);
+  }
+  return s;
+}
+
+}  // namespace
+
+std::vector<std::string> scenario_names() { return {"pull"}; }
+
+Scene make_scenario(const std::string& name, std::uint64_t seed) {
+  if (name == "pull") return pull(seed);
+  std::string known;
+  for (const auto& n : scenario_names()) known += (known.empty() ? "" : ", ") + n;
+  throw SceneError("unknown scenario '" + name + "' (known: " + known + ")");
+}
+
+}  // namespace papersim::simulation

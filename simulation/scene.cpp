@@ -1,0 +1,410 @@
+#include "simulation/scene.hpp"
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <sstream>
+
+#include "collision/errors.hpp"
+#include "simulation/errors.hpp"
+
+namespace papersim::simulation {
+
+using nlohmann::json;
+
+namespace {
+
+/// Reads one JSON object, checking types and ranges, and refuses keys it was not asked for.
+class Reader {
+ public:
+  Reader(const json& j, std::string path, const std::string& source)
+      : m_j(j), m_path(std::move(path)), m_source(source) {
+    if (!m_j.is_object()) fail("", "expected an object");
+  }
+
+  [[noreturn]] void fail(const std::string& key, const std::string& what) const {
+    const std::string full = m_path.empty() ? key : (key.empty() ? m_path : m_path + "." + key);
+    throw SceneError(m_source + ": key '" + full + "': " + what);
+  }
+
+  bool has(const std::string& key) const { return m_j.contains(key); }
+
+  double number(const std::string& key, double fallback, double lo = -INF, double hi = INF,
+                bool lo_open = false) {
+    const json* v = take(key);
+    if (!v) return fallback;
+    if (!v->is_number()) fail(key, "expected a number");
+    const double x = v->get<double>();
+    if (!std::isfinite(x) || x < lo || x > hi || (lo_open && x == lo)) {
+      std::ostringstream s;
+      s << "value " << x << " out of range " << (lo_open ? "(" : "[") << lo << ", " << hi << "]";
+      fail(key, s.str());
+    }
+    return x;
+  }
+
+  int integer(const std::string& key, int fallback, int lo, int hi) {
+    const json* v = take(key);
+    if (!v) return fallback;
+    if (!v->is_number_integer()) fail(key, "expected an integer");
+    const long long x = v->get<long long>();
+    if (x < lo || x > hi)
+      fail(key, "value " + std::to_string(x) + " out of range [" + std::to_string(lo) + ", " +
+                    std::to_string(hi) + "]");
+    return static_cast<int>(x);
+  }
+
+  bool boolean(const std::string& key, bool fallback) {
+    const json* v = take(key);
+    if (!v) return fallback;
+    if (!v->is_boolean()) fail(key, "expected true or false");
+    return v->get<bool>();
+  }
+
+  std::string string(const std::string& key, const std::string& fallback) {
+    const json* v = take(key);
+    if (!v) return fallback;
+    if (!v->is_string()) fail(key, "expected a string");
+    return v->get<std::string>();
+  }
+
+  template <int N>
+  Eigen::Matrix<double, N, 1> vector(const std::string& key, const Eigen::Matrix<double, N, 1>& fallback) {
+    const json* v = take(key);
+    if (!v) return fallback;
+    if (!v->is_array() || v->size() != N) fail(key, "expected an array of " + std::to_string(N) + " numbers");
+    Eigen::Matrix<double, N, 1> r;
+    for (int i = 0; i < N; ++i) {
+      if (!(*v)[i].is_number()) fail(key, "expected an array of " + std::to_string(N) + " numbers");
+      r[i] = (*v)[i].get<double>();
+      if (!std::isfinite(r[i])) fail(key, "not finite");
+    }
+    return r;
+  }
+
+  /// A nested object (an empty one when absent).
+  Reader child(const std::string& key) {
+    const json* v = take(key);
+    static const json EMPTY = json::object();
+    if (v && !v->is_object()) fail(key, "expected an object");
+    return Reader(v ? *v : EMPTY, m_path.empty() ? key : m_path + "." + key, m_source);
+  }
+
+  /// Elements of an array of objects (none when absent).
+  std::vector<Reader> children(const std::string& key) {
+    std::vector<Reader> out;
+    const json* v = take(key);
+    if (!v) return out;
+    if (!v->is_array()) fail(key, "expected an array");
+    for (size_t i = 0; i < v->size(); ++i)
+      out.emplace_back((*v)[i], (m_path.empty() ? key : m_path + "." + key) + "[" + std::to_string(i) + "]",
+                       m_source);
+    return out;
+  }
+
+  const json* raw_array(const std::string& key) {
+    const json* v = take(key);
+    if (v && !v->is_array()) fail(key, "expected an array");
+    return v;
+  }
+
+  /// Every key must have been read.
+  void finish() const {
+    for (auto it = m_j.begin(); it != m_j.end(); ++it)
+      if (!m_used.count(it.key())) fail(it.key(), "unknown key");
+  }
+
+  const std::string& path() const { return m_path; }
+
+ private:
+  const json* take(const std::string& key) {
+    m_used.insert(key);
+    auto it = m_j.find(key);
+    return it == m_j.end() || it->is_null() ? nullptr : &*it;
+  }
+  const json& m_j;
+  std::string m_path;
+  std::string m_source;
+  std::set<std::string> m_used;
+};
+
+remesh::Triangulation triangulation_from(Reader& r, const std::string& key, remesh::Triangulation d) {
+  const std::string name = r.string(key, "");
+  if (name.empty()) return d;
+  if (name == "alternating") return remesh::Triangulation::alternating;
+  if (name == "random") return remesh::Triangulation::random;
+  if (name == "regular") return remesh::Triangulation::regular;
+  r.fail(key, "expected one of alternating, random, regular; got '" + name + "'");
+}
+
+const char* to_string(remesh::Triangulation t) {
+  switch (t) {
+    case remesh::Triangulation::alternating: return "alternating";
+    case remesh::Triangulation::random: return "random";
+    case remesh::Triangulation::regular: return "regular";
+  }
+  return "alternating";
+}
+
+Material read_material(Reader r) {
+  Material m;
+  m.density = r.number("density", m.density, 0, 1e3, true);
+  m.stretch_stiffness = r.number("stretch_stiffness", m.stretch_stiffness, 0, 1e12, true);
+  m.poisson = r.number("poisson", m.poisson, 0, 0.49);
+  m.bending_stiffness = r.number("bending_stiffness", m.bending_stiffness, 0, 1e3, true);
+  m.damping = r.number("damping", m.damping, 0, 1e4);
+  m.strain_limit = r.number("strain_limit", m.strain_limit, 0, 1);
+  m.thickness = r.number("thickness", m.thickness, 0, 0.1, true);
+  m.yield_curvature = r.number("yield_curvature", m.yield_curvature, 0, 1e6, true);
+  m.weakening = r.number("weakening", m.weakening, 0, 1e3);
+  r.finish();
+  return m;
+}
+
+SheetSpec read_sheet(Reader r) {
+  SheetSpec s;
+  s.width = r.number("width", s.width, 0, 100, true);
+  s.height = r.number("height", s.height, 0, 100, true);
+  s.edge_length = r.number("edge_length", s.edge_length, 0, 100, true);
+  if (s.edge_length > std::min(s.width, s.height)) r.fail("edge_length", "longer than the sheet");
+  if (std::max(s.width, s.height) / s.edge_length > 4000)
+    r.fail("edge_length", "too small for the sheet size (more than 4000 edges along a side)");
+  s.triangulation = triangulation_from(r, "triangulation", s.triangulation);
+  s.mesh_path = r.string("mesh", "");
+  s.material = read_material(r.child("material"));
+  s.position = r.vector<3>("position", s.position);
+  s.rotation_deg = r.vector<3>("rotation_deg", s.rotation_deg);
+  r.finish();
+  return s;
+}
+
+std::vector<HandleKeyframe> read_handle_keyframes(Reader& r, const std::string& key) {
+  std::vector<HandleKeyframe> out;
+  for (Reader k : r.children(key)) {
+    HandleKeyframe f;
+    f.time = k.number("time", 0.0, 0, 1e6);
+    f.displacement = k.vector<3>("displacement", Eigen::Vector3d::Zero());
+    if (!out.empty() && f.time <= out.back().time) k.fail("time", "keyframe times must increase");
+    k.finish();
+    out.push_back(f);
+  }
+  return out;
+}
+
+HandleSpec read_handle(Reader r, const SheetSpec& sheet) {
+  HandleSpec h;
+  h.material_point = r.vector<2>("point", Eigen::Vector2d(-1, -1));
+  if (!r.has("point") && h.material_point.x() < 0) r.fail("point", "missing (material point [m])");
+  if (h.material_point.x() < 0 || h.material_point.x() > sheet.width || h.material_point.y() < 0 ||
+      h.material_point.y() > sheet.height)
+    r.fail("point", "outside the sheet [0, width] x [0, height]");
+  h.keyframes = read_handle_keyframes(r, "keyframes");
+  h.release_time = r.number("release_time", INF, 0, INF);
+  h.stiffness = r.number("stiffness", h.stiffness, 0, 1e12, true);
+  r.finish();
+  return h;
+}
+
+ClampSpec read_clamp(Reader r) {
+  ClampSpec c;
+  c.region = r.vector<4>("region", Eigen::Vector4d(0, 0, -1, -1));
+  if (c.region[2] < c.region[0] || c.region[3] < c.region[1])
+    r.fail("region", "expected [x_min, y_min, x_max, y_max] with min <= max");
+  c.release_time = r.number("release_time", INF, 0, INF);
+  c.stiffness = r.number("stiffness", c.stiffness, 0, 1e12, true);
+  r.finish();
+  return c;
+}
+
+collision::ColliderSpec read_obstacle(Reader r) {
+  collision::ColliderSpec c;
+  try {
+    c.kind = collision::collider_kind_from_string(r.string("kind", "plane"));
+    c.field = collision::field_kind_from_string(r.string("field", "automatic"));
+  } catch (const collision::ColliderError& e) {
+    r.fail("kind", e.what());
+  }
+  c.radius = r.number("radius", c.radius, 0, 1e3, true);
+  c.length = r.number("length", c.length, 0, 1e3, true);
+  c.half_extents = r.vector<3>("half_extents", c.half_extents);
+  c.half_width = r.number("half_width", c.half_width, 0, 1e3, true);
+  c.height = r.number("height", c.height, 0, 1e3, true);
+  c.obj_path = r.string("mesh", "");
+  c.obj_scale = r.number("mesh_scale", c.obj_scale, 0, 1e6, true);
+  c.level_set.voxel_size = r.number("voxel_size", c.level_set.voxel_size, 0, 1);
+  c.friction = r.number("friction", c.friction, 0, 10);
+  const Eigen::Vector3d t = r.vector<3>("position", Eigen::Vector3d::Zero());
+  const Eigen::Vector3d rot = r.vector<3>("rotation_deg", Eigen::Vector3d::Zero());
+  auto to_q = [](const Eigen::Vector3d& deg) {
+    const Eigen::Vector3d a = deg * M_PI / 180;
+    return Eigen::Quaterniond(Eigen::AngleAxisd(a.z(), Eigen::Vector3d::UnitZ()) *
+                              Eigen::AngleAxisd(a.y(), Eigen::Vector3d::UnitY()) *
+                              Eigen::AngleAxisd(a.x(), Eigen::Vector3d::UnitX()));
+  };
+  for (Reader k : r.children("keyframes")) {
+    collision::Keyframe f;
+    f.time = k.number("time", 0.0, 0, 1e6);
+    f.translation = k.vector<3>("position", t);
+    f.rotation = to_q(k.vector<3>("rotation_deg", rot));
+    if (!c.keyframes.empty() && f.time <= c.keyframes.back().time)
+      k.fail("time", "keyframe times must increase");
+    k.finish();
+    c.keyframes.push_back(f);
+  }
+  if (c.keyframes.empty()) {
+    collision::Keyframe f;
+    f.translation = t;
+    f.rotation = to_q(rot);
+    c.keyframes.push_back(f);
+  }
+  r.finish();
+  return c;
+}
+
+}  // namespace
+
+Scene scene_from_json(const json& j, const std::string& source) {
+  Reader r(j, "", source);
+  Scene s;
+  s.name = r.string("name", s.name);
+  s.sheet = read_sheet(r.child("sheet"));
+  s.gravity = r.vector<3>("gravity", s.gravity);
+  if (s.gravity.norm() > 1e5) r.fail("gravity", "magnitude above 1e5 m/s^2");
+  s.duration = r.number("duration", s.duration, 0, 1e4, true);
+  s.time_step = r.number("time_step", s.time_step, 1e-7, 1.0);
+  if (s.time_step > s.duration) r.fail("time_step", "longer than the duration");
+  s.ground = r.boolean("ground", s.ground);
+  s.ground_friction = r.number("ground_friction", s.ground_friction, 0, 10);
+  for (Reader o : r.children("obstacles")) s.obstacles.push_back(read_obstacle(std::move(o)));
+  for (Reader h : r.children("handles")) s.handles.push_back(read_handle(std::move(h), s.sheet));
+  for (Reader c : r.children("clamps")) s.clamps.push_back(read_clamp(std::move(c)));
+  {
+    Reader c = r.child("contact");
+    s.contact.dhat = c.number("thickness", s.contact.dhat, 0, 0.1, true);
+    s.contact.stiffness = c.number("stiffness", 0.0, 0, 1e12);
+    s.contact.eps_velocity = c.number("static_velocity", s.contact.eps_velocity, 0, 10, true);
+    c.finish();
+  }
+  {
+    Reader n = r.child("solver");
+    s.newton.max_iterations = n.integer("max_iterations", s.newton.max_iterations, 1, 10000);
+    s.newton.tolerance = n.number("tolerance", s.newton.tolerance, 0, 1e3, true);
+    s.newton.max_halvings = n.integer("max_halvings", s.newton.max_halvings, 0, 30);
+    n.finish();
+  }
+  {
+    Reader o = r.child("output");
+    s.output.frames_every = o.integer("frames_every", s.output.frames_every, 0, 1 << 30);
+    s.output.write_ply = o.boolean("ply", s.output.write_ply);
+    o.finish();
+  }
+  s.scenario = r.string("scenario", "");
+  if (r.has("seed")) s.seed = r.integer("seed", 0, 0, 2147483647);
+  r.finish();
+  return s;
+}
+
+Scene load_scene(const std::string& path) {
+  if (!std::filesystem::exists(path)) throw SceneError(path + ": no such file");
+  std::ifstream in(path);
+  if (!in) throw SceneError(path + ": cannot open");
+  json j;
+  try {
+    j = json::parse(in);
+  } catch (const json::parse_error& e) {
+    throw SceneError(path + ": not valid JSON: " + e.what());
+  }
+  return scene_from_json(j, path);
+}
+
+namespace {
+
+json vec(const Eigen::VectorXd& v) {
+  json a = json::array();
+  for (int i = 0; i < v.size(); ++i) a.push_back(v[i]);
+  return a;
+}
+
+json obstacle_json(const collision::ColliderSpec& c) {
+  json o;
+  o["kind"] = collision::to_string(c.kind);
+  o["field"] = collision::to_string(c.field);
+  o["radius"] = c.radius;
+  o["length"] = c.length;
+  o["half_extents"] = vec(c.half_extents);
+  o["half_width"] = c.half_width;
+  o["height"] = c.height;
+  if (!c.obj_path.empty()) o["mesh"] = c.obj_path;
+  o["mesh_scale"] = c.obj_scale;
+  o["voxel_size"] = c.level_set.voxel_size;
+  o["friction"] = c.friction;
+  json keys = json::array();
+  for (const auto& k : c.keyframes) {
+    const Eigen::Vector3d e = k.rotation.toRotationMatrix().eulerAngles(2, 1, 0) * 180 / M_PI;
+    keys.push_back({{"time", k.time}, {"position", vec(k.translation)},
+                    {"rotation_deg", vec(Eigen::Vector3d(e[2], e[1], e[0]))}});
+  }
+  o["keyframes"] = keys;
+  return o;
+}
+
+}  // namespace
+
+json scene_to_json(const Scene& s) {
+  json j;
+  j["name"] = s.name;
+  const Material& m = s.sheet.material;
+  j["sheet"] = {{"width", s.sheet.width},
+                {"height", s.sheet.height},
+                {"edge_length", s.sheet.edge_length},
+                {"triangulation", to_string(s.sheet.triangulation)},
+                {"position", vec(s.sheet.position)},
+                {"rotation_deg", vec(s.sheet.rotation_deg)},
+                {"material",
+                 {{"density", m.density},
+                  {"stretch_stiffness", m.stretch_stiffness},
+                  {"poisson", m.poisson},
+                  {"bending_stiffness", m.bending_stiffness},
+                  {"damping", m.damping},
+                  {"strain_limit", m.strain_limit},
+                  {"thickness", m.thickness},
+                  {"yield_curvature", m.yield_curvature},
+                  {"weakening", m.weakening}}}};
+  if (!s.sheet.mesh_path.empty()) j["sheet"]["mesh"] = s.sheet.mesh_path;
+  j["gravity"] = vec(s.gravity);
+  j["duration"] = s.duration;
+  j["time_step"] = s.time_step;
+  j["ground"] = s.ground;
+  j["ground_friction"] = s.ground_friction;
+  j["obstacles"] = json::array();
+  for (const auto& o : s.obstacles) j["obstacles"].push_back(obstacle_json(o));
+  j["handles"] = json::array();
+  for (const auto& h : s.handles) {
+    json hj = {{"point", vec(h.material_point)}, {"stiffness", h.stiffness}};
+    if (std::isfinite(h.release_time)) hj["release_time"] = h.release_time;
+    hj["keyframes"] = json::array();
+    for (const auto& k : h.keyframes)
+      hj["keyframes"].push_back({{"time", k.time}, {"displacement", vec(k.displacement)}});
+    j["handles"].push_back(hj);
+  }
+  j["clamps"] = json::array();
+  for (const auto& c : s.clamps) {
+    json cj = {{"region", vec(c.region)}, {"stiffness", c.stiffness}};
+    if (std::isfinite(c.release_time)) cj["release_time"] = c.release_time;
+    j["clamps"].push_back(cj);
+  }
+  j["contact"] = {{"thickness", s.contact.dhat},
+                  {"stiffness", s.contact.stiffness},
+                  {"static_velocity", s.contact.eps_velocity}};
+  j["solver"] = {{"max_iterations", s.newton.max_iterations},
+                 {"tolerance", s.newton.tolerance},
+                 {"max_halvings", s.newton.max_halvings}};
+  j["output"] = {{"frames_every", s.output.frames_every}, {"ply", s.output.write_ply}};
+  if (!s.scenario.empty()) j["scenario"] = s.scenario;
+  if (s.seed >= 0) j["seed"] = s.seed;
+  return j;
+}
+
+}  // namespace papersim::simulation

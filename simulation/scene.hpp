@@ -1,0 +1,69 @@
+#pragma once
+/// A scene: everything one simulation needs, as plain structs with defaults and units. JSON is
+/// parsed only here (load_scene / scene_from_json) and written back by scene_to_json.
+#include <nlohmann/json_fwd.hpp>
+#include <string>
+#include <vector>
+
+#include "collision/collider_factory.hpp"
+#include "remesh/sheet_generator.hpp"
+#include "simulation/energies/contact_energy.hpp"
+#include "simulation/energies/handle_energy.hpp"
+#include "simulation/integrator.hpp"
+#include "simulation/material.hpp"
+
+namespace papersim::simulation {
+
+struct SheetSpec {
+  double width = 0.210;        ///< [m] along material x
+  double height = 0.297;       ///< [m] along material y
+  double edge_length = 6e-3;   ///< target edge length of the initial mesh [m]
+  remesh::Triangulation triangulation = remesh::Triangulation::alternating;
+  std::string mesh_path;       ///< optional OBJ/PLY to start from instead of a rectangle
+  Material material;
+  /// Initial pose: the sheet's centre goes to `position` [m], then it is rotated by
+  /// `rotation_deg` (x, y, z Euler angles applied in that order) about its centre [deg].
+  Eigen::Vector3d position = Eigen::Vector3d(0, 0, 1e-3);
+  Eigen::Vector3d rotation_deg = Eigen::Vector3d::Zero();
+};
+
+/// A clamp: every vertex whose material point lies in the box is held in place.
+struct ClampSpec {
+  Eigen::Vector4d region = Eigen::Vector4d::Zero();  ///< (x_min, y_min, x_max, y_max) [m]
+  double release_time = INF;  ///< [s]
+  double stiffness = 1e6;     ///< [N/m]
+};
+
+struct OutputSpec {
+  int frames_every = 0;   ///< write every K-th step to frames/ (0: none)
+  bool write_ply = true;  ///< sheet.ply beside sheet.obj
+};
+
+struct Scene {
+  std::string name = "scene";
+  SheetSpec sheet;
+  Eigen::Vector3d gravity = Eigen::Vector3d(0, 0, -9.8);  ///< [m/s^2]
+  double duration = 1.0;    ///< [s]
+  double time_step = 2e-3;  ///< [s]
+  bool ground = true;       ///< the plane z = 0
+  double ground_friction = 0.3;  ///< [-]
+  std::vector<collision::ColliderSpec> obstacles;
+  std::vector<HandleSpec> handles;
+  std::vector<ClampSpec> clamps;
+  ContactParams contact;         ///< stiffness <= 0 means automatic: rho_A |g|
+  NewtonParams newton;
+  OutputSpec output;
+  /// Provenance when a scenario drew the scene.
+  std::string scenario;
+  long long seed = -1;
+};
+
+/// Parse a scene. `source` names the file in error messages.
+/// @throw SceneError naming the file and the key (unknown key, wrong type, out-of-range value).
+Scene scene_from_json(const nlohmann::json& j, const std::string& source);
+/// @throw SceneError when the file is missing or not valid JSON, or as scene_from_json.
+Scene load_scene(const std::string& path);
+/// Every field of the scene, so that scene_from_json(scene_to_json(s)) == s.
+nlohmann::json scene_to_json(const Scene& scene);
+
+}  // namespace papersim::simulation

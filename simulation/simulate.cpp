@@ -1,0 +1,320 @@
+#include "simulation/simulate.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <memory>
+#include <sstream>
+
+#include "collision/errors.hpp"
+#include "remesh/errors.hpp"
+#include "remesh/sheet_io.hpp"
+#include "simulation/energies/bending_energy.hpp"
+#include "simulation/energies/membrane_energy.hpp"
+#include "simulation/energies/vertex_energies.hpp"
+#include "simulation/errors.hpp"
+#include "simulation/integrator.hpp"
+
+#ifndef PAPERSIM_VERSION_STRING
+#define PAPERSIM_VERSION_STRING "unknown"
+#endif
+
+namespace papersim::simulation {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+const char* version() { return PAPERSIM_VERSION_STRING; }
+
+namespace {
+
+Eigen::Matrix3d rotation(const Eigen::Vector3d& deg) {
+  const Eigen::Vector3d a = deg * M_PI / 180;
+  return (Eigen::AngleAxisd(a.z(), Eigen::Vector3d::UnitZ()) *
+          Eigen::AngleAxisd(a.y(), Eigen::Vector3d::UnitY()) *
+          Eigen::AngleAxisd(a.x(), Eigen::Vector3d::UnitX()))
+      .toRotationMatrix();
+}
+
+std::vector<HandleSpec> all_handles(const Scene& scene, const remesh::SheetMesh& mesh) {
+  std::vector<HandleSpec> handles = scene.handles;
+  const Eigen::MatrixX2d X = mesh.material_coords();
+  for (const ClampSpec& c : scene.clamps) {
+    int held = 0;
+    for (int v = 0; v < X.rows(); ++v)
+      if (X(v, 0) >= c.region[0] - 1e-12 && X(v, 0) <= c.region[2] + 1e-12 &&
+          X(v, 1) >= c.region[1] - 1e-12 && X(v, 1) <= c.region[3] + 1e-12) {
+        HandleSpec h;
+        h.material_point = X.row(v).transpose();
+        h.release_time = c.release_time;
+        h.stiffness = c.stiffness;
+        handles.push_back(h);
+        ++held;
+      }
+    if (held == 0) throw SceneError("clamp region holds no vertex of the sheet");
+  }
+  return handles;
+}
+
+struct Built {
+  std::unique_ptr<Integrator> integrator;
+  MembraneEnergy* membrane = nullptr;
+  BendingEnergy* bending = nullptr;
+  HandleEnergy* handles = nullptr;
+  ObstacleContactEnergy* contact = nullptr;
+  std::vector<std::shared_ptr<const collision::Collider>> obstacles;
+  Eigen::VectorXd masses;
+};
+
+Built build(const Scene& scene, const remesh::SheetMesh& mesh, const SheetState& state) {
+  Built b;
+  const Eigen::MatrixX2d X = mesh.material_coords();
+  const Eigen::MatrixX3i F = mesh.faces();
+  const Material& m = scene.sheet.material;
+  b.masses = lumped_masses(X, F, m.density);
+  std::vector<std::unique_ptr<EnergyTerm>> terms;
+  terms.push_back(std::make_unique<InertiaEnergy>(b.masses));
+  if (m.damping > 0) terms.push_back(std::make_unique<DampingEnergy>(b.masses, m.damping));
+  terms.push_back(std::make_unique<GravityEnergy>(b.masses, scene.gravity));
+  auto membrane = std::make_unique<MembraneEnergy>(X, F, m);
+  b.membrane = membrane.get();
+  terms.push_back(std::move(membrane));
+  auto bending = std::make_unique<BendingEnergy>(mesh, m);
+  b.bending = bending.get();
+  terms.push_back(std::move(bending));
+  const std::vector<HandleSpec> handles = all_handles(scene, mesh);
+  if (!handles.empty()) {
+    auto h = std::make_unique<HandleEnergy>(mesh, state.positions, handles);
+    b.handles = h.get();
+    terms.push_back(std::move(h));
+  }
+  if (scene.ground) {
+    auto ground = std::make_shared<collision::PlaneCollider>();
+    ground->friction = scene.ground_friction;
+    b.obstacles.push_back(ground);
+  }
+  for (size_t i = 0; i < scene.obstacles.size(); ++i) {
+    try {
+      b.obstacles.push_back(collision::make_collider(scene.obstacles[i]));
+    } catch (const collision::ColliderError& e) {
+      throw SceneError("obstacles[" + std::to_string(i) + "]: " + e.what());
+    }
+  }
+  if (!b.obstacles.empty()) {
+    ContactParams p = scene.contact;
+    if (p.stiffness <= 0) p.stiffness = m.density * std::max(scene.gravity.norm(), 1.0);
+    Eigen::VectorXd areas = b.masses / m.density;
+    auto c = std::make_unique<ObstacleContactEnergy>(areas, b.obstacles, p);
+    b.contact = c.get();
+    terms.push_back(std::move(c));
+  }
+  b.integrator = std::make_unique<Integrator>(mesh.num_vertices(), std::move(terms), scene.newton);
+  return b;
+}
+
+/// Running extremes over the run, for meta.json.
+struct Tracker {
+  double max_stretch = 1.0, min_compression = 1.0, max_speed = 0.0;
+  std::vector<double> min_distance;
+  void update(const Built& b, const SheetState& s) {
+    const Eigen::MatrixX2d st = b.membrane->principal_stretches(s.positions);
+    max_stretch = std::max(max_stretch, st.col(0).maxCoeff());
+    min_compression = std::min(min_compression, st.col(1).minCoeff());
+    for (int v = 0; v < s.num_vertices(); ++v)
+      max_speed = std::max(max_speed, s.velocities.segment<3>(3 * v).norm());
+    min_distance.resize(b.obstacles.size(), INF);
+    for (size_t o = 0; o < b.obstacles.size(); ++o)
+      for (int v = 0; v < s.num_vertices(); ++v)
+        min_distance[o] =
+            std::min(min_distance[o], b.obstacles[o]->distance(s.positions.segment<3>(3 * v), s.time));
+  }
+};
+
+void write_outputs(const fs::path& dir, const Scene& scene, const remesh::SheetMesh& mesh,
+                   const SheetState& s) {
+  remesh::write_sheet_file((dir / "sheet.obj").string(), mesh, s.positions_matrix(),
+                           s.velocities_matrix(), scene.sheet.width, scene.sheet.height);
+  if (scene.output.write_ply)
+    remesh::write_sheet_file((dir / "sheet.ply").string(), mesh, s.positions_matrix(),
+                             s.velocities_matrix(), scene.sheet.width, scene.sheet.height);
+}
+
+void write_json(const fs::path& path, const json& j) {
+  const fs::path tmp = path.string() + ".tmp";
+  std::ofstream out(tmp);
+  out << std::setw(2) << j << '\n';
+  if (!out) throw remesh::IoError(path.string() + ": cannot write");
+  out.close();
+  fs::rename(tmp, path);
+}
+
+/// A staging folder inside out_dir; its files move into out_dir only when the run succeeded.
+class Staging {
+ public:
+  explicit Staging(const std::string& out_dir) {
+    if (out_dir.empty()) return;
+    m_out = out_dir;
+    m_created = !fs::exists(m_out);
+    fs::create_directories(m_out);
+    m_dir = m_out / ".papersim-partial";
+    fs::remove_all(m_dir);
+    fs::create_directories(m_dir);
+  }
+  ~Staging() {
+    std::error_code ec;
+    if (!m_dir.empty()) fs::remove_all(m_dir, ec);
+    // A failed run leaves no trace: not even the folder, when this run made it.
+    if (!m_committed && m_created) fs::remove(m_out, ec);
+  }
+  bool active() const { return !m_dir.empty(); }
+  const fs::path& dir() const { return m_dir; }
+  void commit() {
+    for (const auto& e : fs::directory_iterator(m_dir)) {
+      const fs::path target = m_out / e.path().filename();
+      if (fs::is_directory(target)) fs::remove_all(target);
+      fs::rename(e.path(), target);
+    }
+    m_committed = true;
+  }
+
+ private:
+  fs::path m_out, m_dir;
+  bool m_created = false, m_committed = false;
+};
+
+}  // namespace
+
+void initial_sheet(const Scene& scene, remesh::SheetMesh& mesh, SheetState& state) {
+  const SheetSpec& sp = scene.sheet;
+  Eigen::MatrixX3d x;
+  if (!sp.mesh_path.empty()) {
+    remesh::SheetData d = remesh::read_sheet(sp.mesh_path);
+    mesh = d.mesh;
+    x = d.positions;
+  } else {
+    const Eigen::Vector2i n = remesh::grid_for_edge_length(sp.width, sp.height, sp.edge_length);
+    remesh::RectangleOptions o;
+    o.width = sp.width;
+    o.height = sp.height;
+    o.nx = n.x();
+    o.ny = n.y();
+    o.triangulation = sp.triangulation;
+    o.seed = scene.seed >= 0 ? static_cast<std::uint64_t>(scene.seed) : 0;
+    mesh = remesh::make_rectangle(o);
+    const Eigen::MatrixX2d X = mesh.material_coords();
+    const Eigen::Matrix3d R = rotation(sp.rotation_deg);
+    x.resize(X.rows(), 3);
+    for (int v = 0; v < X.rows(); ++v) {
+      const Eigen::Vector3d local(X(v, 0) - 0.5 * sp.width, X(v, 1) - 0.5 * sp.height, 0.0);
+      x.row(v) = (R * local + sp.position).transpose();
+    }
+  }
+  state.positions = flatten(x);
+  state.velocities = Eigen::VectorXd::Zero(state.positions.size());
+  state.time = 0.0;
+}
+
+RunResult run_scene(const Scene& scene, const RunOptions& options) {
+  const auto t_start = std::chrono::steady_clock::now();
+  RunResult r;
+  initial_sheet(scene, r.mesh, r.state);
+  Built b = build(scene, r.mesh, r.state);
+  if (b.contact) {
+    for (size_t o = 0; o < b.obstacles.size(); ++o)
+      for (int v = 0; v < r.state.num_vertices(); ++v)
+        if (b.obstacles[o]->distance(r.state.positions.segment<3>(3 * v), 0.0) <= 0)
+          throw SceneError("the sheet starts inside obstacle " + std::to_string(o) +
+                           (scene.ground ? " (0 is the ground)" : ""));
+  }
+  Staging staging(options.out_dir);
+  const int frames_every = options.frames_every >= 0 ? options.frames_every : scene.output.frames_every;
+  if (staging.active() && frames_every > 0) fs::create_directories(staging.dir() / "frames");
+  const int steps = std::max(1, static_cast<int>(std::lround(scene.duration / scene.time_step)));
+  const double h = scene.duration / steps;
+  Tracker track;
+  track.update(b, r.state);
+  StepStats total;
+  int last_percent = -1;
+  for (int k = 1; k <= steps; ++k) {
+    const StepStats s = b.integrator->step(r.state, h);
+    total.substeps += s.substeps;
+    total.failed_solves += s.failed_solves;
+    total.newton_iterations += s.newton_iterations;
+    total.line_search_evaluations += s.line_search_evaluations;
+    total.seconds_assembly += s.seconds_assembly;
+    total.seconds_solve += s.seconds_solve;
+    total.seconds_line_search += s.seconds_line_search;
+    track.update(b, r.state);
+    if (staging.active() && frames_every > 0 && k % frames_every == 0) {
+      std::ostringstream name;
+      name << "frame_" << std::setw(6) << std::setfill('0') << k << ".obj";
+      remesh::write_sheet_file((staging.dir() / "frames" / name.str()).string(), r.mesh,
+                               r.state.positions_matrix(), r.state.velocities_matrix(),
+                               scene.sheet.width, scene.sheet.height);
+    }
+    const int percent = static_cast<int>(100.0 * k / steps);
+    if (options.progress && percent != last_percent) {
+      last_percent = percent;
+      options.progress(double(k) / steps,
+                       std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count());
+    }
+  }
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+  json& m = r.meta;
+  m["program"] = "papersim";
+  m["version"] = version();
+  m["scene"] = scene_to_json(scene);
+  if (!scene.scenario.empty()) m["scenario"] = scene.scenario;
+  if (scene.seed >= 0) m["seed"] = scene.seed;
+  m["sheet"] = {{"width", scene.sheet.width},
+                {"height", scene.sheet.height},
+                {"vertices", r.mesh.num_vertices()},
+                {"faces", r.mesh.num_faces()}};
+  m["run"] = {{"wall_seconds", wall},
+              {"steps", steps},
+              {"time_step", h},
+              {"substeps", total.substeps},
+              {"failed_solves", total.failed_solves},
+              {"newton_iterations", total.newton_iterations},
+              {"line_search_evaluations", total.line_search_evaluations},
+              {"seconds_assembly", total.seconds_assembly},
+              {"seconds_solve", total.seconds_solve},
+              {"seconds_line_search", total.seconds_line_search}};
+  json quality = {{"max_principal_stretch", track.max_stretch},
+                  {"min_principal_stretch", track.min_compression},
+                  {"strain_limit", scene.sheet.material.strain_limit},
+                  {"max_speed", track.max_speed}};
+  json distances = json::array();
+  for (double d : track.min_distance) distances.push_back(d);
+  quality["min_obstacle_distance"] = distances;
+  if (b.handles) {
+    double worst = 0;
+    for (int i = 0; i < b.handles->size(); ++i)
+      if (b.handles->active(i, r.state.time - 1e-12))
+        worst = std::max(worst, (b.handles->point(i, r.state.positions) -
+                                 b.handles->target(i, r.state.time)).norm());
+    quality["max_handle_error"] = worst;
+  }
+  m["quality"] = quality;
+  double kinetic = 0;
+  for (int v = 0; v < r.state.num_vertices(); ++v)
+    kinetic += 0.5 * b.masses[v] * r.state.velocities.segment<3>(3 * v).squaredNorm();
+  double gravity_energy = 0;
+  for (int v = 0; v < r.state.num_vertices(); ++v)
+    gravity_energy -= b.masses[v] * scene.gravity.dot(r.state.positions.segment<3>(3 * v));
+  m["energy"] = {{"stretch", b.membrane->value(r.state.positions)},
+                 {"bend", b.bending->value(r.state.positions)},
+                 {"gravity", gravity_energy},
+                 {"kinetic", kinetic}};
+  for (auto it = options.extra_meta.begin(); it != options.extra_meta.end(); ++it) m[it.key()] = it.value();
+  if (staging.active()) {
+    write_outputs(staging.dir(), scene, r.mesh, r.state);
+    write_json(staging.dir() / "meta.json", m);
+    staging.commit();
+  }
+  return r;
+}
+
+}  // namespace papersim::simulation

@@ -1,0 +1,43 @@
+#pragma once
+/// Running a scene end to end: build the sheet and the incremental potential, integrate, and
+/// write sheet.obj, sheet.ply, meta.json (and frames) into an output folder.
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "remesh/sheet_mesh.hpp"
+#include "simulation/scene.hpp"
+#include "simulation/sheet_state.hpp"
+
+namespace papersim::simulation {
+
+/// Progress report: fraction done in [0, 1] and wall seconds so far.
+using ProgressFn = std::function<void(double fraction, double seconds)>;
+
+struct RunOptions {
+  std::string out_dir;      ///< created if missing; files appear only when the run succeeds
+  int frames_every = -1;    ///< overrides scene.output.frames_every when >= 0
+  ProgressFn progress;      ///< called about once per percent
+  nlohmann::json extra_meta = nlohmann::json::object();  ///< merged into meta.json
+};
+
+/// What a finished run measured (also written to meta.json).
+struct RunResult {
+  remesh::SheetMesh mesh;
+  SheetState state;
+  nlohmann::json meta;
+};
+
+/// The sheet of a scene in its initial pose.
+/// @throw SceneError, remesh::IoError, remesh::MeshError
+void initial_sheet(const Scene& scene, remesh::SheetMesh& mesh, SheetState& state);
+
+/// Simulate `scene`; with a non-empty out_dir, write the outputs there.
+/// @throw SceneError for a scene that cannot be built, NumericError when a step fails, and
+///        remesh::IoError when outputs cannot be written. On failure nothing is left in out_dir.
+RunResult run_scene(const Scene& scene, const RunOptions& options);
+
+/// Program version (the CMake project version).
+const char* version();
+
+}  // namespace papersim::simulation
