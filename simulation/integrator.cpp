@@ -2,6 +2,8 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <sstream>
 
 #include "simulation/errors.hpp"
@@ -87,6 +89,9 @@ NewtonResult Integrator::solve(const StepContext& ctx, Eigen::VectorXd& x, StepS
     const Eigen::VectorXd dx = m_solver.solve(-g);
     stats.seconds_solve += seconds_since(t0);
     r.residual = max_vertex_norm(dx) / ctx.h;
+    if (std::getenv("PAPERSIM_DEBUG_NEWTON"))
+      std::fprintf(stderr, "t %.4f it %d E %.12g residual %.3e decrement %.3e\n", ctx.time_t0,
+                   r.iterations, e, r.residual, -g.dot(dx));
     if (!dx.allFinite()) {
       r.failure = "NaN in the Newton direction";
       return r;
@@ -136,7 +141,18 @@ bool Integrator::advance(SheetState& state, double h, int depth, StepStats& stat
   ctx.x_t0 = &x_t0;
   ctx.v_t0 = &v_t0;
   for (const auto& t : m_terms) t->begin_step(ctx, x_t0);
+  // Start from the explicit prediction x_t0 + h v_t0 when it is feasible (CCD-safe from x_t0
+  // and finite energy): Newton then only corrects it, instead of producing the whole motion of
+  // the step from rest (measured: about half the iterations on a falling sheet).
   Eigen::VectorXd x = x_t0;
+  const Eigen::VectorXd dx0 = h * v_t0;
+  double alpha = 1.0;
+  for (const auto& t : m_terms) alpha = std::min(alpha, t->max_step(x_t0, dx0));
+  if (alpha > 0) {
+    const Eigen::VectorXd x_pred = x_t0 + alpha * dx0;
+    if (std::isfinite(energy(x_pred)) && energy(x_pred) <= energy(x_t0) + 1e-12 * std::abs(energy(x_t0)))
+      x = x_pred;
+  }
   const NewtonResult r = solve(ctx, x, stats);
   stats.newton_iterations += r.iterations;
   stats.line_search_evaluations += r.line_search_evaluations;

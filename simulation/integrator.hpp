@@ -15,8 +15,8 @@ namespace papersim::simulation {
 struct NewtonParams {
   int max_iterations = 60;  ///< per time step
   /// Stopping test (IPC): the Newton step's largest vertex displacement divided by h is below
-  /// this speed [m/s]. With h = 1 ms the default stops at 0.01 micrometre per step.
-  double tolerance = 1e-5;
+  /// this speed [m/s]. With h = 5 ms the default stops at 0.5 micrometre per step.
+  double tolerance = 1e-4;
   double armijo = 1e-4;        ///< sufficient decrease constant [-]
   int max_halvings = 10;       ///< a failed step is split in two up to this depth
 };

@@ -3,6 +3,8 @@
 #include <cholmod.h>
 
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <string>
 
 #include "simulation/errors.hpp"
@@ -18,6 +20,10 @@ struct LinearSolver::Impl {
     cholmod_start(&common);
     common.print = 0;  // library code stays silent; failures are returned or thrown
     common.error_handler = nullptr;
+    // Sheet systems are 2D meshes with small supernodes; the supernodal path spends its time in
+    // BLAS calls on tiny blocks (and Debian's default reference BLAS is slow), so factor
+    // simplicially (measured: see docs/performance.md).
+    common.supernodal = CHOLMOD_SIMPLICIAL;
   }
   ~Impl() {
     if (factor) cholmod_free_factor(&factor, &common);
@@ -56,6 +62,8 @@ bool LinearSolver::factorize(const BlockSymmetricMatrix& A, long pattern_id) {
     m_impl->pattern_id = pattern_id;
     m_impl->n = A.size();
     ++m_analyses;
+    if (std::getenv("PAPERSIM_DEBUG_SOLVER"))
+      std::fprintf(stderr, "analyse n %d nnz(A) %zu lnz %.0f ordering %d\n", A.size(), A.values().size(), c.lnz, c.selected);
   }
   const int ok = cholmod_factorize(&s, m_impl->factor, &c);
   if (!ok && c.status != CHOLMOD_NOT_POSDEF)

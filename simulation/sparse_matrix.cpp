@@ -1,6 +1,9 @@
 #include "simulation/sparse_matrix.hpp"
 
 #include <algorithm>
+#include <string>
+
+#include "remesh/errors.hpp"
 
 namespace papersim::simulation {
 
@@ -48,6 +51,7 @@ BlockSymmetricMatrix::BlockSymmetricMatrix(std::vector<std::vector<int>> upper_n
 int BlockSymmetricMatrix::block_offset(int i, int j) const {
   const auto& n = m_neighbours[j];
   const auto it = std::lower_bound(n.begin(), n.end(), i);
+  PAPERSIM_ASSERT(it != n.end() && *it == i, "element coupling missing from the sparsity pattern");
   return static_cast<int>(it - n.begin());
 }
 

@@ -127,18 +127,22 @@ double MembraneEnergy::element(int f, const Eigen::Matrix<double, 9, 1>& xs,
   }
   if (g) *g = t.area * J.transpose() * W.grad;
   if (H) {
-    // Geometric term: d2c/dx_i dx_j = 2 (w_i^T G w_j) I3, G = [[g0, g2/2], [g2/2, g1]].
+    // Geometric term: d2c/dx_i dx_j = 2 (w_i^T G w_j) I3, G = [[g0, g2/2], [g2/2, g1]]. It is
+    // indefinite under compression, so the element matrix is projected to PSD (Teran et al.
+    // 2005 style, on the 9x9 element matrix as in IPC); when G is PSD the matrix already is.
     Eigen::Matrix2d G;
     G << W.grad[0], 0.5 * W.grad[2], 0.5 * W.grad[2], W.grad[1];
-    Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> es(G);
-    const Eigen::Vector2d ev = es.eigenvalues().cwiseMax(0.0);
-    const Eigen::Matrix2d Gp = es.eigenvectors() * ev.asDiagonal() * es.eigenvectors().transpose();
     *H = t.area * J.transpose() * W.hess * J;
     for (int i = 0; i < 3; ++i)
       for (int j = 0; j < 3; ++j) {
-        const double s = 2 * t.area * t.w.row(i).dot(Gp * t.w.row(j).transpose());
+        const double s = 2 * t.area * t.w.row(i).dot(G * t.w.row(j).transpose());
         H->block<3, 3>(3 * i, 3 * j).diagonal().array() += s;
       }
+    if (G.determinant() < 0 || G.trace() < 0) {
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 9, 9>> es(*H);
+      *H = es.eigenvectors() * es.eigenvalues().cwiseMax(0.0).asDiagonal() *
+           es.eigenvectors().transpose();
+    }
   }
   return t.area * W.value;
 }

@@ -171,12 +171,13 @@ TEST(EnergyDerivatives, Handles) {
 TEST(EnergyDerivatives, GroundContactAndFriction) {
   Fixture f = make_fixture();
   // Every vertex within the barrier range of the ground (z in (0, dhat)) and sliding.
+  const double dhat = ContactParams{}.dhat;
   Eigen::VectorXd x0 = f.x0, x = f.x0;
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> u(0.1, 0.9);
   for (int v = 0; v < f.mesh.num_vertices(); ++v) {
-    x0[3 * v + 2] = 5e-4 * u(rng);
-    x[3 * v + 2] = 5e-4 * u(rng);
+    x0[3 * v + 2] = dhat * u(rng);
+    x[3 * v + 2] = dhat * u(rng);
     x[3 * v] += (v % 3) * 7e-4;  // some vertices stick (below eps), some slide
   }
   auto ground = std::make_shared<collision::PlaneCollider>();
@@ -193,7 +194,7 @@ TEST(EnergyDerivatives, GroundContactAndFriction) {
   ctx.v_t0 = &v;
   e.begin_step(ctx, x0);
   EXPECT_EQ(e.active_friction(), f.mesh.num_vertices());
-  check_derivatives(e, f.mesh.num_vertices(), x, 1e-6, 1e-4);
+  check_derivatives(e, f.mesh.num_vertices(), x, 1e-6, 1e-4, true, 1e-8);
   // CCD: a step that would push vertices through the ground is cut before they reach it.
   Eigen::VectorXd dx = Eigen::VectorXd::Zero(x.size());
   for (int k = 0; k < f.mesh.num_vertices(); ++k) dx[3 * k + 2] = -0.01;
