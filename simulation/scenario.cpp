@@ -32,7 +32,8 @@ Scene pull(std::uint64_t seed) {
   s.sheet.position = Eigen::Vector3d(0, 0, 1e-3);
   s.gravity = Eigen::Vector3d(0, 0, d.uniform(-100, -9.8));
   s.duration = 1.0;
-  s.time_step = 5e-3;
+  s.time_step = 1e-2;
+  s.sheet.edge_length = 1e-2;
   s.ground = true;
   s.ground_friction = 0.3;
   const int points = d.chance(0.05) ? 1 : 2;
