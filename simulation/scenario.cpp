@@ -23,6 +23,7 @@ class Draw {
 
 /// Pull (SCENARIOS.md): an A4 sheet on the ground; two points (one with probability 5%) anywhere
 /// on it are lifted linearly to U[0.03, 0.08] m over 1 s under gravity U[-100, -9.8] m/s^2.
+/// The handles set the points' height; their horizontal position is free.
 Scene pull(std::uint64_t seed) {
   Draw d(seed);
   Scene s;
@@ -42,6 +43,9 @@ Scene pull(std::uint64_t seed) {
     h.material_point = Eigen::Vector2d(d.uniform(0, s.sheet.width), d.uniform(0, s.sheet.height));
     const double lift = d.uniform(0.03, 0.08);
     h.keyframes = {{0.0, Eigen::Vector3d::Zero()}, {1.0, Eigen::Vector3d(0, 0, lift)}};
+    // Only the height is driven: two points lifted to different heights are farther apart than
+    // the sheet between them allows, so an inextensible sheet must let them move inwards.
+    h.axes = Eigen::Vector3d(0, 0, 1);
     s.handles.push_back(h);
   }
   return s;

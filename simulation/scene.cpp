@@ -203,6 +203,9 @@ HandleSpec read_handle(Reader r, const SheetSpec& sheet) {
   h.keyframes = read_handle_keyframes(r, "keyframes");
   h.release_time = r.number("release_time", INF, 0, INF);
   h.stiffness = r.number("stiffness", h.stiffness, 0, 1e12, true);
+  h.axes = r.vector<3>("axes", h.axes);
+  for (int k = 0; k < 3; ++k)
+    if (h.axes[k] != 0 && h.axes[k] != 1) r.fail("axes", "expected three values, each 0 or 1");
   r.finish();
   return h;
 }
@@ -382,7 +385,7 @@ json scene_to_json(const Scene& s) {
   for (const auto& o : s.obstacles) j["obstacles"].push_back(obstacle_json(o));
   j["handles"] = json::array();
   for (const auto& h : s.handles) {
-    json hj = {{"point", vec(h.material_point)}, {"stiffness", h.stiffness}};
+    json hj = {{"point", vec(h.material_point)}, {"stiffness", h.stiffness}, {"axes", vec(h.axes)}};
     if (std::isfinite(h.release_time)) hj["release_time"] = h.release_time;
     hj["keyframes"] = json::array();
     for (const auto& k : h.keyframes)

@@ -293,8 +293,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
     double worst = 0;
     for (int i = 0; i < b.handles->size(); ++i)
       if (b.handles->active(i, r.state.time - 1e-12))
-        worst = std::max(worst, (b.handles->point(i, r.state.positions) -
-                                 b.handles->target(i, r.state.time)).norm());
+        worst = std::max(worst, b.handles->error(i, r.state.positions, r.state.time));
     quality["max_handle_error"] = worst;
   }
   m["quality"] = quality;

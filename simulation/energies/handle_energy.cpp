@@ -2,6 +2,7 @@
 
 #include <Eigen/LU>
 #include <algorithm>
+#include <cmath>
 #include <sstream>
 
 #include "simulation/errors.hpp"
@@ -80,11 +81,14 @@ Eigen::Vector3d HandleEnergy::target(int i, double t) const {
   return m_handles[i].start + handle_displacement(m_handles[i].spec, t);
 }
 
+double HandleEnergy::error(int i, const Eigen::VectorXd& x, double t) const {
+  return (point(i, x) - target(i, t)).cwiseProduct(m_handles[i].spec.axes).norm();
+}
+
 double HandleEnergy::value(const Eigen::VectorXd& x) const {
   double e = 0;
   for (int i = 0; i < size(); ++i)
-    if (active(i, m_t1))
-      e += 0.5 * m_handles[i].spec.stiffness * (point(i, x) - target(i, m_t1)).squaredNorm();
+    if (active(i, m_t1)) e += 0.5 * m_handles[i].spec.stiffness * std::pow(error(i, x, m_t1), 2);
   return e;
 }
 
@@ -93,14 +97,15 @@ void HandleEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd& g,
   for (int i = 0; i < size(); ++i) {
     if (!active(i, m_t1)) continue;
     const Bound& b = m_handles[i];
-    const Eigen::Vector3d r = b.spec.stiffness * (point(i, x) - target(i, m_t1));
+    const Eigen::Vector3d r =
+        b.spec.stiffness * (point(i, x) - target(i, m_t1)).cwiseProduct(b.spec.axes);
     for (int k = 0; k < 3; ++k) g.segment<3>(3 * b.v[k]) += b.w[k] * r;
     if (!H) continue;
     Eigen::Matrix<double, 9, 9> local;
     for (int a = 0; a < 3; ++a)
       for (int c = 0; c < 3; ++c)
         local.block<3, 3>(3 * a, 3 * c) =
-            b.spec.stiffness * b.w[a] * b.w[c] * Eigen::Matrix3d::Identity();
+            b.spec.stiffness * b.w[a] * b.w[c] * Eigen::Matrix3d(b.spec.axes.asDiagonal());
     H->add_element<3>(b.v, local);
   }
 }

@@ -21,6 +21,9 @@ struct HandleSpec {
   std::vector<HandleKeyframe> keyframes;  ///< linear in between, held after the last; none = fixed
   double release_time = INF;              ///< [s] the handle lets go at this time
   double stiffness = 1e6;                 ///< spring stiffness [N/m]
+  /// Which world components the handle drives (1) or leaves free (0): (0, 0, 1) sets only the
+  /// height, so two lifted points may move towards each other as an inextensible sheet must.
+  Eigen::Vector3d axes = Eigen::Vector3d::Ones();
 };
 
 /// Displacement of a handle at time t (linear interpolation of the keyframes) [m].
@@ -44,6 +47,8 @@ class HandleEnergy : public EnergyTerm {
   Eigen::Vector3d point(int i, const Eigen::VectorXd& x) const;
   /// Target of handle i at time t [m].
   Eigen::Vector3d target(int i, double t) const;
+  /// Distance from handle i's point to its target over the driven axes [m].
+  double error(int i, const Eigen::VectorXd& x, double t) const;
   int size() const { return static_cast<int>(m_handles.size()); }
   bool active(int i, double t) const { return t < m_handles[i].spec.release_time; }
 

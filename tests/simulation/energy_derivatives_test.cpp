@@ -159,12 +159,17 @@ TEST(EnergyDerivatives, Handles) {
   a.keyframes = {{0.0, Eigen::Vector3d::Zero()}, {1.0, Eigen::Vector3d(0, 0, 0.05)}};
   HandleSpec b;
   b.material_point << 0.1, 0.0;  // a corner
+  b.axes << 0, 0, 1;             // drives the height only
   HandleEnergy e(f.mesh, f.x0, {a, b});
   StepContext ctx;
   ctx.time_t0 = 0.4;
   ctx.h = 0.1;
   e.begin_step(ctx, f.x0);
   EXPECT_NEAR((e.target(0, 0.5) - e.point(0, f.x0)).z(), 0.025, 1e-15);
+  Eigen::VectorXd shifted = f.x0;
+  for (int v = 0; v < f.mesh.num_vertices(); ++v) shifted[3 * v] += 0.01;  // horizontal move
+  EXPECT_NEAR(e.error(1, shifted, 0.5), 0.0, 1e-15) << "a z-only handle ignores x";
+  EXPECT_NEAR(e.error(0, shifted, 0.5), std::hypot(0.01, 0.025), 1e-12);
   check_derivatives(e, f.mesh.num_vertices(), f.x);
 }
 
