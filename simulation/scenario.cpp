@@ -1,5 +1,6 @@
 #include "simulation/scenario.hpp"
 
+#include <cmath>
 #include <random>
 
 #include "simulation/errors.hpp"
@@ -40,11 +41,21 @@ Scene pull(std::uint64_t seed) {
   const int points = d.chance(0.05) ? 1 : 2;
   for (int i = 0; i < points; ++i) {
     HandleSpec h;
-    h.material_point = Eigen::Vector2d(d.uniform(0, s.sheet.width), d.uniform(0, s.sheet.height));
-    const double lift = d.uniform(0.03, 0.08);
+    double lift = 0;
+    // Two points at material distance r cannot end at heights more than r apart on an
+    // inextensible sheet: such draws are avoided by construction (the second point is drawn
+    // again until |lift difference| <= 0.8 r), instead of stretching the sheet to its limit.
+    for (int attempt = 0; attempt < 1000; ++attempt) {
+      h.material_point = Eigen::Vector2d(d.uniform(0, s.sheet.width), d.uniform(0, s.sheet.height));
+      lift = d.uniform(0.03, 0.08);
+      if (i == 0) break;
+      const HandleSpec& first = s.handles.front();
+      const double r = (h.material_point - first.material_point).norm();
+      if (std::abs(lift - first.keyframes.back().displacement.z()) <= 0.8 * r) break;
+    }
     h.keyframes = {{0.0, Eigen::Vector3d::Zero()}, {1.0, Eigen::Vector3d(0, 0, lift)}};
-    // Only the height is driven: two points lifted to different heights are farther apart than
-    // the sheet between them allows, so an inextensible sheet must let them move inwards.
+    // Only the height is driven: two points lifted to different heights move towards each
+    // other, as an inextensible sheet must.
     h.axes = Eigen::Vector3d(0, 0, 1);
     s.handles.push_back(h);
   }
