@@ -146,7 +146,23 @@ SheetMesh make_rotated_lattice(const LatticeOptions& o) {
     pts.emplace_back(o.width, o.height * j / ny);
     pts.emplace_back(0.0, o.height * (ny - j) / ny);
   }
-  // Interior: the rotated lattice, kept half a spacing away from the boundary.
+  for (double lx : o.lines_x) {
+    if (!(lx > 0.5 * h && lx < o.width - 0.5 * h))
+      throw MeshError("lattice: lines_x must lie inside the sheet, half an edge from its sides");
+    // The line's ends replace the boundary points within half a spacing of them.
+    pts.erase(std::remove_if(pts.begin(), pts.end(),
+                             [&](const Eigen::Vector2d& p) {
+                               return (p.y() == 0.0 || p.y() == o.height) && std::abs(p.x() - lx) < 0.5 * h;
+                             }),
+              pts.end());
+    for (int j = 0; j <= ny; ++j) pts.emplace_back(lx, o.height * j / ny);
+  }
+  const auto near_line = [&](const Eigen::Vector2d& p) {
+    for (double lx : o.lines_x)
+      if (std::abs(p.x() - lx) < 0.5 * h) return true;
+    return false;
+  };
+  // Interior: the rotated lattice, kept half a spacing away from the boundary and the lines.
   const Eigen::Vector2d a1(h * std::cos(o.angle), h * std::sin(o.angle));
   const Eigen::Vector2d a2(-a1.y(), a1.x());
   const int range = static_cast<int>(std::ceil((o.width + o.height) / h)) + 2;
@@ -155,7 +171,7 @@ SheetMesh make_rotated_lattice(const LatticeOptions& o) {
     for (int j = -range; j <= range; ++j) {
       const Eigen::Vector2d p = centre + i * a1 + j * a2 + 0.25 * (a1 + a2);
       if (p.x() > 0.5 * h && p.x() < o.width - 0.5 * h && p.y() > 0.5 * h &&
-          p.y() < o.height - 0.5 * h)
+          p.y() < o.height - 0.5 * h && !near_line(p))
         pts.push_back(p);
     }
   Eigen::MatrixX2d P(pts.size(), 2);

