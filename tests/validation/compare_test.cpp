@@ -1,0 +1,81 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "remesh/sheet_generator.hpp"
+#include "validation/compare.hpp"
+
+namespace pv = papersim::validation;
+
+namespace {
+
+/// A flat rectangle mesh (material = world xy) with the given grid.
+pv::SheetGeometry flat(int nx, int ny, papersim::remesh::Triangulation t) {
+  papersim::remesh::RectangleOptions o;
+  o.width = 0.1;
+  o.height = 0.05;
+  o.nx = nx;
+  o.ny = ny;
+  o.triangulation = t;
+  const auto mesh = papersim::remesh::make_rectangle(o);
+  pv::SheetGeometry g;
+  g.material = mesh.material_coords();
+  g.faces = mesh.faces();
+  g.positions.resize(g.material.rows(), 3);
+  g.positions << g.material, Eigen::VectorXd::Zero(g.material.rows());
+  return g;
+}
+
+}  // namespace
+
+TEST(CompareSheets, ClosestPointOnTriangleRegions) {
+  const Eigen::Vector3d a(0, 0, 0), b(1, 0, 0), c(0, 1, 0);
+  EXPECT_TRUE(pv::closest_point_on_triangle({0.2, 0.2, 3}, a, b, c).isApprox(Eigen::Vector3d(0.2, 0.2, 0)));
+  EXPECT_TRUE(pv::closest_point_on_triangle({-1, -1, 0}, a, b, c).isApprox(a));
+  EXPECT_TRUE(pv::closest_point_on_triangle({2, -1, 0}, a, b, c).isApprox(b));
+  EXPECT_TRUE(pv::closest_point_on_triangle({1, 1, 0}, a, b, c).isApprox(Eigen::Vector3d(0.5, 0.5, 0)));
+  EXPECT_TRUE(pv::closest_point_on_triangle({0.5, -2, 1}, a, b, c).isApprox(Eigen::Vector3d(0.5, 0, 0)));
+}
+
+TEST(CompareSheets, SameSurfaceDifferentMeshesIsZero) {
+  const auto ref = flat(41, 21, papersim::remesh::Triangulation::alternating);
+  const auto test = flat(11, 6, papersim::remesh::Triangulation::random);
+  const auto d = pv::compare_sheets(ref, test);
+  EXPECT_LT(d.rms, 1e-15);
+  EXPECT_LT(d.max, 1e-15);
+  EXPECT_LT(d.hausdorff, 1e-15);
+  EXPECT_EQ(d.outside, 0);
+}
+
+TEST(CompareSheets, OffsetAlongTheNormalAndInThePlane) {
+  const auto ref = flat(41, 21, papersim::remesh::Triangulation::alternating);
+  auto test = flat(11, 6, papersim::remesh::Triangulation::alternating);
+  test.positions.col(2).array() += 2e-3;  // lifted by 2 mm: every norm is 2 mm
+  auto d = pv::compare_sheets(ref, test);
+  EXPECT_NEAR(d.rms, 2e-3, 1e-12);
+  EXPECT_NEAR(d.max, 2e-3, 1e-12);
+  EXPECT_NEAR(d.hausdorff, 2e-3, 1e-12);
+  // Slid 1 mm within its plane: the same points are 1 mm off, but the surfaces nearly overlap
+  // (the Hausdorff distance is the 1 mm overhang at the ends only).
+  test = flat(11, 6, papersim::remesh::Triangulation::alternating);
+  test.positions.col(0).array() += 1e-3;
+  d = pv::compare_sheets(ref, test);
+  EXPECT_NEAR(d.rms, 1e-3, 1e-12);
+  EXPECT_NEAR(d.max, 1e-3, 1e-12);
+  EXPECT_NEAR(d.hausdorff, 1e-3, 1e-12);
+}
+
+TEST(CompareSheets, BentSheetAgainstItsLinearInterpolation) {
+  // Reference: z = x^2 on a fine mesh; test: the coarse mesh's vertices on the same surface.
+  // At the test vertices the material-correspondence error is the reference's own
+  // interpolation error, at most h_ref^2 / 8 * z'' = (2.5 mm)^2 / 8 * 2.
+  auto ref = flat(41, 21, papersim::remesh::Triangulation::alternating);
+  auto test = flat(11, 6, papersim::remesh::Triangulation::alternating);
+  for (int v = 0; v < ref.positions.rows(); ++v) ref.positions(v, 2) = std::pow(ref.positions(v, 0), 2);
+  for (int v = 0; v < test.positions.rows(); ++v) test.positions(v, 2) = std::pow(test.positions(v, 0), 2);
+  const auto d = pv::compare_sheets(ref, test);
+  EXPECT_LT(d.max, 2.5e-3 * 2.5e-3 / 8 * 2 + 1e-15);
+  // The coarse chords sag by up to (10 mm)^2 / 8 * 2 = 25 micrometres below the fine surface.
+  EXPECT_GT(d.hausdorff, 0.5 * 1e-2 * 1e-2 / 4);
+  EXPECT_LT(d.hausdorff, 1e-2 * 1e-2 / 4 + 1e-12);
+}
