@@ -65,6 +65,7 @@ double Integrator::energy(const Eigen::VectorXd& x) const {
 NewtonResult Integrator::solve(const StepContext& ctx, Eigen::VectorXd& x, StepStats& stats) {
   NewtonResult r;
   Eigen::VectorXd g(x.size());
+
   double e = energy(x);
   if (!std::isfinite(e)) {
     r.failure = "the start of the step is infeasible";
@@ -72,14 +73,30 @@ NewtonResult Integrator::solve(const StepContext& ctx, Eigen::VectorXd& x, StepS
   }
   for (r.iterations = 1; r.iterations <= m_params.max_iterations; ++r.iterations) {
     auto t0 = std::chrono::steady_clock::now();
-    g.setZero();
-    m_hessian.set_zero();
-    for (const auto& t : m_terms) t->add_derivatives(x, g, &m_hessian);
+    const auto assemble = [&](bool project) {
+      g.setZero();
+      m_hessian.set_zero();
+      for (const auto& t : m_terms) {
+        t->set_hessian_projection(project);
+        t->add_derivatives(x, g, &m_hessian);
+      }
+    };
+    bool project = !m_params.exact_hessian_first;
+    assemble(project);
     stats.seconds_assembly += seconds_since(t0);
     t0 = std::chrono::steady_clock::now();
-    // Element Hessians are PSD and inertia makes the sum definite; a tiny shift covers
-    // round-off in the static limit (no inertia, e.g. huge h).
+    if (!project && !m_solver.factorize(m_hessian, m_pattern_id)) {
+      // The exact Hessian is indefinite here: fall back to the projected one.
+      ++stats.projected_hessians;
+      project = true;
+      const auto t1 = std::chrono::steady_clock::now();
+      assemble(true);
+      stats.seconds_assembly += seconds_since(t1);
+    }
+    // Projected element Hessians are PSD and inertia makes the sum definite; a tiny shift
+    // covers round-off in the static limit (no inertia, e.g. huge h).
     double shift = 0;
+    if (project)
     while (!m_solver.factorize(m_hessian, m_pattern_id)) {
       const double next = shift == 0 ? 1e-10 : 10 * shift;
       m_hessian.add_diagonal(Eigen::VectorXd::Constant(x.size(), next - shift));

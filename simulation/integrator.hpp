@@ -19,6 +19,11 @@ struct NewtonParams {
   double tolerance = 1e-4;
   double armijo = 1e-4;        ///< sufficient decrease constant [-]
   int max_halvings = 10;       ///< a failed step is split in two up to this depth
+  /// Try the exact Hessian (no PSD projection of indefinite element matrices) first in every
+  /// iteration, and project only when it is not positive definite. Projection throws away the
+  /// negative curvature of compressed, buckling regions, and Newton then converges linearly
+  /// there (measured on the pull scenario: 4x the iterations).
+  bool exact_hessian_first = true;
 };
 
 /// What one Newton solve did.
@@ -34,6 +39,7 @@ struct NewtonResult {
 struct StepStats {
   int substeps = 0;
   int failed_solves = 0;   ///< solves that did not converge and were retried with h / 2
+  int projected_hessians = 0;  ///< iterations whose exact Hessian was indefinite (projected)
   int newton_iterations = 0;
   int line_search_evaluations = 0;
   double seconds_assembly = 0, seconds_solve = 0, seconds_line_search = 0;

@@ -5,11 +5,33 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <dlfcn.h>
+#include <mutex>
 #include <string>
 
 #include "simulation/errors.hpp"
 
 namespace papersim::simulation {
+
+namespace {
+
+/// A multi-threaded BLAS (Debian's OpenBLAS pthreads build) spins its threads on the small
+/// supernodes of a sheet and competes with TBB and with the other simulations of a batch: it
+/// made factorisations slower and burned system time. One BLAS thread per solver; the symbol
+/// is looked up at run time so any BLAS links.
+void limit_blas_threads() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    using SetThreads = void (*)(int);
+    for (const char* name : {"openblas_set_num_threads", "goto_set_num_threads"})
+      if (auto f = reinterpret_cast<SetThreads>(dlsym(RTLD_DEFAULT, name))) {
+        f(1);
+        return;
+      }
+  });
+}
+
+}  // namespace
 
 struct LinearSolver::Impl {
   cholmod_common common;
@@ -20,10 +42,11 @@ struct LinearSolver::Impl {
     cholmod_start(&common);
     common.print = 0;  // library code stays silent; failures are returned or thrown
     common.error_handler = nullptr;
-    // Sheet systems are 2D meshes with small supernodes; the supernodal path spends its time in
-    // BLAS calls on tiny blocks (and Debian's default reference BLAS is slow), so factor
-    // simplicially (measured: see docs/performance.md).
-    common.supernodal = CHOLMOD_SIMPLICIAL;
+    // CHOLMOD picks supernodal (BLAS on dense blocks) when the fill is large, which the wide
+    // bending stencil makes it; BLAS runs on one thread (see limit_blas_threads) (measured: see
+    // docs/performance.md).
+    limit_blas_threads();
+    common.supernodal = CHOLMOD_AUTO;
   }
   ~Impl() {
     if (factor) cholmod_free_factor(&factor, &common);

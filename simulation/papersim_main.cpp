@@ -90,6 +90,8 @@ int main(int argc, char** argv) {
   scen->add_option("--frames", frames, "Write every K-th step to OUT/frames/ (0: none)")
       ->check(CLI::NonNegativeNumber);
   scen->add_flag("--quiet", quiet, "No progress on stderr");
+  bool draw_only = false;
+  scen->add_flag("--draw-only", draw_only, "Only write OUT/scene.json (edit it, then: papersim run)");
 
 #ifdef PAPERSIM_WITH_METRICS
   int metrics_code = 0;
@@ -104,6 +106,11 @@ int main(int argc, char** argv) {
     }
     if (scen->parsed()) {
       const ps::Scene scene = ps::make_scenario(name, static_cast<std::uint64_t>(seed));
+      if (draw_only) {
+        write_scene_file(fs::path(out_dir) / "scene.json", scene);
+        std::cout << "wrote " << (fs::path(out_dir) / "scene.json").string() << '\n';
+        return 0;
+      }
       const int code = simulate(scene, out_dir, frames, quiet, name + " seed " + std::to_string(seed));
       write_scene_file(fs::path(out_dir) / "scene.json", scene);
       return code;

@@ -242,6 +242,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
     total.substeps += s.substeps;
     total.failed_solves += s.failed_solves;
     total.newton_iterations += s.newton_iterations;
+    total.projected_hessians += s.projected_hessians;
     total.line_search_evaluations += s.line_search_evaluations;
     total.seconds_assembly += s.seconds_assembly;
     total.seconds_solve += s.seconds_solve;
@@ -278,6 +279,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
               {"substeps", total.substeps},
               {"failed_solves", total.failed_solves},
               {"newton_iterations", total.newton_iterations},
+              {"projected_hessians", total.projected_hessians},
               {"line_search_evaluations", total.line_search_evaluations},
               {"seconds_assembly", total.seconds_assembly},
               {"seconds_solve", total.seconds_solve},

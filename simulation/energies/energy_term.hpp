@@ -36,6 +36,12 @@ class EnergyTerm {
   /// Hessians [J/m^2].
   virtual void add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd& gradient,
                                BlockSymmetricMatrix* hessian) const = 0;
+  /// Terms whose exact element Hessians can be indefinite (the membrane under compression)
+  /// project them to PSD when `project` is true (the default) and add them exactly otherwise.
+  /// The integrator tries the exact Hessian first and projects when the assembled matrix is not
+  /// positive definite (Integrator::solve).
+  virtual void set_hessian_projection(bool /*project*/) {}
+
   /// Largest alpha in (0, 1] such that x + a dx stays feasible for all a in [0, alpha]
   /// (continuous collision detection). Default: no constraint.
   virtual double max_step(const Eigen::VectorXd& /*x*/, const Eigen::VectorXd& /*dx*/) const {

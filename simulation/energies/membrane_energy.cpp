@@ -138,7 +138,7 @@ double MembraneEnergy::element(int f, const Eigen::Matrix<double, 9, 1>& xs,
         const double s = 2 * t.area * t.w.row(i).dot(G * t.w.row(j).transpose());
         H->block<3, 3>(3 * i, 3 * j).diagonal().array() += s;
       }
-    if (G.determinant() < 0 || G.trace() < 0) {
+    if (m_project && (G.determinant() < 0 || G.trace() < 0)) {
       Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 9, 9>> es(*H);
       *H = es.eigenvectors() * es.eigenvalues().cwiseMax(0.0).asDiagonal() *
            es.eigenvectors().transpose();

@@ -41,6 +41,7 @@ class MembraneEnergy : public EnergyTerm {
                  Eigen::Matrix<double, 9, 9>* H) const;
 
   bool limit_enabled() const { return m_limit > 0; }
+  void set_hessian_projection(bool project) override { m_project = project; }
 
  private:
   struct Triangle {
@@ -53,6 +54,7 @@ class MembraneEnergy : public EnergyTerm {
   double m_limit;          // L = (1 + eps)^2, 0 when disabled
   double m_dhat;           // barrier activation distance in lambda
   double m_kappa;          // barrier stiffness [J/m^2]
+  bool m_project = true;   // element Hessians projected to PSD under compression
 };
 
 }  // namespace papersim::simulation

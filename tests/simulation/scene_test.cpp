@@ -26,6 +26,12 @@ std::string error_of(const json& j) {
 }
 
 /// A small, quick scene: a 6 x 6 cm sheet falling 2 mm onto the ground.
+RunOptions options_for(const std::string& out_dir) {
+  RunOptions o;
+  o.out_dir = out_dir;
+  return o;
+}
+
 Scene small_scene() {
   Scene s;
   s.sheet.width = s.sheet.height = 0.06;
@@ -90,7 +96,7 @@ TEST(Scenario, SameSeedSameSceneDifferentSeedDifferentScene) {
 TEST(Run, WritesOutputsAndLeavesNothingOnFailure) {
   const fs::path dir = fs::temp_directory_path() / ("papersim_run_" + std::to_string(::getpid()));
   fs::remove_all(dir);
-  const RunResult r = run_scene(small_scene(), {dir.string()});
+  const RunResult r = run_scene(small_scene(), options_for(dir.string()));
   EXPECT_TRUE(fs::exists(dir / "sheet.obj") && fs::exists(dir / "sheet.ply") && fs::exists(dir / "meta.json"));
   EXPECT_FALSE(fs::exists(dir / ".papersim-partial"));
   EXPECT_LE(r.meta["quality"]["max_principal_stretch"].get<double>(), 1.005);
@@ -101,6 +107,6 @@ TEST(Run, WritesOutputsAndLeavesNothingOnFailure) {
   failing.newton.max_iterations = 1;
   failing.newton.max_halvings = 0;
   failing.newton.tolerance = 1e-30;
-  EXPECT_THROW(run_scene(failing, {dir.string()}), NumericError);
+  EXPECT_THROW(run_scene(failing, options_for(dir.string())), NumericError);
   EXPECT_FALSE(fs::exists(dir));
 }
