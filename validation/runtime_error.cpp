@@ -6,7 +6,7 @@
 // setting beats on both time and error (the Pareto front), and the cheapest setting whose RMS
 // error is below --target.
 //   papersim_runtime_error --out DIR [--scenario pull] [--seed 1] [--edges 20,14,10,7]
-//       [--steps 20,10,5] [--reference-edge 5] [--reference-step 2.5] [--target 2]
+//       [--steps 20,10,5] [--reference-edge 5] [--reference-step 2.5] [--target 2] [--replot]
 // Edges and the target are in mm, steps in ms. The reference is written to DIR/reference and
 // reused by later runs with the same scenario, seed and reference settings.
 #include <CLI/CLI.hpp>
@@ -134,7 +134,7 @@ void write_plot(const fs::path& dir, const std::vector<double>& steps,
   gp << "plot ";
   for (size_t i = 0; i < steps.size(); ++i) {
     if (i) gp << ", \\\n     ";
-    gp << "'runtime_error.csv' every ::1 using ($2==" << steps[i] << " ? $7*1e3 : 1/0):6 with linespoints pt 7 "
+    gp << "'runtime_error.csv' every ::1 using ($2==" << steps[i] << " ? $7*1e3 : 1/0):6 with points pt 7 ps 1.3 "
        << "title 'step " << steps[i] << " ms', "
        << "'' every ::1 using ($2==" << steps[i] << " ? $7*1e3 : 1/0):6:(sprintf('%g mm', $1)) "
        << "with labels offset 1.2,0.6 font ',9' notitle";
@@ -162,9 +162,20 @@ int main(int argc, char** argv) {
   app.add_option("--reference-edge", ref_edge, "edge length of the reference [mm]")->capture_default_str();
   app.add_option("--reference-step", ref_step, "time step of the reference [ms]")->capture_default_str();
   app.add_option("--target", target, "RMS error to recommend a setting for [mm]")->capture_default_str();
+  bool replot = false;
+  app.add_flag("--replot", replot, "only redraw OUT/runtime_error.png from OUT/runtime_error.csv");
   CLI11_PARSE(app, argc, argv);
   try {
     const std::vector<double> edges = parse_list(edges_text, "edges"), steps = parse_list(steps_text, "steps");
+    const std::string title = scenario + " seed " + std::to_string(seed) + ": reference edge " +
+                              std::to_string(ref_edge).substr(0, 4) + " mm, step " + std::to_string(ref_step).substr(0, 4) + " ms";
+    if (replot) {
+      if (!fs::exists(fs::path(out) / "runtime_error.csv"))
+        throw std::runtime_error("--replot: no " + (fs::path(out) / "runtime_error.csv").string());
+      write_plot(out, steps, title);
+      std::printf("wrote %s/runtime_error.png\n", out.c_str());
+      return 0;
+    }
     const ps::Scene base = ps::make_scenario(scenario, seed);
     fs::create_directories(out);
     const auto t0 = std::chrono::steady_clock::now();
@@ -193,9 +204,7 @@ int main(int argc, char** argv) {
         std::fflush(stdout);
         write_csv(fs::path(out) / "runtime_error.csv", samples);  // partial results survive an interruption
       }
-    write_plot(out, steps,
-               scenario + " seed " + std::to_string(seed) + ": reference edge " + std::to_string(ref_edge).substr(0, 4) +
-                   " mm, step " + std::to_string(ref_step).substr(0, 4) + " ms");
+    write_plot(out, steps, title);
     std::printf("\nPareto front (no other setting is both faster and more accurate):\n");
     for (const Sample& s : samples) {
       const bool beaten = std::any_of(samples.begin(), samples.end(), [&](const Sample& o) {
