@@ -118,19 +118,42 @@ Built build(const Scene& scene, const remesh::SheetMesh& mesh, const SheetState&
 struct Tracker {
   double max_stretch = 1.0, min_compression = 1.0, max_speed = 0.0;
   std::vector<double> min_distance;
+  // This step's values (the last update).
+  double step_stretch = 1.0;
+  std::vector<double> step_distance;
   void update(const Built& b, const SheetState& s) {
     const Eigen::MatrixX2d st = b.membrane->principal_stretches(s.positions);
-    max_stretch = std::max(max_stretch, st.col(0).maxCoeff());
+    step_stretch = st.col(0).maxCoeff();
+    max_stretch = std::max(max_stretch, step_stretch);
     min_compression = std::min(min_compression, st.col(1).minCoeff());
     for (int v = 0; v < s.num_vertices(); ++v)
       max_speed = std::max(max_speed, s.velocities.segment<3>(3 * v).norm());
     min_distance.resize(b.obstacles.size(), INF);
-    for (size_t o = 0; o < b.obstacles.size(); ++o)
+    step_distance.assign(b.obstacles.size(), INF);
+    for (size_t o = 0; o < b.obstacles.size(); ++o) {
       for (int v = 0; v < s.num_vertices(); ++v)
-        min_distance[o] =
-            std::min(min_distance[o], b.obstacles[o]->distance(s.positions.segment<3>(3 * v), s.time));
+        step_distance[o] =
+            std::min(step_distance[o], b.obstacles[o]->distance(s.positions.segment<3>(3 * v), s.time));
+      min_distance[o] = std::min(min_distance[o], step_distance[o]);
+    }
   }
 };
+
+struct Energies {
+  double stretch = 0, bend = 0, gravity = 0, kinetic = 0;
+  double mechanical() const { return stretch + bend + gravity + kinetic; }
+};
+
+Energies energies(const Built& b, const Scene& scene, const SheetState& s) {
+  Energies e;
+  for (int v = 0; v < s.num_vertices(); ++v) {
+    e.kinetic += 0.5 * b.masses[v] * s.velocities.segment<3>(3 * v).squaredNorm();
+    e.gravity -= b.masses[v] * scene.gravity.dot(s.positions.segment<3>(3 * v));
+  }
+  e.stretch = b.membrane->value(s.positions);
+  e.bend = b.bending->value(s.positions);
+  return e;
+}
 
 void write_outputs(const fs::path& dir, const Scene& scene, const remesh::SheetMesh& mesh,
                    const SheetState& s) {
@@ -248,6 +271,15 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
     total.seconds_solve += s.seconds_solve;
     total.seconds_line_search += s.seconds_line_search;
     track.update(b, r.state);
+    if (options.on_step) {
+      StepReport report;
+      report.step = k;
+      report.state = &r.state;
+      report.mechanical_energy = energies(b, scene, r.state).mechanical();
+      report.max_stretch = track.step_stretch;
+      report.obstacle_distance = track.step_distance;
+      options.on_step(report);
+    }
     if (staging.active() && frames_every > 0 && k % frames_every == 0) {
       std::ostringstream name;
       name << "frame_" << std::setw(6) << std::setfill('0') << k << ".obj";
@@ -299,16 +331,8 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
     quality["max_handle_error"] = worst;
   }
   m["quality"] = quality;
-  double kinetic = 0;
-  for (int v = 0; v < r.state.num_vertices(); ++v)
-    kinetic += 0.5 * b.masses[v] * r.state.velocities.segment<3>(3 * v).squaredNorm();
-  double gravity_energy = 0;
-  for (int v = 0; v < r.state.num_vertices(); ++v)
-    gravity_energy -= b.masses[v] * scene.gravity.dot(r.state.positions.segment<3>(3 * v));
-  m["energy"] = {{"stretch", b.membrane->value(r.state.positions)},
-                 {"bend", b.bending->value(r.state.positions)},
-                 {"gravity", gravity_energy},
-                 {"kinetic", kinetic}};
+  const Energies end = energies(b, scene, r.state);
+  m["energy"] = {{"stretch", end.stretch}, {"bend", end.bend}, {"gravity", end.gravity}, {"kinetic", end.kinetic}};
   for (auto it = options.extra_meta.begin(); it != options.extra_meta.end(); ++it) m[it.key()] = it.value();
   if (staging.active()) {
     write_outputs(staging.dir(), scene, r.mesh, r.state);

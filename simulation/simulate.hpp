@@ -4,6 +4,7 @@
 #include <functional>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 #include "remesh/sheet_mesh.hpp"
 #include "simulation/scene.hpp"
@@ -14,11 +15,27 @@ namespace papersim::simulation {
 /// Progress report: fraction done in [0, 1] and wall seconds so far.
 using ProgressFn = std::function<void(double fraction, double seconds)>;
 
+/// What a step observer sees after each accepted step.
+struct StepReport {
+  int step = 0;                          ///< 1-based
+  const SheetState* state = nullptr;     ///< the state after the step
+  /// Kinetic + gravity + stretching (with the strain-limit barrier) + bending energy [J];
+  /// contact and handle potentials are not included.
+  double mechanical_energy = 0.0;
+  double max_stretch = 1.0;              ///< largest principal stretch at this step [-]
+  /// Smallest signed distance of a sheet vertex to each obstacle (0 is the ground when the
+  /// scene has one) at this step [m].
+  std::vector<double> obstacle_distance;
+};
+using StepObserver = std::function<void(const StepReport&)>;
+
 struct RunOptions {
   std::string out_dir;      ///< created if missing; files appear only when the run succeeds
   int frames_every = -1;    ///< overrides scene.output.frames_every when >= 0
   ProgressFn progress;      ///< called about once per percent
   nlohmann::json extra_meta = nlohmann::json::object();  ///< merged into meta.json
+  /// Called after every step (costs one energy evaluation per step; none when unset).
+  StepObserver on_step;
 };
 
 /// What a finished run measured (also written to meta.json).

@@ -1,0 +1,299 @@
+// Stability stress suite (VALIDATION.md section 8; issue 5 item 2): scenes at the edges of what
+// the simulator must survive, each run through the product's run_scene, with the same checks on
+// every case:
+//   nan        every position finite at every step;
+//   vertices   no sheet vertex at a negative signed distance from any obstacle, at any step;
+//   faces      no obstacle point inside a sheet triangle (minimum of each obstacle's field over
+//              every triangle within 1 mm, at every step; for non-planar obstacles only: over
+//              a plane the minimum is at a vertex);
+//   strain     largest principal stretch <= 1 + strain limit at every step;
+//   self       zero intersecting triangle pairs at the end (exact predicates);
+//   energy     the mechanical energy (kinetic + gravity + stretching + bending) never exceeds
+//              its value after the first step by more than 0.1% of the energy scale m |g| (z0 + L) of the
+//              case: the scenes have no driven handles or moving obstacles, so nothing does
+//              work on the sheet, contact and friction only take energy out, and backward Euler
+//              dissipates; the tolerance covers the Newton stopping test (at 1e-4 m/s the
+//              energy error per step is far below it).
+// Cases that need self-contact or non-rigid obstacles are listed as not run, with the reason.
+// Exit status 1 when a case fails.
+#include <CLI/CLI.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <limits>
+#include <memory>
+#include <set>
+#include <string>
+#include <unistd.h>
+#include <vector>
+
+#include "collision/collider_factory.hpp"
+#include "collision/self_intersection.hpp"
+#include "collision/triangle_sdf.hpp"
+#include "remesh/sheet_generator.hpp"
+#include "remesh/sheet_io.hpp"
+#include "simulation/simulate.hpp"
+
+namespace fs = std::filesystem;
+namespace ps = papersim::simulation;
+namespace pc = papersim::collision;
+namespace rm = papersim::remesh;
+
+namespace {
+
+constexpr double INF = std::numeric_limits<double>::infinity();
+
+struct Case {
+  std::string name;
+  std::string what;            ///< one line: what is stressed
+  ps::Scene scene;
+  std::string not_run_reason;  ///< non-empty: listed, not run
+};
+
+struct Outcome {
+  bool finished = false;
+  std::string error;
+  bool finite = true;
+  double min_vertex_distance = INF;  ///< [m]
+  double min_face_distance = INF;    ///< [m], non-planar obstacles
+  double max_stretch = 1.0;
+  int self_intersections = -1;
+  double energy_growth = 0.0;        ///< max_k E_k - E_0 [J]
+  double energy_scale = 0.0;         ///< m |g| (z0 + L) [J]
+  double seconds = 0.0;
+  int steps = 0;
+};
+
+/// A 10 x 10 cm sheet with 5 mm edges, flat at height z0 above the ground, under gravity g.
+ps::Scene drop_scene(double z0, double g, double duration, double h) {
+  ps::Scene s;
+  s.sheet.width = s.sheet.height = 0.1;
+  s.sheet.edge_length = 5e-3;
+  s.sheet.position = Eigen::Vector3d(0, 0, z0);
+  s.gravity = Eigen::Vector3d(0, 0, -g);
+  s.duration = duration;
+  s.time_step = h;
+  s.ground = true;
+  return s;
+}
+
+pc::ColliderSpec sphere_at(const Eigen::Vector3d& centre, double radius) {
+  pc::ColliderSpec c;
+  c.kind = pc::ColliderKind::sphere;
+  c.radius = radius;
+  pc::Keyframe k;
+  k.translation = centre;
+  c.keyframes = {k};
+  return c;
+}
+
+std::vector<Case> make_cases(const fs::path& work) {
+  std::vector<Case> cases;
+  // 1. Time step from 0.1 ms to 40 ms: a drop of 1 cm onto the ground (impact at 0.44 m/s).
+  for (double h : {1e-4, 1e-3, 1e-2, 4e-2}) {
+    const double duration = h < 5e-4 ? 0.06 : h < 5e-3 ? 0.3 : 1.0;
+    char name[64];
+    std::snprintf(name, sizeof(name), "step %g ms", 1e3 * h);
+    cases.push_back({name, "drop 1 cm onto the ground", drop_scene(0.01, 9.8, duration, h), ""});
+  }
+  // 2. Young's modulus 1e6 .. 1e11 Pa at 0.1 mm thickness.
+  for (double E : {1e6, 1e8, 1e10, 1e11}) {
+    ps::Scene s = drop_scene(0.01, 9.8, 0.3, 5e-3);
+    s.sheet.material.stretch_stiffness = E * s.sheet.material.thickness;
+    char name[64];
+    std::snprintf(name, sizeof(name), "E %.0e Pa", E);
+    cases.push_back({name, "drop 1 cm, Eh = E x 0.1 mm", s, ""});
+  }
+  // 3. Impact on a sphere of radius 2 cm at 1 and 10 m/s (v^2 = 2 g z over the gap).
+  for (double v : {1.0, 10.0}) {
+    const double g = v < 5 ? 100.0 : 1000.0, gap = v * v / (2 * g), r = 0.02;
+    ps::Scene s = drop_scene(2 * r + gap, g, std::sqrt(2 * gap / g) + 0.02, 1e-3);
+    s.obstacles.push_back(sphere_at(Eigen::Vector3d(0, 0, r), r));
+    char name[64];
+    std::snprintf(name, sizeof(name), "sphere impact %g m/s", v);
+    cases.push_back({name, "sheet onto a 2 cm sphere, h = 1 ms", s, ""});
+  }
+  // 4. Knife edges: a gable with a 30 degree ridge, and a 1 mm plate hit edge-on.
+  {
+    const double height = 0.03;
+    ps::Scene s = drop_scene(height + 0.01, 1000.0, std::sqrt(2 * 0.01 / 1000.0) + 0.02, 1e-3);
+    pc::ColliderSpec gable;
+    gable.kind = pc::ColliderKind::gable;
+    gable.length = 0.15;
+    gable.height = height;
+    gable.half_width = height * std::tan(15 * M_PI / 180);
+    s.obstacles.push_back(gable);
+    cases.push_back({"gable ridge 30 deg", "onto a sharp ridge at 4.5 m/s", s, ""});
+  }
+  {
+    ps::Scene s = drop_scene(0.05 + 0.01, 1000.0, std::sqrt(2 * 0.01 / 1000.0) + 0.02, 1e-3);
+    pc::ColliderSpec plate;
+    plate.kind = pc::ColliderKind::box;
+    plate.half_extents = Eigen::Vector3d(0.075, 0.0005, 0.025);
+    pc::Keyframe k;
+    k.translation = Eigen::Vector3d(0, 0, 0.025);
+    plate.keyframes = {k};
+    s.obstacles.push_back(plate);
+    cases.push_back({"plate 1 mm edge-on", "onto the edge of a 1 mm plate at 4.5 m/s", s, ""});
+  }
+  // 5. Slivers: one row of vertices moved to 1% of a spacing from the next row.
+  {
+    rm::RectangleOptions o;
+    o.width = o.height = 0.1;
+    o.nx = o.ny = 21;
+    rm::SheetMesh mesh = rm::make_rectangle(o);
+    Eigen::MatrixX2d X = mesh.material_coords();
+    const double dy = o.height / (o.ny - 1);
+    for (int v = 0; v < X.rows(); ++v)
+      if (std::abs(X(v, 1) - 10 * dy) < 1e-9) X(v, 1) = 11 * dy - 0.01 * dy;
+    const rm::SheetMesh slivers(X, mesh.faces());
+    const fs::path path = work / "slivers.obj";
+    Eigen::MatrixX3d P(X.rows(), 3);
+    P << X, Eigen::VectorXd::Constant(X.rows(), 0.01);  // world positions: 1 cm above the ground
+    rm::write_sheet_file(path.string(), slivers, P, Eigen::MatrixX3d::Zero(X.rows(), 3), o.width, o.height);
+    ps::Scene s = drop_scene(0.01, 9.8, 0.3, 5e-3);
+    s.sheet.mesh_path = path.string();  // starts where the file puts it
+    cases.push_back({"slivers aspect 0.01", "a row of triangles of aspect ratio 0.01, drop 1 cm", s, ""});
+  }
+  // 6. Gravity 5000 m/s^2 onto the ground (impact at 10 m/s).
+  cases.push_back({"gravity 5000", "drop 1 cm at 5000 m/s^2", drop_scene(0.01, 5000.0, 0.02, 1e-3), ""});
+  // 7. Waiting for capabilities.
+  const auto not_run = [&](const char* name, const char* what, const char* reason) {
+    Case c;
+    c.name = name;
+    c.what = what;
+    c.not_run_reason = reason;
+    cases.push_back(std::move(c));
+  };
+  not_run("fold 180 deg", "a sheet folded onto itself", "needs self-contact (not in yet)");
+  not_run("shrinking sphere", "crumple inside a shrinking sphere", "needs self-contact and obstacles that change size");
+  return cases;
+}
+
+Outcome run_case(const Case& c) {
+  Outcome out;
+  const auto t0 = std::chrono::steady_clock::now();
+  std::vector<std::unique_ptr<pc::Collider>> solids;  // non-planar obstacles, for the face check
+  for (const auto& spec : c.scene.obstacles)
+    if (spec.kind != pc::ColliderKind::plane) solids.push_back(pc::make_collider(spec));
+  double e0 = NAN, e_max = -INF;
+  rm::SheetMesh mesh;
+  ps::SheetState initial;
+  ps::initial_sheet(c.scene, mesh, initial);
+  std::vector<Eigen::Vector3i> faces;
+  for (int f = 0; f < mesh.num_faces(); ++f) faces.emplace_back(mesh.faces().row(f).transpose());
+  double mass = c.scene.sheet.material.density * c.scene.sheet.width * c.scene.sheet.height;
+  out.energy_scale =
+      mass * c.scene.gravity.norm() * (c.scene.sheet.position.z() + std::max(c.scene.sheet.width, c.scene.sheet.height));
+  pc::TriangleSdfParams params;
+  params.cutoff = 1e-3;
+  params.resolution = 2.5e-4;
+  ps::RunOptions options;
+  options.on_step = [&](const ps::StepReport& r) {
+    const ps::SheetState& s = *r.state;
+    ++out.steps;
+    if (!s.positions.allFinite()) out.finite = false;
+    if (std::isnan(e0)) e0 = r.mechanical_energy;  // after the first step (no work done yet)
+    e_max = std::max(e_max, r.mechanical_energy);
+    out.max_stretch = std::max(out.max_stretch, r.max_stretch);
+    for (double d : r.obstacle_distance) out.min_vertex_distance = std::min(out.min_vertex_distance, d);
+    if (solids.empty() || !s.positions.allFinite()) return;
+    std::vector<Eigen::Vector3d> x(static_cast<size_t>(s.num_vertices()));
+    for (int v = 0; v < s.num_vertices(); ++v) x[static_cast<size_t>(v)] = s.positions.segment<3>(3 * v);
+    for (const auto& solid : solids)
+      for (const auto& hit : pc::mesh_edges_faces_vs_sdf(*solid, x, faces, solid->motion.pose(s.time), params))
+        out.min_face_distance = std::min(out.min_face_distance, hit.result.distance);
+  };
+  try {
+    const ps::RunResult r = ps::run_scene(c.scene, options);
+    out.finished = true;
+    if (r.state.positions.allFinite())
+      out.self_intersections = pc::count_self_intersections(r.state.positions_matrix(), r.mesh.faces());
+  } catch (const std::exception& e) {
+    out.error = e.what();
+  }
+  out.energy_growth = std::isnan(e0) ? 0.0 : e_max - e0;
+  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return out;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"papersim_stress_suite: the stability stress cases of VALIDATION.md section 8; every case "
+               "reports NaN, penetration (vertices and faces), strain, self-intersection and energy growth. "
+               "Exit status 1 when a case fails."};
+  std::string csv;
+  std::vector<std::string> only;
+  app.add_option("--csv", csv, "also write the rows as CSV to this file");
+  app.add_option("--only", only, "run only the cases whose name starts with one of these");
+  CLI11_PARSE(app, argc, argv);
+  const fs::path work = fs::temp_directory_path() / ("papersim_stress_" + std::to_string(::getpid()));
+  fs::create_directories(work);
+  std::vector<Case> cases;
+  try {
+    cases = make_cases(work);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "papersim_stress_suite: %s\n", e.what());
+    return 2;
+  }
+  const auto wanted = [&](const std::string& name) {
+    if (only.empty()) return true;
+    return std::any_of(only.begin(), only.end(), [&](const std::string& p) { return name.rfind(p, 0) == 0; });
+  };
+  std::printf("%-22s %-5s %-6s %-22s %-22s %-18s %-8s %-20s %7s %s\n", "case", "steps", "nan", "vertices min d [m]",
+              "faces min d [m]", "strain max s1", "self", "energy growth/scale", "wall s", "verdict");
+  std::ofstream out_csv;
+  if (!csv.empty()) {
+    out_csv.open(csv);
+    out_csv << "case,what,steps,finite,min_vertex_distance,min_face_distance,max_stretch,self_intersections,"
+               "energy_growth_ratio,seconds,verdict,failed_checks\n";
+  }
+  int failures = 0, run = 0;
+  const auto t0 = std::chrono::steady_clock::now();
+  for (const Case& c : cases) {
+    if (!wanted(c.name)) continue;
+    if (!c.not_run_reason.empty()) {
+      std::printf("%-22s not run: %s\n", c.name.c_str(), c.not_run_reason.c_str());
+      if (out_csv) out_csv << '"' << c.name << "\",\"" << c.what << "\",,,,,,,,,not run,\"" << c.not_run_reason << "\"\n";
+      continue;
+    }
+    ++run;
+    const Outcome o = run_case(c);
+    const double limit = 1 + c.scene.sheet.material.strain_limit;
+    const double growth = o.energy_scale > 0 ? o.energy_growth / o.energy_scale : 0.0;
+    std::vector<std::string> failed;
+    if (!o.finished) failed.push_back("did not finish: " + o.error);
+    if (!o.finite) failed.push_back("nan");
+    if (o.min_vertex_distance < 0) failed.push_back("vertex penetration");
+    if (o.min_face_distance < 0) failed.push_back("obstacle through a face");
+    if (o.max_stretch > limit + 1e-12) failed.push_back("strain");
+    if (o.finished && o.self_intersections != 0) failed.push_back("self-intersection");
+    if (growth > 1e-3) failed.push_back("energy growth");
+    std::string verdict = failed.empty() ? "PASS" : "FAIL";
+    std::string reasons;
+    for (const auto& f : failed) reasons += (reasons.empty() ? "" : "; ") + f;
+    failures += !failed.empty();
+    char faces_text[32];
+    if (std::isinf(o.min_face_distance)) std::snprintf(faces_text, sizeof(faces_text), "-");
+    else std::snprintf(faces_text, sizeof(faces_text), "%.3g", o.min_face_distance);
+    std::printf("%-22s %-5d %-6s %-22.3g %-22s %-18.6f %-8d %-20.2e %7.1f %s%s%s\n", c.name.c_str(), o.steps,
+                o.finite ? "none" : "NaN", o.min_vertex_distance, faces_text, o.max_stretch, o.self_intersections,
+                growth, o.seconds, verdict.c_str(), reasons.empty() ? "" : ": ", reasons.c_str());
+    std::fflush(stdout);
+    if (out_csv)
+      out_csv << '"' << c.name << "\",\"" << c.what << "\"," << o.steps << ',' << o.finite << ','
+              << o.min_vertex_distance << ',' << o.min_face_distance << ',' << o.max_stretch << ','
+              << o.self_intersections << ',' << growth << ',' << o.seconds << ',' << verdict << ",\"" << reasons
+              << "\"\n";
+  }
+  fs::remove_all(work);
+  std::printf("\n%d cases run, %d failed; wall time %.1f s\n", run, failures,
+              std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  return failures == 0 ? 0 : 1;
+}
