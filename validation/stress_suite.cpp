@@ -19,6 +19,7 @@
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -175,7 +176,7 @@ std::vector<Case> make_cases(const fs::path& work) {
   return cases;
 }
 
-Outcome run_case(const Case& c) {
+Outcome run_case(const Case& c, const std::string& keep) {
   Outcome out;
   const auto t0 = std::chrono::steady_clock::now();
   std::vector<std::unique_ptr<pc::Collider>> solids;  // non-planar obstacles, for the face check
@@ -194,6 +195,12 @@ Outcome run_case(const Case& c) {
   params.cutoff = 1e-3;
   params.resolution = 2.5e-4;
   ps::RunOptions options;
+  if (!keep.empty()) {
+    std::string folder = c.name;
+    for (char& ch : folder)
+      if (!std::isalnum(static_cast<unsigned char>(ch))) ch = '_';
+    options.out_dir = (fs::path(keep) / folder).string();
+  }
   options.on_step = [&](const ps::StepReport& r) {
     const ps::SheetState& s = *r.state;
     ++out.steps;
@@ -232,6 +239,8 @@ int main(int argc, char** argv) {
   std::vector<std::string> only;
   app.add_option("--csv", csv, "also write the rows as CSV to this file");
   app.add_option("--only", only, "run only the cases whose name starts with one of these");
+  std::string keep;
+  app.add_option("--keep", keep, "write each case's outputs (sheet.obj, meta.json) to KEEP/<case>");
   CLI11_PARSE(app, argc, argv);
   const fs::path work = fs::temp_directory_path() / ("papersim_stress_" + std::to_string(::getpid()));
   fs::create_directories(work);
@@ -264,7 +273,7 @@ int main(int argc, char** argv) {
       continue;
     }
     ++run;
-    const Outcome o = run_case(c);
+    const Outcome o = run_case(c, keep);
     const double limit = 1 + c.scene.sheet.material.strain_limit;
     const double growth = o.energy_scale > 0 ? o.energy_growth / o.energy_scale : 0.0;
     std::vector<std::string> failed;
