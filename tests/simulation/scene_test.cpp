@@ -2,6 +2,8 @@
 // output.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 
@@ -109,4 +111,82 @@ TEST(Run, WritesOutputsAndLeavesNothingOnFailure) {
   failing.newton.tolerance = 1e-30;
   EXPECT_THROW(run_scene(failing, options_for(dir.string())), NumericError);
   EXPECT_FALSE(fs::exists(dir));
+}
+
+namespace {
+
+/// Highest point of a scene's obstacles [m].
+double highest_obstacle(const Scene& s) {
+  double top = 0;
+  for (const auto& o : s.obstacles) top = std::max(top, papersim::collision::make_collider(o)->bounds(0).hi.z());
+  return top;
+}
+
+/// Horizontal heading of an obstacle's local x axis [deg in (-180, 180]] and its tilt from the
+/// horizontal [deg].
+Eigen::Vector2d heading_and_tilt(const papersim::collision::ColliderSpec& o) {
+  const Eigen::Vector3d axis = o.keyframes.front().rotation * Eigen::Vector3d::UnitX();
+  return {std::atan2(axis.y(), axis.x()) * 180 / M_PI, std::asin(std::abs(axis.z())) * 180 / M_PI};
+}
+
+}  // namespace
+
+TEST(Scenario, FallScenariosDrawWithinTheirRangesAndReachTheirObstacles) {
+  using papersim::collision::ColliderKind;
+  for (const std::string name : {"fall-cylinder", "fall-gable", "fall-sphere", "fall-spheres"}) {
+    EXPECT_EQ(scene_to_json(make_scenario(name, 5)), scene_to_json(make_scenario(name, 5))) << name;
+    EXPECT_NE(scene_to_json(make_scenario(name, 5)), scene_to_json(make_scenario(name, 6))) << name;
+    for (int seed = 0; seed < 40; ++seed) {
+      const Scene s = make_scenario(name, seed);
+      SCOPED_TRACE(name + " seed " + std::to_string(seed));
+      EXPECT_DOUBLE_EQ(s.sheet.position.z(), 0.5);
+      EXPECT_TRUE(s.ground);
+      ASSERT_FALSE(s.obstacles.empty());
+      // Every draw reaches its highest obstacle within 80% of the duration in free fall.
+      const double fall = 0.5 * -s.gravity.z() * std::pow(0.8 * s.duration, 2);
+      EXPECT_GE(fall, 0.5 - highest_obstacle(s) - 1e-12);
+      const double mu = s.obstacles.front().friction;
+      for (const auto& o : s.obstacles) {
+        EXPECT_EQ(o.friction, mu);  // one coefficient per draw
+        const Eigen::Vector3d c = o.keyframes.front().translation;
+        if (name == "fall-cylinder") {
+          EXPECT_EQ(o.kind, ColliderKind::cylinder);
+          EXPECT_TRUE(o.radius >= 0.01 && o.radius <= 0.10);
+          EXPECT_TRUE(o.length >= 0.10 && o.length <= 1.0);
+          EXPECT_LE(heading_and_tilt(o)[1], 5 + 1e-9);
+          EXPECT_TRUE(std::abs(c.x()) <= 0.15 && std::abs(c.y()) <= 0.2 && std::abs(c.z()) <= o.radius);
+          EXPECT_DOUBLE_EQ(s.gravity.z(), -9.8);
+        } else if (name == "fall-gable") {
+          EXPECT_EQ(o.kind, ColliderKind::gable);
+          EXPECT_TRUE(o.half_width >= 0.015 && o.half_width <= 0.075);
+          EXPECT_DOUBLE_EQ(o.height, o.half_width);  // a 90 degree ridge
+          EXPECT_TRUE(o.length >= 0.10 && o.length <= 0.50);
+          EXPECT_NEAR(heading_and_tilt(o)[1], 0, 1e-9);
+          EXPECT_TRUE(std::abs(c.x()) <= 0.12 && std::abs(c.y()) <= 0.15 && c.z() == 0);
+          EXPECT_TRUE(s.gravity.z() >= -1000 && s.gravity.z() <= -100);
+        } else if (name == "fall-sphere") {
+          EXPECT_EQ(o.kind, ColliderKind::sphere);
+          EXPECT_TRUE(o.radius >= 0.01 && o.radius <= 0.05);
+          EXPECT_TRUE(std::abs(c.x()) <= 0.05 && std::abs(c.y()) <= 0.15 && std::abs(c.z()) <= o.radius);
+          EXPECT_TRUE(s.gravity.z() >= -1000 && s.gravity.z() <= -9.8);
+        } else {
+          EXPECT_EQ(o.kind, ColliderKind::sphere);
+          EXPECT_TRUE(o.radius >= 0.005 && o.radius <= 0.01);
+          EXPECT_TRUE(std::abs(c.x()) <= 0.15 + 0.4 * 0.3 && std::abs(c.y()) <= 0.21 + 0.4 * 0.42);
+          EXPECT_LE(std::abs(c.z()), 0.5 * o.radius);
+          EXPECT_TRUE(s.gravity.z() >= -5000 && s.gravity.z() <= -1000);
+        }
+      }
+      if (name == "fall-cylinder" || name == "fall-gable" || name == "fall-sphere") {
+        EXPECT_GE(s.obstacles.size(), 1u);
+        EXPECT_LE(s.obstacles.size(), 3u);
+      } else {  // g^2 spheres, g = floor(sqrt(randint(30, 150))): 25 .. 144
+        const int g = static_cast<int>(std::lround(std::sqrt(s.obstacles.size())));
+        EXPECT_EQ(static_cast<size_t>(g * g), s.obstacles.size());
+        EXPECT_TRUE(g >= 5 && g <= 12);
+        EXPECT_DOUBLE_EQ(s.sheet.material.yield_curvature, 50.0);
+        EXPECT_DOUBLE_EQ(s.sheet.material.weakening, 0.2);
+      }
+    }
+  }
 }
