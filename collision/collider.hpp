@@ -97,6 +97,11 @@ class Collider {
   /// Velocity of the obstacle's material point that is at world point p at time t [m/s].
   Eigen::Vector3d velocity(const Eigen::Vector3d& p, double t) const;
 
+  /// True when the obstacle is a convex solid with an exact field. Then the field is a convex
+  /// function and the tangent plane at any surface point bounds the solid (it lies behind the
+  /// plane): continuous collision detection can use that plane instead of sphere tracing.
+  virtual bool is_convex() const { return false; }
+
   double friction = 0.3;  ///< Coulomb coefficient sheet-obstacle [-]
   RigidMotion motion;     ///< world pose over time
 
@@ -109,6 +114,9 @@ class Collider {
 
 /// The plane z = 0 of the local frame (normal +z, solid below). Analytic: no grid.
 class PlaneCollider : public Collider {
+ public:
+  bool is_convex() const override { return true; }
+
  protected:
   double local_distance(const Eigen::Vector3d& p, Eigen::Vector3d* gradient) const override;
   Aabb local_bounds() const override;

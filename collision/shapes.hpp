@@ -56,6 +56,8 @@ class AnalyticCollider : public Collider {
   /// @throw ColliderError when a dimension is invalid (see validate).
   explicit AnalyticCollider(const Shape& shape);
   const Shape& shape() const { return m_shape; }
+  /// Every primitive (sphere, cylinder, capsule, box, gable prism) is convex.
+  bool is_convex() const override { return true; }
 
  protected:
   double local_distance(const Eigen::Vector3d& p, Eigen::Vector3d* gradient) const override;

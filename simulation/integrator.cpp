@@ -119,7 +119,12 @@ NewtonResult Integrator::solve(const StepContext& ctx, Eigen::VectorXd& x, StepS
     }
     t0 = std::chrono::steady_clock::now();
     double alpha = 1.0;
-    for (const auto& t : m_terms) alpha = std::min(alpha, t->max_step(x, dx));
+    const EnergyTerm* limiting = nullptr;
+    for (const auto& t : m_terms) {
+      const double a = t->max_step(x, dx);
+      if (a < alpha) alpha = a, limiting = t.get();
+    }
+    const double alpha_feasible = alpha;
     const double slope = g.dot(dx);
     double e_new = INF;
     Eigen::VectorXd x_new;
@@ -130,9 +135,21 @@ NewtonResult Integrator::solve(const StepContext& ctx, Eigen::VectorXd& x, StepS
       if (std::isfinite(e_new) && e_new <= e + m_params.armijo * alpha * slope) break;
     }
     stats.seconds_line_search += seconds_since(t0);
+    if (std::getenv("PAPERSIM_DEBUG_NEWTON"))
+      std::fprintf(stderr, "  step %.3e (feasible %.3e, limited by %s)\n", alpha, alpha_feasible,
+                   limiting ? limiting->name().c_str() : "none");
+    if (alpha < 1e-9 && std::getenv("PAPERSIM_DEBUG_LS")) {
+      for (double a = 1e-1; a > 1e-13; a *= 0.1) {
+        std::fprintf(stderr, "   a %.0e", a);
+        for (const auto& t : m_terms) std::fprintf(stderr, " %s %.6e", t->name().c_str(), t->value(x + a * dx) - t->value(x));
+        std::fprintf(stderr, " slope*a %.3e\n", a * slope);
+      }
+    }
     if (!(alpha > 1e-12)) {
       // No decrease along the direction: converged to round-off when the step is tiny.
-      if (r.residual * alpha < m_params.tolerance || std::abs(slope) < 1e-14 * std::abs(e)) {
+      // (A step blocked by collision detection is not convergence: the step is split instead.)
+      if ((alpha_feasible == 1.0 && r.residual < 10 * m_params.tolerance) ||
+          std::abs(slope) < 1e-14 * std::abs(e)) {
         r.converged = true;
         return r;
       }

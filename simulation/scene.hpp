@@ -39,6 +39,13 @@ struct OutputSpec {
   bool write_ply = true;  ///< sheet.ply beside sheet.obj
 };
 
+/// ContactParams with the stiffness left to the scene (0: automatic).
+inline ContactParams automatic_contact() {
+  ContactParams c;
+  c.stiffness = 0.0;
+  return c;
+}
+
 struct Scene {
   std::string name = "scene";
   SheetSpec sheet;
@@ -50,7 +57,9 @@ struct Scene {
   std::vector<collision::ColliderSpec> obstacles;
   std::vector<HandleSpec> handles;
   std::vector<ClampSpec> clamps;
-  ContactParams contact;         ///< stiffness <= 0 means automatic: rho_A |g|
+  /// Contact thickness, pressure scale and slip speed; stiffness <= 0 (the default, as in
+  /// scene files) means automatic: rho_A max(|g|, 1).
+  ContactParams contact = automatic_contact();
   NewtonParams newton;
   OutputSpec output;
   /// Provenance when a scenario drew the scene.

@@ -13,7 +13,102 @@ using collision::barrier_second_derivative;
 ObstacleContactEnergy::ObstacleContactEnergy(
     Eigen::VectorXd vertex_areas, std::vector<std::shared_ptr<const collision::Collider>> obstacles,
     const ContactParams& params)
-    : m_area(std::move(vertex_areas)), m_obstacles(std::move(obstacles)), m_params(params) {}
+    : m_area(std::move(vertex_areas)), m_obstacles(std::move(obstacles)), m_params(params),
+      m_stiffness(params.stiffness) {
+  m_face_contact.assign(m_obstacles.size(), false);
+  // The minimum over a triangle is resolved to a tenth of the contact thickness, and triangles
+  // farther than the thickness are not refined (their barrier is zero).
+  m_triangle.cutoff = m_params.dhat;
+  m_triangle.resolution = 0.1 * m_params.dhat;
+}
+
+void ObstacleContactEnergy::set_faces(const Eigen::MatrixX3i& faces, const Eigen::VectorXd& face_areas) {
+  m_faces = faces;
+  m_face_area = face_areas;
+  for (size_t o = 0; o < m_obstacles.size(); ++o)
+    m_face_contact[o] = dynamic_cast<const collision::PlaneCollider*>(m_obstacles[o].get()) == nullptr;
+}
+
+bool ObstacleContactEnergy::face_near_bounds(int o, const Eigen::VectorXd& x, int f, double margin) const {
+  const auto& b = m_bounds[o];
+  Eigen::Vector3d lo = x.segment<3>(3 * m_faces(f, 0)), hi = lo;
+  for (int k = 1; k < 3; ++k) {
+    lo = lo.cwiseMin(x.segment<3>(3 * m_faces(f, k)));
+    hi = hi.cwiseMax(x.segment<3>(3 * m_faces(f, k)));
+  }
+  return (hi.array() + margin >= b.lo.array()).all() && (lo.array() - margin <= b.hi.array()).all();
+}
+
+Eigen::Vector3d ObstacleContactEnergy::contact_point(const FrictionPoint& fp, const Eigen::VectorXd& x) const {
+  Eigen::Vector3d p = Eigen::Vector3d::Zero();
+  for (int k = 0; k < fp.count; ++k) p += fp.weights[k] * x.segment<3>(3 * fp.vertices[k]);
+  return p;
+}
+
+namespace {
+
+/// Polishes the minimum of the field over triangle (a, b, c) found by the subdivision search
+/// (accurate to its resolution only, which makes a barrier on it noisy): projected gradient
+/// descent in barycentric coordinates with Barzilai-Borwein steps and backtracking, from the
+/// minimiser found. The field is smooth on smooth obstacles, so this converges to the exact
+/// minimum and the barrier becomes a smooth function of the vertex positions.
+collision::TriangleSdfResult polish_minimum(const collision::Collider& obs, const Eigen::Vector3d& a,
+                                            const Eigen::Vector3d& b, const Eigen::Vector3d& c,
+                                            const Eigen::Isometry3d& pose, collision::TriangleSdfResult r) {
+  const Eigen::Vector3d e1 = b - a, e2 = c - a;
+  const auto project = [](Eigen::Vector2d w) {  // onto w1, w2 >= 0, w1 + w2 <= 1
+    w = w.cwiseMax(0.0);
+    const double s = w.sum();
+    if (s > 1) w /= s;
+    return w;
+  };
+  Eigen::Vector2d w(r.barycentric[1], r.barycentric[2]);
+  Eigen::Vector3d n;
+  double phi = obs.distance_at_pose(a + w[0] * e1 + w[1] * e2, pose, &n);
+  Eigen::Vector2d g(n.dot(e1), n.dot(e2));
+  double step = 1.0 / std::max(e1.squaredNorm(), e2.squaredNorm());  // one unit of length per unit slope
+  Eigen::Vector2d w_prev = w, g_prev = g;
+  for (int it = 0; it < 400; ++it) {
+    if (it > 0) {
+      const Eigen::Vector2d sw = w - w_prev, sg = g - g_prev;
+      const double den = sw.dot(sg);
+      if (den > 1e-30) step = sw.squaredNorm() / den;
+    }
+    bool moved = false;
+    for (int k = 0; k < 30; ++k, step *= 0.5) {
+      const Eigen::Vector2d w_new = project(w - step * g);
+      if ((w_new - w).norm() < 1e-12) break;
+      Eigen::Vector3d n_new;
+      const double phi_new = obs.distance_at_pose(a + w_new[0] * e1 + w_new[1] * e2, pose, &n_new);
+      if (phi_new < phi - 1e-4 * g.dot(w - w_new) * 0 - 1e-15) {
+        w_prev = w, g_prev = g;
+        w = w_new, phi = phi_new, n = n_new;
+        g = Eigen::Vector2d(n.dot(e1), n.dot(e2));
+        moved = true;
+        break;
+      }
+    }
+    if (!moved) break;
+  }
+  if (phi < r.distance) {
+    r.distance = phi;
+    r.barycentric = Eigen::Vector3d(1 - w[0] - w[1], w[0], w[1]);
+    r.point = a + w[0] * e1 + w[1] * e2;
+    r.gradient = n;
+  }
+  return r;
+}
+
+/// Minimum of the field over a triangle: subdivision search, then polish_minimum near contact.
+collision::TriangleSdfResult face_minimum(const collision::Collider& obs, const Eigen::Vector3d& a,
+                                          const Eigen::Vector3d& b, const Eigen::Vector3d& c,
+                                          const Eigen::Isometry3d& pose, const collision::TriangleSdfParams& params) {
+  collision::TriangleSdfResult r = collision::triangle_min_distance(obs, a, b, c, pose, params);
+  if (r.distance < params.cutoff) r = polish_minimum(obs, a, b, c, pose, r);
+  return r;
+}
+
+}  // namespace
 
 bool ObstacleContactEnergy::near_bounds(int o, const Eigen::Vector3d& p) const {
   const auto& b = m_bounds[o];
@@ -30,30 +125,71 @@ void ObstacleContactEnergy::begin_step(const StepContext& ctx, const Eigen::Vect
     b.hi.array() += m_params.dhat;
     m_bounds.push_back(b);
   }
+  m_stiffness = m_params.stiffness;
+  if (m_impact_density > 0 && ctx.v_t0) {
+    // Impact rule (header): the fastest normal approach of a vertex that can reach an obstacle
+    // within this step.
+    double approach = 0;
+    for (size_t o = 0; o < m_obstacles.size(); ++o) {
+      const auto& obs = *m_obstacles[o];
+      for (int v = 0; v < static_cast<int>(m_area.size()); ++v) {
+        const Eigen::Vector3d p = x_t0.segment<3>(3 * v);
+        const Eigen::Vector3d vel = ctx.v_t0->segment<3>(3 * v) - obs.velocity(p, ctx.time_t0);
+        const double reach = m_params.dhat + 2 * ctx.h * vel.norm();
+        if (m_bounds[o].distance_to(p) > reach) continue;
+        Eigen::Vector3d n;
+        if (obs.distance(p, ctx.time_t0, &n) > reach) continue;
+        approach = std::max(approach, -n.dot(vel));
+      }
+    }
+    m_stiffness = std::max(m_stiffness, m_impact_density * approach * approach /
+                                            (2 * m_params.dhat * std::log(100.0)));
+  }
   // Lagged friction: normal force and tangent plane at the step start (IPC Sec. 5).
   m_friction.clear();
   m_normal_force = 0.0;
   const int nv = static_cast<int>(m_area.size());
+  const auto add_friction = [&](FrictionPoint fp, const collision::Collider& obs, double lambda,
+                                const Eigen::Vector3d& p, const Eigen::Vector3d& n) {
+    m_normal_force += lambda;
+    if (obs.friction <= 0) return;
+    fp.mu_lambda = obs.friction * lambda;
+    const Eigen::Vector3d a = std::abs(n.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+    fp.T.col(0) = n.cross(a).normalized();
+    fp.T.col(1) = n.cross(fp.T.col(0));
+    fp.origin = p + ctx.h * obs.velocity(p, ctx.time_t0);
+    m_friction.push_back(fp);
+  };
   for (int o = 0; o < num_obstacles(); ++o) {
     const auto& obs = *m_obstacles[o];
+    if (uses_faces(o)) {
+      const Eigen::Isometry3d pose = obs.motion.pose(ctx.time_t0);
+      for (int f = 0; f < m_faces.rows(); ++f) {
+        if (!face_near_bounds(o, x_t0, f, 0.0)) continue;
+        const auto r = face_minimum(obs, x_t0.segment<3>(3 * m_faces(f, 0)),
+                                                        x_t0.segment<3>(3 * m_faces(f, 1)),
+                                                        x_t0.segment<3>(3 * m_faces(f, 2)), pose, m_triangle);
+        if (r.distance >= m_params.dhat || r.distance <= 0) continue;
+        FrictionPoint fp;
+        fp.count = 3;
+        fp.vertices = {m_faces(f, 0), m_faces(f, 1), m_faces(f, 2)};
+        fp.weights = r.barycentric;
+        fp.obstacle = o;
+        add_friction(fp, obs, -face_kappa(f) * barrier_first_derivative(r.distance, m_params.dhat),
+                     contact_point(fp, x_t0), r.gradient);
+      }
+      continue;
+    }
     for (int v = 0; v < nv; ++v) {
       const Eigen::Vector3d p = x_t0.segment<3>(3 * v);
       if (!near_bounds(o, p)) continue;
       Eigen::Vector3d n;
       const double d = obs.distance(p, ctx.time_t0, &n);
       if (d >= m_params.dhat || d <= 0) continue;
-      const double lambda = -kappa(v) * barrier_first_derivative(d, m_params.dhat);
-      m_normal_force += lambda;
-      if (obs.friction <= 0) continue;
       FrictionPoint fp;
-      fp.vertex = v;
+      fp.vertices[0] = v;
       fp.obstacle = o;
-      fp.mu_lambda = obs.friction * lambda;
-      const Eigen::Vector3d a = std::abs(n.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
-      fp.T.col(0) = n.cross(a).normalized();
-      fp.T.col(1) = n.cross(fp.T.col(0));
-      fp.origin = p + ctx.h * obs.velocity(p, ctx.time_t0);
-      m_friction.push_back(fp);
+      add_friction(fp, obs, -kappa(v) * barrier_first_derivative(d, m_params.dhat), p, n);
     }
   }
 }
@@ -70,7 +206,19 @@ double f0(double y, double eps) {
 double ObstacleContactEnergy::value(const Eigen::VectorXd& x) const {
   double e = 0;
   const int nv = static_cast<int>(m_area.size());
-  for (int o = 0; o < num_obstacles(); ++o)
+  for (int o = 0; o < num_obstacles(); ++o) {
+    if (uses_faces(o)) {
+      const Eigen::Isometry3d pose = m_obstacles[o]->motion.pose(m_t1);
+      for (int f = 0; f < m_faces.rows(); ++f) {
+        if (!face_near_bounds(o, x, f, 0.0)) continue;
+        const auto r = face_minimum(*m_obstacles[o], x.segment<3>(3 * m_faces(f, 0)),
+                                                        x.segment<3>(3 * m_faces(f, 1)),
+                                                        x.segment<3>(3 * m_faces(f, 2)), pose, m_triangle);
+        if (r.distance <= 0) return INF;
+        if (r.distance < m_params.dhat) e += face_kappa(f) * barrier(r.distance, m_params.dhat);
+      }
+      continue;
+    }
     for (int v = 0; v < nv; ++v) {
       const Eigen::Vector3d p = x.segment<3>(3 * v);
       if (!near_bounds(o, p)) continue;
@@ -78,8 +226,9 @@ double ObstacleContactEnergy::value(const Eigen::VectorXd& x) const {
       if (d <= 0) return INF;
       if (d < m_params.dhat) e += kappa(v) * barrier(d, m_params.dhat);
     }
+  }
   for (const auto& fp : m_friction) {
-    const Eigen::Vector2d u = fp.T.transpose() * (x.segment<3>(3 * fp.vertex) - fp.origin);
+    const Eigen::Vector2d u = fp.T.transpose() * (contact_point(fp, x) - fp.origin);
     e += fp.mu_lambda * f0(u.norm(), m_eps);
   }
   return e;
@@ -89,7 +238,35 @@ void ObstacleContactEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::Vec
                                             BlockSymmetricMatrix* H) const {
   const int nv = static_cast<int>(m_area.size());
   Eigen::VectorXd diag_dummy;
-  for (int o = 0; o < num_obstacles(); ++o)
+  const auto add_weighted = [&](const std::array<int, 3>& vs, const Eigen::Vector3d& w, int count,
+                                const Eigen::Vector3d& force, const Eigen::Matrix3d& local) {
+    for (int k = 0; k < count; ++k) g.segment<3>(3 * vs[k]) += w[k] * force;
+    if (!H) return;
+    if (count == 1) {
+      H->add_element<1>({vs[0]}, local);
+      return;
+    }
+    Eigen::Matrix<double, 9, 9> block;
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) block.block<3, 3>(3 * a, 3 * b) = w[a] * w[b] * local;
+    H->add_element<3>(vs, block);
+  };
+  for (int o = 0; o < num_obstacles(); ++o) {
+    if (uses_faces(o)) {
+      const Eigen::Isometry3d pose = m_obstacles[o]->motion.pose(m_t1);
+      for (int f = 0; f < m_faces.rows(); ++f) {
+        if (!face_near_bounds(o, x, f, 0.0)) continue;
+        const auto r = face_minimum(*m_obstacles[o], x.segment<3>(3 * m_faces(f, 0)),
+                                                        x.segment<3>(3 * m_faces(f, 1)),
+                                                        x.segment<3>(3 * m_faces(f, 2)), pose, m_triangle);
+        if (r.distance >= m_params.dhat || r.distance <= 0) continue;
+        const double k = face_kappa(f);
+        add_weighted({m_faces(f, 0), m_faces(f, 1), m_faces(f, 2)}, r.barycentric, 3,
+                     k * barrier_first_derivative(r.distance, m_params.dhat) * r.gradient,
+                     k * barrier_second_derivative(r.distance, m_params.dhat) * r.gradient * r.gradient.transpose());
+      }
+      continue;
+    }
     for (int v = 0; v < nv; ++v) {
       const Eigen::Vector3d p = x.segment<3>(3 * v);
       if (!near_bounds(o, p)) continue;
@@ -103,21 +280,20 @@ void ObstacleContactEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::Vec
         H->add_element<1>({v}, local);
       }
     }
+  }
   for (const auto& fp : m_friction) {
-    const Eigen::Vector2d u = fp.T.transpose() * (x.segment<3>(3 * fp.vertex) - fp.origin);
+    const Eigen::Vector2d u = fp.T.transpose() * (contact_point(fp, x) - fp.origin);
     const double y = u.norm();
     // f1(y)/y with f1 = f0': 1/y above eps, -y/eps^2 + 2/eps below (finite at y = 0).
     const double f1_over_y = y >= m_eps ? 1 / y : -y / (m_eps * m_eps) + 2 / m_eps;
-    g.segment<3>(3 * fp.vertex) += fp.mu_lambda * f1_over_y * (fp.T * u);
-    if (!H) continue;
     // d/du (f1/y u) = f1/y I + (d(f1/y)/dy / y) u u^T; PSD in both regimes (see header).
     Eigen::Matrix2d M = f1_over_y * Eigen::Matrix2d::Identity();
     if (y > 0) {
       const double slope = y >= m_eps ? -1 / (y * y * y) : -1 / (m_eps * m_eps * y);
       M += slope * u * u.transpose();
     }
-    const Eigen::Matrix3d local = fp.mu_lambda * fp.T * M * fp.T.transpose();
-    H->add_element<1>({fp.vertex}, local);
+    add_weighted(fp.vertices, fp.weights, fp.count, fp.mu_lambda * f1_over_y * (fp.T * u),
+                 fp.mu_lambda * fp.T * M * fp.T.transpose());
   }
 }
 
@@ -126,22 +302,100 @@ double ObstacleContactEnergy::max_step(const Eigen::VectorXd& x, const Eigen::Ve
   const int nv = static_cast<int>(m_area.size());
   for (int o = 0; o < num_obstacles(); ++o) {
     const auto& obs = *m_obstacles[o];
-    for (int v = 0; v < nv; ++v) {
+    // Faces of a convex obstacle cover their vertices (below); otherwise every vertex is traced.
+    const bool trace_vertices = !uses_faces(o) || !obs.is_convex();
+    for (int v = 0; v < nv && trace_vertices; ++v) {
       const Eigen::Vector3d p = x.segment<3>(3 * v), d = dx.segment<3>(3 * v);
       const double len = d.norm();
       if (len == 0) continue;
-      double dist = obs.distance(p, m_t1);
+      Eigen::Vector3d n;
+      double dist = obs.distance(p, m_t1, &n);
       if (dist >= alpha * len) continue;  // cannot reach the surface within this step
+      if (obs.is_convex() && dist > 0) {
+        // The solid lies behind the tangent plane at the closest surface point: the vertex may
+        // close 90% of its gap to that plane (exact for the ground; sliding along a curved
+        // surface is not held back as sphere tracing would hold it).
+        const double rate = -n.dot(d);
+        if (rate > 0) alpha = std::min(alpha, 0.9 * dist / rate);
+        continue;
+      }
       // Sphere tracing: phi is 1-Lipschitz, so advancing by (phi - stop) / len keeps every
       // point passed over at phi >= stop. The vertex may close at most 90% of its gap.
       const double stop = 0.1 * dist;
       double t = 0;
-      for (int it = 0; it < 64; ++it) {
+      for (int it = 0; it < 256; ++it) {
         const double advance = (dist - stop) / len;
         if (advance <= 0) break;
         t += advance;
         if (t >= alpha) break;
         dist = obs.distance(p + t * d, m_t1);
+      }
+      alpha = std::min(alpha, t);
+    }
+    if (!uses_faces(o)) continue;
+    // Faces: conservative advancement on a lower bound of the field over the moving triangle.
+    const Eigen::Isometry3d pose = obs.motion.pose(m_t1);
+    for (int f = 0; f < m_faces.rows(); ++f) {
+      double speed = 0;
+      for (int k = 0; k < 3; ++k) speed = std::max(speed, dx.segment<3>(3 * m_faces(f, k)).norm());
+      if (speed == 0 || !face_near_bounds(o, x, f, alpha * speed)) continue;
+      // A lower bound of the field over the triangle at parameter t: the larger of the
+      // certified bound of the branch and bound (triangle_min_distance) and the minimum found
+      // less the search resolution. The resolution is refined to a fifth of the distance when
+      // the face is close, so that the advancement below can close in on the obstacle as far
+      // as the barrier lets it (a fixed resolution would stall every face at that distance).
+      // The certified bound alone is weak for a face nearly tangent to a large smooth surface
+      // (the query budget runs out), hence the maximum.
+      collision::TriangleSdfParams p = m_triangle;
+      p.cutoff = std::max(m_params.dhat, alpha * speed);
+      const auto lower_bound = [&](double t) {
+        const Eigen::Vector3d a = x.segment<3>(3 * m_faces(f, 0)) + t * dx.segment<3>(3 * m_faces(f, 0));
+        const Eigen::Vector3d b = x.segment<3>(3 * m_faces(f, 1)) + t * dx.segment<3>(3 * m_faces(f, 1));
+        const Eigen::Vector3d c = x.segment<3>(3 * m_faces(f, 2)) + t * dx.segment<3>(3 * m_faces(f, 2));
+        p.resolution = m_triangle.resolution;
+        auto r = face_minimum(obs, a, b, c, pose, p);
+        if (r.distance > 0 && r.distance < 5 * p.resolution) {
+          p.resolution = 0.2 * r.distance;
+          r = face_minimum(obs, a, b, c, pose, p);
+        }
+        return std::max(r.lower_bound, r.distance - p.resolution);
+      };
+      if (obs.is_convex()) {
+        // The minimiser m of the field over the triangle, with normal n, gives a plane that
+        // separates the triangle from the convex solid: the solid lies behind the tangent plane
+        // at its closest point m - phi(m) n, and the triangle (the hull of its vertices) in
+        // front of it. Each vertex may close 90% of the smallest vertex gap to that plane.
+        const Eigen::Vector3d a = x.segment<3>(3 * m_faces(f, 0)), b = x.segment<3>(3 * m_faces(f, 1)),
+                              c = x.segment<3>(3 * m_faces(f, 2));
+        const auto r = face_minimum(obs, a, b, c, pose, p);
+        if (r.lower_bound >= alpha * speed) continue;  // out of reach this step
+        if (r.distance > 0) {
+          const Eigen::Vector3d q = r.point - r.distance * r.gradient;
+          double gap[3], smallest = INF;
+          for (int k = 0; k < 3; ++k) {
+            gap[k] = r.gradient.dot(x.segment<3>(3 * m_faces(f, k)) - q);
+            smallest = std::min(smallest, gap[k]);
+          }
+          if (smallest > 0) {
+            for (int k = 0; k < 3; ++k) {
+              const double rate = -r.gradient.dot(dx.segment<3>(3 * m_faces(f, k)));
+              if (rate > 0) alpha = std::min(alpha, (gap[k] - 0.1 * smallest) / rate);
+            }
+            continue;
+          }
+        }
+        // No separating plane found (the minimum is not resolved): trace as below.
+      }
+      double bound = lower_bound(0.0);
+      if (bound <= 0 || bound >= alpha * speed) continue;  // in contact, or out of reach this step
+      const double stop = 0.1 * bound;
+      double t = 0;
+      for (int it = 0; it < 64; ++it) {
+        const double advance = (bound - stop) / speed;
+        if (advance <= 1e-12) break;
+        t += advance;
+        if (t >= alpha) break;
+        bound = lower_bound(t);
       }
       alpha = std::min(alpha, t);
     }

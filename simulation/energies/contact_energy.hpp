@@ -11,10 +11,33 @@
 /// mu lambda f0(|u|), with f0 the C1 smoothing of |u| below eps_v h.
 /// CCD: along the segment x_v -> x_v + a dx_v, a point cannot reach an obstacle before it moved
 /// by its distance phi (phi is 1-Lipschitz); sphere tracing gives a conservative largest a.
+///
+/// Faces (set_faces): obstacles other than planes touch the sheet's triangles, not only its
+/// vertices, so that a ridge, an edge or a small sphere cannot slip between vertices. Each face
+/// f pays kappa_f b(d_f) with d_f the minimum of the field over the triangle
+/// (collision::triangle_min_distance) and kappa_f = stiffness / dhat x A_f / 3, which equals the
+/// vertex term when the minimum is at a vertex shared by the faces around it. Derivatives hold
+/// the minimiser's barycentric weights w fixed (the envelope theorem: d d_f / d x_i = w_i n);
+/// friction acts at that point with the same weights. CCD advances each face conservatively:
+/// no point of the triangle moves faster than its fastest vertex, so a guaranteed lower bound of
+/// the field over the triangle bounds the safe step. Over a plane the minimum over a triangle is
+/// at a vertex, so planes keep the cheaper vertex terms. Against convex obstacles (the ground
+/// and every primitive) CCD uses the tangent plane at the closest point instead, which the
+/// convex solid lies behind: a face or vertex sliding along a curved surface close to it is
+/// not held back, as sphere tracing (whose steps shrink with the gap) would hold it.
+///
+/// Impacts (set_impact_density): a barrier scaled to the sheet's weight is far too soft to stop
+/// a sheet arriving at metres per second; it would be stopped only nanometres from the surface,
+/// where Newton stalls. At each step start the stiffness is raised, if needed, so that the
+/// barrier can absorb the kinetic energy of the fastest approach within the layer, stopping it
+/// at about dhat / 100: stiffness >= rho_A v_n^2 / (2 dhat ln 100), v_n the largest normal
+/// speed towards an obstacle of a vertex that can reach it within the step.
+#include <array>
 #include <memory>
 #include <vector>
 
 #include "collision/collider.hpp"
+#include "collision/triangle_sdf.hpp"
 #include "simulation/energies/energy_term.hpp"
 
 namespace papersim::simulation {
@@ -40,6 +63,15 @@ class ObstacleContactEnergy : public EnergyTerm {
                        BlockSymmetricMatrix* hessian) const override;
   double max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const override;
 
+  /// Switches obstacles other than planes to face contact (see above).
+  /// @param faces #F by 3 vertex indices; @param face_areas material area per face [m^2]
+  void set_faces(const Eigen::MatrixX3i& faces, const Eigen::VectorXd& face_areas);
+
+  /// Enables the impact rule (see above) for a sheet of areal density rho_A [kg/m^2].
+  void set_impact_density(double areal_density) { m_impact_density = areal_density; }
+  /// Barrier stiffness in force for the current step [Pa] (>= ContactParams::stiffness).
+  double step_stiffness() const { return m_stiffness; }
+
   /// Smallest signed distance of any vertex to obstacle o at the end-of-step time [m].
   double min_distance(int o, const Eigen::VectorXd& x) const;
   /// Number of vertices with friction active in the current step.
@@ -50,20 +82,34 @@ class ObstacleContactEnergy : public EnergyTerm {
 
  private:
   struct FrictionPoint {
-    int vertex, obstacle;
-    double mu_lambda;                  // mu x normal force [N]
-    Eigen::Matrix<double, 3, 2> T;     // tangent basis
-    Eigen::Vector3d origin;            // x_t0 + h v_obstacle [m]
+    std::array<int, 3> vertices{{-1, -1, -1}};  // one (a vertex contact) or three (a face)
+    Eigen::Vector3d weights = Eigen::Vector3d(1, 0, 0);
+    int count = 1;
+    int obstacle = -1;
+    double mu_lambda = 0.0;                                           // mu x normal force [N]
+    Eigen::Matrix<double, 3, 2> T = Eigen::Matrix<double, 3, 2>::Zero();  // tangent basis
+    Eigen::Vector3d origin = Eigen::Vector3d::Zero();                 // x_t0 + h v_obstacle [m]
   };
   bool near_bounds(int o, const Eigen::Vector3d& p) const;
-  double kappa(int v) const { return m_params.stiffness / m_params.dhat * m_area[v]; }
+  bool face_near_bounds(int o, const Eigen::VectorXd& x, int f, double margin) const;
+  bool uses_faces(int o) const { return m_face_contact[o]; }
+  double face_kappa(int f) const { return m_stiffness / m_params.dhat * m_face_area[f] / 3; }
+  /// Point of a friction contact: sum of weight x vertex position.
+  Eigen::Vector3d contact_point(const FrictionPoint& fp, const Eigen::VectorXd& x) const;
+  double kappa(int v) const { return m_stiffness / m_params.dhat * m_area[v]; }
 
   Eigen::VectorXd m_area;
   std::vector<std::shared_ptr<const collision::Collider>> m_obstacles;
   ContactParams m_params;
   std::vector<collision::Aabb> m_bounds;  // at the step end, inflated by dhat
   std::vector<FrictionPoint> m_friction;
+  std::vector<bool> m_face_contact;       // per obstacle: faces (true) or vertices
+  Eigen::MatrixX3i m_faces;
+  Eigen::VectorXd m_face_area;
+  collision::TriangleSdfParams m_triangle;
   double m_t1 = 0.0, m_eps = 1e-6, m_normal_force = 0.0;
+  double m_impact_density = 0.0;  // rho_A for the impact rule; 0: off
+  double m_stiffness = 0.0;       // this step's stiffness [Pa]
 };
 
 }  // namespace papersim::simulation
