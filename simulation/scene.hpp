@@ -9,6 +9,7 @@
 #include "remesh/sheet_generator.hpp"
 #include "simulation/energies/contact_energy.hpp"
 #include "simulation/energies/handle_energy.hpp"
+#include "simulation/energies/self_contact_energy.hpp"
 #include "simulation/integrator.hpp"
 #include "simulation/material.hpp"
 
@@ -51,6 +52,9 @@ struct Scene {
   std::vector<HandleSpec> handles;
   std::vector<ClampSpec> clamps;
   ContactParams contact;         ///< stiffness <= 0 means automatic: rho_A |g|
+  /// Sheet against itself; thickness and stiffness 0 mean: as `contact` (eps_velocity is
+  /// always contact.eps_velocity).
+  SelfContactParams self_contact;
   NewtonParams newton;
   OutputSpec output;
   /// Provenance when a scenario drew the scene.
