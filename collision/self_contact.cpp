@@ -118,7 +118,8 @@ double point_segment(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const E
 }
 
 /// The smallest of point-segment candidates (point index, segment end indices).
-DistanceStencil closest_of(const PairPoints& x, const std::array<std::array<int, 3>, 4>& c, int n) {
+DistanceStencil closest_of(const PairPoints& x, const std::array<std::array<int, 3>, 4>& c, int n,
+                           double* distance2 = nullptr) {
   DistanceStencil best;
   double best_d2 = INF;
   for (int k = 0; k < n; ++k) {
@@ -129,6 +130,7 @@ DistanceStencil closest_of(const PairPoints& x, const std::array<std::array<int,
       best = s;
     }
   }
+  if (distance2) *distance2 = best_d2;
   return best;
 }
 
@@ -349,14 +351,23 @@ DistanceStencil point_triangle_stencil(const PairPoints& x) {
 DistanceStencil edge_edge_stencil(const PairPoints& x) {
   const Eigen::Vector3d u = x[1] - x[0], v = x[3] - x[2], w = x[0] - x[2];
   const double a = u.squaredNorm(), b = u.dot(v), c = v.squaredNorm(), d = u.dot(w), e = v.dot(w);
+  // Candidates on the boundary of the parameter square: an endpoint against the other segment
+  // (this holds the minimum for parallel segments, where the distance is constant along the
+  // overlap).
+  double boundary_d2 = INF;
+  const DistanceStencil boundary =
+      closest_of(x, {{{{0, 2, 3}}, {{1, 2, 3}}, {{2, 0, 1}}, {{3, 0, 1}}}}, 4, &boundary_d2);
   const double D = u.cross(v).squaredNorm();  // = a c - b^2, without cancellation
   if (D > 1e-20 * a * c) {
     const double s = (b * e - c * d) / D, t = (a * e - b * d) / D;
-    if (s > 0 && s < 1 && t > 0 && t < 1) return {DistanceType::edge_edge, {{0, 1, 2, 3}}};
+    // For nearly parallel (or collinear) segments s and t are ill-conditioned and may land
+    // inside the square by round-off while the lines nearly coincide (line distance ~0, segment
+    // distance large): the interior type is taken only when the points it names really are
+    // closer than every boundary candidate.
+    if (s > 0 && s < 1 && t > 0 && t < 1 && (w + s * u - t * v).squaredNorm() < boundary_d2)
+      return {DistanceType::edge_edge, {{0, 1, 2, 3}}};
   }
-  // The minimum over the parameter square lies on its boundary: an endpoint against the other
-  // segment (also for parallel segments, where the distance is constant along the overlap).
-  return closest_of(x, {{{{0, 2, 3}}, {{1, 2, 3}}, {{2, 0, 1}}, {{3, 0, 1}}}}, 4);
+  return boundary;
 }
 
 double distance_squared(const DistanceStencil& s, const PairPoints& x) {

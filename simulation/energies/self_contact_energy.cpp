@@ -101,20 +101,28 @@ std::uint64_t SelfContactEnergy::key(const Pair& p) {
   return (std::uint64_t(p.edge_edge) << 62) | (std::uint64_t(p.a) << 31) | std::uint64_t(p.b);
 }
 
-void SelfContactEnergy::ensure_candidates(const Eigen::VectorXd& x, double motion) const {
-  if (m_candidate_margin >= 0 && m_candidate_x.size() == x.size() &&
-      max_vertex_distance(x, m_candidate_x) + motion <= m_candidate_margin)
-    return;
-  // A margin of half the thickness at rest, or the coming motion: pairs farther apart than
-  // dhat + 2 margin cannot come within dhat while every vertex stays within the margin.
-  m_candidate_margin = std::max(0.5 * m_params.dhat, 1.25 * motion);
-  m_candidate_x = x;
+void SelfContactEnergy::build_candidates(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const {
+  m_segment_x = x;
+  m_segment_dx = dx;
+  const Eigen::VectorXd x1 = x + dx;
   const collision::SelfContactCandidates c =
-      collision::find_self_contact_candidates(m_mesh, x, x, m_params.dhat + 2 * m_candidate_margin);
+      collision::find_self_contact_candidates(m_mesh, x, x1, 1.5 * m_params.dhat);
   m_candidates.clear();
   m_candidates.reserve(c.size());
   for (const auto& [v, f] : c.point_triangle) m_candidates.push_back({false, v, f});
   for (const auto& [a, b] : c.edge_edge) m_candidates.push_back({true, a, b});
+}
+
+void SelfContactEnergy::ensure_candidates(const Eigen::VectorXd& x) const {
+  // x is within delta of the segment point x_s + a dx_s (a the least-squares fraction, clamped
+  // to [0, 1]) when every vertex is. Pairs left out were farther than 1.5 dhat apart all along
+  // the segment; moving each vertex by at most dhat / 4 brings them no closer than dhat.
+  if (m_segment_x.size() == x.size()) {
+    const double dd = m_segment_dx.squaredNorm();
+    const double a = dd > 0 ? std::clamp((x - m_segment_x).dot(m_segment_dx) / dd, 0.0, 1.0) : 0.0;
+    if (max_vertex_distance(x, m_segment_x + a * m_segment_dx) <= 0.25 * m_params.dhat) return;
+  }
+  build_candidates(x, Eigen::VectorXd::Zero(x.size()));
 }
 
 double SelfContactEnergy::stencil_distance2(const Pair& p, const PairPoints& pts, DistanceStencil& s) const {
@@ -125,7 +133,7 @@ double SelfContactEnergy::stencil_distance2(const Pair& p, const PairPoints& pts
 void SelfContactEnergy::begin_step(const StepContext& ctx, const Eigen::VectorXd& x_t0) {
   ScopedTimer timer(m_seconds);
   m_eps = m_params.eps_velocity * ctx.h;
-  ensure_candidates(x_t0, 0.0);
+  ensure_candidates(x_t0);
   m_friction.clear();
   m_friction_keys.clear();
   if (m_params.friction <= 0) return;
@@ -157,7 +165,7 @@ void SelfContactEnergy::begin_step(const StepContext& ctx, const Eigen::VectorXd
 
 bool SelfContactEnergy::update_pattern(const Eigen::VectorXd& x) {
   ScopedTimer timer(m_seconds);
-  ensure_candidates(x, 0.0);
+  ensure_candidates(x);
   const double dhat2 = m_params.dhat * m_params.dhat, near2 = 4 * dhat2;
   bool missing = !std::includes(m_pattern.begin(), m_pattern.end(), m_friction_keys.begin(), m_friction_keys.end());
   std::vector<Pair> near;
@@ -191,7 +199,7 @@ void SelfContactEnergy::add_dynamic_pattern(SparsityBuilder& pattern) const {
 
 double SelfContactEnergy::value(const Eigen::VectorXd& x) const {
   ScopedTimer timer(m_seconds);
-  ensure_candidates(x, 0.0);
+  ensure_candidates(x);
   const double dhat = m_params.dhat, kappa = m_params.stiffness / dhat;
   double e = 0;
   for (const Pair& p : m_candidates) {
@@ -261,7 +269,7 @@ void SelfContactEnergy::add_friction(const Eigen::VectorXd& x, Eigen::VectorXd& 
 void SelfContactEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd& g,
                                         BlockSymmetricMatrix* H) const {
   ScopedTimer timer(m_seconds);
-  ensure_candidates(x, 0.0);
+  ensure_candidates(x);
   const double dhat2 = m_params.dhat * m_params.dhat;
   int active = 0;
   for (const Pair& p : m_candidates) {
@@ -279,26 +287,18 @@ void SelfContactEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::VectorX
 
 double SelfContactEnergy::max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const {
   ScopedTimer timer(m_seconds);
-  // CCD over every pair whose swept boxes meet (Additive CCD never lets a distance reach 0).
-  const Eigen::VectorXd x1 = x + dx;
-  const collision::SelfContactCandidates c = collision::find_self_contact_candidates(m_mesh, x, x1, 0.0);
+  // One broad phase over the swept boxes serves the CCD here (a superset of the pairs whose
+  // swept boxes meet) and every energy evaluation of the line search after it.
+  build_candidates(x, dx);
   double alpha = 1.0;
-  const auto motion = [&](const std::array<int, 4>& v) {
+  for (const Pair& p : m_candidates) {
+    const std::array<int, 4> v = vertices(p);
     PairPoints d;
     for (int k = 0; k < 4; ++k) d[k] = dx.segment<3>(3 * v[k]);
-    return d;
-  };
-  for (const auto& [v, f] : c.point_triangle) {
-    const Pair p{false, v, f};
-    alpha = collision::point_triangle_ccd(points(p, x), motion(vertices(p)), alpha, m_params.ccd_min_separation);
+    alpha = p.edge_edge
+                ? collision::edge_edge_ccd(points(p, x), d, alpha, m_params.ccd_min_separation)
+                : collision::point_triangle_ccd(points(p, x), d, alpha, m_params.ccd_min_separation);
   }
-  for (const auto& [a, b] : c.edge_edge) {
-    const Pair p{true, a, b};
-    alpha = collision::edge_edge_ccd(points(p, x), motion(vertices(p)), alpha, m_params.ccd_min_separation);
-  }
-  // Candidates valid along the whole admissible part of the line search.
-  Eigen::VectorXd adx = alpha * dx;
-  ensure_candidates(x, max_vertex_distance(adx, Eigen::VectorXd::Zero(adx.size())));
   return alpha;
 }
 

@@ -20,9 +20,9 @@
 /// contact direction); the relative tangential slip u = T^T sum_i w_i (x_i - x_i,t0) pays
 /// mu lambda f0(|u|).
 ///
-/// Active set and Hessian pattern: candidate pairs come from a broad phase around a reference
-/// configuration and stay valid while no vertex moved farther than the margin they were built
-/// with. The Hessian pattern holds the pairs within 2 dhat (and the friction pairs) when it was
+/// Active set and Hessian pattern: candidate pairs come from a broad phase over the boxes swept
+/// along the last Newton direction (max_step), so that every configuration the line search
+/// tries is covered by one broad phase; configurations off that segment get their own. The Hessian pattern holds the pairs within 2 dhat (and the friction pairs) when it was
 /// last rebuilt; update_pattern() asks for a rebuild only when a pair within dhat (or a friction
 /// pair) is not in it, so that the symbolic factorisation is redone rarely.
 #include <array>
@@ -106,8 +106,10 @@ class SelfContactEnergy : public EnergyTerm {
   double weight(const Pair& p) const;
   double mollifier_eps(const Pair& p) const;
   static std::uint64_t key(const Pair& p);
-  /// The candidate pairs valid at x (rebuilt when a vertex moved beyond the margin).
-  void ensure_candidates(const Eigen::VectorXd& x, double motion) const;
+  /// Candidate pairs for every configuration on the segment x -> x + dx.
+  void build_candidates(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const;
+  /// The candidate pairs valid at x (rebuilt, for x alone, when x is off the segment).
+  void ensure_candidates(const Eigen::VectorXd& x) const;
   double stencil_distance2(const Pair& p, const collision::PairPoints& pts,
                            collision::DistanceStencil& s) const;
   /// Adds one pair's barrier derivatives (gradient, Hessian) at distance stencil s.
@@ -121,11 +123,11 @@ class SelfContactEnergy : public EnergyTerm {
   bool m_project = true;
   double m_eps = 1e-6;  // friction smoothing: eps_velocity h [m]
 
-  // Candidates: every pair within dhat of each other wherever each vertex stays within
-  // m_candidate_margin of m_candidate_x.
+  // Candidates: every pair that comes within 1.5 dhat anywhere on the segment
+  // m_segment_x -> m_segment_x + m_segment_dx (swept boxes), so they hold every pair within
+  // dhat at any x less than dhat / 4 from the segment (see ensure_candidates).
   mutable std::vector<Pair> m_candidates;
-  mutable Eigen::VectorXd m_candidate_x;
-  mutable double m_candidate_margin = -1;
+  mutable Eigen::VectorXd m_segment_x, m_segment_dx;
 
   std::vector<std::uint64_t> m_pattern;  // sorted pair keys in the Hessian pattern
   std::vector<Pair> m_pattern_pairs;

@@ -7,6 +7,8 @@
 #include <random>
 #include <set>
 
+#include <Eigen/Geometry>
+
 #include "collision/self_contact.hpp"
 
 using namespace papersim::collision;
@@ -122,6 +124,25 @@ TEST(SelfContactDistance, ParallelAndDegenerateEdges) {
   // Anti-parallel and nearly parallel (1e-9 rad): within round-off of the parallel value.
   x = {a0, a1, Eigen::Vector3d(1.5, 0.1, 0), Eigen::Vector3d(0.5, 0.1 + 1e-9, 0)};
   EXPECT_NEAR(std::sqrt(edge_edge_distance_squared(x)), 0.1, 1e-9);
+  // Collinear segments of a rotated straight boundary (found in a simulated strip): round-off
+  // makes them "nearly parallel" and puts the line-line closest points inside both, at line
+  // distance ~1e-12; the segment distance is the 7.5 mm gap between them.
+  std::mt19937 rng(4);
+  int wrong = 0;
+  for (int k = 0; k < 2000; ++k) {
+    const Eigen::Matrix3d R = Eigen::Quaterniond::UnitRandom().toRotationMatrix();
+    const Eigen::Vector3d o = random_point(rng, 0.3);
+    PairPoints c = {o + R * Eigen::Vector3d(0.2775, 0, 0), o + R * Eigen::Vector3d(0.285, 0, 0),
+                    o + R * Eigen::Vector3d(0.2925, 0, 0), o + R * Eigen::Vector3d(0.3, 0, 0)};
+    for (auto& p : c) p += random_point(rng, 1e-10);  // the noise of a simulated state
+    wrong += std::abs(std::sqrt(edge_edge_distance_squared(c)) - 0.0075) > 1e-9;
+  }
+  EXPECT_EQ(wrong, 0);
+  const PairPoints found = {Eigen::Vector3d(0.15834328594928068, 0.002893168993161133, 0.20453000012211286),
+                            Eigen::Vector3d(0.16577024128655374, 0.0039373597683123752, 0.20453000000392274),
+                            Eigen::Vector3d(0.17319719662630398, 0.004981550544265907, 0.20452999996880733),
+                            Eigen::Vector3d(0.18062415196645487, 0.0060257413224608447, 0.20452999998376886)};
+  EXPECT_NEAR(std::sqrt(edge_edge_distance_squared(found)), 0.0075, 1e-9);
   // A degenerate (zero-length) edge is a point.
   x = {a0, a1, Eigen::Vector3d(0.3, 0.2, 0.1), Eigen::Vector3d(0.3, 0.2, 0.1)};
   EXPECT_NEAR(std::sqrt(edge_edge_distance_squared(x)), std::hypot(0.2, 0.1), 1e-15);
