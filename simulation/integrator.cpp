@@ -56,6 +56,7 @@ void Integrator::update_pattern(const Eigen::VectorXd& x) {
   for (const auto& t : m_terms) t->add_dynamic_pattern(pattern);
   m_hessian = BlockSymmetricMatrix(pattern.finish());
   ++m_pattern_id;  // the solver redoes its symbolic analysis
+  if (std::getenv("PAPERSIM_DEBUG_SOLVER")) std::fprintf(stderr, "pattern %ld nnz %zu\n", m_pattern_id, m_hessian.values().size());
 }
 
 EnergyTerm* Integrator::find(const std::string& name) const {

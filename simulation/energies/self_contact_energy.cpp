@@ -176,7 +176,14 @@ bool SelfContactEnergy::update_pattern(const Eigen::VectorXd& x) {
     near.push_back(p);
     if (!missing && d2 < dhat2) missing = !std::binary_search(m_pattern.begin(), m_pattern.end(), key(p));
   }
-  if (!missing) return false;
+  // Pairs far apart in the mesh add fill to the factorisation (measured on the strip scene:
+  // 1.7x the factor's nonzeros), so a pattern holding far more pairs than are near (a contact
+  // ended) is rebuilt too.
+  const size_t needed = near.size() + m_friction_keys.size();
+  // Even a few long-range pairs close a long strip into a loop and double the fill: once no
+  // pair is near, the dynamic pattern is emptied.
+  const bool excess = needed == 0 ? !m_pattern.empty() : m_pattern.size() > 4 * needed + 64;
+  if (!missing && !excess) return false;
   // Rebuild with the pairs within 2 dhat and the friction pairs: the pattern then holds until
   // a pair closes from 2 dhat to dhat.
   m_pattern_pairs = near;

@@ -24,7 +24,8 @@
 /// along the last Newton direction (max_step), so that every configuration the line search
 /// tries is covered by one broad phase; configurations off that segment get their own. The Hessian pattern holds the pairs within 2 dhat (and the friction pairs) when it was
 /// last rebuilt; update_pattern() asks for a rebuild only when a pair within dhat (or a friction
-/// pair) is not in it, so that the symbolic factorisation is redone rarely.
+/// pair) is not in it, or when it holds far more pairs than are near (a contact ended), so that
+/// the symbolic factorisation is redone rarely.
 #include <array>
 #include <cstdint>
 #include <vector>
