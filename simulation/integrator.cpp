@@ -44,7 +44,19 @@ Integrator::Integrator(int num_vertices, std::vector<std::unique_ptr<EnergyTerm>
     : m_terms(std::move(terms)), m_params(params) {
   SparsityBuilder pattern(num_vertices);
   for (const auto& t : m_terms) t->add_pattern(pattern);
+  m_static_pattern = pattern.finish();
+  m_hessian = BlockSymmetricMatrix(m_static_pattern);
+}
+
+void Integrator::update_pattern(const Eigen::VectorXd& x) {
+  bool changed = false;
+  for (const auto& t : m_terms) changed = t->update_pattern(x) || changed;
+  if (!changed) return;
+  SparsityBuilder pattern(m_static_pattern);
+  for (const auto& t : m_terms) t->add_dynamic_pattern(pattern);
   m_hessian = BlockSymmetricMatrix(pattern.finish());
+  ++m_pattern_id;  // the solver redoes its symbolic analysis
+  if (std::getenv("PAPERSIM_DEBUG_SOLVER")) std::fprintf(stderr, "pattern %ld nnz %zu\n", m_pattern_id, m_hessian.values().size());
 }
 
 EnergyTerm* Integrator::find(const std::string& name) const {
@@ -73,6 +85,7 @@ NewtonResult Integrator::solve(const StepContext& ctx, Eigen::VectorXd& x, StepS
   }
   for (r.iterations = 1; r.iterations <= m_params.max_iterations; ++r.iterations) {
     auto t0 = std::chrono::steady_clock::now();
+    update_pattern(x);
     const auto assemble = [&](bool project) {
       g.setZero();
       m_hessian.set_zero();

@@ -60,12 +60,18 @@ class Integrator {
   double energy(const Eigen::VectorXd& x) const;
   const std::vector<std::unique_ptr<EnergyTerm>>& terms() const { return m_terms; }
   EnergyTerm* find(const std::string& name) const;
+  /// Names the current Hessian sparsity pattern; it grows by one whenever a term's dynamic
+  /// pattern changed (statistics and tests).
+  long pattern_id() const { return m_pattern_id; }
 
  private:
   NewtonResult solve(const StepContext& ctx, Eigen::VectorXd& x, StepStats& stats);
   bool advance(SheetState& state, double h, int depth, StepStats& stats);
+  /// Asks every term whether its dynamic pattern changed at x and rebuilds the matrix if so.
+  void update_pattern(const Eigen::VectorXd& x);
   std::vector<std::unique_ptr<EnergyTerm>> m_terms;
   NewtonParams m_params;
+  std::vector<std::vector<int>> m_static_pattern;  // from add_pattern, built once
   BlockSymmetricMatrix m_hessian;
   LinearSolver m_solver;
   long m_pattern_id = 0;

@@ -291,6 +291,14 @@ Scene scene_from_json(const json& j, const std::string& source) {
     c.finish();
   }
   {
+    Reader c = r.child("self_contact");
+    s.self_contact.enabled = c.boolean("enabled", s.self_contact.enabled);
+    s.self_contact.dhat = c.number("thickness", s.self_contact.dhat, 0, 0.1);
+    s.self_contact.stiffness = c.number("stiffness", s.self_contact.stiffness, 0, 1e12);
+    s.self_contact.friction = c.number("friction", s.self_contact.friction, 0, 10);
+    c.finish();
+  }
+  {
     Reader n = r.child("solver");
     s.newton.max_iterations = n.integer("max_iterations", s.newton.max_iterations, 1, 10000);
     s.newton.tolerance = n.number("tolerance", s.newton.tolerance, 0, 1e3, true);
@@ -401,6 +409,10 @@ json scene_to_json(const Scene& s) {
   j["contact"] = {{"thickness", s.contact.dhat},
                   {"stiffness", s.contact.stiffness},
                   {"static_velocity", s.contact.eps_velocity}};
+  j["self_contact"] = {{"enabled", s.self_contact.enabled},
+                       {"thickness", s.self_contact.dhat},
+                       {"stiffness", s.self_contact.stiffness},
+                       {"friction", s.self_contact.friction}};
   j["solver"] = {{"max_iterations", s.newton.max_iterations},
                  {"tolerance", s.newton.tolerance},
                  {"max_halvings", s.newton.max_halvings}};

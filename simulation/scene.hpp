@@ -9,6 +9,7 @@
 #include "remesh/sheet_generator.hpp"
 #include "simulation/energies/contact_energy.hpp"
 #include "simulation/energies/handle_energy.hpp"
+#include "simulation/energies/self_contact_energy.hpp"
 #include "simulation/integrator.hpp"
 #include "simulation/material.hpp"
 
@@ -60,6 +61,9 @@ struct Scene {
   /// Contact thickness, pressure scale and slip speed; stiffness <= 0 (the default, as in
   /// scene files) means automatic: rho_A max(|g|, 1).
   ContactParams contact = automatic_contact();
+  /// Sheet against itself; thickness and stiffness 0 mean: as `contact` (eps_velocity is
+  /// always contact.eps_velocity).
+  SelfContactParams self_contact;
   NewtonParams newton;
   OutputSpec output;
   /// Provenance when a scenario drew the scene.

@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "collision/errors.hpp"
+#include "collision/self_intersection.hpp"
 #include "remesh/errors.hpp"
 #include "remesh/sheet_io.hpp"
 #include "simulation/energies/bending_energy.hpp"
@@ -64,6 +65,7 @@ struct Built {
   BendingEnergy* bending = nullptr;
   HandleEnergy* handles = nullptr;
   ObstacleContactEnergy* contact = nullptr;
+  SelfContactEnergy* self_contact = nullptr;
   std::vector<std::shared_ptr<const collision::Collider>> obstacles;
   Eigen::VectorXd masses;
 };
@@ -102,9 +104,9 @@ Built build(const Scene& scene, const remesh::SheetMesh& mesh, const SheetState&
       throw SceneError("obstacles[" + std::to_string(i) + "]: " + e.what());
     }
   }
+  ContactParams p = scene.contact;
+  if (p.stiffness <= 0) p.stiffness = m.density * std::max(scene.gravity.norm(), 1.0);
   if (!b.obstacles.empty()) {
-    ContactParams p = scene.contact;
-    if (p.stiffness <= 0) p.stiffness = m.density * std::max(scene.gravity.norm(), 1.0);
     Eigen::VectorXd areas = b.masses / m.density;
     auto c = std::make_unique<ObstacleContactEnergy>(areas, b.obstacles, p);
     const Eigen::MatrixX3i F = mesh.faces();
@@ -117,6 +119,15 @@ Built build(const Scene& scene, const remesh::SheetMesh& mesh, const SheetState&
     c->set_faces(F, face_areas);
     c->set_impact_density(m.density);
     b.contact = c.get();
+    terms.push_back(std::move(c));
+  }
+  if (scene.self_contact.enabled) {
+    SelfContactParams sp = scene.self_contact;
+    if (sp.dhat <= 0) sp.dhat = p.dhat;
+    if (sp.stiffness <= 0) sp.stiffness = p.stiffness;
+    sp.eps_velocity = p.eps_velocity;
+    auto c = std::make_unique<SelfContactEnergy>(X, F, sp);
+    b.self_contact = c.get();
     terms.push_back(std::move(c));
   }
   b.integrator = std::make_unique<Integrator>(mesh.num_vertices(), std::move(terms), scene.newton);
@@ -253,6 +264,13 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
   RunResult r;
   initial_sheet(scene, r.mesh, r.state);
   Built b = build(scene, r.mesh, r.state);
+  if (b.self_contact) {
+    // The barrier keeps an intersection-free sheet so; it cannot undo an intersection.
+    const int crossings = collision::count_self_intersections(r.state.positions_matrix(), r.mesh.faces());
+    if (crossings > 0 || !(b.self_contact->min_distance(r.state.positions, b.self_contact->params().dhat) > 0))
+      throw SceneError("the sheet starts intersecting itself (" + std::to_string(crossings) +
+                       " triangle pairs); self-contact needs an intersection-free start");
+  }
   if (b.contact) {
     for (size_t o = 0; o < b.obstacles.size(); ++o)
       for (int v = 0; v < r.state.num_vertices(); ++v)
@@ -324,7 +342,12 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
               {"line_search_evaluations", total.line_search_evaluations},
               {"seconds_assembly", total.seconds_assembly},
               {"seconds_solve", total.seconds_solve},
-              {"seconds_line_search", total.seconds_line_search}};
+              {"seconds_line_search", total.seconds_line_search},
+              {"pattern_changes", b.integrator->pattern_id()}};
+  if (b.self_contact)
+    m["run"]["self_contact"] = {{"seconds", b.self_contact->seconds()},
+                                {"max_active_pairs", b.self_contact->max_active_pairs()},
+                                {"pattern_changes", b.self_contact->pattern_changes()}};
   json quality = {{"max_principal_stretch", track.max_stretch},
                   {"min_principal_stretch", track.min_compression},
                   {"strain_limit", scene.sheet.material.strain_limit},
@@ -332,6 +355,8 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
   json distances = json::array();
   for (double d : track.min_distance) distances.push_back(d);
   quality["min_obstacle_distance"] = distances;
+  quality["self_intersections"] =
+      collision::count_self_intersections(r.state.positions_matrix(), r.mesh.faces());
   if (b.handles) {
     double worst = 0;
     for (int i = 0; i < b.handles->size(); ++i)

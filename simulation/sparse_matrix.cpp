@@ -11,6 +11,9 @@ SparsityBuilder::SparsityBuilder(int num_vertices) : m_neighbours(num_vertices) 
   for (int j = 0; j < num_vertices; ++j) m_neighbours[j].push_back(j);
 }
 
+SparsityBuilder::SparsityBuilder(std::vector<std::vector<int>> upper_neighbours)
+    : m_neighbours(std::move(upper_neighbours)) {}
+
 void SparsityBuilder::add_clique(const int* vertices, int count) {
   for (int a = 0; a < count; ++a)
     for (int b = 0; b < count; ++b)

@@ -11,6 +11,8 @@ namespace papersim::simulation {
 class SparsityBuilder {
  public:
   explicit SparsityBuilder(int num_vertices);
+  /// Starts from a finished pattern (finish()'s result) and adds to it.
+  explicit SparsityBuilder(std::vector<std::vector<int>> upper_neighbours);
   /// Every pair of vertices in `vertices` couples.
   void add_clique(const int* vertices, int count);
   int num_vertices() const { return static_cast<int>(m_neighbours.size()); }

@@ -26,8 +26,18 @@ class EnergyTerm {
   virtual ~EnergyTerm() = default;
   /// Short name for statistics ("stretch", "bend", ...).
   virtual std::string name() const = 0;
-  /// Declares every element's vertices so the Hessian pattern can be built.
+  /// Declares every element's vertices so the Hessian pattern can be built (once, for the
+  /// static part of the pattern: elements whose vertices never change).
   virtual void add_pattern(SparsityBuilder& pattern) const = 0;
+  /// Terms whose elements change with the configuration (self-contact couples vertices far
+  /// apart in the mesh) keep a dynamic part of the pattern. Called before every assembly at x;
+  /// returns true when the term's coupled vertex cliques changed, so that the integrator
+  /// rebuilds the matrix from add_pattern and every term's add_dynamic_pattern (and CHOLMOD
+  /// redoes its symbolic analysis). After it returns, add_derivatives(x, ...) adds Hessian
+  /// elements only within the pattern. Default: no dynamic part.
+  virtual bool update_pattern(const Eigen::VectorXd& /*x*/) { return false; }
+  /// Declares the cliques of the dynamic pattern (as chosen by the last update_pattern).
+  virtual void add_dynamic_pattern(SparsityBuilder& /*pattern*/) const {}
   /// Called once at the start of each time step (lagged quantities, active sets).
   virtual void begin_step(const StepContext& /*ctx*/, const Eigen::VectorXd& /*x_t0*/) {}
   /// Value [J]; +infinity when x is infeasible for this term.

@@ -10,6 +10,7 @@
 #include "simulation/energies/contact_energy.hpp"
 #include "simulation/energies/handle_energy.hpp"
 #include "simulation/energies/membrane_energy.hpp"
+#include "simulation/energies/self_contact_energy.hpp"
 #include "simulation/energies/vertex_energies.hpp"
 
 using namespace papersim;
@@ -65,11 +66,13 @@ Eigen::MatrixXd dense(const BlockSymmetricMatrix& A) {
 /// Hessian. Step 1e-7 m: truncation O(h^2 f''') and round-off O(eps f / h) both far below
 /// the tolerances for positions of order 0.1 m. Terms with a log barrier near its singularity
 /// have large third derivatives and take a smaller step.
-void check_derivatives(const EnergyTerm& term, int nv, const Eigen::VectorXd& x,
+void check_derivatives(EnergyTerm& term, int nv, const Eigen::VectorXd& x,
                        double tol_grad = 1e-6, double tol_hess = 1e-5, bool check_hessian = true,
                        double step = 1e-7) {
   SparsityBuilder pattern(nv);
   term.add_pattern(pattern);
+  term.update_pattern(x);  // terms with a dynamic pattern (self-contact) choose it at x
+  term.add_dynamic_pattern(pattern);
   BlockSymmetricMatrix H(pattern.finish());
   Eigen::VectorXd g = Eigen::VectorXd::Zero(x.size());
   term.add_derivatives(x, g, &H);
@@ -206,4 +209,129 @@ TEST(EnergyDerivatives, GroundContactAndFriction) {
   const double alpha = e.max_step(x, dx);
   EXPECT_GT(alpha, 0.0);
   for (int k = 0; k < f.mesh.num_vertices(); ++k) EXPECT_GT(x[3 * k + 2] + alpha * dx[3 * k + 2], 0.0);
+}
+
+namespace {
+
+/// Two separate right triangles (legs 1 cm in material space): A = (0, 1, 2) hovers over
+/// B = (3, 4, 5), which lies in z = 0 with its corner at the origin and legs along x and y.
+/// `a` holds A's three world positions; with dhat = 1 mm only the intended contacts are active.
+struct TwoTriangles {
+  Eigen::MatrixX2d X;
+  Eigen::MatrixX3i F;
+  Eigen::VectorXd x;
+};
+
+TwoTriangles two_triangles(const std::array<Eigen::Vector3d, 3>& a) {
+  TwoTriangles t;
+  t.X.resize(6, 2);
+  t.X << 0, 0, 0.01, 0, 0, 0.01, 0.02, 0, 0.03, 0, 0.02, 0.01;
+  t.F.resize(2, 3);
+  t.F << 0, 1, 2, 3, 4, 5;
+  t.x.resize(18);
+  for (int k = 0; k < 3; ++k) t.x.segment<3>(3 * k) = a[k];
+  t.x.segment<3>(9) << 0, 0, 0;
+  t.x.segment<3>(12) << 0.01, 0, 0;
+  t.x.segment<3>(15) << 0, 0.01, 0;
+  return t;
+}
+
+SelfContactParams self_params() {
+  SelfContactParams p;
+  p.dhat = 1e-3;
+  p.stiffness = 1.0;
+  p.eps_velocity = 1.0;  // eps = 1 mm at h = 1 ms: the FD step is far below the smoothing scale
+  return p;
+}
+
+collision::PairPoints pair_points(const Eigen::VectorXd& x, std::array<int, 4> v) {
+  collision::PairPoints p;
+  for (int k = 0; k < 4; ++k) p[k] = x.segment<3>(3 * v[k]);
+  return p;
+}
+
+/// The barrier derivatives of a two-triangle configuration, with the exact Hessian. The log
+/// barrier's third derivative near d = 0.4 mm asks for a small step: 1e-9 m.
+void check_self_contact(const TwoTriangles& t) {
+  SelfContactEnergy e(t.X, t.F, self_params());
+  e.set_hessian_projection(false);
+  ASSERT_GT(e.value(t.x), 0.0);
+  ASSERT_LT(e.value(t.x), INF);
+  check_derivatives(e, 6, t.x, 1e-6, 1e-5, true, 1e-9);
+  EXPECT_GT(e.active_pairs(), 0);
+}
+
+}  // namespace
+
+TEST(EnergyDerivatives, SelfContactPointTriangleTypes) {
+  using collision::DistanceType;
+  const double dhat = self_params().dhat;
+  // Vertex 0 of A above B's face, beside B's edge x = 0, and beyond B's corner.
+  const std::array<std::array<Eigen::Vector3d, 3>, 3> configs = {{
+      {{Eigen::Vector3d(0.002, 0.002, 5e-4), Eigen::Vector3d(0.004, 0.003, 0.008), Eigen::Vector3d(0.001, 0.004, 0.009)}},
+      {{Eigen::Vector3d(-3e-4, 0.004, 4e-4), Eigen::Vector3d(-0.002, 0.005, 0.008), Eigen::Vector3d(-0.004, 0.003, 0.008)}},
+      {{Eigen::Vector3d(-3e-4, -3e-4, 3e-4), Eigen::Vector3d(-0.003, -0.002, 0.008), Eigen::Vector3d(-0.001, -0.004, 0.008)}},
+  }};
+  const DistanceType expected[3] = {DistanceType::point_triangle, DistanceType::point_edge, DistanceType::point_point};
+  for (int c = 0; c < 3; ++c) {
+    const TwoTriangles t = two_triangles(configs[c]);
+    const collision::PairPoints p = pair_points(t.x, {{0, 3, 4, 5}});
+    EXPECT_EQ(collision::point_triangle_stencil(p).type, expected[c]);
+    EXPECT_LT(collision::point_triangle_distance_squared(p), dhat * dhat);
+    check_self_contact(t);
+  }
+}
+
+TEST(EnergyDerivatives, SelfContactEdgeEdgeCrossingAndNearlyParallel) {
+  const double dhat = self_params().dhat;
+  // A's edge (0, 1) crosses above B's edge (3, 4) along x: at a right angle, then nearly
+  // parallel (sin^2 of the angle 1e-4 of the rest-length product: the mollifier is at 0.1).
+  const std::array<std::array<Eigen::Vector3d, 3>, 2> configs = {{
+      {{Eigen::Vector3d(0.005, -0.003, 5e-4), Eigen::Vector3d(0.005, 0.003, 6e-4), Eigen::Vector3d(0.005, 0, 0.008)}},
+      {{Eigen::Vector3d(0.002, -5e-5, 4e-4), Eigen::Vector3d(0.008, 5e-5, 4e-4), Eigen::Vector3d(0.005, -0.004, 0.006)}},
+  }};
+  for (int c = 0; c < 2; ++c) {
+    const TwoTriangles t = two_triangles(configs[c]);
+    const collision::PairPoints p = pair_points(t.x, {{0, 1, 3, 4}});
+    EXPECT_EQ(collision::edge_edge_stencil(p).type, collision::DistanceType::edge_edge) << "config " << c;
+    EXPECT_LT(collision::edge_edge_distance_squared(p), dhat * dhat);
+    const double m = collision::edge_edge_mollifier(p, collision::edge_edge_mollifier_threshold(0.01, 0.01), nullptr, nullptr);
+    if (c == 0) {
+      EXPECT_EQ(m, 1.0);
+    } else {
+      EXPECT_GT(m, 0.05);
+      EXPECT_LT(m, 0.5);
+    }
+    check_self_contact(t);
+  }
+}
+
+TEST(EnergyDerivatives, SelfContactFrictionAndCcd) {
+  const TwoTriangles t = two_triangles({{Eigen::Vector3d(0.002, 0.002, 5e-4), Eigen::Vector3d(0.004, 0.003, 0.008),
+                                         Eigen::Vector3d(0.001, 0.004, 0.009)}});
+  SelfContactEnergy e(t.X, t.F, self_params());
+  e.set_hessian_projection(false);
+  const Eigen::VectorXd v = Eigen::VectorXd::Zero(18);
+  StepContext ctx;
+  ctx.h = 1e-3;
+  ctx.x_t0 = &t.x;
+  ctx.v_t0 = &v;
+  e.begin_step(ctx, t.x);
+  EXPECT_EQ(e.active_friction(), 1) << "vertex 0 over B's face";
+  // A slides over B: vertex 0 by 0.3 mm (below eps = 1 mm: static-like), the rest by 2 mm.
+  Eigen::VectorXd x = t.x;
+  x.segment<3>(0) += Eigen::Vector3d(3e-4, 1e-4, 0);
+  x.segment<3>(3) += Eigen::Vector3d(2e-3, 0, 0);
+  check_derivatives(e, 6, x, 1e-6, 1e-5, true, 1e-9);
+  // Friction resists the slide: the gradient on vertex 0 points along the slip.
+  Eigen::VectorXd g = Eigen::VectorXd::Zero(18);
+  e.add_derivatives(x, g, nullptr);
+  EXPECT_GT(g[0], 0.0);
+  // CCD: moving A down by 2 mm would put vertex 0 through B at a quarter of the step.
+  Eigen::VectorXd dx = Eigen::VectorXd::Zero(18);
+  for (int k = 0; k < 3; ++k) dx[3 * k + 2] = -2e-3;
+  const double alpha = e.max_step(t.x, dx);
+  EXPECT_GT(alpha, 0.2);
+  EXPECT_LE(alpha, 0.25 * 0.9 + 1e-12) << "at most 90% of the 0.5 mm gap is closed";
+  EXPECT_LT(e.value(t.x + alpha * dx), INF);
 }

@@ -57,6 +57,21 @@ TEST(Scene, ErrorsNameTheFileAndTheKey) {
             std::string::npos);
   EXPECT_NE(error_of({{"time_step", 2.0}}).find("'time_step'"), std::string::npos);
   EXPECT_THROW(load_scene("/nonexistent/scene.json"), SceneError);
+  EXPECT_NE(error_of({{"self_contact", {{"friction", -0.1}}}}).find("'self_contact.friction'"), std::string::npos);
+  EXPECT_EQ(error_of({{"self_contact", {{"thicknes", 1e-3}}}}), "s.json: key 'self_contact.thicknes': unknown key");
+  EXPECT_NE(error_of({{"self_contact", {{"enabled", 1}}}}).find("'self_contact.enabled': expected true or false"),
+            std::string::npos);
+}
+
+TEST(Scene, SelfContactDefaultsAndKeys) {
+  const Scene d = scene_from_json(json::object(), "s.json");
+  EXPECT_TRUE(d.self_contact.enabled);
+  EXPECT_EQ(d.self_contact.friction, 0.6);
+  EXPECT_EQ(d.self_contact.dhat, 0.0) << "0 = the obstacle contact thickness";
+  const Scene s = scene_from_json({{"self_contact", {{"enabled", false}, {"thickness", 2e-4}, {"friction", 0.4}}}}, "s.json");
+  EXPECT_FALSE(s.self_contact.enabled);
+  EXPECT_EQ(s.self_contact.dhat, 2e-4);
+  EXPECT_EQ(s.self_contact.friction, 0.4);
 }
 
 TEST(Scene, JsonRoundTripIsExact) {
@@ -66,6 +81,8 @@ TEST(Scene, JsonRoundTripIsExact) {
   c.radius = 0.02;
   c.keyframes = {{0.0, Eigen::Vector3d(0, 0, 0.1), Eigen::Quaterniond::Identity()}};
   s.obstacles.push_back(c);
+  s.self_contact.dhat = 2.5e-4;
+  s.self_contact.friction = 0.45;
   const json once = scene_to_json(s);
   const json twice = scene_to_json(scene_from_json(once, "round trip"));
   EXPECT_EQ(once, twice);
@@ -103,6 +120,9 @@ TEST(Run, WritesOutputsAndLeavesNothingOnFailure) {
   EXPECT_FALSE(fs::exists(dir / ".papersim-partial"));
   EXPECT_LE(r.meta["quality"]["max_principal_stretch"].get<double>(), 1.005);
   EXPECT_GT(r.meta["quality"]["min_obstacle_distance"][0].get<double>(), 0.0);
+  EXPECT_EQ(r.meta["quality"]["self_intersections"].get<int>(), 0);
+  EXPECT_EQ(r.meta["run"]["self_contact"]["max_active_pairs"].get<int>(), 0) << "a flat sheet is far from itself";
+  EXPECT_GE(r.meta["run"]["self_contact"]["seconds"].get<double>(), 0.0);
   fs::remove_all(dir);
   // A step that cannot converge (one Newton iteration, no halving) fails: no folder is left.
   Scene failing = small_scene();

@@ -1,0 +1,316 @@
+#include "simulation/energies/self_contact_energy.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+
+#include "collision/barrier.hpp"
+
+namespace papersim::simulation {
+
+using collision::DistanceStencil;
+using collision::Matrix12d;
+using collision::PairPoints;
+using collision::Vector12d;
+
+namespace {
+
+/// Adds the wall time of a scope to a counter.
+class ScopedTimer {
+ public:
+  explicit ScopedTimer(double& total) : m_total(total), m_t0(std::chrono::steady_clock::now()) {}
+  ~ScopedTimer() {
+    m_total += std::chrono::duration<double>(std::chrono::steady_clock::now() - m_t0).count();
+  }
+  ScopedTimer(const ScopedTimer&) = delete;
+  ScopedTimer& operator=(const ScopedTimer&) = delete;
+
+ private:
+  double& m_total;
+  std::chrono::steady_clock::time_point m_t0;
+};
+
+Matrix12d project_psd(const Matrix12d& H) {
+  Eigen::SelfAdjointEigenSolver<Matrix12d> es(H);
+  return es.eigenvectors() * es.eigenvalues().cwiseMax(0.0).asDiagonal() *
+         es.eigenvectors().transpose();
+}
+
+double max_vertex_distance(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
+  double m = 0;
+  for (Eigen::Index v = 0; v < a.size() / 3; ++v)
+    m = std::max(m, (a.segment<3>(3 * v) - b.segment<3>(3 * v)).squaredNorm());
+  return std::sqrt(m);
+}
+
+}  // namespace
+
+SelfContactEnergy::SelfContactEnergy(const Eigen::MatrixX2d& X, const Eigen::MatrixX3i& F,
+                                     const SelfContactParams& params)
+    : m_mesh(collision::SelfContactMesh::from_faces(F, static_cast<int>(X.rows()))), m_params(params) {
+  if (!(params.dhat > 0)) throw std::invalid_argument("self contact: thickness must be positive");
+  if (!(params.stiffness > 0)) throw std::invalid_argument("self contact: stiffness must be positive");
+  const Eigen::Index nv = X.rows(), ne = m_mesh.edges.rows();
+  m_vertex_area = Eigen::VectorXd::Zero(nv);
+  m_edge_area = Eigen::VectorXd::Zero(ne);
+  m_edge_rest.resize(ne);
+  for (Eigen::Index e = 0; e < ne; ++e)
+    m_edge_rest[e] = (X.row(m_mesh.edges(e, 1)) - X.row(m_mesh.edges(e, 0))).norm();
+  for (Eigen::Index f = 0; f < F.rows(); ++f) {
+    const Eigen::Vector2d e1 = X.row(F(f, 1)) - X.row(F(f, 0)), e2 = X.row(F(f, 2)) - X.row(F(f, 0));
+    const double a = 0.5 * std::abs(e1.x() * e2.y() - e1.y() * e2.x());
+    for (int k = 0; k < 3; ++k) {
+      m_vertex_area[F(f, k)] += a / 3;
+      const int i = std::min(F(f, k), F(f, (k + 1) % 3)), j = std::max(F(f, k), F(f, (k + 1) % 3));
+      // Edges are sorted (i, j): find this one.
+      Eigen::Index lo = 0, hi = ne;
+      while (lo < hi) {
+        const Eigen::Index mid = (lo + hi) / 2;
+        if (m_mesh.edges(mid, 0) < i || (m_mesh.edges(mid, 0) == i && m_mesh.edges(mid, 1) < j)) lo = mid + 1;
+        else hi = mid;
+      }
+      m_edge_area[lo] += a / 3;
+    }
+  }
+}
+
+std::array<int, 4> SelfContactEnergy::vertices(const Pair& p) const {
+  if (p.edge_edge)
+    return {{m_mesh.edges(p.a, 0), m_mesh.edges(p.a, 1), m_mesh.edges(p.b, 0), m_mesh.edges(p.b, 1)}};
+  return {{p.a, m_mesh.faces(p.b, 0), m_mesh.faces(p.b, 1), m_mesh.faces(p.b, 2)}};
+}
+
+PairPoints SelfContactEnergy::points(const Pair& p, const Eigen::VectorXd& x) const {
+  const std::array<int, 4> v = vertices(p);
+  PairPoints pts;
+  for (int k = 0; k < 4; ++k) pts[k] = x.segment<3>(3 * v[k]);
+  return pts;
+}
+
+double SelfContactEnergy::weight(const Pair& p) const {
+  return p.edge_edge ? 0.25 * (m_edge_area[p.a] + m_edge_area[p.b]) : 0.5 * m_vertex_area[p.a];
+}
+
+double SelfContactEnergy::mollifier_eps(const Pair& p) const {
+  return collision::edge_edge_mollifier_threshold(m_edge_rest[p.a], m_edge_rest[p.b]);
+}
+
+std::uint64_t SelfContactEnergy::key(const Pair& p) {
+  return (std::uint64_t(p.edge_edge) << 62) | (std::uint64_t(p.a) << 31) | std::uint64_t(p.b);
+}
+
+void SelfContactEnergy::build_candidates(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const {
+  m_segment_x = x;
+  m_segment_dx = dx;
+  const Eigen::VectorXd x1 = x + dx;
+  const collision::SelfContactCandidates c =
+      collision::find_self_contact_candidates(m_mesh, x, x1, 1.5 * m_params.dhat);
+  m_candidates.clear();
+  m_candidates.reserve(c.size());
+  for (const auto& [v, f] : c.point_triangle) m_candidates.push_back({false, v, f});
+  for (const auto& [a, b] : c.edge_edge) m_candidates.push_back({true, a, b});
+}
+
+void SelfContactEnergy::ensure_candidates(const Eigen::VectorXd& x) const {
+  // x is within delta of the segment point x_s + a dx_s (a the least-squares fraction, clamped
+  // to [0, 1]) when every vertex is. Pairs left out were farther than 1.5 dhat apart all along
+  // the segment; moving each vertex by at most dhat / 4 brings them no closer than dhat.
+  if (m_segment_x.size() == x.size()) {
+    const double dd = m_segment_dx.squaredNorm();
+    const double a = dd > 0 ? std::clamp((x - m_segment_x).dot(m_segment_dx) / dd, 0.0, 1.0) : 0.0;
+    if (max_vertex_distance(x, m_segment_x + a * m_segment_dx) <= 0.25 * m_params.dhat) return;
+  }
+  build_candidates(x, Eigen::VectorXd::Zero(x.size()));
+}
+
+double SelfContactEnergy::stencil_distance2(const Pair& p, const PairPoints& pts, DistanceStencil& s) const {
+  s = p.edge_edge ? collision::edge_edge_stencil(pts) : collision::point_triangle_stencil(pts);
+  return collision::distance_squared(s, pts);
+}
+
+void SelfContactEnergy::begin_step(const StepContext& ctx, const Eigen::VectorXd& x_t0) {
+  ScopedTimer timer(m_seconds);
+  m_eps = m_params.eps_velocity * ctx.h;
+  ensure_candidates(x_t0);
+  m_friction.clear();
+  m_friction_keys.clear();
+  if (m_params.friction <= 0) return;
+  const double dhat = m_params.dhat, kappa = m_params.stiffness / dhat;
+  for (const Pair& p : m_candidates) {
+    const PairPoints pts = points(p, x_t0);
+    DistanceStencil s;
+    const double d2 = stencil_distance2(p, pts, s);
+    if (d2 >= dhat * dhat || d2 <= 0) continue;
+    const double d = std::sqrt(d2);
+    const double m = p.edge_edge ? collision::edge_edge_mollifier(pts, mollifier_eps(p), nullptr, nullptr) : 1.0;
+    const double lambda = -kappa * weight(p) * m * collision::barrier_first_derivative(d, dhat);
+    if (!(lambda > 0)) continue;
+    FrictionPair fp;
+    fp.vertices = vertices(p);
+    fp.weights = collision::closest_point_weights(s, pts);
+    fp.r_t0 = Eigen::Vector3d::Zero();
+    for (int k = 0; k < 4; ++k) fp.r_t0 += fp.weights[k] * pts[k];
+    const Eigen::Vector3d n = fp.r_t0.normalized();
+    const Eigen::Vector3d a = std::abs(n.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+    fp.T.col(0) = n.cross(a).normalized();
+    fp.T.col(1) = n.cross(fp.T.col(0));
+    fp.mu_lambda = m_params.friction * lambda;
+    m_friction.push_back(fp);
+    m_friction_keys.push_back(key(p));
+  }
+  std::sort(m_friction_keys.begin(), m_friction_keys.end());
+}
+
+bool SelfContactEnergy::update_pattern(const Eigen::VectorXd& x) {
+  ScopedTimer timer(m_seconds);
+  ensure_candidates(x);
+  const double dhat2 = m_params.dhat * m_params.dhat, near2 = 4 * dhat2;
+  bool missing = !std::includes(m_pattern.begin(), m_pattern.end(), m_friction_keys.begin(), m_friction_keys.end());
+  std::vector<Pair> near;
+  for (const Pair& p : m_candidates) {
+    DistanceStencil s;
+    const double d2 = stencil_distance2(p, points(p, x), s);
+    if (d2 >= near2) continue;
+    near.push_back(p);
+    if (!missing && d2 < dhat2) missing = !std::binary_search(m_pattern.begin(), m_pattern.end(), key(p));
+  }
+  // Pairs far apart in the mesh add fill to the factorisation (measured on the strip scene:
+  // 1.7x the factor's nonzeros), so a pattern holding far more pairs than are near (a contact
+  // ended) is rebuilt too.
+  const size_t needed = near.size() + m_friction_keys.size();
+  // Even a few long-range pairs close a long strip into a loop and double the fill: once no
+  // pair is near, the dynamic pattern is emptied.
+  const bool excess = needed == 0 ? !m_pattern.empty() : m_pattern.size() > 4 * needed + 64;
+  if (!missing && !excess) return false;
+  // Rebuild with the pairs within 2 dhat and the friction pairs: the pattern then holds until
+  // a pair closes from 2 dhat to dhat.
+  m_pattern_pairs = near;
+  m_pattern.clear();
+  for (const Pair& p : near) m_pattern.push_back(key(p));
+  m_pattern.insert(m_pattern.end(), m_friction_keys.begin(), m_friction_keys.end());
+  std::sort(m_pattern.begin(), m_pattern.end());
+  m_pattern.erase(std::unique(m_pattern.begin(), m_pattern.end()), m_pattern.end());
+  ++m_pattern_changes;
+  return true;
+}
+
+void SelfContactEnergy::add_dynamic_pattern(SparsityBuilder& pattern) const {
+  for (const Pair& p : m_pattern_pairs) {
+    const std::array<int, 4> v = vertices(p);
+    pattern.add_clique(v.data(), 4);
+  }
+  for (const FrictionPair& fp : m_friction) pattern.add_clique(fp.vertices.data(), 4);
+}
+
+double SelfContactEnergy::value(const Eigen::VectorXd& x) const {
+  ScopedTimer timer(m_seconds);
+  ensure_candidates(x);
+  const double dhat = m_params.dhat, kappa = m_params.stiffness / dhat;
+  double e = 0;
+  for (const Pair& p : m_candidates) {
+    const PairPoints pts = points(p, x);
+    DistanceStencil s;
+    const double d2 = stencil_distance2(p, pts, s);
+    if (d2 >= dhat * dhat) continue;
+    if (!(d2 > 0)) return INF;
+    const double m = p.edge_edge ? collision::edge_edge_mollifier(pts, mollifier_eps(p), nullptr, nullptr) : 1.0;
+    e += kappa * weight(p) * m * collision::barrier(std::sqrt(d2), dhat);
+  }
+  for (const FrictionPair& fp : m_friction) {
+    Eigen::Vector3d r = -fp.r_t0;
+    for (int k = 0; k < 4; ++k) r += fp.weights[k] * x.segment<3>(3 * fp.vertices[k]);
+    e += fp.mu_lambda * collision::friction_f0((fp.T.transpose() * r).norm(), m_eps);
+  }
+  return e;
+}
+
+void SelfContactEnergy::add_pair(const Pair& p, const PairPoints& pts, const DistanceStencil& s,
+                                 Eigen::VectorXd& g, BlockSymmetricMatrix* H) const {
+  const double dhat = m_params.dhat, scale = m_params.stiffness / dhat * weight(p);
+  Vector12d g2;
+  Matrix12d H2;
+  const double d2 = collision::distance_squared_derivatives(s, pts, g2, H ? &H2 : nullptr);
+  // b(d) with d = sqrt(d^2): grad d = grad d^2 / (2 d), Hess d = (Hess d^2 - 2 grad d grad d^T) / (2 d).
+  const double d = std::sqrt(d2);
+  const Vector12d gd = g2 / (2 * d);
+  const double b = collision::barrier(d, dhat), b1 = collision::barrier_first_derivative(d, dhat);
+  Vector12d grad = b1 * gd;
+  Matrix12d hess;
+  if (H) hess = collision::barrier_second_derivative(d, dhat) * gd * gd.transpose() +
+                b1 * (H2 - 2 * gd * gd.transpose()) / (2 * d);
+  if (p.edge_edge) {
+    // Mollified: E = m b, grad = m grad b + b grad m, Hess = m Hb + grad b grad m^T + grad m grad b^T + b Hm.
+    Vector12d gm;
+    Matrix12d Hm;
+    const double m = collision::edge_edge_mollifier(pts, mollifier_eps(p), &gm, H ? &Hm : nullptr);
+    if (H) hess = m * hess + grad * gm.transpose() + gm * grad.transpose() + b * Hm;
+    grad = m * grad + b * gm;
+  }
+  const std::array<int, 4> v = vertices(p);
+  for (int k = 0; k < 4; ++k) g.segment<3>(3 * v[k]) += scale * grad.segment<3>(3 * k);
+  if (H) {
+    hess *= scale;
+    H->add_element<4>(v, m_project ? project_psd(hess) : hess);
+  }
+}
+
+void SelfContactEnergy::add_friction(const Eigen::VectorXd& x, Eigen::VectorXd& g, BlockSymmetricMatrix* H) const {
+  for (const FrictionPair& fp : m_friction) {
+    Eigen::Vector3d r = -fp.r_t0;
+    for (int k = 0; k < 4; ++k) r += fp.weights[k] * x.segment<3>(3 * fp.vertices[k]);
+    const Eigen::Vector2d u = fp.T.transpose() * r;
+    const Eigen::Vector3d f = fp.mu_lambda * (fp.T * collision::friction_gradient(u, m_eps));
+    for (int k = 0; k < 4; ++k) g.segment<3>(3 * fp.vertices[k]) += fp.weights[k] * f;
+    if (!H) continue;
+    // d r / d x_k = w_k I: Hess = (w w^T) kron (T Hf T^T), PSD as Hf is (barrier.hpp).
+    const Eigen::Matrix3d M = fp.mu_lambda * fp.T * collision::friction_hessian(u, m_eps) * fp.T.transpose();
+    Matrix12d local;
+    for (int a = 0; a < 4; ++a)
+      for (int b = 0; b < 4; ++b) local.block<3, 3>(3 * a, 3 * b) = fp.weights[a] * fp.weights[b] * M;
+    H->add_element<4>(fp.vertices, local);
+  }
+}
+
+void SelfContactEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd& g,
+                                        BlockSymmetricMatrix* H) const {
+  ScopedTimer timer(m_seconds);
+  ensure_candidates(x);
+  const double dhat2 = m_params.dhat * m_params.dhat;
+  int active = 0;
+  for (const Pair& p : m_candidates) {
+    const PairPoints pts = points(p, x);
+    DistanceStencil s;
+    const double d2 = stencil_distance2(p, pts, s);
+    if (d2 >= dhat2 || !(d2 > 0)) continue;
+    ++active;
+    add_pair(p, pts, s, g, H);
+  }
+  add_friction(x, g, H);
+  m_active = active;
+  m_max_active = std::max(m_max_active, active);
+}
+
+double SelfContactEnergy::max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const {
+  ScopedTimer timer(m_seconds);
+  // One broad phase over the swept boxes serves the CCD here (a superset of the pairs whose
+  // swept boxes meet) and every energy evaluation of the line search after it.
+  build_candidates(x, dx);
+  double alpha = 1.0;
+  for (const Pair& p : m_candidates) {
+    const std::array<int, 4> v = vertices(p);
+    PairPoints d;
+    for (int k = 0; k < 4; ++k) d[k] = dx.segment<3>(3 * v[k]);
+    alpha = p.edge_edge
+                ? collision::edge_edge_ccd(points(p, x), d, alpha, m_params.ccd_min_separation)
+                : collision::point_triangle_ccd(points(p, x), d, alpha, m_params.ccd_min_separation);
+  }
+  return alpha;
+}
+
+double SelfContactEnergy::min_distance(const Eigen::VectorXd& x, double radius) const {
+  return collision::min_self_distance(m_mesh, x, radius);
+}
+
+}  // namespace papersim::simulation

@@ -1,0 +1,143 @@
+#pragma once
+/// Self-contact of the sheet: an IPC barrier between every vertex and the triangles not holding
+/// it and between every two edges sharing no vertex, lagged IPC friction between the layers,
+/// and continuous collision detection so that no step of the line search lets the sheet pass
+/// through itself (Li et al. 2020, "Incremental Potential Contact"; Li et al. 2021,
+/// "Codimensional IPC" for the CCD).
+///
+/// Energy: E = sum_pairs kappa w_k m_k b(d_k, dhat) with d the exact distance of the pair, b the
+/// IPC log barrier (collision/barrier.hpp), m the edge-edge mollifier (1 for vertex-triangle
+/// pairs) and kappa = stiffness / dhat as for obstacles, so that `stiffness` is a pressure [Pa].
+/// Pair weights are areas, so the energy scales with the mesh: a vertex-triangle pair weighs half
+/// the vertex's area, an edge-edge pair a quarter of the sum of its edges' areas (a third of the
+/// adjacent faces each) - half, because both layers see the same contact. As in IPC, a contact
+/// near a vertex or an edge is seen by several pairs (no deduplication: that would make the
+/// energy discontinuous), so two layers rest at a somewhat larger gap than a sheet on an
+/// obstacle of the same stiffness.
+///
+/// Friction (IPC Sec. 5, lagged per step): at the step start, every pair within dhat gets its
+/// normal force lambda, closest-point weights w and tangent basis T (orthonormal, normal to the
+/// contact direction); the relative tangential slip u = T^T sum_i w_i (x_i - x_i,t0) pays
+/// mu lambda f0(|u|).
+///
+/// Active set and Hessian pattern: candidate pairs come from a broad phase over the boxes swept
+/// along the last Newton direction (max_step), so that every configuration the line search
+/// tries is covered by one broad phase; configurations off that segment get their own. The Hessian pattern holds the pairs within 2 dhat (and the friction pairs) when it was
+/// last rebuilt; update_pattern() asks for a rebuild only when a pair within dhat (or a friction
+/// pair) is not in it, or when it holds far more pairs than are near (a contact ended), so that
+/// the symbolic factorisation is redone rarely.
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "collision/self_contact.hpp"
+#include "simulation/energies/energy_term.hpp"
+
+namespace papersim::simulation {
+
+struct SelfContactParams {
+  bool enabled = true;
+  /// Barrier activation distance between two parts of the sheet [m]; 0 = the obstacle contact
+  /// thickness (ContactParams::dhat).
+  double dhat = 0.0;
+  /// Barrier pressure scale [Pa]; 0 = the obstacle contact stiffness (automatic: rho_A |g|).
+  double stiffness = 0.0;
+  double friction = 0.6;        ///< Coulomb coefficient sheet-sheet [-] (SCENARIOS.md)
+  double eps_velocity = 1e-3;   ///< slip speed below which friction is static-like [m/s]
+  /// The line search never closes more than this fraction of a pair's gap in one step.
+  double ccd_min_separation = 0.1;
+};
+
+class SelfContactEnergy : public EnergyTerm {
+ public:
+  /// @param material_coords #V by 2 flat sheet coordinates [m] (rest edge lengths)
+  /// @param faces           #F by 3
+  /// @param params          dhat > 0 and stiffness > 0 (resolved by the caller)
+  /// @throw std::invalid_argument when dhat or stiffness is not positive or a face index is
+  ///        out of range.
+  SelfContactEnergy(const Eigen::MatrixX2d& material_coords, const Eigen::MatrixX3i& faces,
+                    const SelfContactParams& params);
+
+  std::string name() const override { return "self_contact"; }
+  void add_pattern(SparsityBuilder&) const override {}
+  bool update_pattern(const Eigen::VectorXd& x) override;
+  void add_dynamic_pattern(SparsityBuilder& pattern) const override;
+  void begin_step(const StepContext& ctx, const Eigen::VectorXd& x_t0) override;
+  double value(const Eigen::VectorXd& x) const override;
+  void add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd& gradient,
+                       BlockSymmetricMatrix* hessian) const override;
+  void set_hessian_projection(bool project) override { m_project = project; }
+  double max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const override;
+
+  /// Smallest distance between two parts of the sheet that are closer than `radius` [m]
+  /// (vertex-triangle and edge-edge pairs), +inf when none is.
+  double min_distance(const Eigen::VectorXd& x, double radius) const;
+  /// Pairs within dhat at the last derivative evaluation, and the most over the run.
+  int active_pairs() const { return m_active; }
+  int max_active_pairs() const { return m_max_active; }
+  /// Pairs with friction in the current step.
+  int active_friction() const { return static_cast<int>(m_friction.size()); }
+  /// Wall time spent in this term (broad phase, barrier, friction, CCD) [s].
+  double seconds() const { return m_seconds; }
+  /// How often update_pattern() reported a change.
+  int pattern_changes() const { return m_pattern_changes; }
+  const SelfContactParams& params() const { return m_params; }
+
+ private:
+  /// A pair: a vertex-triangle (a = vertex, b = face) or an edge-edge (a, b edges) pair.
+  struct Pair {
+    bool edge_edge;
+    int a, b;
+  };
+  struct FrictionPair {
+    std::array<int, 4> vertices;
+    Eigen::Vector4d weights;        // closest-point weights
+    Eigen::Matrix<double, 3, 2> T;  // tangent basis
+    Eigen::Vector3d r_t0;           // sum_i w_i x_i,t0
+    double mu_lambda;               // mu x normal force [N]
+  };
+  /// What the barrier of one pair is at x.
+  struct PairEval {
+    double d2 = 0;
+    collision::DistanceStencil stencil;
+  };
+
+  std::array<int, 4> vertices(const Pair& p) const;
+  collision::PairPoints points(const Pair& p, const Eigen::VectorXd& x) const;
+  double weight(const Pair& p) const;
+  double mollifier_eps(const Pair& p) const;
+  static std::uint64_t key(const Pair& p);
+  /// Candidate pairs for every configuration on the segment x -> x + dx.
+  void build_candidates(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const;
+  /// The candidate pairs valid at x (rebuilt, for x alone, when x is off the segment).
+  void ensure_candidates(const Eigen::VectorXd& x) const;
+  double stencil_distance2(const Pair& p, const collision::PairPoints& pts,
+                           collision::DistanceStencil& s) const;
+  /// Adds one pair's barrier derivatives (gradient, Hessian) at distance stencil s.
+  void add_pair(const Pair& p, const collision::PairPoints& pts, const collision::DistanceStencil& s,
+                Eigen::VectorXd& g, BlockSymmetricMatrix* H) const;
+  void add_friction(const Eigen::VectorXd& x, Eigen::VectorXd& g, BlockSymmetricMatrix* H) const;
+
+  collision::SelfContactMesh m_mesh;
+  SelfContactParams m_params;
+  Eigen::VectorXd m_vertex_area, m_edge_area, m_edge_rest;
+  bool m_project = true;
+  double m_eps = 1e-6;  // friction smoothing: eps_velocity h [m]
+
+  // Candidates: every pair that comes within 1.5 dhat anywhere on the segment
+  // m_segment_x -> m_segment_x + m_segment_dx (swept boxes), so they hold every pair within
+  // dhat at any x less than dhat / 4 from the segment (see ensure_candidates).
+  mutable std::vector<Pair> m_candidates;
+  mutable Eigen::VectorXd m_segment_x, m_segment_dx;
+
+  std::vector<std::uint64_t> m_pattern;  // sorted pair keys in the Hessian pattern
+  std::vector<Pair> m_pattern_pairs;
+  std::vector<FrictionPair> m_friction;
+  std::vector<std::uint64_t> m_friction_keys;
+
+  mutable double m_seconds = 0;
+  mutable int m_active = 0, m_max_active = 0;
+  int m_pattern_changes = 0;
+};
+
+}  // namespace papersim::simulation
