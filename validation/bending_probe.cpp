@@ -1,0 +1,254 @@
+// Bending probe (diagnostic, see docs/elastica_30deg_diagnosis.md): for the elastica strips of
+// known_answers (L = 10 cm, grid and 30 degree lattice, clamp line at x = 2h, Poisson 0)
+//   - linear sag: the small-G tip drop of the clamped strip from the bending stiffness at the flat
+//     state (central differences of the gradient in the out-of-plane displacements), divided by
+//     the beam's G / 8, and the first mode frequencies over the cantilever's first one (a beam
+//     gives 1, 6.27, 17.5); instant, and it reproduces the simulated G = 1 error;
+//   - the discrete bending energy of prescribed isometric shapes (constant, linear, quadratic
+//     curvature along x; constant curvature after the clamp line; the shooting elastica at
+//     G = 1, 8, 20) over the continuum D/2 int K^2 dA, split into the curvature-fit part and the
+//     fit-residual part.
+// Usage: papersim_bending_probe [edge [m], default 2.5e-3] [width [m], default 0.01]
+// Environment: PROBE_ANGLE (lattice angle [deg], 30), PROBE_BINS (energy and K_xx by x bins),
+// PROBE_SAG_ONLY, PROBE_MODE_SHAPE (print the first mode's displacements).
+#include <Eigen/LU>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "remesh/sheet_generator.hpp"
+#include "simulation/energies/bending_energy.hpp"
+#include "simulation/energies/vertex_energies.hpp"
+#include <Eigen/Eigenvalues>
+
+namespace ps = papersim::simulation;
+namespace rm = papersim::remesh;
+
+namespace {
+
+constexpr double L = 0.1, W = 0.01;
+
+rm::SheetMesh strip(bool rotated, double h, double width) {
+  const double c = 2 * h;
+  if (!rotated) {
+    rm::RectangleOptions o;
+    o.width = L + c;
+    o.height = width;
+    o.nx = static_cast<int>(std::lround(o.width / h)) + 1;
+    o.ny = static_cast<int>(std::lround(width / h)) + 1;
+    o.triangulation = rm::Triangulation::alternating;
+    return rm::make_rectangle(o);
+  }
+  rm::LatticeOptions o;
+  o.width = L + c;
+  o.height = width;
+  o.edge_length = h;
+  o.angle = std::atof(std::getenv("PROBE_ANGLE") ? std::getenv("PROBE_ANGLE") : "30") * M_PI / 180;
+  o.lines_x = {c};
+  return rm::make_rotated_lattice(o);
+}
+
+/// Planar curve with curvature kappa(s) (s from material x = 0), integrated by RK4 on a fine grid.
+struct Curve {
+  double ds;
+  std::vector<double> x, z, th;
+  Curve(std::function<double(double)> kappa, double length, int n = 20000) : ds(length / n) {
+    x = z = th = std::vector<double>(n + 1, 0.0);
+    for (int i = 0; i < n; ++i) {
+      const double s = i * ds;
+      // theta' = kappa, x' = cos, z' = sin; RK4 on (th, x, z).
+      auto f = [&](double ss, double t) { return std::array<double, 3>{kappa(ss), std::cos(t), std::sin(t)}; };
+      auto k1 = f(s, th[i]);
+      auto k2 = f(s + ds / 2, th[i] + ds / 2 * k1[0]);
+      auto k3 = f(s + ds / 2, th[i] + ds / 2 * k2[0]);
+      auto k4 = f(s + ds, th[i] + ds * k3[0]);
+      th[i + 1] = th[i] + ds / 6 * (k1[0] + 2 * k2[0] + 2 * k3[0] + k4[0]);
+      x[i + 1] = x[i] + ds / 6 * (k1[1] + 2 * k2[1] + 2 * k3[1] + k4[1]);
+      z[i + 1] = z[i] + ds / 6 * (k1[2] + 2 * k2[2] + 2 * k3[2] + k4[2]);
+    }
+  }
+  Eigen::Vector2d at(double s) const {
+    const double u = s / ds;
+    const int i = std::min(static_cast<int>(u), static_cast<int>(x.size()) - 2);
+    const double t = u - i;
+    // cubic Hermite with derivatives (cos th, sin th)
+    const double h00 = 2 * t * t * t - 3 * t * t + 1, h10 = t * t * t - 2 * t * t + t,
+                 h01 = -2 * t * t * t + 3 * t * t, h11 = t * t * t - t * t;
+    return {h00 * x[i] + h10 * ds * std::cos(th[i]) + h01 * x[i + 1] + h11 * ds * std::cos(th[i + 1]),
+            h00 * z[i] + h10 * ds * std::sin(th[i]) + h01 * z[i + 1] + h11 * ds * std::sin(th[i + 1])};
+  }
+};
+
+/// Heavy elastica curvature kappa(s) L for theta'' = -G (1 - s) cos theta, theta(0)=0, theta'(1)=0.
+std::vector<double> elastica_kappa(double G, int n, double* tip_drop) {
+  auto shoot = [&](double k0, std::vector<double>* out) {
+    double t = 0, k = k0, ds = 1.0 / n, z = 0;
+    if (out) out->assign(n + 1, 0), (*out)[0] = k;
+    for (int i = 0; i < n; ++i) {
+      const double s = i * ds;
+      auto f = [&](double ss, double tt, double kk) { return std::array<double, 3>{kk, -G * (1 - ss) * std::cos(tt), std::sin(tt)}; };
+      auto a = f(s, t, k);
+      auto b = f(s + ds / 2, t + ds / 2 * a[0], k + ds / 2 * a[1]);
+      auto c = f(s + ds / 2, t + ds / 2 * b[0], k + ds / 2 * b[1]);
+      auto d = f(s + ds, t + ds * c[0], k + ds * c[1]);
+      t += ds / 6 * (a[0] + 2 * b[0] + 2 * c[0] + d[0]);
+      k += ds / 6 * (a[1] + 2 * b[1] + 2 * c[1] + d[1]);
+      z += ds / 6 * (a[2] + 2 * b[2] + 2 * c[2] + d[2]);
+      if (out) (*out)[i + 1] = k;
+    }
+    if (tip_drop) *tip_drop = z;
+    return k;
+  };
+  double lo = 0, hi = 2 * G + 1;
+  for (int it = 0; it < 200; ++it) {
+    const double mid = (lo + hi) / 2;
+    (shoot(mid, nullptr) > 0 ? hi : lo) = mid;
+  }
+  std::vector<double> out;
+  shoot((lo + hi) / 2, &out);
+  return out;
+}
+
+void probe(const char* label, const rm::SheetMesh& mesh, double clamp, double width,
+           std::function<double(double)> kappa_of_x) {
+  const Eigen::MatrixX2d X = mesh.material_coords();
+  const Eigen::MatrixX3i F = mesh.faces();
+  const double xmax = X.col(0).maxCoeff();
+  Curve curve(kappa_of_x, xmax * 1.001);
+  Eigen::VectorXd x(3 * X.rows());
+  for (int v = 0; v < X.rows(); ++v) {
+    const Eigen::Vector2d q = curve.at(X(v, 0));
+    x.segment<3>(3 * v) << q.x(), X(v, 1), q.y();
+  }
+  ps::Material m;
+  m.poisson = 0;
+  ps::BendingEnergy bend(mesh, m);
+  const double D = m.bending_stiffness;
+  const double E = bend.value(x);
+  const Eigen::MatrixX3d K = bend.face_curvatures(x);
+  // Continuum energy by quadrature
+  double Ec = 0;
+  const int nq = 200000;
+  for (int i = 0; i < nq; ++i) {
+    const double s = (i + 0.5) * xmax / nq;
+    Ec += 0.5 * D * width * kappa_of_x(s) * kappa_of_x(s) * xmax / nq;
+  }
+  // Fit part, by bins of x.
+  const int nb = 8;
+  std::vector<double> fit(nb, 0), cont(nb, 0), kd(nb, 0), kc(nb, 0), area(nb, 0);
+  double Efit = 0;
+  for (int f = 0; f < F.rows(); ++f) {
+    Eigen::Matrix2d T;
+    T.col(0) = (X.row(F(f, 1)) - X.row(F(f, 0))).transpose();
+    T.col(1) = (X.row(F(f, 2)) - X.row(F(f, 0))).transpose();
+    const double A = 0.5 * std::abs(T.determinant());
+    const double xc = (X(F(f, 0), 0) + X(F(f, 1), 0) + X(F(f, 2), 0)) / 3;
+    const double e = 0.5 * D * A * (K(f, 0) * K(f, 0) + K(f, 1) * K(f, 1) + 2 * K(f, 2) * K(f, 2));
+    Efit += e;
+    const int b = std::min(nb - 1, static_cast<int>(xc / xmax * nb));
+    fit[b] += e;
+    cont[b] += 0.5 * D * A * kappa_of_x(xc) * kappa_of_x(xc);
+    kd[b] += A * std::abs(K(f, 0));
+    kc[b] += A * std::abs(kappa_of_x(xc));
+    area[b] += A;
+  }
+  std::printf("%-34s E/Ec = %.4f  fit/Ec = %.4f  resid/Ec = %.4f\n", label, E / Ec, Efit / Ec, (E - Efit) / Ec);
+  if (std::getenv("PROBE_BINS")) {
+    for (int b = 0; b < nb; ++b)
+      std::printf("    bin %d x=[%.3f,%.3f]  fit/cont(centroid) %.4f   Kxx/kappa %.4f\n", b, b * xmax / nb,
+                  (b + 1) * xmax / nb, fit[b] / cont[b], kd[b] / kc[b]);
+  }
+  (void)clamp;
+}
+
+/// Linear (small-G) sag of the clamped strip: stiffness of the out-of-plane displacement at the
+/// flat state by differences of the gradient, solved for the uniform load; tip drop / (G L / 8).
+void linear_sag(const char* label, const rm::SheetMesh& mesh, double clamp, double width) {
+  const Eigen::MatrixX2d X = mesh.material_coords();
+  const int nv = X.rows();
+  ps::Material m;
+  m.poisson = 0;
+  ps::BendingEnergy bend(mesh, m);
+  Eigen::VectorXd x0(3 * nv);
+  for (int v = 0; v < nv; ++v) x0.segment<3>(3 * v) << X(v, 0), X(v, 1), 0.0;
+  std::vector<int> free;
+  for (int v = 0; v < nv; ++v)
+    if (X(v, 0) > clamp + 1e-12) free.push_back(v);
+  const int n = free.size();
+  Eigen::MatrixXd H(n, n);
+  const double eps = 1e-7;
+  for (int j = 0; j < n; ++j) {
+    Eigen::VectorXd x = x0;
+    x[3 * free[j] + 2] += eps;
+    Eigen::VectorXd g = Eigen::VectorXd::Zero(3 * nv), g2 = g;
+    bend.add_derivatives(x, g, nullptr);
+    x[3 * free[j] + 2] -= 2 * eps;
+    bend.add_derivatives(x, g2, nullptr);
+    for (int i = 0; i < n; ++i) H(i, j) = (g[3 * free[i] + 2] - g2[3 * free[i] + 2]) / (2 * eps);
+  }
+  H = 0.5 * (H + H.transpose()).eval();
+  const Eigen::VectorXd mass = ps::lumped_masses(X, mesh.faces(), m.density);
+  const double G = 1.0, g = G * m.bending_stiffness / (m.density * L * L * L);
+  Eigen::VectorXd f(n), M(n);
+  for (int i = 0; i < n; ++i) f[i] = -mass[free[i]] * g, M[i] = mass[free[i]];
+  const Eigen::VectorXd w = H.ldlt().solve(f);
+  const double tip_x = X.col(0).maxCoeff();
+  double drop = 0;
+  int cnt = 0;
+  for (int i = 0; i < n; ++i)
+    if (X(free[i], 0) > tip_x - 1e-9) drop -= w[i], ++cnt;
+  drop /= cnt * L;
+  // Modes: H v = w^2 M v, relative to the clamped-free beam's first bending mode.
+  Eigen::VectorXd Mi = M.cwiseSqrt().cwiseInverse();
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(Mi.asDiagonal() * H * Mi.asDiagonal());
+  const double w1 = 1.8751 * 1.8751 * std::sqrt(m.bending_stiffness / (m.density * std::pow(L, 4)));
+  std::printf("%-28s linear sag / (G/8) = %.4f   omega_k/omega_beam1:", label, drop / (G / 8));
+  for (int k = 0; k < 6; ++k) std::printf(" %.3f", std::sqrt(std::max(0.0, es.eigenvalues()[k])) / w1);
+  std::printf("\n");
+  if (std::getenv("PROBE_MODE_SHAPE")) {
+    const Eigen::VectorXd v = Mi.asDiagonal() * es.eigenvectors().col(0);
+    for (int i = 0; i < n; ++i)
+      std::printf("  x=%.5f y=%.5f w=%.5f\n", X(free[i], 0), X(free[i], 1), v[i] / v.cwiseAbs().maxCoeff());
+  }
+  (void)width;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const double h = argc > 1 ? std::atof(argv[1]) : 2.5e-3;
+  const double width = argc > 2 ? std::atof(argv[2]) : W;
+  const double c = 2 * h;
+  for (bool rotated : {false, true}) {
+    const rm::SheetMesh mesh = strip(rotated, h, width);
+    linear_sag(rotated ? "rot  linear sag" : "grid linear sag", mesh, c, width);
+    if (std::getenv("PROBE_SAG_ONLY")) continue;
+    const std::string tag = rotated ? "rot " : "grid";
+    const double k0 = 5.0;  // [1/m]
+    probe((tag + " constant").c_str(), mesh, c, width, [&](double) { return k0; });
+    probe((tag + " linear (no clamp)").c_str(), mesh, c, width,
+          [&](double xx) { return k0 * (1 - xx / (L + c)); });
+    probe((tag + " quadratic (no clamp)").c_str(), mesh, c, width,
+          [&](double xx) { const double t = 1 - xx / (L + c); return k0 * t * t; });
+    probe((tag + " constant after clamp").c_str(), mesh, c, width,
+          [&](double xx) { return xx < c ? 0.0 : k0; });
+    for (double G : {1.0, 8.0, 20.0}) {
+      const int n = 4000;
+      double drop = 0;
+      const std::vector<double> kap = elastica_kappa(G, n, &drop);
+      auto kx = [&, c](double xx) {
+        if (xx < c) return 0.0;
+        const double s = std::min(1.0, (xx - c) / L) * n;
+        const int i = std::min(n - 1, static_cast<int>(s));
+        return (kap[i] + (s - i) * (kap[i + 1] - kap[i])) / L;
+      };
+      char buf[64];
+      std::snprintf(buf, sizeof buf, "%s elastica G=%g", tag.c_str(), G);
+      probe(buf, mesh, c, width, kx);
+    }
+  }
+}
