@@ -148,6 +148,7 @@ Scene fall_cylinder(std::uint64_t seed) {
 Scene fall_gable(std::uint64_t seed) {
   Draw d(seed);
   Scene s = fall_base("fall-gable", seed, 0.2, 1e-3);
+  s.contact.faces = true;  // the ridge is sharper than the sheet's edges
   const int n = d.integer(1, 3);
   const double friction = d.uniform(0.2, 0.5);
   double top = 0;
@@ -173,6 +174,7 @@ Scene fall_gable(std::uint64_t seed) {
 Scene fall_sphere(std::uint64_t seed) {
   Draw d(seed);
   Scene s = fall_base("fall-sphere", seed, 0.2, 1e-3);
+  s.contact.faces = true;
   const int n = d.integer(1, 3);
   const double friction = d.uniform(0.2, 0.5);
   double top = 0;
@@ -195,6 +197,7 @@ Scene fall_sphere(std::uint64_t seed) {
 Scene fall_spheres(std::uint64_t seed) {
   Draw d(seed);
   Scene s = fall_base("fall-spheres", seed, 0.1, 5e-4);
+  s.contact.faces = true;  // spheres of 5-10 mm against 10 mm edges
   s.gravity = Eigen::Vector3d(0, 0, -d.uniform(1000, 5000));
   s.sheet.material.yield_curvature = 50.0;
   s.sheet.material.weakening = 0.2;

@@ -288,6 +288,7 @@ Scene scene_from_json(const json& j, const std::string& source) {
     s.contact.dhat = c.number("thickness", s.contact.dhat, 0, 0.1, true);
     s.contact.stiffness = c.number("stiffness", 0.0, 0, 1e12);
     s.contact.eps_velocity = c.number("static_velocity", s.contact.eps_velocity, 0, 10, true);
+    s.contact.faces = c.boolean("faces", s.contact.faces);
     c.finish();
   }
   {
@@ -408,7 +409,8 @@ json scene_to_json(const Scene& s) {
   }
   j["contact"] = {{"thickness", s.contact.dhat},
                   {"stiffness", s.contact.stiffness},
-                  {"static_velocity", s.contact.eps_velocity}};
+                  {"static_velocity", s.contact.eps_velocity},
+                  {"faces", s.contact.faces}};
   j["self_contact"] = {{"enabled", s.self_contact.enabled},
                        {"thickness", s.self_contact.dhat},
                        {"stiffness", s.self_contact.stiffness},

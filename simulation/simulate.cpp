@@ -116,7 +116,7 @@ Built build(const Scene& scene, const remesh::SheetMesh& mesh, const SheetState&
       const Eigen::Vector2d e1 = X.row(F(f, 1)) - X.row(F(f, 0)), e2 = X.row(F(f, 2)) - X.row(F(f, 0));
       face_areas[f] = 0.5 * std::abs(e1.x() * e2.y() - e1.y() * e2.x());
     }
-    c->set_faces(F, face_areas);
+    if (p.faces) c->set_faces(F, face_areas);
     c->set_impact_density(m.density);
     b.contact = c.get();
     terms.push_back(std::move(c));

@@ -115,6 +115,7 @@ std::vector<Case> make_cases(const fs::path& work) {
     const double g = v < 5 ? 100.0 : 1000.0, gap = v * v / (2 * g), r = 0.02;
     ps::Scene s = drop_scene(2 * r + gap, g, std::sqrt(2 * gap / g) + 0.02, 1e-3);
     s.obstacles.push_back(sphere_at(Eigen::Vector3d(0, 0, r), r));
+    s.contact.faces = true;
     char name[64];
     std::snprintf(name, sizeof(name), "sphere impact %g m/s", v);
     cases.push_back({name, "sheet onto a 2 cm sphere, h = 1 ms", s, ""});
@@ -129,6 +130,7 @@ std::vector<Case> make_cases(const fs::path& work) {
     gable.height = height;
     gable.half_width = height * std::tan(15 * M_PI / 180);
     s.obstacles.push_back(gable);
+    s.contact.faces = true;  // the ridge is sharper than the edges
     cases.push_back({"gable ridge 30 deg", "onto a sharp ridge at 4.5 m/s", s, ""});
   }
   {
@@ -140,6 +142,7 @@ std::vector<Case> make_cases(const fs::path& work) {
     k.translation = Eigen::Vector3d(0, 0, 0.025);
     plate.keyframes = {k};
     s.obstacles.push_back(plate);
+    s.contact.faces = true;  // 1 mm against 5 mm edges
     cases.push_back({"plate 1 mm edge-on", "onto the edge of a 1 mm plate at 4.5 m/s", s, ""});
   }
   // 5. Slivers: one row of vertices moved to 1% of a spacing from the next row.

@@ -104,7 +104,7 @@ collision::TriangleSdfResult face_minimum(const collision::Collider& obs, const 
                                           const Eigen::Vector3d& b, const Eigen::Vector3d& c,
                                           const Eigen::Isometry3d& pose, const collision::TriangleSdfParams& params) {
   collision::TriangleSdfResult r = collision::triangle_min_distance(obs, a, b, c, pose, params);
-  if (r.distance < params.cutoff) r = polish_minimum(obs, a, b, c, pose, r);
+  if (r.distance < params.cutoff + params.lipschitz * params.resolution) r = polish_minimum(obs, a, b, c, pose, r);
   return r;
 }
 

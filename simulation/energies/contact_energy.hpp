@@ -46,6 +46,9 @@ struct ContactParams {
   double dhat = 3e-4;          ///< barrier activation distance (contact thickness) [m]
   double stiffness = 1.0;      ///< pressure scale of the barrier [Pa] (see above)
   double eps_velocity = 1e-3;  ///< slip speed below which friction is static-like [m/s]
+  /// Contact on sheet faces against obstacles other than planes (set_faces), for features
+  /// smaller than the sheet's edges; off: vertices only.
+  bool faces = false;
 };
 
 class ObstacleContactEnergy : public EnergyTerm {
