@@ -141,7 +141,11 @@ NewtonResult Integrator::solve(const StepContext& ctx, Eigen::VectorXd& x, StepS
     const double slope = g.dot(dx);
     double e_new = INF;
     Eigen::VectorXd x_new;
-    for (; alpha > 1e-12; alpha *= 0.5) {
+    // A step that would move no vertex by more than a picometre makes no progress: the line
+    // search gives up there (at round-off level an energy with a search-based term, such as
+    // face contact, can show a decrease that is only noise, and Newton would repeat it).
+    const double min_alpha = std::max(1e-12, 1e-12 / std::max(max_vertex_norm(dx), 1e-300));
+    for (; alpha > min_alpha; alpha *= 0.5) {
       x_new = x + alpha * dx;
       e_new = energy(x_new);
       ++r.line_search_evaluations;
@@ -158,7 +162,7 @@ NewtonResult Integrator::solve(const StepContext& ctx, Eigen::VectorXd& x, StepS
         std::fprintf(stderr, " slope*a %.3e\n", a * slope);
       }
     }
-    if (!(alpha > 1e-12)) {
+    if (!(alpha > min_alpha)) {
       // No decrease along the direction: converged to round-off when the step is tiny.
       // (A step blocked by collision detection is not convergence: the step is split instead.)
       if ((alpha_feasible == 1.0 && r.residual < 10 * m_params.tolerance) ||
