@@ -110,6 +110,13 @@ collision::TriangleSdfResult face_minimum(const collision::Collider& obs, const 
 
 }  // namespace
 
+collision::TriangleSdfResult ObstacleContactEnergy::face_contact(int o, const Eigen::VectorXd& x, int f,
+                                                                 const Eigen::Isometry3d& pose) const {
+  if (!face_near_bounds(o, x, f, 0.0)) return {};  // distance +inf: out of contact
+  return face_minimum(*m_obstacles[o], x.segment<3>(3 * m_faces(f, 0)), x.segment<3>(3 * m_faces(f, 1)),
+                      x.segment<3>(3 * m_faces(f, 2)), pose, m_triangle);
+}
+
 bool ObstacleContactEnergy::near_bounds(int o, const Eigen::Vector3d& p) const {
   const auto& b = m_bounds[o];
   return (p.array() >= b.lo.array()).all() && (p.array() <= b.hi.array()).all();
@@ -165,10 +172,7 @@ void ObstacleContactEnergy::begin_step(const StepContext& ctx, const Eigen::Vect
     if (uses_faces(o)) {
       const Eigen::Isometry3d pose = obs.motion.pose(ctx.time_t0);
       for (int f = 0; f < m_faces.rows(); ++f) {
-        if (!face_near_bounds(o, x_t0, f, 0.0)) continue;
-        const auto r = face_minimum(obs, x_t0.segment<3>(3 * m_faces(f, 0)),
-                                                        x_t0.segment<3>(3 * m_faces(f, 1)),
-                                                        x_t0.segment<3>(3 * m_faces(f, 2)), pose, m_triangle);
+        const auto r = face_contact(o, x_t0, f, pose);
         if (r.distance >= m_params.dhat || r.distance <= 0) continue;
         FrictionPoint fp;
         fp.count = 3;
@@ -210,10 +214,7 @@ double ObstacleContactEnergy::value(const Eigen::VectorXd& x) const {
     if (uses_faces(o)) {
       const Eigen::Isometry3d pose = m_obstacles[o]->motion.pose(m_t1);
       for (int f = 0; f < m_faces.rows(); ++f) {
-        if (!face_near_bounds(o, x, f, 0.0)) continue;
-        const auto r = face_minimum(*m_obstacles[o], x.segment<3>(3 * m_faces(f, 0)),
-                                                        x.segment<3>(3 * m_faces(f, 1)),
-                                                        x.segment<3>(3 * m_faces(f, 2)), pose, m_triangle);
+        const auto r = face_contact(o, x, f, pose);
         if (r.distance <= 0) return INF;
         if (r.distance < m_params.dhat) e += face_kappa(f) * barrier(r.distance, m_params.dhat);
       }
@@ -237,7 +238,6 @@ double ObstacleContactEnergy::value(const Eigen::VectorXd& x) const {
 void ObstacleContactEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd& g,
                                             BlockSymmetricMatrix* H) const {
   const int nv = static_cast<int>(m_area.size());
-  Eigen::VectorXd diag_dummy;
   const auto add_weighted = [&](const std::array<int, 3>& vs, const Eigen::Vector3d& w, int count,
                                 const Eigen::Vector3d& force, const Eigen::Matrix3d& local) {
     for (int k = 0; k < count; ++k) g.segment<3>(3 * vs[k]) += w[k] * force;
@@ -255,10 +255,7 @@ void ObstacleContactEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::Vec
     if (uses_faces(o)) {
       const Eigen::Isometry3d pose = m_obstacles[o]->motion.pose(m_t1);
       for (int f = 0; f < m_faces.rows(); ++f) {
-        if (!face_near_bounds(o, x, f, 0.0)) continue;
-        const auto r = face_minimum(*m_obstacles[o], x.segment<3>(3 * m_faces(f, 0)),
-                                                        x.segment<3>(3 * m_faces(f, 1)),
-                                                        x.segment<3>(3 * m_faces(f, 2)), pose, m_triangle);
+        const auto r = face_contact(o, x, f, pose);
         if (r.distance >= m_params.dhat || r.distance <= 0) continue;
         const double k = face_kappa(f);
         add_weighted({m_faces(f, 0), m_faces(f, 1), m_faces(f, 2)}, r.barycentric, 3,

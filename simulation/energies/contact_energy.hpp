@@ -96,6 +96,10 @@ class ObstacleContactEnergy : public EnergyTerm {
   bool near_bounds(int o, const Eigen::Vector3d& p) const;
   bool face_near_bounds(int o, const Eigen::VectorXd& x, int f, double margin) const;
   bool uses_faces(int o) const { return m_face_contact[o]; }
+  /// Minimum of obstacle o's field (at `pose`) over face f at x; +inf distance when the face's
+  /// box is outside the obstacle's bounds.
+  collision::TriangleSdfResult face_contact(int o, const Eigen::VectorXd& x, int f,
+                                            const Eigen::Isometry3d& pose) const;
   double face_kappa(int f) const { return m_stiffness / m_params.dhat * m_face_area[f] / 3; }
   /// Point of a friction contact: sum of weight x vertex position.
   Eigen::Vector3d contact_point(const FrictionPoint& fp, const Eigen::VectorXd& x) const;
