@@ -31,6 +31,20 @@ void limit_blas_threads() {
   });
 }
 
+/// Debian's CHOLMOD is built with OpenMP: cholmod_super_numeric opens parallel regions (with an
+/// explicit thread count, so omp_set_num_threads does not apply) whose thread wake-ups cost more
+/// than the small supernodes of a sheet gain (measured on fall-spheres seed 1, 682 vertices:
+/// 37% of the samples in futex calls). Setting the maximum number of active parallel levels to
+/// 0 makes every region run on the calling thread; nothing else in the process uses OpenMP
+/// (papersim's own parallelism is TBB). Looked up at run time so a CHOLMOD without OpenMP links.
+void limit_openmp_threads() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    using SetLevels = void (*)(int);
+    if (auto f = reinterpret_cast<SetLevels>(dlsym(RTLD_DEFAULT, "omp_set_max_active_levels"))) f(0);
+  });
+}
+
 }  // namespace
 
 struct LinearSolver::Impl {
@@ -46,6 +60,7 @@ struct LinearSolver::Impl {
     // bending stencil makes it; BLAS runs on one thread (see limit_blas_threads) (measured: see
     // docs/performance.md).
     limit_blas_threads();
+    limit_openmp_threads();
     common.supernodal = CHOLMOD_AUTO;
   }
   ~Impl() {
