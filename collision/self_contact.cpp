@@ -7,6 +7,7 @@
 #include <limits>
 #include <stdexcept>
 
+#include "collision/barrier.hpp"
 #include "collision/collider.hpp"
 
 namespace papersim::collision {
@@ -239,9 +240,11 @@ Eigen::Matrix3d cross_matrix(const Eigen::Vector3d& v) {
   return m;
 }
 
-/// Additive CCD (Li et al. 2021, Alg. 1) with thickness 0.
+/// Additive CCD (Li et al. 2021, Alg. 1) with thickness `offset`: the gap is the distance of the
+/// pair less the offset. The distance changes no faster than the bound lp on the relative speed
+/// of the pair's points, and so does the gap.
 template <class Distance2>
-double additive_ccd(PairPoints x, PairPoints dx, bool edge_edge, double t_max, double s,
+double additive_ccd(PairPoints x, PairPoints dx, bool edge_edge, double t_max, double s, double offset,
                     Distance2&& distance2) {
   // The distance is translation invariant: remove the mean motion to tighten the bound.
   const Eigen::Vector3d mean = 0.25 * (dx[0] + dx[1] + dx[2] + dx[3]);
@@ -249,15 +252,15 @@ double additive_ccd(PairPoints x, PairPoints dx, bool edge_edge, double t_max, d
   const double lp = edge_edge ? std::max(dx[0].norm(), dx[1].norm()) + std::max(dx[2].norm(), dx[3].norm())
                               : dx[0].norm() + std::max({dx[1].norm(), dx[2].norm(), dx[3].norm()});
   if (lp == 0) return t_max;
-  double d = std::sqrt(distance2(x));
+  double d = std::sqrt(distance2(x)) - offset;
   if (!(d > 0)) return 0.0;
   const double g = s * d;
   double t = 0, tl = (1 - s) * d / lp;
-  // Every step of tl = 0.9 d / lp keeps the distance above 0.1 d > 0; t grows by at least
+  // Every step of tl = 0.9 d / lp keeps the gap above 0.1 d > 0; t grows by at least
   // 0.9 g / lp per step. The cap only guards against pathological grazing; t stays safe.
   for (int it = 0; it < 100000; ++it) {
     for (int k = 0; k < 4; ++k) x[k] += tl * dx[k];
-    d = std::sqrt(distance2(x));
+    d = std::sqrt(distance2(x)) - offset;
     if (t > 0 && d < g) return t;
     t += tl;
     if (t >= t_max) return t_max;
@@ -449,13 +452,37 @@ double edge_edge_mollifier(const PairPoints& x, double eps, Vector12d* gradient,
   return m;
 }
 
-double point_triangle_ccd(const PairPoints& x, const PairPoints& dx, double t_max, double min_separation) {
-  return additive_ccd(x, dx, false, t_max, min_separation,
+double pair_barrier_derivatives(const DistanceStencil& s, const PairPoints& pts, double dhat,
+                                double mollifier_eps, Vector12d& grad, Matrix12d* hess, double offset) {
+  Vector12d g2;
+  Matrix12d H2;
+  const double d2 = distance_squared_derivatives(s, pts, g2, hess ? &H2 : nullptr);
+  // b(d) with d = |r| - offset, |r| = sqrt(d^2): grad d = grad d^2 / (2 |r|),
+  // Hess d = (Hess d^2 - 2 grad d grad d^T) / (2 |r|).
+  const double r = std::sqrt(d2), d = r - offset;
+  const Vector12d gd = g2 / (2 * r);
+  const double b = barrier(d, dhat), b1 = barrier_first_derivative(d, dhat);
+  grad = b1 * gd;
+  if (hess)
+    *hess = barrier_second_derivative(d, dhat) * gd * gd.transpose() + b1 * (H2 - 2 * gd * gd.transpose()) / (2 * r);
+  if (mollifier_eps <= 0) return b;
+  // Mollified: E = m b, grad = m grad b + b grad m, Hess = m Hb + grad b grad m^T + grad m grad b^T + b Hm.
+  Vector12d gm;
+  Matrix12d Hm;
+  const double m = edge_edge_mollifier(pts, mollifier_eps, &gm, hess ? &Hm : nullptr);
+  if (hess) *hess = m * *hess + grad * gm.transpose() + gm * grad.transpose() + b * Hm;
+  grad = m * grad + b * gm;
+  return m * b;
+}
+
+double point_triangle_ccd(const PairPoints& x, const PairPoints& dx, double t_max, double min_separation,
+                          double offset) {
+  return additive_ccd(x, dx, false, t_max, min_separation, offset,
                       [](const PairPoints& y) { return point_triangle_distance_squared(y); });
 }
 
 double edge_edge_ccd(const PairPoints& x, const PairPoints& dx, double t_max, double min_separation) {
-  return additive_ccd(x, dx, true, t_max, min_separation,
+  return additive_ccd(x, dx, true, t_max, min_separation, 0.0,
                       [](const PairPoints& y) { return edge_edge_distance_squared(y); });
 }
 

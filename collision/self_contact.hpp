@@ -96,13 +96,24 @@ double edge_edge_mollifier(const PairPoints& x, double eps, Vector12d* gradient,
 /// eps of the mollifier from rest edge lengths: 1e-3 |a_rest|^2 |b_rest|^2 [m^4].
 double edge_edge_mollifier_threshold(double rest_length_a, double rest_length_b);
 
+/// The IPC barrier of one pair, b(d, dhat) (collision/barrier.hpp) with d = |r| - offset, |r| the
+/// stencil's distance (offset: the radius of a round primitive, 0 for the sheet against itself),
+/// times the edge-edge mollifier when `mollifier_eps` > 0 (0: a point-triangle pair). Fills its
+/// gradient with respect to the 12 coordinates and, when `hessian` is not null, its exact
+/// Hessian (indefinite in general). Requires 0 < d < dhat.
+double pair_barrier_derivatives(const DistanceStencil& s, const PairPoints& x, double dhat,
+                                double mollifier_eps, Vector12d& gradient, Matrix12d* hessian,
+                                double offset = 0.0);
+
 /// Additive CCD (Li et al. 2021, Alg. 1) for the linear motion x + t dx, t in [0, t_max]:
 /// a time of impact t such that every configuration on [0, t] keeps a positive distance and
 /// the distance at t is at least min_separation x the distance at 0; t_max when the pair stays
 /// apart beyond t_max. Returns 0 when the pair touches at t = 0.
 /// @param min_separation in (0, 1), IPC uses 0.1
+/// @param offset thickness of the point (a sphere of that radius about it) [m]: the gap is
+///        the distance less the offset
 double point_triangle_ccd(const PairPoints& x, const PairPoints& dx, double t_max,
-                          double min_separation = 0.1);
+                          double min_separation = 0.1, double offset = 0.0);
 double edge_edge_ccd(const PairPoints& x, const PairPoints& dx, double t_max,
                      double min_separation = 0.1);
 

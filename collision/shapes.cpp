@@ -208,4 +208,28 @@ double AnalyticCollider::local_distance(const Eigen::Vector3d& p, Eigen::Vector3
 
 Aabb AnalyticCollider::local_bounds() const { return shape_bounds(m_shape); }
 
+PolytopeFeatures polytope_features(const Shape& s) {
+  PolytopeFeatures f;
+  if (s.kind == ShapeKind::box) {
+    const Eigen::Vector3d& e = s.half_extents;
+    for (int i = 0; i < 8; ++i)  // bit k of i: sign of axis k
+      f.corners.emplace_back((i & 1 ? 1 : -1) * e.x(), (i & 2 ? 1 : -1) * e.y(), (i & 4 ? 1 : -1) * e.z());
+    for (int i = 0; i < 8; ++i)
+      for (int k = 0; k < 3; ++k)
+        if (!(i & (1 << k))) f.edges.push_back({{i, i | (1 << k)}});
+  } else if (s.kind == ShapeKind::gable) {
+    for (const double x : {-0.5 * s.length, 0.5 * s.length}) {  // base corners and ridge end
+      f.corners.emplace_back(x, -s.half_width, 0.0);
+      f.corners.emplace_back(x, s.half_width, 0.0);
+      f.corners.emplace_back(x, 0.0, s.height);
+    }
+    for (int k = 0; k < 3; ++k) {
+      f.edges.push_back({{k, k + 3}});                  // along the prism
+      f.edges.push_back({{k, (k + 1) % 3}});            // end triangle at -length/2
+      f.edges.push_back({{k + 3, (k + 1) % 3 + 3}});    // end triangle at +length/2
+    }
+  }
+  return f;
+}
+
 }  // namespace papersim::collision

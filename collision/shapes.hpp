@@ -14,6 +14,8 @@
 #include "collision/collider.hpp"
 
 #include <Eigen/Core>
+#include <array>
+#include <vector>
 
 namespace papersim::collision {
 
@@ -48,6 +50,17 @@ double shape_smallest_feature(const Shape& shape);
 
 /// Surface area [m^2] (to estimate a level set's voxel count before building it).
 double shape_surface_area(const Shape& shape);
+
+/// Corners and edges of a polyhedral primitive in its local frame [m].
+struct PolytopeFeatures {
+  std::vector<Eigen::Vector3d> corners;
+  std::vector<std::array<int, 2>> edges;  ///< indices into corners
+};
+
+/// The corners and edges of a box (8 and 12) or a gable prism (6 and 9); empty for curved
+/// primitives (sphere, cylinder, capsule). Sheet contact uses them so that an edge of the
+/// obstacle cannot slip between the sheet's vertices.
+PolytopeFeatures polytope_features(const Shape& shape);
 
 /// A collider that evaluates the exact signed distance of a primitive: no grid, exact
 /// distances and gradients, cheaper than a level set. Thread-safe (no mutable state).

@@ -109,14 +109,7 @@ Built build(const Scene& scene, const remesh::SheetMesh& mesh, const SheetState&
   if (!b.obstacles.empty()) {
     Eigen::VectorXd areas = b.masses / m.density;
     auto c = std::make_unique<ObstacleContactEnergy>(areas, b.obstacles, p);
-    const Eigen::MatrixX3i F = mesh.faces();
-    const Eigen::MatrixX2d X = mesh.material_coords();
-    Eigen::VectorXd face_areas(F.rows());
-    for (int f = 0; f < F.rows(); ++f) {
-      const Eigen::Vector2d e1 = X.row(F(f, 1)) - X.row(F(f, 0)), e2 = X.row(F(f, 2)) - X.row(F(f, 0));
-      face_areas[f] = 0.5 * std::abs(e1.x() * e2.y() - e1.y() * e2.x());
-    }
-    if (p.faces) c->set_faces(F, face_areas);
+    if (p.faces) c->set_faces(mesh.faces(), mesh.material_coords());
     c->set_impact_density(m.density);
     b.contact = c.get();
     terms.push_back(std::move(c));

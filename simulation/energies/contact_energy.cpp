@@ -1,8 +1,11 @@
 #include "simulation/energies/contact_energy.hpp"
 
+#include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
 
 #include "collision/barrier.hpp"
+#include "collision/shapes.hpp"
 
 namespace papersim::simulation {
 
@@ -15,18 +18,142 @@ ObstacleContactEnergy::ObstacleContactEnergy(
     const ContactParams& params)
     : m_area(std::move(vertex_areas)), m_obstacles(std::move(obstacles)), m_params(params),
       m_stiffness(params.stiffness) {
-  m_face_contact.assign(m_obstacles.size(), false);
+  m_mode.assign(m_obstacles.size(), Mode::vertices);
+  m_sphere_radius.assign(m_obstacles.size(), 0.0);
   // The minimum over a triangle is resolved to a tenth of the contact thickness, and triangles
   // farther than the thickness are not refined (their barrier is zero).
   m_triangle.cutoff = m_params.dhat;
   m_triangle.resolution = 0.1 * m_params.dhat;
 }
 
-void ObstacleContactEnergy::set_faces(const Eigen::MatrixX3i& faces, const Eigen::VectorXd& face_areas) {
+void ObstacleContactEnergy::set_faces(const Eigen::MatrixX3i& faces, const Eigen::MatrixX2d& X) {
   m_faces = faces;
-  m_face_area = face_areas;
-  for (size_t o = 0; o < m_obstacles.size(); ++o)
-    m_face_contact[o] = dynamic_cast<const collision::PlaneCollider*>(m_obstacles[o].get()) == nullptr;
+  const int nf = static_cast<int>(faces.rows());
+  m_face_area.resize(nf);
+  for (int f = 0; f < nf; ++f) {
+    const Eigen::Vector2d e1 = X.row(faces(f, 1)) - X.row(faces(f, 0)), e2 = X.row(faces(f, 2)) - X.row(faces(f, 0));
+    m_face_area[f] = 0.5 * std::abs(e1.x() * e2.y() - e1.y() * e2.x());
+  }
+  m_edges = collision::SelfContactMesh::from_faces(faces, static_cast<int>(X.rows())).edges;
+  const int ne = static_cast<int>(m_edges.rows());
+  m_edge_rest.resize(ne);
+  for (int e = 0; e < ne; ++e) m_edge_rest[e] = (X.row(m_edges(e, 1)) - X.row(m_edges(e, 0))).norm();
+  // Edge weight: a third of the area of the faces at the edge.
+  m_edge_area = Eigen::VectorXd::Zero(ne);
+  for (int f = 0; f < nf; ++f)
+    for (int k = 0; k < 3; ++k) {
+      const int a = std::min(faces(f, k), faces(f, (k + 1) % 3)), b = std::max(faces(f, k), faces(f, (k + 1) % 3));
+      int lo = 0, hi = ne;  // edges are sorted by (a, b)
+      while (lo < hi) {
+        const int mid = (lo + hi) / 2;
+        if (m_edges(mid, 0) < a || (m_edges(mid, 0) == a && m_edges(mid, 1) < b))
+          lo = mid + 1;
+        else
+          hi = mid;
+      }
+      m_edge_area[lo] += m_face_area[f] / 3;
+    }
+  for (size_t o = 0; o < m_obstacles.size(); ++o) {
+    const auto* obs = m_obstacles[o].get();
+    if (dynamic_cast<const collision::PlaneCollider*>(obs)) continue;
+    m_mode[o] = Mode::search;
+    const auto* analytic = dynamic_cast<const collision::AnalyticCollider*>(obs);
+    if (!analytic) continue;
+    if (analytic->shape().kind == collision::ShapeKind::sphere) {
+      m_mode[o] = Mode::sphere;
+      m_sphere_radius[o] = analytic->shape().radius;
+    } else if (!collision::polytope_features(analytic->shape()).corners.empty()) {
+      m_mode[o] = Mode::polytope;
+    }
+  }
+}
+
+void ObstacleContactEnergy::add_pattern(SparsityBuilder& pattern) const {
+  for (int f = 0; f < m_faces.rows(); ++f) {
+    const int v[3] = {m_faces(f, 0), m_faces(f, 1), m_faces(f, 2)};
+    pattern.add_clique(v, 3);
+  }
+}
+
+ObstacleContactEnergy::WorldFeatures ObstacleContactEnergy::world_features(int o, double t) const {
+  WorldFeatures w;
+  if (m_mode[o] != Mode::polytope) return w;
+  const auto& analytic = static_cast<const collision::AnalyticCollider&>(*m_obstacles[o]);
+  const collision::PolytopeFeatures local = collision::polytope_features(analytic.shape());
+  const Eigen::Isometry3d pose = analytic.motion.pose(t);
+  for (const auto& c : local.corners) w.corners.push_back(pose * c);
+  w.edges = local.edges;
+  for (const auto& e : w.edges) w.edge_length.push_back((w.corners[e[1]] - w.corners[e[0]]).norm());
+  return w;
+}
+
+std::vector<ObstacleContactEnergy::FeaturePair> ObstacleContactEnergy::feature_pairs(
+    const Eigen::VectorXd& x, const Eigen::VectorXd* dx, double radius,
+    const std::vector<WorldFeatures>& features) const {
+  std::vector<FeaturePair> pairs;
+  const auto box_of = [&](const int* v, int n) {
+    collision::Aabb b;
+    for (int k = 0; k < n; ++k) {
+      b.extend(Eigen::Vector3d(x.segment<3>(3 * v[k])));
+      if (dx) b.extend(Eigen::Vector3d(x.segment<3>(3 * v[k]) + dx->segment<3>(3 * v[k])));
+    }
+    b.inflate(radius);
+    return b;
+  };
+  const auto overlap = [](const collision::Aabb& a, const collision::Aabb& b) {
+    return (a.hi.array() >= b.lo.array()).all() && (a.lo.array() <= b.hi.array()).all();
+  };
+  for (int o = 0; o < num_obstacles(); ++o) {
+    if (m_mode[o] != Mode::polytope) continue;
+    const WorldFeatures& w = features[o];
+    collision::Aabb whole;
+    for (const auto& c : w.corners) whole.extend(c);
+    std::vector<collision::Aabb> edge_box(w.edges.size());
+    for (size_t e = 0; e < w.edges.size(); ++e) {
+      edge_box[e].extend(w.corners[w.edges[e][0]]);
+      edge_box[e].extend(w.corners[w.edges[e][1]]);
+    }
+    for (int f = 0; f < m_faces.rows(); ++f) {
+      const int v[3] = {m_faces(f, 0), m_faces(f, 1), m_faces(f, 2)};
+      const collision::Aabb b = box_of(v, 3);
+      if (!overlap(b, whole)) continue;
+      for (size_t c = 0; c < w.corners.size(); ++c)
+        if (b.distance_to(w.corners[c]) == 0) pairs.push_back({o, false, static_cast<int>(c), f});
+    }
+    for (int e = 0; e < m_edges.rows(); ++e) {
+      const int v[2] = {m_edges(e, 0), m_edges(e, 1)};
+      const collision::Aabb b = box_of(v, 2);
+      if (!overlap(b, whole)) continue;
+      for (size_t k = 0; k < w.edges.size(); ++k)
+        if (overlap(b, edge_box[k])) pairs.push_back({o, true, e, static_cast<int>(k)});
+    }
+  }
+  return pairs;
+}
+
+collision::PairPoints ObstacleContactEnergy::pair_points(const FeaturePair& p, const Eigen::VectorXd& x,
+                                                         const std::vector<WorldFeatures>& features) const {
+  const WorldFeatures& w = features[p.obstacle];
+  if (p.edge_edge)
+    return {x.segment<3>(3 * m_edges(p.a, 0)), x.segment<3>(3 * m_edges(p.a, 1)), w.corners[w.edges[p.b][0]],
+            w.corners[w.edges[p.b][1]]};
+  return {w.corners[p.a], x.segment<3>(3 * m_faces(p.b, 0)), x.segment<3>(3 * m_faces(p.b, 1)),
+          x.segment<3>(3 * m_faces(p.b, 2))};
+}
+
+double ObstacleContactEnergy::pair_weight(const FeaturePair& p) const {
+  return p.edge_edge ? m_edge_area[p.a] : m_face_area[p.b] / 3;
+}
+
+double ObstacleContactEnergy::pair_mollifier_eps(const FeaturePair& p, const std::vector<WorldFeatures>& features) const {
+  return p.edge_edge ? collision::edge_edge_mollifier_threshold(m_edge_rest[p.a], features[p.obstacle].edge_length[p.b])
+                     : 0.0;
+}
+
+collision::PairPoints ObstacleContactEnergy::sphere_points(const Eigen::VectorXd& x, int f,
+                                                           const Eigen::Isometry3d& pose) const {
+  return {pose.translation(), x.segment<3>(3 * m_faces(f, 0)), x.segment<3>(3 * m_faces(f, 1)),
+          x.segment<3>(3 * m_faces(f, 2))};
 }
 
 bool ObstacleContactEnergy::face_near_bounds(int o, const Eigen::VectorXd& x, int f, double margin) const {
@@ -113,6 +240,22 @@ collision::TriangleSdfResult face_minimum(const collision::Collider& obs, const 
 collision::TriangleSdfResult ObstacleContactEnergy::face_contact(int o, const Eigen::VectorXd& x, int f,
                                                                  const Eigen::Isometry3d& pose) const {
   if (!face_near_bounds(o, x, f, 0.0)) return {};  // distance +inf: out of contact
+  if (m_mode[o] == Mode::sphere) {
+    // Exact: the closest point of the triangle to the centre.
+    const collision::PairPoints pts = sphere_points(x, f, pose);
+    const collision::DistanceStencil s = collision::point_triangle_stencil(pts);
+    const Eigen::Vector4d w = collision::closest_point_weights(s, pts);  // r = centre - point
+    collision::TriangleSdfResult r;
+    r.barycentric = -w.tail<3>();
+    r.point = r.barycentric[0] * pts[1] + r.barycentric[1] * pts[2] + r.barycentric[2] * pts[3];
+    const Eigen::Vector3d out = r.point - pts[0];
+    const double len = out.norm();
+    r.distance = len - m_sphere_radius[o];
+    r.lower_bound = r.distance;
+    r.gradient = len > 0 ? Eigen::Vector3d(out / len) : Eigen::Vector3d::UnitZ();
+    r.evaluations = 1;
+    return r;
+  }
   return face_minimum(*m_obstacles[o], x.segment<3>(3 * m_faces(f, 0)), x.segment<3>(3 * m_faces(f, 1)),
                       x.segment<3>(3 * m_faces(f, 2)), pose, m_triangle);
 }
@@ -169,7 +312,7 @@ void ObstacleContactEnergy::begin_step(const StepContext& ctx, const Eigen::Vect
   };
   for (int o = 0; o < num_obstacles(); ++o) {
     const auto& obs = *m_obstacles[o];
-    if (uses_faces(o)) {
+    if (m_mode[o] == Mode::sphere || m_mode[o] == Mode::search) {
       const Eigen::Isometry3d pose = obs.motion.pose(ctx.time_t0);
       for (int f = 0; f < m_faces.rows(); ++f) {
         const auto r = face_contact(o, x_t0, f, pose);
@@ -182,8 +325,8 @@ void ObstacleContactEnergy::begin_step(const StepContext& ctx, const Eigen::Vect
         add_friction(fp, obs, -face_kappa(f) * barrier_first_derivative(r.distance, m_params.dhat),
                      contact_point(fp, x_t0), r.gradient);
       }
-      continue;
     }
+    if (!uses_vertices(o)) continue;
     for (int v = 0; v < nv; ++v) {
       const Eigen::Vector3d p = x_t0.segment<3>(3 * v);
       if (!near_bounds(o, p)) continue;
@@ -196,6 +339,40 @@ void ObstacleContactEnergy::begin_step(const StepContext& ctx, const Eigen::Vect
       add_friction(fp, obs, -kappa(v) * barrier_first_derivative(d, m_params.dhat), p, n);
     }
   }
+  // Corner-triangle and edge-edge pairs of polyhedral obstacles: normal force of the mollified
+  // barrier, acting at the closest point on the sheet.
+  m_features.assign(m_obstacles.size(), {});
+  std::vector<WorldFeatures> at_t0(m_obstacles.size());
+  for (int o = 0; o < num_obstacles(); ++o) {
+    m_features[o] = world_features(o, m_t1);
+    at_t0[o] = world_features(o, ctx.time_t0);
+  }
+  for (const FeaturePair& p : feature_pairs(x_t0, nullptr, m_params.dhat, at_t0)) {
+    const collision::PairPoints pts = pair_points(p, x_t0, at_t0);
+    const collision::DistanceStencil s =
+        p.edge_edge ? collision::edge_edge_stencil(pts) : collision::point_triangle_stencil(pts);
+    const double d = std::sqrt(collision::distance_squared(s, pts));
+    if (d >= m_params.dhat || d <= 0) continue;
+    const double eps = pair_mollifier_eps(p, at_t0);
+    const double m = p.edge_edge ? collision::edge_edge_mollifier(pts, eps, nullptr, nullptr) : 1.0;
+    const Eigen::Vector4d w = collision::closest_point_weights(s, pts);
+    FrictionPoint fp;
+    fp.obstacle = p.obstacle;
+    if (p.edge_edge) {  // r = sheet point - obstacle point
+      fp.count = 2;
+      fp.vertices = {m_edges(p.a, 0), m_edges(p.a, 1), -1};
+      fp.weights = Eigen::Vector3d(w[0], w[1], 0);
+    } else {  // r = corner - sheet point
+      fp.count = 3;
+      fp.vertices = {m_faces(p.b, 0), m_faces(p.b, 1), m_faces(p.b, 2)};
+      fp.weights = -w.tail<3>();
+    }
+    Eigen::Vector3d r = Eigen::Vector3d::Zero();
+    for (int k = 0; k < 4; ++k) r += w[k] * pts[k];
+    const double kappa_pair = m_stiffness / m_params.dhat * pair_weight(p);
+    add_friction(fp, *m_obstacles[p.obstacle], -kappa_pair * m * barrier_first_derivative(d, m_params.dhat),
+                 contact_point(fp, x_t0), r.normalized());
+  }
 }
 
 namespace {
@@ -205,28 +382,43 @@ double f0(double y, double eps) {
   return y >= eps ? y : -y * y * y / (3 * eps * eps) + y * y / eps + eps / 3;
 }
 
+/// The stencil of a pair of a polyhedral obstacle (corner-triangle or edge-edge).
+collision::DistanceStencil pair_stencil(bool edge_edge, const collision::PairPoints& pts) {
+  return edge_edge ? collision::edge_edge_stencil(pts) : collision::point_triangle_stencil(pts);
+}
+
 }  // namespace
 
 double ObstacleContactEnergy::value(const Eigen::VectorXd& x) const {
   double e = 0;
   const int nv = static_cast<int>(m_area.size());
+  const double dhat = m_params.dhat;
   for (int o = 0; o < num_obstacles(); ++o) {
-    if (uses_faces(o)) {
+    if (m_mode[o] == Mode::sphere || m_mode[o] == Mode::search) {
       const Eigen::Isometry3d pose = m_obstacles[o]->motion.pose(m_t1);
       for (int f = 0; f < m_faces.rows(); ++f) {
         const auto r = face_contact(o, x, f, pose);
         if (r.distance <= 0) return INF;
-        if (r.distance < m_params.dhat) e += face_kappa(f) * barrier(r.distance, m_params.dhat);
+        if (r.distance < dhat) e += face_kappa(f) * barrier(r.distance, dhat);
       }
-      continue;
     }
+    if (!uses_vertices(o)) continue;
     for (int v = 0; v < nv; ++v) {
       const Eigen::Vector3d p = x.segment<3>(3 * v);
       if (!near_bounds(o, p)) continue;
       const double d = m_obstacles[o]->distance(p, m_t1);
       if (d <= 0) return INF;
-      if (d < m_params.dhat) e += kappa(v) * barrier(d, m_params.dhat);
+      if (d < dhat) e += kappa(v) * barrier(d, dhat);
     }
+  }
+  for (const FeaturePair& p : feature_pairs(x, nullptr, dhat, m_features)) {
+    const collision::PairPoints pts = pair_points(p, x, m_features);
+    const double d2 = collision::distance_squared(pair_stencil(p.edge_edge, pts), pts);
+    if (d2 >= dhat * dhat) continue;
+    if (!(d2 > 0)) return INF;
+    const double m =
+        p.edge_edge ? collision::edge_edge_mollifier(pts, pair_mollifier_eps(p, m_features), nullptr, nullptr) : 1.0;
+    e += m_stiffness / dhat * pair_weight(p) * m * barrier(std::sqrt(d2), dhat);
   }
   for (const auto& fp : m_friction) {
     const Eigen::Vector2d u = fp.T.transpose() * (contact_point(fp, x) - fp.origin);
@@ -235,9 +427,19 @@ double ObstacleContactEnergy::value(const Eigen::VectorXd& x) const {
   return e;
 }
 
+namespace {
+
+collision::Matrix12d project_psd(const collision::Matrix12d& H) {
+  Eigen::SelfAdjointEigenSolver<collision::Matrix12d> es(H);
+  return es.eigenvectors() * es.eigenvalues().cwiseMax(0.0).asDiagonal() * es.eigenvectors().transpose();
+}
+
+}  // namespace
+
 void ObstacleContactEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd& g,
                                             BlockSymmetricMatrix* H) const {
   const int nv = static_cast<int>(m_area.size());
+  const double dhat = m_params.dhat;
   const auto add_weighted = [&](const std::array<int, 3>& vs, const Eigen::Vector3d& w, int count,
                                 const Eigen::Vector3d& force, const Eigen::Matrix3d& local) {
     for (int k = 0; k < count; ++k) g.segment<3>(3 * vs[k]) += w[k] * force;
@@ -246,37 +448,72 @@ void ObstacleContactEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::Vec
       H->add_element<1>({vs[0]}, local);
       return;
     }
-    Eigen::Matrix<double, 9, 9> block;
-    for (int a = 0; a < 3; ++a)
-      for (int b = 0; b < 3; ++b) block.block<3, 3>(3 * a, 3 * b) = w[a] * w[b] * local;
-    H->add_element<3>(vs, block);
+    Eigen::Matrix<double, 9, 9> block = Eigen::Matrix<double, 9, 9>::Zero();
+    for (int a = 0; a < count; ++a)
+      for (int b = 0; b < count; ++b) block.block<3, 3>(3 * a, 3 * b) = w[a] * w[b] * local;
+    if (count == 2)
+      H->add_element<2>({vs[0], vs[1]}, block.topLeftCorner<6, 6>());
+    else
+      H->add_element<3>(vs, block);
   };
+  // A term with exact 12-coordinate derivatives of which `first` .. `first + count - 1` are
+  // sheet vertices `vs` (the other points belong to the obstacle and do not move).
+  const auto add_exact = [&](const std::array<int, 3>& vs, int first, int count, double scale,
+                             const collision::Vector12d& grad, collision::Matrix12d* hess) {
+    for (int k = 0; k < count; ++k) g.segment<3>(3 * vs[k]) += scale * grad.segment<3>(3 * (first + k));
+    if (!H) return;
+    const collision::Matrix12d h = m_project ? project_psd(scale * *hess) : collision::Matrix12d(scale * *hess);
+    if (count == 2)
+      H->add_element<2>({vs[0], vs[1]}, h.block<6, 6>(3 * first, 3 * first));
+    else
+      H->add_element<3>(vs, h.block<9, 9>(3 * first, 3 * first));
+  };
+  collision::Vector12d grad;
+  collision::Matrix12d hess;
   for (int o = 0; o < num_obstacles(); ++o) {
-    if (uses_faces(o)) {
+    if (m_mode[o] == Mode::sphere || m_mode[o] == Mode::search) {
       const Eigen::Isometry3d pose = m_obstacles[o]->motion.pose(m_t1);
       for (int f = 0; f < m_faces.rows(); ++f) {
         const auto r = face_contact(o, x, f, pose);
-        if (r.distance >= m_params.dhat || r.distance <= 0) continue;
+        if (r.distance >= dhat || r.distance <= 0) continue;
         const double k = face_kappa(f);
-        add_weighted({m_faces(f, 0), m_faces(f, 1), m_faces(f, 2)}, r.barycentric, 3,
-                     k * barrier_first_derivative(r.distance, m_params.dhat) * r.gradient,
-                     k * barrier_second_derivative(r.distance, m_params.dhat) * r.gradient * r.gradient.transpose());
+        const std::array<int, 3> vs{{m_faces(f, 0), m_faces(f, 1), m_faces(f, 2)}};
+        if (m_mode[o] == Mode::sphere) {
+          const collision::PairPoints pts = sphere_points(x, f, pose);
+          collision::pair_barrier_derivatives(collision::point_triangle_stencil(pts), pts, dhat, 0.0, grad,
+                                              H ? &hess : nullptr, m_sphere_radius[o]);
+          add_exact(vs, 1, 3, k, grad, &hess);
+          continue;
+        }
+        add_weighted(vs, r.barycentric, 3, k * barrier_first_derivative(r.distance, dhat) * r.gradient,
+                     k * barrier_second_derivative(r.distance, dhat) * r.gradient * r.gradient.transpose());
       }
-      continue;
     }
+    if (!uses_vertices(o)) continue;
     for (int v = 0; v < nv; ++v) {
       const Eigen::Vector3d p = x.segment<3>(3 * v);
       if (!near_bounds(o, p)) continue;
       Eigen::Vector3d n;
       const double d = m_obstacles[o]->distance(p, m_t1, &n);
-      if (d >= m_params.dhat || d <= 0) continue;
-      g.segment<3>(3 * v) += kappa(v) * barrier_first_derivative(d, m_params.dhat) * n;
+      if (d >= dhat || d <= 0) continue;
+      g.segment<3>(3 * v) += kappa(v) * barrier_first_derivative(d, dhat) * n;
       if (H) {
-        const Eigen::Matrix3d local =
-            kappa(v) * barrier_second_derivative(d, m_params.dhat) * n * n.transpose();
+        const Eigen::Matrix3d local = kappa(v) * barrier_second_derivative(d, dhat) * n * n.transpose();
         H->add_element<1>({v}, local);
       }
     }
+  }
+  for (const FeaturePair& p : feature_pairs(x, nullptr, dhat, m_features)) {
+    const collision::PairPoints pts = pair_points(p, x, m_features);
+    const collision::DistanceStencil s = pair_stencil(p.edge_edge, pts);
+    const double d2 = collision::distance_squared(s, pts);
+    if (d2 >= dhat * dhat || !(d2 > 0)) continue;
+    collision::pair_barrier_derivatives(s, pts, dhat, pair_mollifier_eps(p, m_features), grad, H ? &hess : nullptr);
+    const double scale = m_stiffness / dhat * pair_weight(p);
+    if (p.edge_edge)
+      add_exact({m_edges(p.a, 0), m_edges(p.a, 1), -1}, 0, 2, scale, grad, &hess);
+    else
+      add_exact({m_faces(p.b, 0), m_faces(p.b, 1), m_faces(p.b, 2)}, 1, 3, scale, grad, &hess);
   }
   for (const auto& fp : m_friction) {
     const Eigen::Vector2d u = fp.T.transpose() * (contact_point(fp, x) - fp.origin);
@@ -299,8 +536,9 @@ double ObstacleContactEnergy::max_step(const Eigen::VectorXd& x, const Eigen::Ve
   const int nv = static_cast<int>(m_area.size());
   for (int o = 0; o < num_obstacles(); ++o) {
     const auto& obs = *m_obstacles[o];
-    // Faces of a convex obstacle cover their vertices (below); otherwise every vertex is traced.
-    const bool trace_vertices = !uses_faces(o) || !obs.is_convex();
+    // Faces against a convex obstacle cover their vertices (below); otherwise the vertices of
+    // the terms are traced.
+    const bool trace_vertices = uses_vertices(o) || (m_mode[o] == Mode::search && !obs.is_convex());
     for (int v = 0; v < nv && trace_vertices; ++v) {
       const Eigen::Vector3d p = x.segment<3>(3 * v), d = dx.segment<3>(3 * v);
       const double len = d.norm();
@@ -329,13 +567,57 @@ double ObstacleContactEnergy::max_step(const Eigen::VectorXd& x, const Eigen::Ve
       }
       alpha = std::min(alpha, t);
     }
-    if (!uses_faces(o)) continue;
+    if (m_mode[o] != Mode::sphere && m_mode[o] != Mode::search) continue;
     // Faces: conservative advancement on a lower bound of the field over the moving triangle.
     const Eigen::Isometry3d pose = obs.motion.pose(m_t1);
     for (int f = 0; f < m_faces.rows(); ++f) {
       double speed = 0;
       for (int k = 0; k < 3; ++k) speed = std::max(speed, dx.segment<3>(3 * m_faces(f, k)).norm());
       if (speed == 0 || !face_near_bounds(o, x, f, alpha * speed)) continue;
+      if (obs.is_convex()) {
+        // The minimiser m of the field over the triangle, with normal n, gives a plane that
+        // separates the triangle from the convex solid: the solid lies behind the tangent plane
+        // at its closest point m - phi(m) n, and the triangle (the hull of its vertices) in
+        // front of it. Each vertex may close 90% of the smallest vertex gap to that plane.
+        collision::TriangleSdfResult r;
+        if (m_mode[o] == Mode::sphere) {
+          r = face_contact(o, x, f, pose);
+        } else {
+          collision::TriangleSdfParams p = m_triangle;
+          p.cutoff = std::max(m_params.dhat, alpha * speed);
+          r = face_minimum(obs, x.segment<3>(3 * m_faces(f, 0)), x.segment<3>(3 * m_faces(f, 1)),
+                           x.segment<3>(3 * m_faces(f, 2)), pose, p);
+        }
+        if (r.lower_bound >= alpha * speed) continue;  // out of reach this step
+        if (r.distance > 0) {
+          const Eigen::Vector3d q = r.point - r.distance * r.gradient;
+          double gap[3], smallest = INF;
+          for (int k = 0; k < 3; ++k) {
+            gap[k] = r.gradient.dot(x.segment<3>(3 * m_faces(f, k)) - q);
+            smallest = std::min(smallest, gap[k]);
+          }
+          if (smallest > 0) {
+            double plane = alpha;
+            for (int k = 0; k < 3; ++k) {
+              const double rate = -r.gradient.dot(dx.segment<3>(3 * m_faces(f, k)));
+              if (rate > 0) plane = std::min(plane, (gap[k] - 0.1 * smallest) / rate);
+            }
+            if (plane < alpha && m_mode[o] == Mode::sphere) {
+              // The plane bound is one step: a face turning on a sphere smaller than itself
+              // closes its tangent plane at once while keeping its distance. Additive CCD on
+              // the exact centre-triangle distance follows the turn; both bounds are safe.
+              collision::PairPoints d;
+              d[0].setZero();
+              for (int k = 0; k < 3; ++k) d[k + 1] = dx.segment<3>(3 * m_faces(f, k));
+              plane = std::max(plane, collision::point_triangle_ccd(sphere_points(x, f, pose), d, alpha, 0.1,
+                                                                    m_sphere_radius[o]));
+            }
+            alpha = std::min(alpha, plane);
+            continue;
+          }
+        }
+        // No separating plane found (the minimum is not resolved): trace as below.
+      }
       // A lower bound of the field over the triangle at parameter t: the larger of the
       // certified bound of the branch and bound (triangle_min_distance) and the minimum found
       // less the search resolution. The resolution is refined to a fifth of the distance when
@@ -357,32 +639,6 @@ double ObstacleContactEnergy::max_step(const Eigen::VectorXd& x, const Eigen::Ve
         }
         return std::max(r.lower_bound, r.distance - p.resolution);
       };
-      if (obs.is_convex()) {
-        // The minimiser m of the field over the triangle, with normal n, gives a plane that
-        // separates the triangle from the convex solid: the solid lies behind the tangent plane
-        // at its closest point m - phi(m) n, and the triangle (the hull of its vertices) in
-        // front of it. Each vertex may close 90% of the smallest vertex gap to that plane.
-        const Eigen::Vector3d a = x.segment<3>(3 * m_faces(f, 0)), b = x.segment<3>(3 * m_faces(f, 1)),
-                              c = x.segment<3>(3 * m_faces(f, 2));
-        const auto r = face_minimum(obs, a, b, c, pose, p);
-        if (r.lower_bound >= alpha * speed) continue;  // out of reach this step
-        if (r.distance > 0) {
-          const Eigen::Vector3d q = r.point - r.distance * r.gradient;
-          double gap[3], smallest = INF;
-          for (int k = 0; k < 3; ++k) {
-            gap[k] = r.gradient.dot(x.segment<3>(3 * m_faces(f, k)) - q);
-            smallest = std::min(smallest, gap[k]);
-          }
-          if (smallest > 0) {
-            for (int k = 0; k < 3; ++k) {
-              const double rate = -r.gradient.dot(dx.segment<3>(3 * m_faces(f, k)));
-              if (rate > 0) alpha = std::min(alpha, (gap[k] - 0.1 * smallest) / rate);
-            }
-            continue;
-          }
-        }
-        // No separating plane found (the minimum is not resolved): trace as below.
-      }
       double bound = lower_bound(0.0);
       if (bound <= 0 || bound >= alpha * speed) continue;  // in contact, or out of reach this step
       const double stop = 0.1 * bound;
@@ -395,6 +651,22 @@ double ObstacleContactEnergy::max_step(const Eigen::VectorXd& x, const Eigen::Ve
         bound = lower_bound(t);
       }
       alpha = std::min(alpha, t);
+    }
+  }
+  // Corner-triangle and edge-edge pairs of polyhedral obstacles: additive CCD, the obstacle held
+  // at its end-of-step pose.
+  const Eigen::VectorXd reach = alpha * dx;
+  for (const FeaturePair& p : feature_pairs(x, &reach, 0.0, m_features)) {
+    const collision::PairPoints pts = pair_points(p, x, m_features);
+    collision::PairPoints d;
+    for (auto& v : d) v.setZero();
+    if (p.edge_edge) {
+      d[0] = dx.segment<3>(3 * m_edges(p.a, 0));
+      d[1] = dx.segment<3>(3 * m_edges(p.a, 1));
+      alpha = collision::edge_edge_ccd(pts, d, alpha);
+    } else {
+      for (int k = 0; k < 3; ++k) d[k + 1] = dx.segment<3>(3 * m_faces(p.b, k));
+      alpha = collision::point_triangle_ccd(pts, d, alpha);
     }
   }
   return alpha;

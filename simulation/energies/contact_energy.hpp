@@ -12,19 +12,30 @@
 /// CCD: along the segment x_v -> x_v + a dx_v, a point cannot reach an obstacle before it moved
 /// by its distance phi (phi is 1-Lipschitz); sphere tracing gives a conservative largest a.
 ///
-/// Faces (set_faces): obstacles other than planes touch the sheet's triangles, not only its
-/// vertices, so that a ridge, an edge or a small sphere cannot slip between vertices. Each face
-/// f pays kappa_f b(d_f) with d_f the minimum of the field over the triangle
-/// (collision::triangle_min_distance) and kappa_f = stiffness / dhat x A_f / 3, which equals the
-/// vertex term when the minimum is at a vertex shared by the faces around it. Derivatives hold
-/// the minimiser's barycentric weights w fixed (the envelope theorem: d d_f / d x_i = w_i n);
-/// friction acts at that point with the same weights. CCD advances each face conservatively:
-/// no point of the triangle moves faster than its fastest vertex, so a guaranteed lower bound of
-/// the field over the triangle bounds the safe step. Over a plane the minimum over a triangle is
-/// at a vertex, so planes keep the cheaper vertex terms. Against convex obstacles (the ground
-/// and every primitive) CCD uses the tangent plane at the closest point instead, which the
-/// convex solid lies behind: a face or vertex sliding along a curved surface close to it is
-/// not held back, as sphere tracing (whose steps shrink with the gap) would hold it.
+/// Faces (set_faces): obstacles other than planes touch the sheet's triangles and edges, not only
+/// its vertices, so that a ridge, an edge or a small sphere cannot slip between vertices. How
+/// depends on the obstacle:
+/// - Sphere: each face f pays kappa_f b(d_f) with d_f = dist(centre, triangle) - radius, the
+///   exact minimum of the field over the triangle, and kappa_f = stiffness / dhat x A_f / 3
+///   (which equals the vertex term when the closest point is a vertex shared by the faces
+///   around it). The point-triangle distance is C1 and has exact derivatives
+///   (collision::pair_barrier_derivatives), so the energy is smooth to round-off.
+/// - Box and gable prism (polyhedra): as IPC between two meshes. The vertex terms above, plus a
+///   barrier between every obstacle corner and sheet triangle (weight A_f / 3) and between every
+///   obstacle edge and sheet edge (mollified as IPC's edge-edge pairs, weight a third of the
+///   areas of the faces at the sheet edge). Every term is an exact distance with exact
+///   derivatives; CCD is additive CCD on the corner-triangle and edge-edge pairs.
+/// - Other obstacles (cylinder, capsule, mesh level sets): d_f is the minimum of the field over
+///   the triangle found by a search (collision::triangle_min_distance, polished by projected
+///   gradient steps). That minimum is accurate only to the search's tolerance, so the energy
+///   carries a little noise; derivatives hold the minimiser's barycentric weights w fixed (the
+///   envelope theorem: d d_f / d x_i = w_i n).
+/// Friction acts at each term's closest point on the sheet with the same weights. Over a plane
+/// the minimum over a triangle is at a vertex, so planes keep the cheaper vertex terms. Against
+/// convex obstacles (the ground and every primitive) vertex and face CCD use the tangent plane
+/// at the closest point, which the convex solid lies behind: a face or vertex sliding along a
+/// curved surface close to it is not held back, as sphere tracing (whose steps shrink with the
+/// gap) would hold it; other fields are sphere-traced on a certified lower bound.
 ///
 /// Impacts (set_impact_density): a barrier scaled to the sheet's weight is far too soft to stop
 /// a sheet arriving at metres per second; it would be stopped only nanometres from the surface,
@@ -37,6 +48,7 @@
 #include <vector>
 
 #include "collision/collider.hpp"
+#include "collision/self_contact.hpp"
 #include "collision/triangle_sdf.hpp"
 #include "simulation/energies/energy_term.hpp"
 
@@ -59,7 +71,9 @@ class ObstacleContactEnergy : public EnergyTerm {
                         const ContactParams& params);
 
   std::string name() const override { return "contact"; }
-  void add_pattern(SparsityBuilder&) const override {}
+  /// Couples the vertices of each face when face contact is on (set_faces); vertex terms need
+  /// no coupling.
+  void add_pattern(SparsityBuilder& pattern) const override;
   void begin_step(const StepContext& ctx, const Eigen::VectorXd& x_t0) override;
   double value(const Eigen::VectorXd& x) const override;
   void add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd& gradient,
@@ -67,8 +81,10 @@ class ObstacleContactEnergy : public EnergyTerm {
   double max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const override;
 
   /// Switches obstacles other than planes to face contact (see above).
-  /// @param faces #F by 3 vertex indices; @param face_areas material area per face [m^2]
-  void set_faces(const Eigen::MatrixX3i& faces, const Eigen::VectorXd& face_areas);
+  /// @param faces #F by 3 vertex indices; @param material_coords #V by 2 flat sheet
+  /// coordinates [m] (face areas and rest edge lengths)
+  void set_faces(const Eigen::MatrixX3i& faces, const Eigen::MatrixX2d& material_coords);
+  void set_hessian_projection(bool project) override { m_project = project; }
 
   /// Enables the impact rule (see above) for a sheet of areal density rho_A [kg/m^2].
   void set_impact_density(double areal_density) { m_impact_density = areal_density; }
@@ -85,7 +101,7 @@ class ObstacleContactEnergy : public EnergyTerm {
 
  private:
   struct FrictionPoint {
-    std::array<int, 3> vertices{{-1, -1, -1}};  // one (a vertex contact) or three (a face)
+    std::array<int, 3> vertices{{-1, -1, -1}};  // one (a vertex), two (an edge) or three (a face)
     Eigen::Vector3d weights = Eigen::Vector3d(1, 0, 0);
     int count = 1;
     int obstacle = -1;
@@ -93,14 +109,44 @@ class ObstacleContactEnergy : public EnergyTerm {
     Eigen::Matrix<double, 3, 2> T = Eigen::Matrix<double, 3, 2>::Zero();  // tangent basis
     Eigen::Vector3d origin = Eigen::Vector3d::Zero();                 // x_t0 + h v_obstacle [m]
   };
+  /// How an obstacle touches the sheet (see the header comment).
+  enum class Mode { vertices, sphere, polytope, search };
+  /// A corner-triangle (a = corner, b = sheet face) or edge-edge (a = sheet edge, b = obstacle
+  /// edge) pair of a polyhedral obstacle.
+  struct FeaturePair {
+    int obstacle;
+    bool edge_edge;
+    int a, b;
+  };
+  /// An obstacle's corners and edges in the world at one time.
+  struct WorldFeatures {
+    std::vector<Eigen::Vector3d> corners;
+    std::vector<std::array<int, 2>> edges;
+    std::vector<double> edge_length;
+  };
+
   bool near_bounds(int o, const Eigen::Vector3d& p) const;
   bool face_near_bounds(int o, const Eigen::VectorXd& x, int f, double margin) const;
-  bool uses_faces(int o) const { return m_face_contact[o]; }
-  /// Minimum of obstacle o's field (at `pose`) over face f at x; +inf distance when the face's
-  /// box is outside the obstacle's bounds.
+  bool uses_faces(int o) const { return m_mode[o] != Mode::vertices; }
+  bool uses_vertices(int o) const { return m_mode[o] == Mode::vertices || m_mode[o] == Mode::polytope; }
+  /// Minimum of obstacle o's field (at `pose`) over face f at x: exact for a sphere, searched
+  /// otherwise; +inf distance when the face's box is outside the obstacle's bounds.
   collision::TriangleSdfResult face_contact(int o, const Eigen::VectorXd& x, int f,
                                             const Eigen::Isometry3d& pose) const;
+  /// Sphere obstacle o (at `pose`) against face f: the four points (centre, face corners).
+  collision::PairPoints sphere_points(const Eigen::VectorXd& x, int f, const Eigen::Isometry3d& pose) const;
   double face_kappa(int f) const { return m_stiffness / m_params.dhat * m_face_area[f] / 3; }
+  /// Corners and edges of polyhedral obstacle o at time t.
+  WorldFeatures world_features(int o, double t) const;
+  /// Pairs of the polyhedral obstacles whose boxes come within `radius` of each other while the
+  /// sheet moves from x to x + dx (dx null: at x only), with the features `features`.
+  std::vector<FeaturePair> feature_pairs(const Eigen::VectorXd& x, const Eigen::VectorXd* dx, double radius,
+                                         const std::vector<WorldFeatures>& features) const;
+  collision::PairPoints pair_points(const FeaturePair& p, const Eigen::VectorXd& x,
+                                    const std::vector<WorldFeatures>& features) const;
+  /// Weight (area) of a pair [m^2] and its mollifier threshold (0 for corner-triangle pairs).
+  double pair_weight(const FeaturePair& p) const;
+  double pair_mollifier_eps(const FeaturePair& p, const std::vector<WorldFeatures>& features) const;
   /// Point of a friction contact: sum of weight x vertex position.
   Eigen::Vector3d contact_point(const FrictionPoint& fp, const Eigen::VectorXd& x) const;
   double kappa(int v) const { return m_stiffness / m_params.dhat * m_area[v]; }
@@ -110,10 +156,14 @@ class ObstacleContactEnergy : public EnergyTerm {
   ContactParams m_params;
   std::vector<collision::Aabb> m_bounds;  // at the step end, inflated by dhat
   std::vector<FrictionPoint> m_friction;
-  std::vector<bool> m_face_contact;       // per obstacle: faces (true) or vertices
+  std::vector<Mode> m_mode;               // per obstacle
+  std::vector<double> m_sphere_radius;    // per obstacle (sphere mode) [m]
+  std::vector<WorldFeatures> m_features;  // per obstacle at the step end (polytope mode)
   Eigen::MatrixX3i m_faces;
-  Eigen::VectorXd m_face_area;
+  Eigen::MatrixX2i m_edges;               // sheet edges (polytope mode)
+  Eigen::VectorXd m_face_area, m_edge_area, m_edge_rest;
   collision::TriangleSdfParams m_triangle;
+  bool m_project = true;
   double m_t1 = 0.0, m_eps = 1e-6, m_normal_force = 0.0;
   double m_impact_density = 0.0;  // rho_A for the impact rule; 0: off
   double m_stiffness = 0.0;       // this step's stiffness [Pa]

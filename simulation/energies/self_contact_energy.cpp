@@ -228,26 +228,11 @@ double SelfContactEnergy::value(const Eigen::VectorXd& x) const {
 
 void SelfContactEnergy::add_pair(const Pair& p, const PairPoints& pts, const DistanceStencil& s,
                                  Eigen::VectorXd& g, BlockSymmetricMatrix* H) const {
-  const double dhat = m_params.dhat, scale = m_params.stiffness / dhat * weight(p);
-  Vector12d g2;
-  Matrix12d H2;
-  const double d2 = collision::distance_squared_derivatives(s, pts, g2, H ? &H2 : nullptr);
-  // b(d) with d = sqrt(d^2): grad d = grad d^2 / (2 d), Hess d = (Hess d^2 - 2 grad d grad d^T) / (2 d).
-  const double d = std::sqrt(d2);
-  const Vector12d gd = g2 / (2 * d);
-  const double b = collision::barrier(d, dhat), b1 = collision::barrier_first_derivative(d, dhat);
-  Vector12d grad = b1 * gd;
+  const double scale = m_params.stiffness / m_params.dhat * weight(p);
+  Vector12d grad;
   Matrix12d hess;
-  if (H) hess = collision::barrier_second_derivative(d, dhat) * gd * gd.transpose() +
-                b1 * (H2 - 2 * gd * gd.transpose()) / (2 * d);
-  if (p.edge_edge) {
-    // Mollified: E = m b, grad = m grad b + b grad m, Hess = m Hb + grad b grad m^T + grad m grad b^T + b Hm.
-    Vector12d gm;
-    Matrix12d Hm;
-    const double m = collision::edge_edge_mollifier(pts, mollifier_eps(p), &gm, H ? &Hm : nullptr);
-    if (H) hess = m * hess + grad * gm.transpose() + gm * grad.transpose() + b * Hm;
-    grad = m * grad + b * gm;
-  }
+  collision::pair_barrier_derivatives(s, pts, m_params.dhat, p.edge_edge ? mollifier_eps(p) : 0.0, grad,
+                                      H ? &hess : nullptr);
   const std::array<int, 4> v = vertices(p);
   for (int k = 0; k < 4; ++k) g.segment<3>(3 * v[k]) += scale * grad.segment<3>(3 * k);
   if (H) {

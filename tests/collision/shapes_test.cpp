@@ -154,3 +154,32 @@ TEST(Shapes, InvalidDimensionsNameTheField) {
   s.length = 0.1;
   EXPECT_THROW(pc::AnalyticCollider{s}, pc::ColliderError);
 }
+
+// Corners and edges of the polyhedra: on the surface, each corner on 3 edges (both solids are
+// simple polyhedra), and Euler's V - E + F = 2 with 6 (box) and 5 (gable) faces, so no face
+// diagonal or missing edge slips in.
+TEST(Shapes, PolytopeFeaturesAreTheCornersAndEdges) {
+  pc::Shape box;
+  box.kind = pc::ShapeKind::box;
+  box.half_extents = {0.03, 0.02, 0.01};
+  pc::Shape gable;
+  gable.kind = pc::ShapeKind::gable;
+  gable.half_width = 0.04;
+  gable.height = 0.03;
+  gable.length = 0.2;
+  for (const auto& [shape, faces] : {std::pair{box, 6}, std::pair{gable, 5}}) {
+    const pc::PolytopeFeatures f = pc::polytope_features(shape);
+    const int v = static_cast<int>(f.corners.size()), e = static_cast<int>(f.edges.size());
+    EXPECT_EQ(v - e + faces, 2);
+    std::vector<int> degree(v, 0);
+    for (const auto& c : f.corners) EXPECT_NEAR(pc::shape_distance(shape, c, nullptr), 0.0, 1e-15);
+    for (const auto& [a, b] : f.edges) {
+      ++degree[a];
+      ++degree[b];
+      EXPECT_NEAR(pc::shape_distance(shape, 0.5 * (f.corners[a] + f.corners[b]), nullptr), 0.0, 1e-15);
+    }
+    for (int d : degree) EXPECT_EQ(d, 3);
+  }
+  pc::Shape sphere;
+  EXPECT_TRUE(pc::polytope_features(sphere).corners.empty());
+}
