@@ -144,9 +144,7 @@ struct Tracker {
     min_distance.resize(b.obstacles.size(), INF);
     step_distance.assign(b.obstacles.size(), INF);
     for (size_t o = 0; o < b.obstacles.size(); ++o) {
-      for (int v = 0; v < s.num_vertices(); ++v)
-        step_distance[o] =
-            std::min(step_distance[o], b.obstacles[o]->distance(s.positions.segment<3>(3 * v), s.time));
+      step_distance[o] = b.contact->surface_distance(static_cast<int>(o), s.positions, s.time);
       min_distance[o] = std::min(min_distance[o], step_distance[o]);
     }
   }
@@ -337,6 +335,10 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
               {"seconds_solve", total.seconds_solve},
               {"seconds_line_search", total.seconds_line_search},
               {"pattern_changes", b.integrator->pattern_id()}};
+  if (b.contact)
+    m["run"]["contact"] = {{"seconds", b.contact->seconds()},
+                           {"max_friction_points", b.contact->max_friction_points()},
+                           {"max_normal_force", b.contact->max_normal_force()}};
   if (b.self_contact)
     m["run"]["self_contact"] = {{"seconds", b.self_contact->seconds()},
                                 {"max_active_pairs", b.self_contact->max_active_pairs()},

@@ -6,6 +6,7 @@
 
 #include "collision/barrier.hpp"
 #include "collision/shapes.hpp"
+#include "simulation/energies/scoped_timer.hpp"
 
 namespace papersim::simulation {
 
@@ -266,6 +267,7 @@ bool ObstacleContactEnergy::near_bounds(int o, const Eigen::Vector3d& p) const {
 }
 
 void ObstacleContactEnergy::begin_step(const StepContext& ctx, const Eigen::VectorXd& x_t0) {
+  ScopedTimer timer(m_seconds);
   m_t1 = ctx.time_t1();
   m_eps = m_params.eps_velocity * ctx.h;
   m_bounds.clear();
@@ -373,6 +375,8 @@ void ObstacleContactEnergy::begin_step(const StepContext& ctx, const Eigen::Vect
     add_friction(fp, *m_obstacles[p.obstacle], -kappa_pair * m * barrier_first_derivative(d, m_params.dhat),
                  contact_point(fp, x_t0), r.normalized());
   }
+  m_max_friction = std::max(m_max_friction, active_friction());
+  m_max_normal_force = std::max(m_max_normal_force, m_normal_force);
 }
 
 namespace {
@@ -390,6 +394,7 @@ collision::DistanceStencil pair_stencil(bool edge_edge, const collision::PairPoi
 }  // namespace
 
 double ObstacleContactEnergy::value(const Eigen::VectorXd& x) const {
+  ScopedTimer timer(m_seconds);
   double e = 0;
   const int nv = static_cast<int>(m_area.size());
   const double dhat = m_params.dhat;
@@ -438,6 +443,7 @@ collision::Matrix12d project_psd(const collision::Matrix12d& H) {
 
 void ObstacleContactEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd& g,
                                             BlockSymmetricMatrix* H) const {
+  ScopedTimer timer(m_seconds);
   const int nv = static_cast<int>(m_area.size());
   const double dhat = m_params.dhat;
   const auto add_weighted = [&](const std::array<int, 3>& vs, const Eigen::Vector3d& w, int count,
@@ -532,6 +538,7 @@ void ObstacleContactEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::Vec
 }
 
 double ObstacleContactEnergy::max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const {
+  ScopedTimer timer(m_seconds);
   double alpha = 1.0;
   const int nv = static_cast<int>(m_area.size());
   for (int o = 0; o < num_obstacles(); ++o) {
@@ -670,6 +677,63 @@ double ObstacleContactEnergy::max_step(const Eigen::VectorXd& x, const Eigen::Ve
     }
   }
   return alpha;
+}
+
+double ObstacleContactEnergy::surface_distance(int o, const Eigen::VectorXd& x, double t) const {
+  ScopedTimer timer(m_seconds);
+  const collision::Collider& obs = *m_obstacles[o];
+  double m = INF;
+  for (int v = 0; v < m_area.size(); ++v) m = std::min(m, obs.distance(x.segment<3>(3 * v), t));
+  if (m_mode[o] == Mode::vertices || !(m > 0)) return m;
+  const Eigen::Isometry3d pose = obs.motion.pose(t);
+  const auto face_box = [&](int f) {
+    collision::Aabb b;
+    for (int k = 0; k < 3; ++k) b.extend(Eigen::Vector3d(x.segment<3>(3 * m_faces(f, k))));
+    return b;
+  };
+  collision::Aabb bounds = obs.bounds(t);
+  if (m_mode[o] == Mode::sphere || m_mode[o] == Mode::search) {
+    for (int f = 0; f < m_faces.rows(); ++f) {
+      if (face_box(f).distance_to(bounds) >= m) continue;  // the face min is at least that
+      if (m_mode[o] == Mode::sphere) {
+        const collision::PairPoints pts = sphere_points(x, f, pose);
+        m = std::min(m, std::sqrt(collision::point_triangle_distance_squared(pts)) - m_sphere_radius[o]);
+        continue;
+      }
+      collision::TriangleSdfParams p = m_triangle;
+      p.cutoff = m;
+      m = std::min(m, face_minimum(obs, x.segment<3>(3 * m_faces(f, 0)), x.segment<3>(3 * m_faces(f, 1)),
+                                   x.segment<3>(3 * m_faces(f, 2)), pose, p).distance);
+    }
+    return m;
+  }
+  // Polyhedron: corners against faces and edges against edges, within the vertex minimum; an
+  // obstacle edge through a face (every vertex outside) counts as distance 0.
+  std::vector<WorldFeatures> features(m_obstacles.size());
+  features[o] = world_features(o, t);
+  const WorldFeatures& w = features[o];
+  for (int f = 0; f < m_faces.rows(); ++f) {
+    if (face_box(f).distance_to(bounds) > 0) continue;
+    const Eigen::Vector3d a = x.segment<3>(3 * m_faces(f, 0)), b = x.segment<3>(3 * m_faces(f, 1)),
+                          c = x.segment<3>(3 * m_faces(f, 2));
+    const Eigen::Vector3d n = (b - a).cross(c - a);
+    for (const auto& [i, j] : w.edges) {
+      const Eigen::Vector3d &p = w.corners[i], &q = w.corners[j];
+      const double sp = n.dot(p - a), sq = n.dot(q - a);
+      if (sp * sq > 0 || sp == sq) continue;  // both ends on one side of the plane
+      const Eigen::Vector3d y = p + sp / (sp - sq) * (q - p);  // where the edge meets the plane
+      const bool inside = n.dot((b - a).cross(y - a)) >= 0 && n.dot((c - b).cross(y - b)) >= 0 &&
+                          n.dot((a - c).cross(y - c)) >= 0;
+      if (inside) return 0.0;
+    }
+  }
+  for (const FeaturePair& p : feature_pairs(x, nullptr, m, features)) {
+    if (p.obstacle != o) continue;
+    const collision::PairPoints pts = pair_points(p, x, features);
+    m = std::min(m, std::sqrt(p.edge_edge ? collision::edge_edge_distance_squared(pts)
+                                          : collision::point_triangle_distance_squared(pts)));
+  }
+  return m;
 }
 
 double ObstacleContactEnergy::min_distance(int o, const Eigen::VectorXd& x) const {

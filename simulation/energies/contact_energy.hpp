@@ -98,6 +98,16 @@ class ObstacleContactEnergy : public EnergyTerm {
   /// Sum of normal contact force magnitudes at the step start [N].
   double normal_force() const { return m_normal_force; }
   int num_obstacles() const { return static_cast<int>(m_obstacles.size()); }
+  /// Smallest signed distance from the sheet's surface to obstacle o at time t [m]: over the
+  /// vertices, and with face contact over the faces (spheres, searched fields) or the corner-
+  /// triangle and edge-edge pairs (polyhedra) too, so a ridge between vertices counts.
+  double surface_distance(int o, const Eigen::VectorXd& x, double t) const;
+  /// Wall time spent in this term (field queries, barrier, friction, CCD) [s].
+  double seconds() const { return m_seconds; }
+  /// Most friction contacts (vertices, faces, pairs) in one step, and the largest total normal
+  /// force at a step start over the run [N].
+  int max_friction_points() const { return m_max_friction; }
+  double max_normal_force() const { return m_max_normal_force; }
 
  private:
   struct FrictionPoint {
@@ -167,6 +177,9 @@ class ObstacleContactEnergy : public EnergyTerm {
   double m_t1 = 0.0, m_eps = 1e-6, m_normal_force = 0.0;
   double m_impact_density = 0.0;  // rho_A for the impact rule; 0: off
   double m_stiffness = 0.0;       // this step's stiffness [Pa]
+  mutable double m_seconds = 0.0;
+  int m_max_friction = 0;
+  double m_max_normal_force = 0.0;
 };
 
 }  // namespace papersim::simulation

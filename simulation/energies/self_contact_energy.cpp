@@ -2,11 +2,11 @@
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <stdexcept>
 
 #include "collision/barrier.hpp"
+#include "simulation/energies/scoped_timer.hpp"
 
 namespace papersim::simulation {
 
@@ -16,21 +16,6 @@ using collision::PairPoints;
 using collision::Vector12d;
 
 namespace {
-
-/// Adds the wall time of a scope to a counter.
-class ScopedTimer {
- public:
-  explicit ScopedTimer(double& total) : m_total(total), m_t0(std::chrono::steady_clock::now()) {}
-  ~ScopedTimer() {
-    m_total += std::chrono::duration<double>(std::chrono::steady_clock::now() - m_t0).count();
-  }
-  ScopedTimer(const ScopedTimer&) = delete;
-  ScopedTimer& operator=(const ScopedTimer&) = delete;
-
- private:
-  double& m_total;
-  std::chrono::steady_clock::time_point m_t0;
-};
 
 Matrix12d project_psd(const Matrix12d& H) {
   Eigen::SelfAdjointEigenSolver<Matrix12d> es(H);
