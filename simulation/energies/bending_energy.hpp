@@ -63,6 +63,7 @@ class BendingEnergy : public EnergyTerm {
     std::vector<std::array<int, 4>> local;  // per hinge: local index of (v0, v1, a, b)
     Eigen::MatrixXd P;                   // 3 x |S|: K = P theta (least squares)
     Eigen::MatrixXd R;                   // |S| x |S|: scaled fit residual (hourglass control)
+    Eigen::MatrixXd M;                   // |S| x |S|: P^T Q P + R^T R, d2E/dtheta2 / stiffness
     double area = 0;                     // [m^2]
     double stiffness = 0;                // A D_f [N m^3]
     Eigen::Vector3d plastic = Eigen::Vector3d::Zero();
