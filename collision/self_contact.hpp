@@ -82,6 +82,10 @@ double distance_squared_derivatives(const DistanceStencil& s, const PairPoints& 
 /// primitive's closest point to the first's is r = sum_i w_i x_i (|r|^2 = the squared distance).
 Eigen::Vector4d closest_point_weights(const DistanceStencil& s, const PairPoints& x);
 
+/// A cheap lower bound on the distance of a pair [m] from bounding spheres (the triangle's about
+/// its centroid, each segment's about its midpoint); may be negative.
+double pair_distance_lower_bound(const PairPoints& x, bool edge_edge);
+
 /// Exact squared distance between point x[0] and triangle x[1..3] [m^2].
 double point_triangle_distance_squared(const PairPoints& x);
 /// Exact squared distance between segments x[0]x[1] and x[2]x[3] [m^2].

@@ -119,7 +119,13 @@ void SelfContactEnergy::ensure_candidates(const Eigen::VectorXd& x) const {
   build_candidates(x, Eigen::VectorXd::Zero(x.size()));
 }
 
-double SelfContactEnergy::stencil_distance2(const Pair& p, const PairPoints& pts, DistanceStencil& s) const {
+double SelfContactEnergy::stencil_distance2(const Pair& p, const PairPoints& pts, DistanceStencil& s,
+                                            double reject2) const {
+  // A lower bound from bounding spheres first: most candidates are neighbours in the mesh a
+  // whole edge apart, and the closest-feature search costs several times more (measured: the
+  // stencils were 6% of a fall-sphere run with no pair ever within the thickness).
+  const double gap = collision::pair_distance_lower_bound(pts, p.edge_edge);
+  if (gap > 0 && gap * gap >= reject2) return gap * gap;
   s = p.edge_edge ? collision::edge_edge_stencil(pts) : collision::point_triangle_stencil(pts);
   return collision::distance_squared(s, pts);
 }
@@ -135,7 +141,7 @@ void SelfContactEnergy::begin_step(const StepContext& ctx, const Eigen::VectorXd
   for (const Pair& p : m_candidates) {
     const PairPoints pts = points(p, x_t0);
     DistanceStencil s;
-    const double d2 = stencil_distance2(p, pts, s);
+    const double d2 = stencil_distance2(p, pts, s, dhat * dhat);
     if (d2 >= dhat * dhat || d2 <= 0) continue;
     const double d = std::sqrt(d2);
     const double m = p.edge_edge ? collision::edge_edge_mollifier(pts, mollifier_eps(p), nullptr, nullptr) : 1.0;
@@ -165,7 +171,7 @@ bool SelfContactEnergy::update_pattern(const Eigen::VectorXd& x) {
   std::vector<Pair> near;
   for (const Pair& p : m_candidates) {
     DistanceStencil s;
-    const double d2 = stencil_distance2(p, points(p, x), s);
+    const double d2 = stencil_distance2(p, points(p, x), s, near2);
     if (d2 >= near2) continue;
     near.push_back(p);
     if (!missing && d2 < dhat2) missing = !std::binary_search(m_pattern.begin(), m_pattern.end(), key(p));
@@ -206,7 +212,7 @@ double SelfContactEnergy::value(const Eigen::VectorXd& x) const {
   for (const Pair& p : m_candidates) {
     const PairPoints pts = points(p, x);
     DistanceStencil s;
-    const double d2 = stencil_distance2(p, pts, s);
+    const double d2 = stencil_distance2(p, pts, s, dhat * dhat);
     if (d2 >= dhat * dhat) continue;
     if (!(d2 > 0)) return INF;
     const double m = p.edge_edge ? collision::edge_edge_mollifier(pts, mollifier_eps(p), nullptr, nullptr) : 1.0;
@@ -261,7 +267,7 @@ void SelfContactEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::VectorX
   for (const Pair& p : m_candidates) {
     const PairPoints pts = points(p, x);
     DistanceStencil s;
-    const double d2 = stencil_distance2(p, pts, s);
+    const double d2 = stencil_distance2(p, pts, s, dhat2);
     if (d2 >= dhat2 || !(d2 > 0)) continue;
     ++active;
     add_pair(p, pts, s, g, H);

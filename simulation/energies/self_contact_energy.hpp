@@ -111,8 +111,10 @@ class SelfContactEnergy : public EnergyTerm {
   void build_candidates(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const;
   /// The candidate pairs valid at x (rebuilt, for x alone, when x is off the segment).
   void ensure_candidates(const Eigen::VectorXd& x) const;
-  double stencil_distance2(const Pair& p, const collision::PairPoints& pts,
-                           collision::DistanceStencil& s) const;
+  /// Squared distance of a pair and its stencil s; when a bounding-sphere bound shows the
+  /// squared distance is at least `reject2`, that bound instead (s not set).
+  double stencil_distance2(const Pair& p, const collision::PairPoints& pts, collision::DistanceStencil& s,
+                           double reject2 = INF) const;
   /// Adds one pair's barrier derivatives (gradient, Hessian) at distance stencil s.
   void add_pair(const Pair& p, const collision::PairPoints& pts, const collision::DistanceStencil& s,
                 Eigen::VectorXd& g, BlockSymmetricMatrix* H) const;
