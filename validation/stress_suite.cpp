@@ -99,7 +99,7 @@ pc::ColliderSpec sphere_at(const Eigen::Vector3d& centre, double radius) {
 std::vector<Case> make_cases(const fs::path& work) {
   std::vector<Case> cases;
   // 1. Time step from 0.1 ms to 40 ms: a drop of 1 cm onto the ground (impact at 0.44 m/s).
-  for (double h : {1e-4, 1e-3, 1e-2, 4e-2}) {
+  for (double h : {1e-4, 1e-3, 1e-2, 2e-2, 4e-2}) {
     const double duration = h < 5e-4 ? 0.06 : h < 5e-3 ? 0.3 : 1.0;
     char name[64];
     std::snprintf(name, sizeof(name), "step %g ms", 1e3 * h);
@@ -122,6 +122,13 @@ std::vector<Case> make_cases(const fs::path& work) {
     char name[64];
     std::snprintf(name, sizeof(name), "sphere impact %g m/s", v);
     cases.push_back({name, "sheet onto a 2 cm sphere, h = 1 ms", s, ""});
+  }
+  {  // The large step against a curved obstacle: 20 ms steps, the sheet drapes over the sphere.
+    const double r = 0.02;
+    ps::Scene s = drop_scene(2 * r + 0.01, 9.8, 1.0, 2e-2);
+    s.obstacles.push_back(sphere_at(Eigen::Vector3d(0, 0, r), r));
+    s.contact.faces = true;
+    cases.push_back({"sphere step 20 ms", "drop 1 cm onto a 2 cm sphere, h = 20 ms", s, ""});
   }
   // 4. Knife edges: a gable with a 30 degree ridge, and a 1 mm plate hit edge-on.
   {
