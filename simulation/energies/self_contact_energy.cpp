@@ -23,12 +23,6 @@ Matrix12d project_psd(const Matrix12d& H) {
          es.eigenvectors().transpose();
 }
 
-double max_vertex_distance(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
-  double m = 0;
-  for (Eigen::Index v = 0; v < a.size() / 3; ++v)
-    m = std::max(m, (a.segment<3>(3 * v) - b.segment<3>(3 * v)).squaredNorm());
-  return std::sqrt(m);
-}
 
 }  // namespace
 
@@ -86,37 +80,68 @@ std::uint64_t SelfContactEnergy::key(const Pair& p) {
   return (std::uint64_t(p.edge_edge) << 62) | (std::uint64_t(p.a) << 31) | std::uint64_t(p.b);
 }
 
-void SelfContactEnergy::build_candidates(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const {
-  m_segment_x = x;
-  m_segment_dx = dx;
-  // The distance of every pair along x + a dx is unchanged when all vertices move by a common
-  // translation: the boxes are swept along dx less its mean, which for a sheet falling or being
-  // carried is most of it (measured on fall-sphere: the broad phase found every neighbour along
-  // a 2 cm fall per step).
+namespace {
+
+/// Largest |d_v - mean(d)| over the vertices of a flat 3N vector [m].
+double relative_motion(const Eigen::VectorXd& d) {
+  const Eigen::Index nv = d.size() / 3;
+  if (nv == 0) return 0;
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-  const Eigen::Index nv = x.size() / 3;
-  for (Eigen::Index v = 0; v < nv; ++v) mean += dx.segment<3>(3 * v);
-  if (nv > 0) mean /= static_cast<double>(nv);
-  Eigen::VectorXd x1 = x + dx;
-  for (Eigen::Index v = 0; v < nv; ++v) x1.segment<3>(3 * v) -= mean;
+  for (Eigen::Index v = 0; v < nv; ++v) mean += d.segment<3>(3 * v);
+  mean /= static_cast<double>(nv);
+  double m = 0;
+  for (Eigen::Index v = 0; v < nv; ++v) m = std::max(m, (d.segment<3>(3 * v) - mean).squaredNorm());
+  return std::sqrt(m);
+}
+
+}  // namespace
+
+bool SelfContactEnergy::covered(const Eigen::VectorXd& x) const {
+  if (m_base.size() != x.size()) return false;
+  if (m_segment_dx.size() == 0) return relative_motion(x - m_base) <= 0.5 * m_margin;
+  // Segment set: x within dhat / 4 of the segment point base + a dx (a the least-squares
+  // fraction, clamped to [0, 1]), after removing the common translation.
+  const double dd = m_segment_dx.squaredNorm();
+  const double a = dd > 0 ? std::clamp((x - m_base).dot(m_segment_dx) / dd, 0.0, 1.0) : 0.0;
+  return relative_motion(x - m_base - a * m_segment_dx) <= 0.25 * m_params.dhat;
+}
+
+void SelfContactEnergy::find_candidates(const Eigen::VectorXd& x, const Eigen::VectorXd* dx) const {
+  m_base = x;
+  Eigen::VectorXd x1 = x;
+  if (dx) {
+    // Swept boxes along dx less its mean: pair distances are translation invariant.
+    m_segment_dx = *dx;
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+    const Eigen::Index nv = x.size() / 3;
+    for (Eigen::Index v = 0; v < nv; ++v) mean += dx->segment<3>(3 * v);
+    if (nv > 0) mean /= static_cast<double>(nv);
+    for (Eigen::Index v = 0; v < nv; ++v) x1.segment<3>(3 * v) += dx->segment<3>(3 * v) - mean;
+    m_margin = 0;
+  } else {
+    m_segment_dx.resize(0);
+    m_margin = 2 * m_params.dhat;
+  }
   const collision::SelfContactCandidates c =
-      collision::find_self_contact_candidates(m_mesh, x, x1, 1.5 * m_params.dhat);
+      collision::find_self_contact_candidates(m_mesh, x, x1, 1.5 * m_params.dhat + m_margin);
   m_candidates.clear();
   m_candidates.reserve(c.size());
   for (const auto& [v, f] : c.point_triangle) m_candidates.push_back({false, v, f});
   for (const auto& [a, b] : c.edge_edge) m_candidates.push_back({true, a, b});
 }
 
+void SelfContactEnergy::build_candidates(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const {
+  // A set at a base with a margin covers the segment when it covers both ends (the relative
+  // motion is convex along the segment: a maximum of norms of affine functions).
+  if (m_segment_dx.size() == 0 && covered(x) && covered(x + dx)) return;
+  if (relative_motion(dx) <= m_params.dhat)
+    find_candidates(x, nullptr);  // the margin (2 dhat) covers the whole step
+  else
+    find_candidates(x, &dx);
+}
+
 void SelfContactEnergy::ensure_candidates(const Eigen::VectorXd& x) const {
-  // x is within delta of the segment point x_s + a dx_s (a the least-squares fraction, clamped
-  // to [0, 1]) when every vertex is. Pairs left out were farther than 1.5 dhat apart all along
-  // the segment; moving each vertex by at most dhat / 4 brings them no closer than dhat.
-  if (m_segment_x.size() == x.size()) {
-    const double dd = m_segment_dx.squaredNorm();
-    const double a = dd > 0 ? std::clamp((x - m_segment_x).dot(m_segment_dx) / dd, 0.0, 1.0) : 0.0;
-    if (max_vertex_distance(x, m_segment_x + a * m_segment_dx) <= 0.25 * m_params.dhat) return;
-  }
-  build_candidates(x, Eigen::VectorXd::Zero(x.size()));
+  if (!covered(x)) find_candidates(x, nullptr);
 }
 
 double SelfContactEnergy::stencil_distance2(const Pair& p, const PairPoints& pts, DistanceStencil& s,

@@ -20,9 +20,12 @@
 /// contact direction); the relative tangential slip u = T^T sum_i w_i (x_i - x_i,t0) pays
 /// mu lambda f0(|u|).
 ///
-/// Active set and Hessian pattern: candidate pairs come from a broad phase over the boxes swept
-/// along the last Newton direction (max_step), so that every configuration the line search
-/// tries is covered by one broad phase; configurations off that segment get their own. The Hessian pattern holds the pairs within 2 dhat (and the friction pairs) when it was
+/// Active set and Hessian pattern: candidate pairs come from a broad phase at base positions
+/// with a margin of 2 dhat; the set holds at every configuration within dhat of the base after
+/// removing the common translation, so that the line search, the next Newton iterations and,
+/// for a sheet moving as a whole, the next time steps reuse it. A Newton step with more
+/// relative motion gets a broad phase over the boxes swept along it (less its mean) instead.
+/// The Hessian pattern holds the pairs within 2 dhat (and the friction pairs) when it was
 /// last rebuilt; update_pattern() asks for a rebuild only when a pair within dhat (or a friction
 /// pair) is not in it, or when it holds far more pairs than are near (a contact ended), so that
 /// the symbolic factorisation is redone rarely.
@@ -107,10 +110,16 @@ class SelfContactEnergy : public EnergyTerm {
   double weight(const Pair& p) const;
   double mollifier_eps(const Pair& p) const;
   static std::uint64_t key(const Pair& p);
-  /// Candidate pairs for every configuration on the segment x -> x + dx.
+  /// Candidate pairs for every configuration on the segment x -> x + dx (the current set when
+  /// it covers the segment).
   void build_candidates(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const;
-  /// The candidate pairs valid at x (rebuilt, for x alone, when x is off the segment).
+  /// The candidate pairs valid at x (found again, for x alone, when x is not covered).
   void ensure_candidates(const Eigen::VectorXd& x) const;
+  /// Finds the pairs at base x: within 1.5 dhat + 2 dhat at x (dx null), or within 1.5 dhat
+  /// along the segment x -> x + dx.
+  void find_candidates(const Eigen::VectorXd& x, const Eigen::VectorXd* dx) const;
+  /// True when the current candidate set holds every pair within dhat at x.
+  bool covered(const Eigen::VectorXd& x) const;
   /// Squared distance of a pair and its stencil s; when a bounding-sphere bound shows the
   /// squared distance is at least `reject2`, that bound instead (s not set).
   double stencil_distance2(const Pair& p, const collision::PairPoints& pts, collision::DistanceStencil& s,
@@ -126,11 +135,15 @@ class SelfContactEnergy : public EnergyTerm {
   bool m_project = true;
   double m_eps = 1e-6;  // friction smoothing: eps_velocity h [m]
 
-  // Candidates: every pair that comes within 1.5 dhat anywhere on the segment
-  // m_segment_x -> m_segment_x + m_segment_dx (swept boxes), so they hold every pair within
-  // dhat at any x less than dhat / 4 from the segment (see ensure_candidates).
+  // Candidates, found at the base positions m_base, either (a) every pair within 1.5 dhat +
+  // m_margin there, or (b) every pair that comes within 1.5 dhat along the segment m_base ->
+  // m_base + m_segment_dx. Pair distances do not change under a common translation, so (a)
+  // holds every pair within dhat at any x whose vertices are within m_margin / 2 of base +
+  // (mean displacement), and (b) at any x within dhat / 4 of a point of the segment after the
+  // same removal (see covered).
   mutable std::vector<Pair> m_candidates;
-  mutable Eigen::VectorXd m_segment_x, m_segment_dx;
+  mutable Eigen::VectorXd m_base, m_segment_dx;
+  mutable double m_margin = 0;
 
   std::vector<std::uint64_t> m_pattern;  // sorted pair keys in the Hessian pattern
   std::vector<Pair> m_pattern_pairs;
