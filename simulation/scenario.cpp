@@ -104,6 +104,10 @@ Scene fall_base(const std::string& name, std::uint64_t seed, double duration, do
   s.duration = duration;
   s.time_step = time_step;
   s.ground = true;
+  // Contact-rich steps often converge slowly but steadily past 60 Newton iterations; splitting
+  // them throws that work away (measured on fall-sphere seed 2: 150 iterations per step took
+  // 3221 iterations and 1 split, 60 took 4985 and 23 splits).
+  s.newton.max_iterations = 150;
   return s;
 }
 
