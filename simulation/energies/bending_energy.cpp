@@ -10,6 +10,7 @@
 #include <string>
 
 #include "simulation/energies/dihedral_angle.hpp"
+#include "simulation/energies/psd.hpp"
 #include "simulation/errors.hpp"
 
 namespace papersim::simulation {
@@ -242,11 +243,7 @@ void BendingEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd& g
             H.block<3, 3>(3 * face.local[i][q], 3 * face.local[i][r]) +=
                 c[i] * hesses[face.hinges[i]].block<3, 3>(3 * q, 3 * r);
     }
-    if (m_hessian_kind == BendingHessian::projected) {
-      Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(H);
-      H = es.eigenvectors() * es.eigenvalues().cwiseMax(0.0).asDiagonal() *
-          es.eigenvectors().transpose();
-    }
+    if (m_hessian_kind == BendingHessian::projected) H = project_psd(H);
     hessian->add_element(face.vertices.data(), nv, H.data());
   }
 }

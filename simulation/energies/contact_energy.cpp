@@ -1,11 +1,11 @@
 #include "simulation/energies/contact_energy.hpp"
 
-#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 
 #include "collision/barrier.hpp"
 #include "collision/shapes.hpp"
+#include "simulation/energies/psd.hpp"
 #include "simulation/energies/scoped_timer.hpp"
 
 namespace papersim::simulation {
@@ -238,20 +238,27 @@ collision::TriangleSdfResult face_minimum(const collision::Collider& obs, const 
 
 }  // namespace
 
+double ObstacleContactEnergy::sphere_face_distance(int o, const Eigen::VectorXd& x, int f, const Eigen::Isometry3d& pose,
+                                                   collision::PairPoints& pts, collision::DistanceStencil& s) const {
+  pts = sphere_points(x, f, pose);
+  s = collision::point_triangle_stencil(pts);
+  return std::sqrt(collision::distance_squared(s, pts)) - m_sphere_radius[o];
+}
+
 collision::TriangleSdfResult ObstacleContactEnergy::face_contact(int o, const Eigen::VectorXd& x, int f,
                                                                  const Eigen::Isometry3d& pose) const {
   if (!face_near_bounds(o, x, f, 0.0)) return {};  // distance +inf: out of contact
   if (m_mode[o] == Mode::sphere) {
     // Exact: the closest point of the triangle to the centre.
-    const collision::PairPoints pts = sphere_points(x, f, pose);
-    const collision::DistanceStencil s = collision::point_triangle_stencil(pts);
-    const Eigen::Vector4d w = collision::closest_point_weights(s, pts);  // r = centre - point
+    collision::PairPoints pts;
+    collision::DistanceStencil s;
     collision::TriangleSdfResult r;
+    r.distance = sphere_face_distance(o, x, f, pose, pts, s);
+    const Eigen::Vector4d w = collision::closest_point_weights(s, pts);  // r = centre - point
     r.barycentric = -w.tail<3>();
     r.point = r.barycentric[0] * pts[1] + r.barycentric[1] * pts[2] + r.barycentric[2] * pts[3];
     const Eigen::Vector3d out = r.point - pts[0];
     const double len = out.norm();
-    r.distance = len - m_sphere_radius[o];
     r.lower_bound = r.distance;
     r.gradient = len > 0 ? Eigen::Vector3d(out / len) : Eigen::Vector3d::UnitZ();
     r.evaluations = 1;
@@ -401,10 +408,14 @@ double ObstacleContactEnergy::value(const Eigen::VectorXd& x) const {
   for (int o = 0; o < num_obstacles(); ++o) {
     if (m_mode[o] == Mode::sphere || m_mode[o] == Mode::search) {
       const Eigen::Isometry3d pose = m_obstacles[o]->motion.pose(m_t1);
+      collision::PairPoints pts;
+      collision::DistanceStencil s;
       for (int f = 0; f < m_faces.rows(); ++f) {
-        const auto r = face_contact(o, x, f, pose);
-        if (r.distance <= 0) return INF;
-        if (r.distance < dhat) e += face_kappa(f) * barrier(r.distance, dhat);
+        if (!face_near_bounds(o, x, f, 0.0)) continue;
+        const double d = m_mode[o] == Mode::sphere ? sphere_face_distance(o, x, f, pose, pts, s)
+                                                   : face_contact(o, x, f, pose).distance;
+        if (d <= 0) return INF;
+        if (d < dhat) e += face_kappa(f) * barrier(d, dhat);
       }
     }
     if (!uses_vertices(o)) continue;
@@ -431,15 +442,6 @@ double ObstacleContactEnergy::value(const Eigen::VectorXd& x) const {
   }
   return e;
 }
-
-namespace {
-
-collision::Matrix12d project_psd(const collision::Matrix12d& H) {
-  Eigen::SelfAdjointEigenSolver<collision::Matrix12d> es(H);
-  return es.eigenvectors() * es.eigenvalues().cwiseMax(0.0).asDiagonal() * es.eigenvectors().transpose();
-}
-
-}  // namespace
 
 void ObstacleContactEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd& g,
                                             BlockSymmetricMatrix* H) const {
@@ -479,18 +481,21 @@ void ObstacleContactEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::Vec
   for (int o = 0; o < num_obstacles(); ++o) {
     if (m_mode[o] == Mode::sphere || m_mode[o] == Mode::search) {
       const Eigen::Isometry3d pose = m_obstacles[o]->motion.pose(m_t1);
+      collision::PairPoints pts;
+      collision::DistanceStencil s;
       for (int f = 0; f < m_faces.rows(); ++f) {
-        const auto r = face_contact(o, x, f, pose);
-        if (r.distance >= dhat || r.distance <= 0) continue;
+        if (!face_near_bounds(o, x, f, 0.0)) continue;
         const double k = face_kappa(f);
         const std::array<int, 3> vs{{m_faces(f, 0), m_faces(f, 1), m_faces(f, 2)}};
         if (m_mode[o] == Mode::sphere) {
-          const collision::PairPoints pts = sphere_points(x, f, pose);
-          collision::pair_barrier_derivatives(collision::point_triangle_stencil(pts), pts, dhat, 0.0, grad,
-                                              H ? &hess : nullptr, m_sphere_radius[o]);
+          const double d = sphere_face_distance(o, x, f, pose, pts, s);
+          if (d >= dhat || d <= 0) continue;
+          collision::pair_barrier_derivatives(s, pts, dhat, 0.0, grad, H ? &hess : nullptr, m_sphere_radius[o]);
           add_exact(vs, 1, 3, k, grad, &hess);
           continue;
         }
+        const auto r = face_contact(o, x, f, pose);
+        if (r.distance >= dhat || r.distance <= 0) continue;
         add_weighted(vs, r.barycentric, 3, k * barrier_first_derivative(r.distance, dhat) * r.gradient,
                      k * barrier_second_derivative(r.distance, dhat) * r.gradient * r.gradient.transpose());
       }
@@ -696,8 +701,9 @@ double ObstacleContactEnergy::surface_distance(int o, const Eigen::VectorXd& x, 
     for (int f = 0; f < m_faces.rows(); ++f) {
       if (face_box(f).distance_to(bounds) >= m) continue;  // the face min is at least that
       if (m_mode[o] == Mode::sphere) {
-        const collision::PairPoints pts = sphere_points(x, f, pose);
-        m = std::min(m, std::sqrt(collision::point_triangle_distance_squared(pts)) - m_sphere_radius[o]);
+        collision::PairPoints pts;
+        collision::DistanceStencil s;
+        m = std::min(m, sphere_face_distance(o, x, f, pose, pts, s));
         continue;
       }
       collision::TriangleSdfParams p = m_triangle;
@@ -733,13 +739,6 @@ double ObstacleContactEnergy::surface_distance(int o, const Eigen::VectorXd& x, 
     m = std::min(m, std::sqrt(p.edge_edge ? collision::edge_edge_distance_squared(pts)
                                           : collision::point_triangle_distance_squared(pts)));
   }
-  return m;
-}
-
-double ObstacleContactEnergy::min_distance(int o, const Eigen::VectorXd& x) const {
-  double m = INF;
-  for (int v = 0; v < m_area.size(); ++v)
-    m = std::min(m, m_obstacles[o]->distance(x.segment<3>(3 * v), m_t1));
   return m;
 }
 

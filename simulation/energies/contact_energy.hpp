@@ -35,7 +35,11 @@
 /// convex obstacles (the ground and every primitive) vertex and face CCD use the tangent plane
 /// at the closest point, which the convex solid lies behind: a face or vertex sliding along a
 /// curved surface close to it is not held back, as sphere tracing (whose steps shrink with the
-/// gap) would hold it; other fields are sphere-traced on a certified lower bound.
+/// gap) would hold it. A sphere face whose tangent-plane bound is shorter than the step also gets
+/// additive CCD on the centre-triangle distance with the radius as thickness (a face turning on
+/// a sphere smaller than itself closes its tangent plane at once but keeps its distance), and
+/// the larger of the two safe bounds is taken. Other fields are sphere-traced on a certified
+/// lower bound.
 ///
 /// Impacts (set_impact_density): a barrier scaled to the sheet's weight is far too soft to stop
 /// a sheet arriving at metres per second; it would be stopped only nanometres from the surface,
@@ -91,8 +95,6 @@ class ObstacleContactEnergy : public EnergyTerm {
   /// Barrier stiffness in force for the current step [Pa] (>= ContactParams::stiffness).
   double step_stiffness() const { return m_stiffness; }
 
-  /// Smallest signed distance of any vertex to obstacle o at the end-of-step time [m].
-  double min_distance(int o, const Eigen::VectorXd& x) const;
   /// Number of vertices with friction active in the current step.
   int active_friction() const { return static_cast<int>(m_friction.size()); }
   /// Sum of normal contact force magnitudes at the step start [N].
@@ -145,6 +147,10 @@ class ObstacleContactEnergy : public EnergyTerm {
                                             const Eigen::Isometry3d& pose) const;
   /// Sphere obstacle o (at `pose`) against face f: the four points (centre, face corners).
   collision::PairPoints sphere_points(const Eigen::VectorXd& x, int f, const Eigen::Isometry3d& pose) const;
+  /// Sphere obstacle o against face f: its surface distance |centre - triangle| - radius [m],
+  /// with the points and the closest-feature stencil it was measured on.
+  double sphere_face_distance(int o, const Eigen::VectorXd& x, int f, const Eigen::Isometry3d& pose,
+                              collision::PairPoints& pts, collision::DistanceStencil& s) const;
   double face_kappa(int f) const { return m_stiffness / m_params.dhat * m_face_area[f] / 3; }
   /// Corners and edges of polyhedral obstacle o at time t.
   WorldFeatures world_features(int o, double t) const;

@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "collision/barrier.hpp"
+#include "simulation/energies/psd.hpp"
 #include "simulation/errors.hpp"
 
 namespace papersim::simulation {
@@ -138,11 +139,7 @@ double MembraneEnergy::element(int f, const Eigen::Matrix<double, 9, 1>& xs,
         const double s = 2 * t.area * t.w.row(i).dot(G * t.w.row(j).transpose());
         H->block<3, 3>(3 * i, 3 * j).diagonal().array() += s;
       }
-    if (m_project && (G.determinant() < 0 || G.trace() < 0)) {
-      Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 9, 9>> es(*H);
-      *H = es.eigenvectors() * es.eigenvalues().cwiseMax(0.0).asDiagonal() *
-           es.eigenvectors().transpose();
-    }
+    if (m_project && (G.determinant() < 0 || G.trace() < 0)) *H = project_psd(*H);
   }
   return t.area * W.value;
 }

@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "collision/barrier.hpp"
+#include "simulation/energies/psd.hpp"
 #include "simulation/energies/scoped_timer.hpp"
 
 namespace papersim::simulation {
@@ -17,11 +18,6 @@ using collision::Vector12d;
 
 namespace {
 
-Matrix12d project_psd(const Matrix12d& H) {
-  Eigen::SelfAdjointEigenSolver<Matrix12d> es(H);
-  return es.eigenvectors() * es.eigenvalues().cwiseMax(0.0).asDiagonal() *
-         es.eigenvectors().transpose();
-}
 
 
 }  // namespace
