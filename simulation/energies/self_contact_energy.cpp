@@ -78,13 +78,18 @@ std::uint64_t SelfContactEnergy::key(const Pair& p) {
 
 namespace {
 
+/// Mean of the vertex vectors of a flat 3N vector.
+Eigen::Vector3d vertex_mean(const Eigen::VectorXd& d) {
+  const Eigen::Index nv = d.size() / 3;
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (Eigen::Index v = 0; v < nv; ++v) mean += d.segment<3>(3 * v);
+  return nv > 0 ? Eigen::Vector3d(mean / static_cast<double>(nv)) : mean;
+}
+
 /// Largest |d_v - mean(d)| over the vertices of a flat 3N vector [m].
 double relative_motion(const Eigen::VectorXd& d) {
   const Eigen::Index nv = d.size() / 3;
-  if (nv == 0) return 0;
-  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-  for (Eigen::Index v = 0; v < nv; ++v) mean += d.segment<3>(3 * v);
-  mean /= static_cast<double>(nv);
+  const Eigen::Vector3d mean = vertex_mean(d);
   double m = 0;
   for (Eigen::Index v = 0; v < nv; ++v) m = std::max(m, (d.segment<3>(3 * v) - mean).squaredNorm());
   return std::sqrt(m);
@@ -108,11 +113,8 @@ void SelfContactEnergy::find_candidates(const Eigen::VectorXd& x, const Eigen::V
   if (dx) {
     // Swept boxes along dx less its mean: pair distances are translation invariant.
     m_segment_dx = *dx;
-    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-    const Eigen::Index nv = x.size() / 3;
-    for (Eigen::Index v = 0; v < nv; ++v) mean += dx->segment<3>(3 * v);
-    if (nv > 0) mean /= static_cast<double>(nv);
-    for (Eigen::Index v = 0; v < nv; ++v) x1.segment<3>(3 * v) += dx->segment<3>(3 * v) - mean;
+    const Eigen::Vector3d mean = vertex_mean(*dx);
+    for (Eigen::Index v = 0; v < x.size() / 3; ++v) x1.segment<3>(3 * v) += dx->segment<3>(3 * v) - mean;
     m_margin = 0;
   } else {
     m_segment_dx.resize(0);
