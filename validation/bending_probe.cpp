@@ -7,11 +7,17 @@
 //   - the discrete bending energy of prescribed isometric shapes (constant, linear, quadratic
 //     curvature along x; constant curvature after the clamp line; the shooting elastica at
 //     G = 1, 8, 20) over the continuum D/2 int K^2 dA, split into the curvature-fit part and the
-//     fit-residual part.
+//     fit-residual part;
+//   - the same sag under a linear Morley plate (one normal slope unknown per edge), with free or
+//     extrapolated boundary edges and with or without the slopes clamped in the clamp band, and
+//     (PROBE_CYLINDER) its energy of a small-slope cylinder on a 15 cm wide sheet: the
+//     consistent discretisation docs/elastica_30deg_diagnosis.md section 5 measures.
 // Usage: papersim_bending_probe [edge [m], default 2.5e-3] [width [m], default 0.01]
 // Environment: PROBE_ANGLE (lattice angle [deg], 30), PROBE_BINS (energy and K_xx by x bins),
-// PROBE_SAG_ONLY, PROBE_MODE_SHAPE (print the first mode's displacements).
+// PROBE_SAG_ONLY, PROBE_MODE_SHAPE (print the first mode's displacements), PROBE_CYLINDER.
 #include <Eigen/LU>
+#include <Eigen/Sparse>
+#include <map>
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -217,6 +223,171 @@ void linear_sag(const char* label, const rm::SheetMesh& mesh, double clamp, doub
   (void)width;
 }
 
+
+/// Linear Morley plate: the heights z of the vertices and one normal slope phi per edge (at its
+/// midpoint) determine a constant curvature per face, exact for every quadratic height field:
+/// for the edge (p_i, p_j) of face f with opposite vertex p_k, outward normal n and height h,
+///   dz/dn(midpoint) - grad(I_f z) . n = a^T K_f b / (2 h),  a = p_k - p_i, b = p_k - p_j,
+/// where I_f z is the linear interpolant. K is the stiffness of sum_f A_f D/2 K_f^T Q K_f over
+/// (z, phi). Boundary edges: phi free (natural boundary condition), or, with `extrapolate`,
+/// tied by a stiff penalty to the slope the mean curvature of the face's interior neighbours
+/// gives there.
+struct Morley {
+  int nv = 0, ne = 0;
+  std::map<std::pair<int, int>, int> edge_of;  // sorted vertex pair -> edge
+  Eigen::SparseMatrix<double> K;                // (nv + ne)^2
+  double area = 0;
+};
+
+Morley morley_system(const rm::SheetMesh& mesh, bool extrapolate) {
+  const Eigen::MatrixX2d X = mesh.material_coords();
+  const Eigen::MatrixX3i F = mesh.faces();
+  const int nf = F.rows();
+  Morley M;
+  M.nv = X.rows();
+  std::vector<Eigen::Vector2d> normal;  // fixed unit normal per edge
+  Eigen::MatrixX3i fe(nf, 3);
+  for (int f = 0; f < nf; ++f)
+    for (int k = 0; k < 3; ++k) {
+      const auto key = std::minmax(F(f, (k + 1) % 3), F(f, (k + 2) % 3));
+      auto it = M.edge_of.find(key);
+      if (it == M.edge_of.end()) {
+        const Eigen::Vector2d d = X.row(key.second) - X.row(key.first);
+        normal.push_back(Eigen::Vector2d(d.y(), -d.x()).normalized());
+        it = M.edge_of.emplace(key, static_cast<int>(normal.size()) - 1).first;
+      }
+      fe(f, k) = it->second;
+    }
+  M.ne = normal.size();
+  const int nv = M.nv;
+  ps::Material m;
+  m.poisson = 0;
+  Eigen::Matrix3d Q = (1 - m.poisson) * Eigen::Vector3d(1, 1, 2).asDiagonal().toDenseMatrix();
+  Q += m.poisson * Eigen::Vector3d(1, 1, 0) * Eigen::RowVector3d(1, 1, 0);
+  std::vector<Eigen::Triplet<double>> trip;
+  std::vector<Eigen::Matrix<double, 3, 6>> C(nf), S(nf);  // K_f = C s_dofs, s = S dofs
+  std::vector<Eigen::Matrix3d> R(nf);                      // R K = s
+  std::vector<double> area(nf);
+  auto dofs = [&](int f, int* d) {
+    for (int k = 0; k < 3; ++k) d[k] = F(f, k), d[3 + k] = nv + fe(f, k);
+  };
+  auto add_quadratic = [&](const std::map<int, double>& row, double w) {
+    for (const auto& [i, a] : row)
+      for (const auto& [j, b] : row) trip.emplace_back(i, j, w * a * b);
+  };
+  for (int f = 0; f < nf; ++f) {
+    Eigen::Vector2d p[3];
+    for (int k = 0; k < 3; ++k) p[k] = X.row(F(f, k));
+    Eigen::Matrix2d T;
+    T.col(0) = p[1] - p[0];
+    T.col(1) = p[2] - p[0];
+    area[f] = 0.5 * std::abs(T.determinant());
+    M.area += area[f];
+    Eigen::Matrix<double, 2, 3> grad;  // gradient of the linear interpolant = grad z
+    const Eigen::Matrix2d Ti = T.inverse().transpose();
+    grad.col(1) = Ti.col(0);
+    grad.col(2) = Ti.col(1);
+    grad.col(0) = -grad.col(1) - grad.col(2);
+    S[f].setZero();
+    for (int k = 0; k < 3; ++k) {
+      const Eigen::Vector2d pi = p[(k + 1) % 3], pj = p[(k + 2) % 3], pk = p[k];
+      const Eigen::Vector2d e = (pj - pi).normalized();
+      Eigen::Vector2d n(e.y(), -e.x());
+      if (n.dot(pk - pi) > 0) n = -n;
+      const double h = std::abs(n.dot(pk - pi));
+      const Eigen::Vector2d a = pk - pi, b = pk - pj;
+      R[f].row(k) << a.x() * b.x(), a.y() * b.y(), a.x() * b.y() + a.y() * b.x();
+      R[f].row(k) /= 2 * h;
+      S[f](k, 3 + k) = n.dot(normal[fe(f, k)]) > 0 ? 1 : -1;
+      S[f].block<1, 3>(k, 0) = -(n.transpose() * grad);
+    }
+    C[f] = R[f].inverse() * S[f];
+    const Eigen::Matrix<double, 6, 6> Ke = area[f] * m.bending_stiffness * C[f].transpose() * Q * C[f];
+    int d[6];
+    dofs(f, d);
+    for (int r = 0; r < 6; ++r)
+      for (int c = 0; c < 6; ++c) trip.emplace_back(d[r], d[c], Ke(r, c));
+  }
+  if (extrapolate) {
+    std::vector<std::vector<int>> edge_faces(M.ne);
+    for (int f = 0; f < nf; ++f)
+      for (int k = 0; k < 3; ++k) edge_faces[fe(f, k)].push_back(f);
+    for (int f = 0; f < nf; ++f)
+      for (int k = 0; k < 3; ++k) {
+        if (edge_faces[fe(f, k)].size() != 1) continue;
+        std::vector<int> neighbours;
+        for (int j = 0; j < 3; ++j)
+          for (int g : edge_faces[fe(f, j)])
+            if (g != f) neighbours.push_back(g);
+        std::map<int, double> row;  // s_fk - R_f,k . mean_g K_g
+        int d[6];
+        dofs(f, d);
+        for (int c = 0; c < 6; ++c) row[d[c]] += S[f](k, c);
+        for (int g : neighbours) {
+          dofs(g, d);
+          const Eigen::Matrix<double, 1, 6> a = R[f].row(k) * C[g] / neighbours.size();
+          for (int c = 0; c < 6; ++c) row[d[c]] -= a[c];
+        }
+        add_quadratic(row, 1e6 * m.bending_stiffness);  // (s / h)^2 A D with A ~ h^2, x 1e6
+      }
+  }
+  M.K.resize(nv + M.ne, nv + M.ne);
+  M.K.setFromTriplets(trip.begin(), trip.end());
+  return M;
+}
+
+/// Tip sag over G/8 of the clamped strip under the Morley plate (heights fixed to 0 up to the
+/// clamp line; with `clamp_slopes` the slopes of the edges within the clamp too).
+double morley_sag(const rm::SheetMesh& mesh, double clamp, bool extrapolate, bool clamp_slopes) {
+  const Eigen::MatrixX2d X = mesh.material_coords();
+  Morley M = morley_system(mesh, extrapolate);
+  const double big = 1e12;
+  ps::Material m;
+  const Eigen::VectorXd mass = ps::lumped_masses(X, mesh.faces(), m.density);
+  const double G = 1.0, g = G * m.bending_stiffness / (m.density * L * L * L);
+  Eigen::VectorXd f = Eigen::VectorXd::Zero(M.nv + M.ne);
+  for (int v = 0; v < M.nv; ++v) {
+    if (X(v, 0) <= clamp + 1e-12)
+      M.K.coeffRef(v, v) += big;
+    else
+      f[v] = -mass[v] * g;
+  }
+  if (clamp_slopes)
+    for (const auto& [key, e] : M.edge_of)
+      if (X(key.first, 0) <= clamp + 1e-12 && X(key.second, 0) <= clamp + 1e-12) M.K.coeffRef(M.nv + e, M.nv + e) += big;
+  const Eigen::VectorXd w = Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>(M.K).solve(f);
+  const double tip_x = X.col(0).maxCoeff();
+  double drop = 0;
+  int count = 0;
+  for (int v = 0; v < M.nv; ++v)
+    if (X(v, 0) > tip_x - 1e-9) drop -= w[v], ++count;
+  return drop / (count * L) / (G / 8);
+}
+
+/// Energy of z = kappa/2 (d . p)^2 (a cylinder bent along d at `angle` to material x, small
+/// slopes) minimised over the edge slopes, over the plate's D/2 kappa^2 A.
+double morley_cylinder(const rm::SheetMesh& mesh, double angle, bool extrapolate) {
+  const Eigen::MatrixX2d X = mesh.material_coords();
+  const Morley M = morley_system(mesh, extrapolate);
+  const double kappa = 20;
+  const Eigen::Vector2d d(std::cos(angle), std::sin(angle));
+  Eigen::VectorXd z(M.nv);
+  for (int v = 0; v < M.nv; ++v) z[v] = 0.5 * kappa * std::pow(d.dot(Eigen::Vector2d(X.row(v))), 2);
+  const Eigen::SparseMatrix<double> Kpp = M.K.block(M.nv, M.nv, M.ne, M.ne);
+  const Eigen::SparseMatrix<double> Kpz = M.K.block(M.nv, 0, M.ne, M.nv);
+  const Eigen::SparseMatrix<double> Kzz = M.K.block(0, 0, M.nv, M.nv);
+  const Eigen::VectorXd phi = -Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>(Kpp).solve(Kpz * z);
+  const double E = 0.5 * z.dot(Kzz * z) + z.dot(Kpz.transpose() * phi) + 0.5 * phi.dot(Kpp * phi);
+  return E / (0.5 * ps::Material{}.bending_stiffness * kappa * kappa * M.area);
+}
+
+void morley_report(const char* label, const rm::SheetMesh& mesh, double clamp) {
+  std::printf("%-28s Morley sag / (G/8): free edges %.4f (slopes clamped %.4f), extrapolated edges "
+              "%.4f (slopes clamped %.4f)\n",
+              label, morley_sag(mesh, clamp, false, false), morley_sag(mesh, clamp, false, true),
+              morley_sag(mesh, clamp, true, false), morley_sag(mesh, clamp, true, true));
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -226,6 +397,16 @@ int main(int argc, char** argv) {
   for (bool rotated : {false, true}) {
     const rm::SheetMesh mesh = strip(rotated, h, width);
     linear_sag(rotated ? "rot  linear sag" : "grid linear sag", mesh, c, width);
+    morley_report(rotated ? "rot  Morley" : "grid Morley", mesh, c);
+    if (std::getenv("PROBE_CYLINDER")) {
+      // A sheet of width x 15 cm, every mesh: cylinder energies at 0, 30, 45, 90 degrees.
+      rm::SheetMesh sheet = rotated ? strip(true, h, 0.15) : strip(false, h, 0.15);
+      for (bool ex : {false, true}) {
+        std::printf("%s Morley cylinder E/Ec (%s edges):", rotated ? "rot " : "grid", ex ? "extrapolated" : "free");
+        for (double a : {0.0, 30.0, 45.0, 90.0}) std::printf(" %g deg %.4f", a, morley_cylinder(sheet, a * M_PI / 180, ex));
+        std::printf("\n");
+      }
+    }
     if (std::getenv("PROBE_SAG_ONLY")) continue;
     const std::string tag = rotated ? "rot " : "grid";
     const double k0 = 5.0;  // [1/m]
