@@ -175,4 +175,17 @@ Eigen::MatrixX3i face_hinges(const SheetMesh& sheet, const Hinges& hinges) {
   return fh;
 }
 
+std::vector<int> faces_inside(const SheetMesh& mesh, const Eigen::Vector4d& box) {
+  const Eigen::MatrixX2d X = mesh.material_coords();
+  const Eigen::MatrixX3i F = mesh.faces();
+  auto inside = [&](int v) {
+    return X(v, 0) >= box[0] - 1e-12 && X(v, 1) >= box[1] - 1e-12 && X(v, 0) <= box[2] + 1e-12 &&
+           X(v, 1) <= box[3] + 1e-12;
+  };
+  std::vector<int> faces;
+  for (int f = 0; f < F.rows(); ++f)
+    if (inside(F(f, 0)) && inside(F(f, 1)) && inside(F(f, 2))) faces.push_back(f);
+  return faces;
+}
+
 }  // namespace papersim::remesh

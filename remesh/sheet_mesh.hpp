@@ -1,4 +1,5 @@
 #pragma once
+#include <vector>
 /// The sheet's connectivity and material coordinates.
 ///
 /// A SheetMesh is an OpenMesh triangle mesh whose points are the *material coordinates* of the
@@ -77,5 +78,9 @@ Hinges interior_hinges(const SheetMesh& mesh);
 /// For every face, the index into Hinges of its three edges (edge i opposite corner i), or -1
 /// for a boundary edge. #F by 3.
 Eigen::MatrixX3i face_hinges(const SheetMesh& mesh, const Hinges& hinges);
+
+/// Faces whose three corners lie in the material-space box (x_min, y_min, x_max, y_max) [m]
+/// (bounds included, 1e-12 m of slack): the faces a clamp over that box holds.
+std::vector<int> faces_inside(const SheetMesh& mesh, const Eigen::Vector4d& box);
 
 }  // namespace papersim::remesh

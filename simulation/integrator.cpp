@@ -42,7 +42,12 @@ Eigen::VectorXd flatten(const Eigen::MatrixX3d& m) {
 Integrator::Integrator(int num_vertices, std::vector<std::unique_ptr<EnergyTerm>> terms,
                        const NewtonParams& params)
     : m_terms(std::move(terms)), m_params(params) {
-  SparsityBuilder pattern(num_vertices);
+  int blocks = num_vertices;
+  for (const auto& t : m_terms) {
+    t->set_auxiliary_offset(blocks);
+    blocks += t->auxiliary_blocks();
+  }
+  SparsityBuilder pattern(blocks);
   for (const auto& t : m_terms) t->add_pattern(pattern);
   m_static_pattern = pattern.finish();
   m_hessian = BlockSymmetricMatrix(m_static_pattern);
@@ -112,11 +117,15 @@ NewtonResult Integrator::solve(const StepContext& ctx, Eigen::VectorXd& x, StepS
     if (project)
     while (!m_solver.factorize(m_hessian, m_pattern_id)) {
       const double next = shift == 0 ? 1e-10 : 10 * shift;
-      m_hessian.add_diagonal(Eigen::VectorXd::Constant(x.size(), next - shift));
+      m_hessian.add_diagonal(Eigen::VectorXd::Constant(m_hessian.size(), next - shift));
       shift = next;
       if (shift > 1e3) throw NumericError("newton: the Hessian cannot be factored");
     }
-    const Eigen::VectorXd dx = m_solver.solve(-g);
+    // Auxiliary unknowns (EnergyTerm::auxiliary_blocks) sit at their optimum, so their part of
+    // the right-hand side is zero; their part of the solution is dropped.
+    Eigen::VectorXd rhs = Eigen::VectorXd::Zero(m_hessian.size());
+    rhs.head(g.size()) = -g;
+    const Eigen::VectorXd dx = m_solver.solve(rhs).head(g.size());
     stats.seconds_solve += seconds_since(t0);
     r.residual = max_vertex_norm(dx) / ctx.h;
     if (std::getenv("PAPERSIM_DEBUG_NEWTON"))

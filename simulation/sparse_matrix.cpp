@@ -1,5 +1,7 @@
 #include "simulation/sparse_matrix.hpp"
 
+#include <cassert>
+
 #include <algorithm>
 #include <string>
 
@@ -81,7 +83,8 @@ void BlockSymmetricMatrix::add_element(const int* vertices, int n, const double*
 }
 
 void BlockSymmetricMatrix::add_diagonal(const Eigen::VectorXd& d) {
-  for (int c = 0; c < size(); ++c) m_values[m_col_start[c + 1] - 1] += d[c];
+  assert(d.size() <= size());
+  for (int c = 0; c < d.size(); ++c) m_values[m_col_start[c + 1] - 1] += d[c];
 }
 
 Eigen::VectorXd BlockSymmetricMatrix::multiply(const Eigen::VectorXd& x) const {

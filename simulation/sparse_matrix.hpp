@@ -42,7 +42,8 @@ class BlockSymmetricMatrix {
   }
   /// Same for a dynamically sized element (n vertices, column-major 3n x 3n data).
   void add_element(const int* vertices, int n, const double* hessian);
-  /// Adds s to the diagonal entry of every degree of freedom.
+  /// Adds d[i] to the diagonal entry of the first d.size() degrees of freedom (the vertices';
+  /// auxiliary unknowns after them are left alone when d is shorter).
   void add_diagonal(const Eigen::VectorXd& d);
 
   /// y = A x

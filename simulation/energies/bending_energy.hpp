@@ -1,29 +1,43 @@
 #pragma once
-/// Bending energy calibrated to the Kirchhoff plate on any mesh.
+/// Bending energy: the Morley plate on any triangle mesh (nonlinear, with hinge angles).
 ///
-/// Per face f, a curvature tensor K_f (2x2 symmetric, material coordinates, Voigt
-/// (K_xx, K_yy, K_xy) [1/m]) is fitted by least squares to the dihedral angles of a stencil of
-/// hinges: the face's own interior edges and those of its edge neighbours (up to nine; boundary
-/// faces add the hinges of faces sharing a vertex until K is determined). The map
-/// from a constant curvature K to the angle of hinge (v0, v1, a, b) is exact for the quadratic
-/// height field z = p^T K p / 2 over the material plane (small slopes):
-///   theta = -1/2 sum_{i<j} l_i l_j (p_i - p_j)^T K (p_i - p_j) / h_b,
-/// with l the barycentric coordinates of p_b in the triangle (p_0, p_1, p_a) and h_b the
-/// distance of p_b from the hinge line. Stacking these rows gives B_f (|S| x 3) and
-/// K_f = P_f theta with P_f = (B^T B)^-1 B^T, exact for every constant curvature field whatever
-/// the triangulation (no grain, no dependence on orientation). The energy is the plate energy
-///   E = sum_f A_f D_f / 2 [(1 - nu) |K_f - Kp_f|^2 + nu tr(K_f - Kp_f)^2 + |R_f theta|^2],
-/// where the last term, the fit residual (I - B P) theta scaled to curvature units, vanishes
-/// for every constant curvature and penalises angle patterns no smooth surface makes: without
-/// it, per-face recovery admits soft hourglass modes (a strip sagged 1.5-3x too far).
-/// with Kp_f the plastic curvature and D_f = D / (1 + weakening damage_f) (Narain et al. 2013).
+/// Per face f, a constant curvature tensor K_f (2x2 symmetric, material coordinates, Voigt
+/// (K_xx, K_yy, K_xy) [1/m]) follows from one slope unknown s per edge: for the edge
+/// (p_i, p_j) of f with opposite corner p_k, height h and the material outward normal n, every
+/// quadratic height field z with Hessian K satisfies
+///   dz/dn(edge midpoint) - grad(I_f z) . n = a^T K b / (2 h) =: R_f,k . K,  a = p_k - p_i,
+///   b = p_k - p_j,
+/// with I_f z the face's linear interpolant, so K_f = R_f^-1 s_f is exact for every quadratic
+/// on every triangle: no grain, no dependence on orientation, no stencil and no soft modes.
+/// The slopes of the two faces of an interior hinge add up to its dihedral angle theta (the
+/// slope jump of the two linear interpolants), so the unknown per hinge is the split psi:
+///   s_f = theta / 2 + psi,  s_g = theta / 2 - psi,
+/// and per boundary edge the slope itself, s = psi. The energy is the plate energy
+///   E(x) = min_psi sum_f A_f D_f / 2 [(1 - nu) |K_f - Kp_f|^2 + nu tr(K_f - Kp_f)^2]
+///          + boundary terms,
+/// with Kp_f the plastic curvature and D_f = D / (1 + weakening damage_f) (Narain et al.
+/// 2013). It is a quadratic in (theta, psi) with coefficients fixed by the rest shape, so
+/// psi*(theta) comes from one sparse solve with a matrix factored once, and by the envelope
+/// theorem the gradient is sum_h dE/dtheta_h grad theta_h at psi*.
 ///
-/// Hessian: the Gauss-Newton part sum M_hk grad theta_h grad theta_k^T is PSD by construction;
-/// the curvature part sum c_h Hess theta_h is added only with `exact_hessian` (then the element
-/// matrix is projected to PSD by eigen-decomposition), because it is O(theta) relative to the
-/// first and costs an eigen-decomposition per face. `BendingHessian::exact` (unprojected) is for
-/// finite-difference tests.
+/// Boundary edges: a free boundary slope is the natural boundary condition (no moment across
+/// the edge), right for a minimiser but it lets the energy of an imposed shape lose the
+/// curvature only that slope sees (a cylinder on a 10 x 15 cm sheet at 5 mm: 2-5% low). A stiff
+/// penalty ties each boundary slope to the slope the mean elastic curvature of the face's
+/// interior neighbours gives there (the cylinder then within 2%, docs/elastica_30deg_diagnosis.md
+/// section 5). Clamped faces (all corners held by a clamp) keep their slopes: s = 0 on their
+/// edges, so the face across takes the whole angle.
+///
+/// Hessian: the psi are auxiliary unknowns of the Newton system (EnergyTerm::auxiliary_blocks):
+/// the Gauss-Newton part of (x, psi) is sum over elements of [J_theta, I_psi]^T M [J_theta,
+/// I_psi], PSD by construction, and its Schur complement on x is the condensed energy's. The
+/// curvature part sum_h dE/dtheta_h Hess theta_h is added only with `exact_hessian` (projected
+/// to PSD per hinge with `projected`), being O(theta) relative to the first.
+/// `BendingHessian::exact` (unprojected) is for finite-difference tests.
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
 #include <array>
+#include <memory>
 #include <vector>
 
 #include "remesh/sheet_mesh.hpp"
@@ -36,46 +50,84 @@ enum class BendingHessian { gauss_newton, projected, exact };
 
 class BendingEnergy : public EnergyTerm {
  public:
-  /// @throw NumericError when a face's stencil cannot determine its curvature (a mesh with
-  ///        fewer than three interior edges).
+  /// @param clamped_faces faces held rigidly, slopes included (a clamp's jaws).
   BendingEnergy(const remesh::SheetMesh& mesh, const Material& material,
-                BendingHessian hessian = BendingHessian::gauss_newton);
+                BendingHessian hessian = BendingHessian::gauss_newton,
+                const std::vector<int>& clamped_faces = {});
+  ~BendingEnergy() override;
 
   std::string name() const override { return "bend"; }
   void add_pattern(SparsityBuilder& pattern) const override;
   double value(const Eigen::VectorXd& x) const override;
   void add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd& gradient,
                        BlockSymmetricMatrix* hessian) const override;
+  int auxiliary_blocks() const override { return (m_num_psi + 2) / 3; }
+  void set_auxiliary_offset(int first_block) override { m_first_block = first_block; }
 
-  /// Curvature tensor of every face at x, #F by 3 (K_xx, K_yy, K_xy) [1/m].
+  /// Curvature tensor of every face at x, #F by 3 (K_xx, K_yy, K_xy) [1/m] (clamped faces:
+  /// their plastic curvature).
   Eigen::MatrixX3d face_curvatures(const Eigen::VectorXd& x) const;
   /// Signed dihedral angle of every interior hinge [rad].
   Eigen::VectorXd hinge_angles(const Eigen::VectorXd& x) const;
   const remesh::Hinges& hinges() const { return m_hinges; }
+  /// Number of edge slope unknowns.
+  int num_slopes() const { return m_num_psi; }
 
   /// Replace the plastic state (#F by 3 curvature [1/m], #F damage).
   void set_plastic_state(const Eigen::MatrixX3d& plastic_curvature, const Eigen::VectorXd& damage);
 
  private:
-  struct Face {
-    std::vector<int> hinges;             // stencil hinges
-    std::vector<int> vertices;           // union of their vertices (local order)
+  /// A quadratic element: r = L (theta_ids, psi_ids) - c, energy r^T W r / 2.
+  struct Element {
+    std::vector<int> theta;     // hinge indices
+    std::vector<int> psi;       // slope unknowns
+    Eigen::MatrixXd L;          // rows x (|theta| + |psi|)
+    Eigen::VectorXd c;          // offset (plastic curvature)
+    Eigen::MatrixXd W;          // rows x rows
+    std::vector<int> vertices;  // union of the hinges' vertices (local order)
     std::vector<std::array<int, 4>> local;  // per hinge: local index of (v0, v1, a, b)
-    Eigen::MatrixXd P;                   // 3 x |S|: K = P theta (least squares)
-    Eigen::MatrixXd R;                   // |S| x |S|: scaled fit residual (hourglass control)
-    Eigen::MatrixXd M;                   // |S| x |S|: P^T Q P + R^T R, d2E/dtheta2 / stiffness
-    double area = 0;                     // [m^2]
-    double stiffness = 0;                // A D_f [N m^3]
-    Eigen::Vector3d plastic = Eigen::Vector3d::Zero();
+    std::vector<int> blocks;    // auxiliary blocks of the psi (local order, after the vertices)
+    std::vector<std::pair<int, int>> psi_at;  // per psi: (local block, component)
+    Eigen::MatrixXd M;          // L^T W L
   };
-  void build_stencil(int f, const Eigen::MatrixX3i& face_hinges, const Eigen::MatrixX3i& faces,
-                     const Eigen::MatrixX2d& X);
-  double face_energy(const Face& face, const Eigen::VectorXd& theta) const;
+  struct Face {
+    Eigen::Matrix3d R, Rinv;   // R K = s
+    int hinge[3] = {-1, -1, -1};
+    double alpha[3] = {0, 0, 0};  // s_k = alpha_k theta + sigma_k psi
+    int psi[3] = {-1, -1, -1};
+    double sigma[3] = {0, 0, 0};
+    double area = 0;
+    bool clamped = false;
+  };
+  struct Factor;
+
+  struct Penalty {
+    int face = -1, edge = -1;     // the boundary edge (local index) it ties
+    std::vector<int> neighbours;  // unclamped faces across the face's interior edges
+  };
+  void build_elements();
+  /// Element weights and offsets from the faces' stiffness and plastic curvature; factors C.
+  void refresh();
+  /// theta and psi*(theta) at x.
+  void unknowns(const Eigen::VectorXd& x, Eigen::VectorXd& theta, Eigen::VectorXd& psi) const;
+  Eigen::VectorXd element_residual(const Element& e, const Eigen::VectorXd& theta,
+                                   const Eigen::VectorXd& psi) const;
 
   remesh::Hinges m_hinges;
   std::vector<Face> m_faces;
+  std::vector<Element> m_elements;  // one per unclamped face, then the boundary penalties
+  std::vector<int> m_face_element;  // face -> its element, -1 for clamped faces
+  std::vector<Penalty> m_penalties;  // element m_num_face_elements + i
+  int m_num_face_elements = 0;
+  std::vector<Eigen::Vector3d> m_plastic;
+  std::vector<double> m_stiffness;  // A_f D_f
+  Eigen::SparseMatrix<double> m_A_psi_theta;  // d2E / dpsi dtheta
+  Eigen::VectorXd m_b_psi;                     // C psi* = b_psi - A_psi_theta theta
+  std::unique_ptr<Factor> m_C;
   Eigen::Matrix3d m_Q;  // plate energy density in Voigt: e = k^T Q k
   double m_D, m_weakening;
+  int m_num_psi = 0;
+  int m_first_block = -1;
   BendingHessian m_hessian_kind;
 };
 

@@ -52,6 +52,15 @@ class EnergyTerm {
   /// positive definite (Integrator::solve).
   virtual void set_hessian_projection(bool /*project*/) {}
 
+  /// Unknowns of the linear system that are not positions: a term whose energy is minimised
+  /// over internal variables y (the bending energy's edge slopes) keeps y out of the state
+  /// (y = y*(x), recomputed by value and add_derivatives) but adds the (x, y) Hessian to the
+  /// Newton system, whose position part is then the exact Newton direction of the condensed
+  /// energy. Auxiliary unknowns are packed three per 3x3 block after the vertex blocks.
+  virtual int auxiliary_blocks() const { return 0; }
+  /// Block index of this term's first auxiliary block (called by the integrator).
+  virtual void set_auxiliary_offset(int /*first_block*/) {}
+
   /// Largest alpha in (0, 1] such that x + a dx stays feasible for all a in [0, alpha]
   /// (continuous collision detection). Default: no constraint.
   virtual double max_step(const Eigen::VectorXd& /*x*/, const Eigen::VectorXd& /*dx*/) const {

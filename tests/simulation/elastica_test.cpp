@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <limits>
 #include <memory>
 
 #include "remesh/sheet_generator.hpp"
@@ -51,7 +52,10 @@ ElasticaResult run_elastica(const remesh::SheetMesh& mesh, double L, double c, d
   terms.push_back(std::make_unique<DampingEnergy>(mass, 20.0));
   terms.push_back(std::make_unique<GravityEnergy>(mass, Eigen::Vector3d(0, 0, -g)));
   terms.push_back(std::make_unique<MembraneEnergy>(X, F, m));
-  terms.push_back(std::make_unique<BendingEnergy>(mesh, m));
+  // The clamp holds the band's slopes as well as its corners.
+  const double inf = std::numeric_limits<double>::infinity();
+  terms.push_back(std::make_unique<BendingEnergy>(mesh, m, BendingHessian::gauss_newton,
+                                                  remesh::faces_inside(mesh, Eigen::Vector4d(-inf, -inf, c, inf))));
   terms.push_back(std::make_unique<HandleEnergy>(mesh, x0, clamp));
   NewtonParams newton;
   newton.tolerance = 1e-6;  // [m/s]: solves that stop early stall the creep to rest (known_answers)

@@ -70,7 +70,10 @@ Eigen::MatrixXd dense(const BlockSymmetricMatrix& A) {
 void check_derivatives(EnergyTerm& term, int nv, const Eigen::VectorXd& x,
                        double tol_grad = 1e-6, double tol_hess = 1e-5, bool check_hessian = true,
                        double step = 1e-7) {
-  SparsityBuilder pattern(nv);
+  // Auxiliary unknowns (the bending energy's edge slopes) follow the vertex blocks; the
+  // condensed Hessian is the Schur complement of their block.
+  term.set_auxiliary_offset(nv);
+  SparsityBuilder pattern(nv + term.auxiliary_blocks());
   term.add_pattern(pattern);
   term.update_pattern(x);  // terms with a dynamic pattern (self-contact) choose it at x
   term.add_dynamic_pattern(pattern);
@@ -92,7 +95,12 @@ void check_derivatives(EnergyTerm& term, int nv, const Eigen::VectorXd& x,
   const double gscale = std::max(g.norm(), 1e-12);
   EXPECT_LT((g - g_fd).norm() / gscale, tol_grad) << term.name() << " gradient";
   if (check_hessian) {
-    const Eigen::MatrixXd Hd = dense(H);
+    Eigen::MatrixXd Hd = dense(H);
+    if (Hd.rows() > x.size()) {
+      const int n = static_cast<int>(x.size()), m = static_cast<int>(Hd.rows()) - n;
+      const Eigen::MatrixXd Haa = Hd.bottomRightCorner(m, m), Hxa = Hd.topRightCorner(n, m);
+      Hd = (Hd.topLeftCorner(n, n) - Hxa * Haa.ldlt().solve(Hxa.transpose())).eval();
+    }
     const double hscale = std::max(H_fd.norm(), 1e-12);
     EXPECT_LT((Hd - H_fd).norm() / hscale, tol_hess) << term.name() << " Hessian";
   }
