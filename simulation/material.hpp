@@ -3,6 +3,9 @@
 
 namespace papersim::simulation {
 
+/// Discretisation of the bending energy (simulation/energies/bending_energy.hpp).
+enum class BendingModel { fit, morley };
+
 struct Material {
   double density = 0.08;              ///< areal density rho_A [kg/m^2]
   double stretch_stiffness = 5e5;     ///< Eh, Young's modulus x thickness [N/m]
@@ -13,6 +16,7 @@ struct Material {
   double thickness = 1e-4;            ///< physical thickness [m] (for reports and contact)
   double yield_curvature = 200.0;     ///< plastic yield curvature [1/m]
   double weakening = 1.0;             ///< D / (1 + weakening * damage) [-]
+  BendingModel bending_model = BendingModel::fit;  ///< "fit" or "morley"
 };
 
 }  // namespace papersim::simulation

@@ -148,6 +148,16 @@ const char* to_string(remesh::Triangulation t) {
   return "alternating";
 }
 
+BendingModel bending_model_from(Reader& r, const std::string& key, BendingModel d) {
+  const std::string name = r.string(key, "");
+  if (name.empty()) return d;
+  if (name == "fit") return BendingModel::fit;
+  if (name == "morley") return BendingModel::morley;
+  r.fail(key, "expected one of fit, morley; got '" + name + "'");
+}
+
+const char* to_string(BendingModel m) { return m == BendingModel::morley ? "morley" : "fit"; }
+
 Material read_material(Reader r) {
   Material m;
   m.density = r.number("density", m.density, 0, 1e3, true);
@@ -159,6 +169,7 @@ Material read_material(Reader r) {
   m.thickness = r.number("thickness", m.thickness, 0, 0.1, true);
   m.yield_curvature = r.number("yield_curvature", m.yield_curvature, 0, 1e6, true);
   m.weakening = r.number("weakening", m.weakening, 0, 1e3);
+  m.bending_model = bending_model_from(r, "bending_model", m.bending_model);
   r.finish();
   return m;
 }
@@ -383,7 +394,8 @@ json scene_to_json(const Scene& s) {
                   {"strain_limit", m.strain_limit},
                   {"thickness", m.thickness},
                   {"yield_curvature", m.yield_curvature},
-                  {"weakening", m.weakening}}}};
+                  {"weakening", m.weakening},
+                  {"bending_model", to_string(m.bending_model)}}}};
   if (!s.sheet.mesh_path.empty()) j["sheet"]["mesh"] = s.sheet.mesh_path;
   j["gravity"] = vec(s.gravity);
   j["duration"] = s.duration;

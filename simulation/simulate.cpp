@@ -59,6 +59,17 @@ std::vector<HandleSpec> all_handles(const Scene& scene, const remesh::SheetMesh&
   return handles;
 }
 
+/// Faces held by clamps that are never released: they keep their slopes (Morley model).
+std::vector<int> clamped_faces(const Scene& scene, const remesh::SheetMesh& mesh) {
+  std::vector<int> faces;
+  for (const ClampSpec& c : scene.clamps)
+    if (std::isinf(c.release_time))
+      for (int f : remesh::faces_inside(mesh, c.region)) faces.push_back(f);
+  std::sort(faces.begin(), faces.end());
+  faces.erase(std::unique(faces.begin(), faces.end()), faces.end());
+  return faces;
+}
+
 struct Built {
   std::unique_ptr<Integrator> integrator;
   MembraneEnergy* membrane = nullptr;
@@ -83,7 +94,7 @@ Built build(const Scene& scene, const remesh::SheetMesh& mesh, const SheetState&
   auto membrane = std::make_unique<MembraneEnergy>(X, F, m);
   b.membrane = membrane.get();
   terms.push_back(std::move(membrane));
-  auto bending = std::make_unique<BendingEnergy>(mesh, m);
+  auto bending = make_bending_energy(mesh, m, BendingHessian::gauss_newton, clamped_faces(scene, mesh));
   b.bending = bending.get();
   terms.push_back(std::move(bending));
   const std::vector<HandleSpec> handles = all_handles(scene, mesh);

@@ -27,7 +27,7 @@
 #include <vector>
 
 #include "remesh/sheet_generator.hpp"
-#include "simulation/energies/bending_energy.hpp"
+#include "simulation/energies/fit_bending_energy.hpp"
 #include "simulation/energies/vertex_energies.hpp"
 #include <Eigen/Eigenvalues>
 
@@ -132,7 +132,7 @@ void probe(const char* label, const rm::SheetMesh& mesh, double clamp, double wi
   }
   ps::Material m;
   m.poisson = 0;
-  ps::BendingEnergy bend(mesh, m);
+  ps::FitBendingEnergy bend(mesh, m);
   const double D = m.bending_stiffness;
   const double E = bend.value(x);
   const Eigen::MatrixX3d K = bend.face_curvatures(x);
@@ -178,7 +178,7 @@ void linear_sag(const char* label, const rm::SheetMesh& mesh, double clamp, doub
   const int nv = X.rows();
   ps::Material m;
   m.poisson = 0;
-  ps::BendingEnergy bend(mesh, m);
+  ps::FitBendingEnergy bend(mesh, m);
   Eigen::VectorXd x0(3 * nv);
   for (int v = 0; v < nv; ++v) x0.segment<3>(3 * v) << X(v, 0), X(v, 1), 0.0;
   std::vector<int> free;
@@ -391,6 +391,24 @@ void morley_report(const char* label, const rm::SheetMesh& mesh, double clamp) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (std::getenv("PROBE_MODES")) {
+    // smallest eigenvalues of the condensed Morley stiffness on a free sheet
+    rm::RectangleOptions o;
+    o.width = 0.12; o.height = 0.04; o.nx = 16; o.ny = 6;
+    o.triangulation = rm::Triangulation::alternating;
+    const rm::SheetMesh mesh = rm::make_rectangle(o);
+    for (bool ex : {false, true}) {
+      Morley M = morley_system(mesh, ex);
+      const Eigen::MatrixXd K(M.K);
+      const int n = M.nv, m = M.ne;
+      const Eigen::MatrixXd S = K.topLeftCorner(n, n) - K.topRightCorner(n, m) * K.bottomRightCorner(m, m).ldlt().solve(K.bottomLeftCorner(m, n));
+      Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(S);
+      std::printf("extrapolate %d eigenvalues:", ex);
+      for (int k = 0; k < 8; ++k) std::printf(" %.3g", es.eigenvalues()[k]);
+      std::printf("\n");
+    }
+    return 0;
+  }
   const double h = argc > 1 ? std::atof(argv[1]) : 2.5e-3;
   const double width = argc > 2 ? std::atof(argv[2]) : W;
   const double c = 2 * h;

@@ -179,8 +179,7 @@ Simulation make_simulation(const rm::SheetMesh& mesh, const Eigen::VectorXd& x0,
   if (s.damping > 0) terms.push_back(std::make_unique<ps::DampingEnergy>(mass, s.damping));
   if (s.gravity.norm() > 0) terms.push_back(std::make_unique<ps::GravityEnergy>(mass, s.gravity));
   terms.push_back(std::make_unique<ps::MembraneEnergy>(X, F, s.material));
-  auto bending = std::make_unique<ps::BendingEnergy>(mesh, s.material, ps::BendingHessian::gauss_newton,
-                                                      s.clamped_faces);
+  auto bending = ps::make_bending_energy(mesh, s.material, ps::BendingHessian::gauss_newton, s.clamped_faces);
   Simulation sim;
   sim.bending = bending.get();
   terms.push_back(std::move(bending));
@@ -289,9 +288,13 @@ std::vector<int> clamped_faces(const Strip& strip) {
 /// than D by up to 1 / (1 - nu^2) where its width keeps it from curving anticlastically, by an
 /// amount that depends on w^2 / (R h); with nu = 0 the strip's bending stiffness is D exactly,
 /// whatever its width, so G = rho_A g L^3 / D is unambiguous.
+/// The bending discretisation under test (--bending).
+ps::BendingModel g_bending_model = ps::Material{}.bending_model;
+
 ps::Material beam_material() {
   ps::Material m;
   m.poisson = 0.0;
+  m.bending_model = g_bending_model;
   return m;
 }
 
@@ -569,11 +572,13 @@ void run_cylinder(Report& report, bool quick) {
   lo.edge_length = 5e-3;
   lo.angle = 30 * PI / 180;
   meshes.push_back({"lattice30", rm::make_rotated_lattice(lo)});
-  const ps::Material material;
+  ps::Material material;
+  material.bending_model = g_bending_model;
   const double expected = material.bending_stiffness * W * H / (2 * R * R);
   const std::vector<double> angles = quick ? std::vector<double>{0, 30, 90} : std::vector<double>{0, 17, 30, 45, 90};
   for (const MeshCase& m : meshes) {
-    const ps::BendingEnergy bending(m.mesh, material);
+    const std::unique_ptr<ps::BendingEnergy> bending_model = ps::make_bending_energy(m.mesh, material);
+    const ps::BendingEnergy& bending = *bending_model;
     const Eigen::MatrixX2d X = m.mesh.material_coords();
     const Eigen::MatrixX3i F = m.mesh.faces();
     const auto topology = papersim::validation::build_topology(F, static_cast<int>(X.rows()));
@@ -754,7 +759,12 @@ int main(int argc, char** argv) {
   app.add_option("--only", only,
                  "run only these families: elastica, convergence, greenhill, cylinder, damping, friction")
       ->check(CLI::IsMember({"elastica", "convergence", "greenhill", "cylinder", "damping", "friction"}));
+  std::string bending = "fit";
+  app.add_option("--bending", bending,
+                 "bending discretisation under test: fit (the simulator's default) or morley")
+      ->check(CLI::IsMember({"fit", "morley"}));
   CLI11_PARSE(app, argc, argv);
+  g_bending_model = bending == "morley" ? ps::BendingModel::morley : ps::BendingModel::fit;
 
   const std::set<std::string> selected(only.begin(), only.end());
   const auto wanted = [&](const std::string& name) { return selected.empty() || selected.count(name); };
@@ -765,7 +775,7 @@ int main(int argc, char** argv) {
   };
   const auto t0 = std::chrono::steady_clock::now();
   Report report;
-  std::printf("papersim known answers%s\n", quick ? " (--quick)" : "");
+  std::printf("papersim known answers%s, bending model %s\n", quick ? " (--quick)" : "", bending.c_str());
   report.header();
   for (const auto& [name, run] : families) {
     if (!wanted(name)) continue;

@@ -49,7 +49,7 @@ Outcome squeeze_sheet(double strain, bool exact_first) {
   std::vector<std::unique_ptr<EnergyTerm>> terms;
   terms.push_back(std::make_unique<InertiaEnergy>(mass));
   terms.push_back(std::make_unique<MembraneEnergy>(X, F, m));
-  terms.push_back(std::make_unique<BendingEnergy>(mesh, m));
+  terms.push_back(make_bending_energy(mesh, m));
   terms.push_back(std::make_unique<HandleEnergy>(mesh, x0, handles));
   NewtonParams p;
   p.exact_hessian_first = exact_first;

@@ -1,0 +1,423 @@
+#include "simulation/energies/morley_bending_energy.hpp"
+
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
+#include <Eigen/SparseCholesky>
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <string>
+
+#include "simulation/energies/dihedral_angle.hpp"
+#include "simulation/energies/psd.hpp"
+#include "simulation/errors.hpp"
+
+namespace papersim::simulation {
+
+struct MorleyBendingEnergy::Factor {
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt;
+};
+
+namespace {
+
+/// Weight of the boundary-slope penalty over D_f (its residual is a slope, dimensionless):
+/// stiff enough to act as a constraint (the probe's figures are at this weight) while the
+/// slope matrix stays well conditioned for a direct solve.
+constexpr double BOUNDARY_PENALTY = 1e6;
+
+/// theta = row . (K_xx, K_yy, K_xy) for z = p^T K p / 2 over the hinge (p0, p1, pa, pb): the
+/// height of p_b over the plane of (p0, p1, pa), over its distance from the hinge line.
+Eigen::RowVector3d hinge_row(const Eigen::Vector2d& p0, const Eigen::Vector2d& p1,
+                             const Eigen::Vector2d& pa, const Eigen::Vector2d& pb) {
+  Eigen::Matrix2d T;
+  T.col(0) = p1 - p0;
+  T.col(1) = pa - p0;
+  const Eigen::Vector2d l12 = T.inverse() * (pb - p0);
+  const double l[3] = {1 - l12[0] - l12[1], l12[0], l12[1]};
+  const Eigen::Vector2d p[3] = {p0, p1, pa};
+  Eigen::RowVector3d row = Eigen::RowVector3d::Zero();
+  for (int i = 0; i < 3; ++i)
+    for (int j = i + 1; j < 3; ++j) {
+      const Eigen::Vector2d d = p[i] - p[j];
+      row += -0.5 * l[i] * l[j] * Eigen::RowVector3d(d.x() * d.x(), d.y() * d.y(), 2 * d.x() * d.y());
+    }
+  const Eigen::Vector2d e = (p1 - p0).normalized();
+  const Eigen::Vector2d r = pb - p0;
+  return row / std::abs(e.x() * r.y() - e.y() * r.x());
+}
+
+void gather(const Eigen::VectorXd& x, const Eigen::Vector4i& v, Eigen::Vector3d* p) {
+  for (int k = 0; k < 4; ++k) p[k] = x.segment<3>(3 * v[k]);
+}
+
+}  // namespace
+
+MorleyBendingEnergy::MorleyBendingEnergy(const remesh::SheetMesh& mesh, const Material& material,
+                             BendingHessian hessian_kind, const std::vector<int>& clamped_faces)
+    : m_hinges(remesh::interior_hinges(mesh)),
+      m_C(std::make_unique<Factor>()),
+      m_D(material.bending_stiffness),
+      m_weakening(material.weakening),
+      m_hessian_kind(hessian_kind) {
+  const double nu = material.poisson;
+  m_Q = (1 - nu) * Eigen::Vector3d(1, 1, 2).asDiagonal().toDenseMatrix();
+  m_Q += nu * Eigen::Vector3d(1, 1, 0) * Eigen::RowVector3d(1, 1, 0);
+  const Eigen::MatrixX3i F = mesh.faces();
+  const Eigen::MatrixX2d X = mesh.material_coords();
+  m_faces.resize(F.rows());
+  for (int f : clamped_faces) {
+    if (f < 0 || f >= F.rows())
+      throw NumericError("bending: clamped face " + std::to_string(f) + " is not a face of the mesh");
+    m_faces[f].clamped = true;
+  }
+  // Face geometry: R_f (s = R_f K for quadratics) per local edge k (opposite corner k).
+  for (int f = 0; f < F.rows(); ++f) {
+    Face& face = m_faces[f];
+    Eigen::Vector2d p[3];
+    for (int k = 0; k < 3; ++k) p[k] = X.row(F(f, k));
+    face.area = 0.5 * std::abs((p[1] - p[0]).x() * (p[2] - p[0]).y() - (p[1] - p[0]).y() * (p[2] - p[0]).x());
+    for (int k = 0; k < 3; ++k) {
+      const Eigen::Vector2d pi = p[(k + 1) % 3], pj = p[(k + 2) % 3], pk = p[k];
+      const Eigen::Vector2d e = (pj - pi).normalized();
+      const double h = std::abs(e.x() * (pk - pi).y() - e.y() * (pk - pi).x());
+      const Eigen::Vector2d a = pk - pi, b = pk - pj;
+      face.R.row(k) << a.x() * b.x(), a.y() * b.y(), a.x() * b.y() + a.y() * b.x();
+      face.R.row(k) /= 2 * h;
+    }
+    const Eigen::FullPivLU<Eigen::Matrix3d> lu(face.R);
+    if (!lu.isInvertible() || !(face.area > 0))
+      throw NumericError("bending: face " + std::to_string(f) + " is degenerate in material space");
+    face.Rinv = lu.inverse();
+  }
+  // Edges: interior hinges split their angle, s = alpha theta + sigma psi.
+  auto local_edge = [&](int f, int opposite) {
+    for (int k = 0; k < 3; ++k)
+      if (F(f, k) == opposite) return k;
+    throw NumericError("bending: inconsistent hinge of face " + std::to_string(f));
+  };
+  for (int h = 0; h < m_hinges.vertices.rows(); ++h) {
+    const Eigen::Vector4i v = m_hinges.vertices.row(h);
+    const int f0 = m_hinges.faces(h, 0), f1 = m_hinges.faces(h, 1);
+    const int k0 = local_edge(f0, v[2]), k1 = local_edge(f1, v[3]);
+    // The two faces' slope rows add up to the hinge's angle row (sign t of the convention).
+    const Eigen::RowVector3d row = hinge_row(X.row(v[0]), X.row(v[1]), X.row(v[2]), X.row(v[3]));
+    const Eigen::RowVector3d sum = m_faces[f0].R.row(k0) + m_faces[f1].R.row(k1);
+    const double t = sum.dot(row) > 0 ? 1.0 : -1.0;
+    if ((sum - t * row).norm() > 1e-8 * row.norm())
+      throw NumericError("bending: the slopes of hinge " + std::to_string(h) +
+                         " do not add up to its angle (inconsistent orientation)");
+    Face &a = m_faces[f0], &b = m_faces[f1];
+    a.hinge[k0] = b.hinge[k1] = h;
+    if (!a.clamped && !b.clamped) {
+      a.alpha[k0] = b.alpha[k1] = 0.5 * t;
+      a.psi[k0] = b.psi[k1] = m_num_psi++;
+      a.sigma[k0] = 1;
+      b.sigma[k1] = -1;
+    } else if (!a.clamped) {
+      a.alpha[k0] = t;  // the clamped face keeps its slope: this one takes the whole angle
+    } else if (!b.clamped) {
+      b.alpha[k1] = t;
+    }
+  }
+  for (Face& face : m_faces)
+    for (int k = 0; k < 3; ++k)
+      if (face.hinge[k] < 0 && !face.clamped) {
+        face.psi[k] = m_num_psi++;
+        face.sigma[k] = 1;
+      }
+  pack_slopes();
+  build_elements();
+  set_plastic_state(mesh.plastic_curvature(), mesh.damage());
+}
+
+MorleyBendingEnergy::~MorleyBendingEnergy() = default;
+
+void MorleyBendingEnergy::pack_slopes() {
+  // The Newton system stores 3x3 blocks, so the three slopes sharing a block couple to each
+  // other's vertices. Packing the three edges of one face together adds no coupling (they share
+  // that face's element); the edges left over are packed in face order, near each other.
+  std::vector<int> order(m_num_psi, -1);
+  int next = 0;
+  for (const Face& face : m_faces)
+    if (face.psi[0] >= 0 && face.psi[1] >= 0 && face.psi[2] >= 0 && order[face.psi[0]] < 0 &&
+        order[face.psi[1]] < 0 && order[face.psi[2]] < 0)
+      for (int k = 0; k < 3; ++k) order[face.psi[k]] = next++;
+  for (const Face& face : m_faces)
+    for (int k = 0; k < 3; ++k)
+      if (face.psi[k] >= 0 && order[face.psi[k]] < 0) order[face.psi[k]] = next++;
+  for (Face& face : m_faces)
+    for (int k = 0; k < 3; ++k)
+      if (face.psi[k] >= 0) face.psi[k] = order[face.psi[k]];
+}
+
+void MorleyBendingEnergy::build_elements() {
+  const int nf = static_cast<int>(m_faces.size());
+  m_face_element.assign(nf, -1);
+  // Face g's curvature K_g - Kp_g as columns over an element's unknown lists (appended as
+  // needed; theta columns are >= 0, psi column j is -1 - j).
+  auto curvature_rows = [&](int g, std::vector<int>& theta, std::vector<int>& psi,
+                            std::vector<std::pair<int, Eigen::Vector3d>>& columns) {
+    const Face& face = m_faces[g];
+    for (int k = 0; k < 3; ++k) {
+      const Eigen::Vector3d col = face.Rinv.col(k);
+      if (face.alpha[k] != 0) {
+        auto it = std::find(theta.begin(), theta.end(), face.hinge[k]);
+        if (it == theta.end()) theta.push_back(face.hinge[k]), it = theta.end() - 1;
+        columns.emplace_back(static_cast<int>(it - theta.begin()), face.alpha[k] * col);
+      }
+      if (face.psi[k] >= 0) {
+        auto it = std::find(psi.begin(), psi.end(), face.psi[k]);
+        if (it == psi.end()) psi.push_back(face.psi[k]), it = psi.end() - 1;
+        columns.emplace_back(-1 - static_cast<int>(it - psi.begin()), face.sigma[k] * col);
+      }
+    }
+  };
+  auto to_matrix = [](const std::vector<int>& theta, const std::vector<int>& psi,
+                      const std::vector<std::pair<int, Eigen::Vector3d>>& columns) {
+    Eigen::MatrixXd L = Eigen::MatrixXd::Zero(3, theta.size() + psi.size());
+    for (const auto& [c, v] : columns) L.col(c >= 0 ? c : static_cast<int>(theta.size()) - 1 - c) += v;
+    return L;
+  };
+  // Face element: K_f - Kp_f = L u - Kp_f over the face's own unknowns u.
+  for (int f = 0; f < nf; ++f) {
+    if (m_faces[f].clamped) continue;
+    Element e;
+    std::vector<std::pair<int, Eigen::Vector3d>> columns;
+    curvature_rows(f, e.theta, e.psi, columns);
+    e.L = to_matrix(e.theta, e.psi, columns);
+    m_face_element[f] = static_cast<int>(m_elements.size());
+    m_elements.push_back(std::move(e));
+  }
+  m_num_face_elements = static_cast<int>(m_elements.size());
+  // Boundary penalties: s_fk - R_f,k (Kp_f + mean_g (K_g - Kp_g)) over the unclamped faces g
+  // across f's interior edges.
+  for (int f = 0; f < nf; ++f) {
+    const Face& face = m_faces[f];
+    if (face.clamped) continue;
+    std::vector<int> neighbours;
+    for (int k = 0; k < 3; ++k) {
+      const int h = face.hinge[k];
+      if (h < 0) continue;
+      const int g = m_hinges.faces(h, 0) == f ? m_hinges.faces(h, 1) : m_hinges.faces(h, 0);
+      if (!m_faces[g].clamped) neighbours.push_back(g);
+    }
+    if (neighbours.empty()) continue;
+    for (int k = 0; k < 3; ++k) {
+      if (face.hinge[k] >= 0) continue;
+      Element e;
+      e.psi.push_back(face.psi[k]);
+      std::vector<std::pair<int, Eigen::Vector3d>> columns;
+      for (int g : neighbours) curvature_rows(g, e.theta, e.psi, columns);
+      const Eigen::MatrixXd L3 = to_matrix(e.theta, e.psi, columns);
+      e.L = -face.R.row(k) * L3 / static_cast<double>(neighbours.size());
+      e.L(0, e.theta.size()) += face.sigma[k];  // psi of the edge itself: first psi
+      m_penalties.push_back({f, k, neighbours});
+      m_elements.push_back(std::move(e));
+    }
+  }
+  // Vertices of each element's hinges (for the Hessian), local order.
+  for (Element& e : m_elements) {
+    for (int h : e.theta) {
+      std::array<int, 4> loc;
+      for (int k = 0; k < 4; ++k) {
+        const int v = m_hinges.vertices(h, k);
+        auto it = std::find(e.vertices.begin(), e.vertices.end(), v);
+        if (it == e.vertices.end()) e.vertices.push_back(v), it = e.vertices.end() - 1;
+        loc[k] = static_cast<int>(it - e.vertices.begin());
+      }
+      e.local.push_back(loc);
+    }
+    for (int p : e.psi) {
+      const int block = p / 3;
+      auto it = std::find(e.blocks.begin(), e.blocks.end(), block);
+      if (it == e.blocks.end()) e.blocks.push_back(block), it = e.blocks.end() - 1;
+      e.psi_at.emplace_back(static_cast<int>(it - e.blocks.begin()), p % 3);
+    }
+  }
+}
+
+void MorleyBendingEnergy::set_plastic_state(const Eigen::MatrixX3d& k, const Eigen::VectorXd& damage) {
+  const int nf = static_cast<int>(m_faces.size());
+  m_plastic.resize(nf);
+  m_stiffness.resize(nf);
+  for (int f = 0; f < nf; ++f) {
+    m_plastic[f] = k.row(f).transpose();
+    m_stiffness[f] = m_faces[f].area * m_D / (1 + m_weakening * damage[f]);
+  }
+  refresh();
+}
+
+void MorleyBendingEnergy::refresh() {
+  const int nf = static_cast<int>(m_faces.size());
+  for (int f = 0; f < nf; ++f) {
+    if (m_face_element[f] < 0) continue;
+    Element& e = m_elements[m_face_element[f]];
+    e.c = m_plastic[f];
+    e.W = m_stiffness[f] * m_Q;
+  }
+  for (size_t i = 0; i < m_penalties.size(); ++i) {
+    const Penalty& pen = m_penalties[i];
+    Element& e = m_elements[m_num_face_elements + i];
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+    for (int g : pen.neighbours) mean += m_plastic[g];
+    mean /= static_cast<double>(pen.neighbours.size());
+    e.c = Eigen::VectorXd::Constant(1, m_faces[pen.face].R.row(pen.edge).dot(m_plastic[pen.face] - mean));
+    e.W = Eigen::MatrixXd::Constant(1, 1, BOUNDARY_PENALTY * m_stiffness[pen.face] / m_faces[pen.face].area);
+  }
+  // C = d2E/dpsi2, A_psi_theta, b_psi = sum L_psi^T W c.
+  std::vector<Eigen::Triplet<double>> c_entries, a_entries;
+  m_b_psi = Eigen::VectorXd::Zero(m_num_psi);
+  for (Element& e : m_elements) {
+    e.M = e.L.transpose() * e.W * e.L;
+    const int nt = static_cast<int>(e.theta.size());
+    const Eigen::VectorXd Wc = e.L.transpose() * (e.W * e.c);
+    for (size_t i = 0; i < e.psi.size(); ++i) {
+      m_b_psi[e.psi[i]] += Wc[nt + i];
+      for (size_t j = 0; j < e.psi.size(); ++j) c_entries.emplace_back(e.psi[i], e.psi[j], e.M(nt + i, nt + j));
+      for (int j = 0; j < nt; ++j) a_entries.emplace_back(e.psi[i], e.theta[j], e.M(nt + i, j));
+    }
+  }
+  m_A_psi_theta.resize(m_num_psi, m_hinges.vertices.rows());
+  m_A_psi_theta.setFromTriplets(a_entries.begin(), a_entries.end());
+  if (m_num_psi == 0) return;
+  Eigen::SparseMatrix<double> C(m_num_psi, m_num_psi);
+  C.setFromTriplets(c_entries.begin(), c_entries.end());
+  m_C->ldlt.compute(C);
+  if (m_C->ldlt.info() != Eigen::Success)
+    throw NumericError("bending: the edge slope system cannot be factored");
+}
+
+void MorleyBendingEnergy::add_pattern(SparsityBuilder& pattern) const {
+  std::vector<int> clique;
+  for (const Element& e : m_elements) {
+    clique = e.vertices;
+    for (int b : e.blocks) clique.push_back(m_first_block + b);
+    pattern.add_clique(clique.data(), static_cast<int>(clique.size()));
+  }
+}
+
+Eigen::VectorXd MorleyBendingEnergy::hinge_angles(const Eigen::VectorXd& x) const {
+  Eigen::VectorXd theta(m_hinges.vertices.rows());
+  Eigen::Vector3d p[4];
+  for (int h = 0; h < theta.size(); ++h) {
+    gather(x, m_hinges.vertices.row(h), p);
+    theta[h] = dihedral_angle(p[0], p[1], p[2], p[3]);
+  }
+  return theta;
+}
+
+void MorleyBendingEnergy::unknowns(const Eigen::VectorXd& x, Eigen::VectorXd& theta, Eigen::VectorXd& psi) const {
+  if (theta.size() != m_hinges.vertices.rows()) theta = hinge_angles(x);
+  psi = m_num_psi > 0 ? Eigen::VectorXd(m_C->ldlt.solve(m_b_psi - m_A_psi_theta * theta))
+                      : Eigen::VectorXd();
+}
+
+Eigen::VectorXd MorleyBendingEnergy::element_residual(const Element& e, const Eigen::VectorXd& theta,
+                                                const Eigen::VectorXd& psi) const {
+  const int nt = static_cast<int>(e.theta.size());
+  Eigen::VectorXd u(nt + e.psi.size());
+  for (int i = 0; i < nt; ++i) u[i] = theta[e.theta[i]];
+  for (size_t i = 0; i < e.psi.size(); ++i) u[nt + i] = psi[e.psi[i]];
+  return e.L * u - e.c;
+}
+
+double MorleyBendingEnergy::value(const Eigen::VectorXd& x) const {
+  Eigen::VectorXd theta, psi;
+  unknowns(x, theta, psi);
+  double energy = 0;
+  for (const Element& e : m_elements) {
+    const Eigen::VectorXd r = element_residual(e, theta, psi);
+    energy += 0.5 * r.dot(e.W * r);
+  }
+  return energy;
+}
+
+Eigen::MatrixX3d MorleyBendingEnergy::face_curvatures(const Eigen::VectorXd& x) const {
+  Eigen::VectorXd theta, psi;
+  unknowns(x, theta, psi);
+  Eigen::MatrixX3d K(m_faces.size(), 3);
+  for (size_t f = 0; f < m_faces.size(); ++f) {
+    const int e = m_face_element[f];
+    K.row(f) = (e < 0 ? m_plastic[f] : Eigen::Vector3d(element_residual(m_elements[e], theta, psi) + m_plastic[f]))
+                   .transpose();
+  }
+  return K;
+}
+
+void MorleyBendingEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd& gradient,
+                                    BlockSymmetricMatrix* hessian) const {
+  const int nh = static_cast<int>(m_hinges.vertices.rows());
+  Eigen::VectorXd theta(nh);
+  std::vector<Eigen::Matrix<double, 12, 1>> grads(nh);
+  const bool curvature_term = m_hessian_kind != BendingHessian::gauss_newton && hessian;
+  std::vector<Eigen::Matrix<double, 12, 12>> hesses(curvature_term ? nh : 0);
+  Eigen::Vector3d p[4];
+  for (int h = 0; h < nh; ++h) {
+    gather(x, m_hinges.vertices.row(h), p);
+    dihedral_angle_derivatives(p[0], p[1], p[2], p[3], theta[h], &grads[h],
+                               hesses.empty() ? nullptr : &hesses[h]);
+  }
+  Eigen::VectorXd psi;
+  unknowns(x, theta, psi);
+  // dE/dtheta at psi* (envelope theorem: dE/dpsi = 0 there).
+  Eigen::VectorXd dE = Eigen::VectorXd::Zero(nh);
+  std::vector<char> used(nh, 0);
+  for (const Element& e : m_elements) {
+    const Eigen::VectorXd g = e.L.transpose() * (e.W * element_residual(e, theta, psi));
+    for (size_t i = 0; i < e.theta.size(); ++i) dE[e.theta[i]] += g[i], used[e.theta[i]] = 1;
+  }
+  for (int h = 0; h < nh; ++h)
+    for (int q = 0; q < 4; ++q) gradient.segment<3>(3 * m_hinges.vertices(h, q)) += dE[h] * grads[h].segment<3>(3 * q);
+  if (!hessian) return;
+  if (m_first_block < 0 && m_num_psi > 0)
+    throw NumericError("bending: the Hessian needs the integrator's auxiliary blocks");
+  // Gauss-Newton: per element, [G, I]^T M [G, I] over (hinge vertices, psi blocks), with G the
+  // hinge gradients (column i = grad theta_i on its 4 vertices).
+  Eigen::MatrixXd GM, H;
+  std::vector<int> index;
+  for (const Element& e : m_elements) {
+    const int nt = static_cast<int>(e.theta.size()), np = static_cast<int>(e.psi.size());
+    const int nv = static_cast<int>(e.vertices.size()), nb = static_cast<int>(e.blocks.size());
+    const int n = nt + np;
+    GM.setZero(3 * nv, n);  // G M[theta rows, :]
+    for (int i = 0; i < nt; ++i)
+      for (int q = 0; q < 4; ++q) {
+        const Eigen::Vector3d gi = grads[e.theta[i]].segment<3>(3 * q);
+        GM.middleRows<3>(3 * e.local[i][q]) += gi * e.M.row(i);
+      }
+    H.setZero(3 * (nv + nb), 3 * (nv + nb));
+    for (int j = 0; j < nt; ++j)
+      for (int r = 0; r < 4; ++r)
+        H.block(0, 3 * e.local[j][r], 3 * nv, 3).noalias() +=
+            GM.col(j) * grads[e.theta[j]].segment<3>(3 * r).transpose();
+    for (int j = 0; j < np; ++j) {
+      const int col = 3 * (nv + e.psi_at[j].first) + e.psi_at[j].second;
+      H.block(0, col, 3 * nv, 1) += GM.col(nt + j);
+      H.block(col, 0, 1, 3 * nv) += GM.col(nt + j).transpose();
+      for (int i = 0; i < np; ++i) {
+        const int row = 3 * (nv + e.psi_at[i].first) + e.psi_at[i].second;
+        H(row, col) += e.M(nt + i, nt + j);
+      }
+    }
+    index = e.vertices;
+    for (int b : e.blocks) index.push_back(m_first_block + b);
+    hessian->add_element(index.data(), nv + nb, H.data());
+  }
+  // The unused components of the last auxiliary block: identity (their right-hand side is 0).
+  if (m_num_psi % 3 != 0) {
+    Eigen::Matrix3d I = Eigen::Matrix3d::Zero();
+    for (int c = m_num_psi % 3; c < 3; ++c) I(c, c) = 1;
+    const int block = m_first_block + m_num_psi / 3;
+    hessian->add_element(&block, 1, I.data());
+  }
+  if (curvature_term)
+    for (int h = 0; h < nh; ++h) {
+      if (!used[h] || dE[h] == 0) continue;
+      Eigen::Matrix<double, 12, 12> Hh = dE[h] * hesses[h];
+      if (m_hessian_kind == BendingHessian::projected) Hh = project_psd(Hh);
+      const Eigen::Vector4i v = m_hinges.vertices.row(h);
+      hessian->add_element<4>({v[0], v[1], v[2], v[3]}, Hh);
+    }
+}
+
+}  // namespace papersim::simulation
