@@ -399,6 +399,17 @@ int main(int argc, char** argv) {
     const rm::SheetMesh mesh = rm::make_rectangle(o);
     for (bool ex : {false, true}) {
       Morley M = morley_system(mesh, ex);
+      {
+        // twist z = tau x y: energy over the plate's D tau^2 A (nu = 0)
+        const Eigen::MatrixX2d X = mesh.material_coords();
+        Eigen::VectorXd z(M.nv);
+        const double tau = 10;
+        for (int v = 0; v < M.nv; ++v) z[v] = tau * X(v, 0) * X(v, 1);
+        const Eigen::SparseMatrix<double> Kpp = M.K.block(M.nv, M.nv, M.ne, M.ne), Kpz = M.K.block(M.nv, 0, M.ne, M.nv), Kzz = M.K.block(0, 0, M.nv, M.nv);
+        const Eigen::VectorXd phi = -Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>(Kpp).solve(Kpz * z);
+        const double E = 0.5 * z.dot(Kzz * z) + z.dot(Kpz.transpose() * phi) + 0.5 * phi.dot(Kpp * phi);
+        std::printf("extrapolate %d twist E/Ec %.4f\n", ex, E / (ps::Material{}.bending_stiffness * tau * tau * M.area));
+      }
       const Eigen::MatrixXd K(M.K);
       const int n = M.nv, m = M.ne;
       const Eigen::MatrixXd S = K.topLeftCorner(n, n) - K.topRightCorner(n, m) * K.bottomRightCorner(m, m).ldlt().solve(K.bottomLeftCorner(m, n));
