@@ -31,6 +31,34 @@ class BendingEnergy : public EnergyTerm {
                                  const Eigen::VectorXd& damage) = 0;
 };
 
+/// theta = row . (K_xx, K_yy, K_xy) for the height field z = p^T K p / 2 over the hinge
+/// (p0, p1, pa, pb) in material coordinates (small slopes): the height of p_b over the plane of
+/// (p0, p1, pa) over its distance from the hinge line. Exact for every constant curvature.
+Eigen::RowVector3d hinge_curvature_row(const Eigen::Vector2d& p0, const Eigen::Vector2d& p1,
+                                       const Eigen::Vector2d& pa, const Eigen::Vector2d& pb);
+
+/// Plate energy density in Voigt form: D/2 [(1 - nu)|K|^2 + nu tr(K)^2] = D/2 k^T Q k with
+/// k = (K_xx, K_yy, K_xy).
+Eigen::Matrix3d plate_energy_matrix(double nu);
+
+/// Positions of hinge v = (v0, v1, a, b) in x.
+inline void gather_hinge(const Eigen::VectorXd& x, const Eigen::Vector4i& v, Eigen::Vector3d* p) {
+  for (int k = 0; k < 4; ++k) p[k] = x.segment<3>(3 * v[k]);
+}
+
+/// Signed dihedral angle of every hinge at x [rad].
+Eigen::VectorXd hinge_angles_at(const remesh::Hinges& hinges, const Eigen::VectorXd& x);
+
+/// Angles of every hinge at x with their gradients (12 per hinge, over (v0, v1, a, b)) and,
+/// when asked, their Hessians.
+struct HingeDerivatives {
+  Eigen::VectorXd theta;
+  std::vector<Eigen::Matrix<double, 12, 1>> gradients;
+  std::vector<Eigen::Matrix<double, 12, 12>> hessians;  // empty unless asked
+};
+HingeDerivatives hinge_derivatives(const remesh::Hinges& hinges, const Eigen::VectorXd& x,
+                                   bool with_hessians);
+
 /// The model material.bending_model names. `clamped_faces`: faces a clamp holds, slopes
 /// included (the Morley model keeps their slopes; the fit model has no slope unknowns and
 /// ignores them).

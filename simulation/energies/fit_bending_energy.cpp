@@ -19,43 +19,15 @@ namespace {
 
 /// Weight of the fit residual against the plate energy (see build_stencil).
 constexpr double HOURGLASS_WEIGHT = 10.0;
-
-/// Row of B for hinge (p0, p1, pa, pb): theta = row . (K_xx, K_yy, K_xy) for z = p^T K p / 2.
-Eigen::RowVector3d hinge_row(const Eigen::Vector2d& p0, const Eigen::Vector2d& p1,
-                             const Eigen::Vector2d& pa, const Eigen::Vector2d& pb) {
-  Eigen::Matrix2d T;
-  T.col(0) = p1 - p0;
-  T.col(1) = pa - p0;
-  const Eigen::Vector2d l12 = T.inverse() * (pb - p0);
-  const double l[3] = {1 - l12[0] - l12[1], l12[0], l12[1]};
-  const Eigen::Vector2d p[3] = {p0, p1, pa};
-  Eigen::RowVector3d row = Eigen::RowVector3d::Zero();
-  for (int i = 0; i < 3; ++i)
-    for (int j = i + 1; j < 3; ++j) {
-      const Eigen::Vector2d d = p[i] - p[j];
-      row += -0.5 * l[i] * l[j] * Eigen::RowVector3d(d.x() * d.x(), d.y() * d.y(), 2 * d.x() * d.y());
-    }
-  const Eigen::Vector2d e = (p1 - p0).normalized();
-  const Eigen::Vector2d r = pb - p0;
-  const double h = std::abs(e.x() * r.y() - e.y() * r.x());
-  return row / h;
-}
-
-void dihedral_gather(const Eigen::VectorXd& x, const Eigen::Vector4i& v, Eigen::Vector3d* p) {
-  for (int k = 0; k < 4; ++k) p[k] = x.segment<3>(3 * v[k]);
-}
-
 }  // namespace
 
 FitBendingEnergy::FitBendingEnergy(const remesh::SheetMesh& mesh, const Material& material,
                              BendingHessian hessian_kind)
     : m_hinges(remesh::interior_hinges(mesh)),
+      m_Q(plate_energy_matrix(material.poisson)),
       m_D(material.bending_stiffness),
       m_weakening(material.weakening),
       m_hessian_kind(hessian_kind) {
-  const double nu = material.poisson;
-  m_Q = (1 - nu) * Eigen::Vector3d(1, 1, 2).asDiagonal().toDenseMatrix();
-  m_Q += nu * Eigen::Vector3d(1, 1, 0) * Eigen::RowVector3d(1, 1, 0);
   const Eigen::MatrixX3i faces = mesh.faces();
   const Eigen::MatrixX2d X = mesh.material_coords();
   const Eigen::MatrixX3i fh = remesh::face_hinges(mesh, m_hinges);
@@ -84,7 +56,7 @@ void FitBendingEnergy::build_stencil(int f, const Eigen::MatrixX3i& fh, const Ei
     Eigen::MatrixXd B(face.hinges.size(), 3);
     for (size_t i = 0; i < face.hinges.size(); ++i) {
       const Eigen::Vector4i v = m_hinges.vertices.row(face.hinges[i]);
-      B.row(i) = hinge_row(X.row(v[0]), X.row(v[1]), X.row(v[2]), X.row(v[3]));
+      B.row(i) = hinge_curvature_row(X.row(v[0]), X.row(v[1]), X.row(v[2]), X.row(v[3]));
     }
     return B;
   };
@@ -158,13 +130,7 @@ void FitBendingEnergy::add_pattern(SparsityBuilder& pattern) const {
 }
 
 Eigen::VectorXd FitBendingEnergy::hinge_angles(const Eigen::VectorXd& x) const {
-  Eigen::VectorXd theta(m_hinges.vertices.rows());
-  Eigen::Vector3d p[4];
-  for (int h = 0; h < theta.size(); ++h) {
-    dihedral_gather(x, m_hinges.vertices.row(h), p);
-    theta[h] = dihedral_angle(p[0], p[1], p[2], p[3]);
-  }
-  return theta;
+  return hinge_angles_at(m_hinges, x);
 }
 
 double FitBendingEnergy::face_energy(const Face& face, const Eigen::VectorXd& theta) const {
@@ -195,17 +161,11 @@ Eigen::MatrixX3d FitBendingEnergy::face_curvatures(const Eigen::VectorXd& x) con
 
 void FitBendingEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd& gradient,
                                     BlockSymmetricMatrix* hessian) const {
-  const int nh = static_cast<int>(m_hinges.vertices.rows());
-  Eigen::VectorXd theta(nh);
-  std::vector<Eigen::Matrix<double, 12, 1>> grads(nh);
   const bool curvature_term = m_hessian_kind != BendingHessian::gauss_newton && hessian;
-  std::vector<Eigen::Matrix<double, 12, 12>> hesses(curvature_term ? nh : 0);
-  Eigen::Vector3d p[4];
-  for (int h = 0; h < nh; ++h) {
-    dihedral_gather(x, m_hinges.vertices.row(h), p);
-    dihedral_angle_derivatives(p[0], p[1], p[2], p[3], theta[h], &grads[h],
-                               hesses.empty() ? nullptr : &hesses[h]);
-  }
+  const HingeDerivatives hd = hinge_derivatives(m_hinges, x, curvature_term);
+  const Eigen::VectorXd& theta = hd.theta;
+  const auto& grads = hd.gradients;
+  const auto& hesses = hd.hessians;
   Eigen::MatrixXd H, JM;
   for (const Face& face : m_faces) {
     const int ns = static_cast<int>(face.hinges.size());

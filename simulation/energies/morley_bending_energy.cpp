@@ -24,44 +24,16 @@ namespace {
 /// stiff enough to act as a constraint (the probe's figures are at this weight) while the
 /// slope matrix stays well conditioned for a direct solve.
 constexpr double BOUNDARY_PENALTY = 1e6;
-
-/// theta = row . (K_xx, K_yy, K_xy) for z = p^T K p / 2 over the hinge (p0, p1, pa, pb): the
-/// height of p_b over the plane of (p0, p1, pa), over its distance from the hinge line.
-Eigen::RowVector3d hinge_row(const Eigen::Vector2d& p0, const Eigen::Vector2d& p1,
-                             const Eigen::Vector2d& pa, const Eigen::Vector2d& pb) {
-  Eigen::Matrix2d T;
-  T.col(0) = p1 - p0;
-  T.col(1) = pa - p0;
-  const Eigen::Vector2d l12 = T.inverse() * (pb - p0);
-  const double l[3] = {1 - l12[0] - l12[1], l12[0], l12[1]};
-  const Eigen::Vector2d p[3] = {p0, p1, pa};
-  Eigen::RowVector3d row = Eigen::RowVector3d::Zero();
-  for (int i = 0; i < 3; ++i)
-    for (int j = i + 1; j < 3; ++j) {
-      const Eigen::Vector2d d = p[i] - p[j];
-      row += -0.5 * l[i] * l[j] * Eigen::RowVector3d(d.x() * d.x(), d.y() * d.y(), 2 * d.x() * d.y());
-    }
-  const Eigen::Vector2d e = (p1 - p0).normalized();
-  const Eigen::Vector2d r = pb - p0;
-  return row / std::abs(e.x() * r.y() - e.y() * r.x());
-}
-
-void gather(const Eigen::VectorXd& x, const Eigen::Vector4i& v, Eigen::Vector3d* p) {
-  for (int k = 0; k < 4; ++k) p[k] = x.segment<3>(3 * v[k]);
-}
-
 }  // namespace
 
 MorleyBendingEnergy::MorleyBendingEnergy(const remesh::SheetMesh& mesh, const Material& material,
                              BendingHessian hessian_kind, const std::vector<int>& clamped_faces)
     : m_hinges(remesh::interior_hinges(mesh)),
       m_C(std::make_unique<Factor>()),
+      m_Q(plate_energy_matrix(material.poisson)),
       m_D(material.bending_stiffness),
       m_weakening(material.weakening),
       m_hessian_kind(hessian_kind) {
-  const double nu = material.poisson;
-  m_Q = (1 - nu) * Eigen::Vector3d(1, 1, 2).asDiagonal().toDenseMatrix();
-  m_Q += nu * Eigen::Vector3d(1, 1, 0) * Eigen::RowVector3d(1, 1, 0);
   const Eigen::MatrixX3i F = mesh.faces();
   const Eigen::MatrixX2d X = mesh.material_coords();
   m_faces.resize(F.rows());
@@ -100,7 +72,7 @@ MorleyBendingEnergy::MorleyBendingEnergy(const remesh::SheetMesh& mesh, const Ma
     const int f0 = m_hinges.faces(h, 0), f1 = m_hinges.faces(h, 1);
     const int k0 = local_edge(f0, v[2]), k1 = local_edge(f1, v[3]);
     // The two faces' slope rows add up to the hinge's angle row (sign t of the convention).
-    const Eigen::RowVector3d row = hinge_row(X.row(v[0]), X.row(v[1]), X.row(v[2]), X.row(v[3]));
+    const Eigen::RowVector3d row = hinge_curvature_row(X.row(v[0]), X.row(v[1]), X.row(v[2]), X.row(v[3]));
     const Eigen::RowVector3d sum = m_faces[f0].R.row(k0) + m_faces[f1].R.row(k1);
     const double t = sum.dot(row) > 0 ? 1.0 : -1.0;
     if ((sum - t * row).norm() > 1e-8 * row.norm())
@@ -297,13 +269,7 @@ void MorleyBendingEnergy::add_pattern(SparsityBuilder& pattern) const {
 }
 
 Eigen::VectorXd MorleyBendingEnergy::hinge_angles(const Eigen::VectorXd& x) const {
-  Eigen::VectorXd theta(m_hinges.vertices.rows());
-  Eigen::Vector3d p[4];
-  for (int h = 0; h < theta.size(); ++h) {
-    gather(x, m_hinges.vertices.row(h), p);
-    theta[h] = dihedral_angle(p[0], p[1], p[2], p[3]);
-  }
-  return theta;
+  return hinge_angles_at(m_hinges, x);
 }
 
 void MorleyBendingEnergy::unknowns(const Eigen::VectorXd& x, Eigen::VectorXd& theta, Eigen::VectorXd& psi) const {
@@ -347,16 +313,11 @@ Eigen::MatrixX3d MorleyBendingEnergy::face_curvatures(const Eigen::VectorXd& x) 
 void MorleyBendingEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd& gradient,
                                     BlockSymmetricMatrix* hessian) const {
   const int nh = static_cast<int>(m_hinges.vertices.rows());
-  Eigen::VectorXd theta(nh);
-  std::vector<Eigen::Matrix<double, 12, 1>> grads(nh);
   const bool curvature_term = m_hessian_kind != BendingHessian::gauss_newton && hessian;
-  std::vector<Eigen::Matrix<double, 12, 12>> hesses(curvature_term ? nh : 0);
-  Eigen::Vector3d p[4];
-  for (int h = 0; h < nh; ++h) {
-    gather(x, m_hinges.vertices.row(h), p);
-    dihedral_angle_derivatives(p[0], p[1], p[2], p[3], theta[h], &grads[h],
-                               hesses.empty() ? nullptr : &hesses[h]);
-  }
+  HingeDerivatives hd = hinge_derivatives(m_hinges, x, curvature_term);
+  Eigen::VectorXd& theta = hd.theta;
+  const auto& grads = hd.gradients;
+  const auto& hesses = hd.hessians;
   Eigen::VectorXd psi;
   unknowns(x, theta, psi);
   // dE/dtheta at psi* (envelope theorem: dE/dpsi = 0 there).
