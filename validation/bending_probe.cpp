@@ -14,7 +14,9 @@
 //     consistent discretisation docs/elastica_30deg_diagnosis.md section 5 measures.
 // Usage: papersim_bending_probe [edge [m], default 2.5e-3] [width [m], default 0.01]
 // Environment: PROBE_ANGLE (lattice angle [deg], 30), PROBE_BINS (energy and K_xx by x bins),
-// PROBE_SAG_ONLY, PROBE_MODE_SHAPE (print the first mode's displacements), PROBE_CYLINDER.
+// PROBE_SAG_ONLY, PROBE_MODE_SHAPE (print the first mode's displacements), PROBE_CYLINDER,
+// PROBE_MODES (zero modes and twist of the Morley plate on a 12 x 4 cm sheet), PROBE_FOLD=r
+// (a 180-degree fold of radius r [m] under both bending models).
 #include <Eigen/LU>
 #include <Eigen/Sparse>
 #include <map>
@@ -28,6 +30,7 @@
 
 #include "remesh/sheet_generator.hpp"
 #include "simulation/energies/fit_bending_energy.hpp"
+#include "simulation/energies/bending_energy.hpp"
 #include "simulation/energies/vertex_energies.hpp"
 #include <Eigen/Eigenvalues>
 
@@ -391,6 +394,36 @@ void morley_report(const char* label, const rm::SheetMesh& mesh, double clamp) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (std::getenv("PROBE_FOLD")) {
+    // A 180-degree fold of radius r (isometric) on a 12 x 4 cm sheet at 8 mm, its start x0 swept
+    // over two edge lengths: bending energy of both models over the continuum pi D w / r.
+    rm::RectangleOptions o;
+    o.width = 0.12; o.height = 0.04; o.nx = 16; o.ny = 6;
+    const rm::SheetMesh mesh = rm::make_rectangle(o);
+    const Eigen::MatrixX2d X = mesh.material_coords();
+    const double r = std::atof(std::getenv("PROBE_FOLD"));
+    for (ps::BendingModel model : {ps::BendingModel::fit, ps::BendingModel::morley}) {
+      ps::Material m;
+      m.bending_model = model;
+      const auto e = ps::make_bending_energy(mesh, m);
+      const double ec = M_PI * m.bending_stiffness * o.height / r;
+      std::printf("%s fold r = %g mm, E/Ec over x0:", model == ps::BendingModel::fit ? "fit   " : "morley", 1e3 * r);
+      for (double x0 = 0.04; x0 <= 0.056 + 1e-9; x0 += 0.002) {
+        Eigen::VectorXd x(3 * X.rows());
+        for (int v = 0; v < X.rows(); ++v) {
+          const double s = X(v, 0), len = M_PI * r;
+          double px, pz;
+          if (s <= x0) px = s, pz = 0;
+          else if (s <= x0 + len) px = x0 + r * std::sin((s - x0) / r), pz = r * (1 - std::cos((s - x0) / r));
+          else px = x0 - (s - x0 - len), pz = 2 * r;
+          x.segment<3>(3 * v) << px, X(v, 1), pz;
+        }
+        std::printf(" %.3f", e->value(x) / ec);
+      }
+      std::printf("\n");
+    }
+    return 0;
+  }
   if (std::getenv("PROBE_MODES")) {
     // smallest eigenvalues of the condensed Morley stiffness on a free sheet
     rm::RectangleOptions o;
