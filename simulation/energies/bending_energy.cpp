@@ -60,6 +60,18 @@ Eigen::VectorXd hinge_angles_at(const remesh::Hinges& hinges, const Eigen::Vecto
   return theta;
 }
 
+BendingEnergy::BendingEnergy(const remesh::SheetMesh& mesh, const Material& material,
+                             BendingHessian hessian)
+    : m_hinges(remesh::interior_hinges(mesh)),
+      m_Q(plate_energy_matrix(material.poisson)),
+      m_D(material.bending_stiffness),
+      m_weakening(material.weakening),
+      m_hessian_kind(hessian) {}
+
+Eigen::VectorXd BendingEnergy::hinge_angles(const Eigen::VectorXd& x) const {
+  return hinge_angles_at(m_hinges, x);
+}
+
 std::unique_ptr<BendingEnergy> make_bending_energy(const remesh::SheetMesh& mesh,
                                                    const Material& material,
                                                    BendingHessian hessian,

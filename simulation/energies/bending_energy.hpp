@@ -18,17 +18,29 @@ namespace papersim::simulation {
 
 enum class BendingHessian { gauss_newton, projected, exact };
 
+/// Plate energy density in Voigt form: D/2 [(1 - nu)|K|^2 + nu tr(K)^2] = D/2 k^T Q k with
+/// k = (K_xx, K_yy, K_xy).
+Eigen::Matrix3d plate_energy_matrix(double nu);
+
 class BendingEnergy : public EnergyTerm {
  public:
   std::string name() const override { return "bend"; }
   /// Curvature tensor of every face at x, #F by 3 (K_xx, K_yy, K_xy) [1/m].
   virtual Eigen::MatrixX3d face_curvatures(const Eigen::VectorXd& x) const = 0;
-  /// Signed dihedral angle of every interior hinge [rad].
-  virtual Eigen::VectorXd hinge_angles(const Eigen::VectorXd& x) const = 0;
-  virtual const remesh::Hinges& hinges() const = 0;
   /// Replace the plastic state (#F by 3 curvature [1/m], #F damage).
   virtual void set_plastic_state(const Eigen::MatrixX3d& plastic_curvature,
                                  const Eigen::VectorXd& damage) = 0;
+  /// Signed dihedral angle of every interior hinge [rad].
+  Eigen::VectorXd hinge_angles(const Eigen::VectorXd& x) const;
+  const remesh::Hinges& hinges() const { return m_hinges; }
+
+ protected:
+  BendingEnergy(const remesh::SheetMesh& mesh, const Material& material, BendingHessian hessian);
+
+  remesh::Hinges m_hinges;
+  Eigen::Matrix3d m_Q;  // plate energy density in Voigt: e = k^T Q k (plate_energy_matrix)
+  double m_D, m_weakening;
+  BendingHessian m_hessian_kind;
 };
 
 /// theta = row . (K_xx, K_yy, K_xy) for the height field z = p^T K p / 2 over the hinge
@@ -37,9 +49,6 @@ class BendingEnergy : public EnergyTerm {
 Eigen::RowVector3d hinge_curvature_row(const Eigen::Vector2d& p0, const Eigen::Vector2d& p1,
                                        const Eigen::Vector2d& pa, const Eigen::Vector2d& pb);
 
-/// Plate energy density in Voigt form: D/2 [(1 - nu)|K|^2 + nu tr(K)^2] = D/2 k^T Q k with
-/// k = (K_xx, K_yy, K_xy).
-Eigen::Matrix3d plate_energy_matrix(double nu);
 
 /// Positions of hinge v = (v0, v1, a, b) in x.
 inline void gather_hinge(const Eigen::VectorXd& x, const Eigen::Vector4i& v, Eigen::Vector3d* p) {

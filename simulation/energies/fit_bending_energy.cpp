@@ -23,11 +23,7 @@ constexpr double HOURGLASS_WEIGHT = 10.0;
 
 FitBendingEnergy::FitBendingEnergy(const remesh::SheetMesh& mesh, const Material& material,
                              BendingHessian hessian_kind)
-    : m_hinges(remesh::interior_hinges(mesh)),
-      m_Q(plate_energy_matrix(material.poisson)),
-      m_D(material.bending_stiffness),
-      m_weakening(material.weakening),
-      m_hessian_kind(hessian_kind) {
+    : BendingEnergy(mesh, material, hessian_kind) {
   const Eigen::MatrixX3i faces = mesh.faces();
   const Eigen::MatrixX2d X = mesh.material_coords();
   const Eigen::MatrixX3i fh = remesh::face_hinges(mesh, m_hinges);
@@ -127,10 +123,6 @@ void FitBendingEnergy::set_plastic_state(const Eigen::MatrixX3d& k, const Eigen:
 void FitBendingEnergy::add_pattern(SparsityBuilder& pattern) const {
   for (const auto& face : m_faces)
     pattern.add_clique(face.vertices.data(), static_cast<int>(face.vertices.size()));
-}
-
-Eigen::VectorXd FitBendingEnergy::hinge_angles(const Eigen::VectorXd& x) const {
-  return hinge_angles_at(m_hinges, x);
 }
 
 double FitBendingEnergy::face_energy(const Face& face, const Eigen::VectorXd& theta) const {

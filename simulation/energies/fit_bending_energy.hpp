@@ -28,7 +28,6 @@
 
 #include "remesh/sheet_mesh.hpp"
 #include "simulation/energies/bending_energy.hpp"
-#include "simulation/energies/energy_term.hpp"
 #include "simulation/material.hpp"
 
 namespace papersim::simulation {
@@ -47,9 +46,6 @@ class FitBendingEnergy : public BendingEnergy {
 
   /// Curvature tensor of every face at x, #F by 3 (K_xx, K_yy, K_xy) [1/m].
   Eigen::MatrixX3d face_curvatures(const Eigen::VectorXd& x) const override;
-  /// Signed dihedral angle of every interior hinge [rad].
-  Eigen::VectorXd hinge_angles(const Eigen::VectorXd& x) const override;
-  const remesh::Hinges& hinges() const override { return m_hinges; }
 
   /// Replace the plastic state (#F by 3 curvature [1/m], #F damage).
   void set_plastic_state(const Eigen::MatrixX3d& plastic_curvature, const Eigen::VectorXd& damage) override;
@@ -70,11 +66,7 @@ class FitBendingEnergy : public BendingEnergy {
                      const Eigen::MatrixX2d& X);
   double face_energy(const Face& face, const Eigen::VectorXd& theta) const;
 
-  remesh::Hinges m_hinges;
   std::vector<Face> m_faces;
-  Eigen::Matrix3d m_Q;  // plate energy density in Voigt: e = k^T Q k
-  double m_D, m_weakening;
-  BendingHessian m_hessian_kind;
 };
 
 }  // namespace papersim::simulation

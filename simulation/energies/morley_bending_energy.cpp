@@ -28,12 +28,8 @@ constexpr double BOUNDARY_PENALTY = 1e6;
 
 MorleyBendingEnergy::MorleyBendingEnergy(const remesh::SheetMesh& mesh, const Material& material,
                              BendingHessian hessian_kind, const std::vector<int>& clamped_faces)
-    : m_hinges(remesh::interior_hinges(mesh)),
-      m_C(std::make_unique<Factor>()),
-      m_Q(plate_energy_matrix(material.poisson)),
-      m_D(material.bending_stiffness),
-      m_weakening(material.weakening),
-      m_hessian_kind(hessian_kind) {
+    : BendingEnergy(mesh, material, hessian_kind),
+      m_C(std::make_unique<Factor>()) {
   const Eigen::MatrixX3i F = mesh.faces();
   const Eigen::MatrixX2d X = mesh.material_coords();
   m_faces.resize(F.rows());
@@ -266,10 +262,6 @@ void MorleyBendingEnergy::add_pattern(SparsityBuilder& pattern) const {
     for (int b : e.blocks) clique.push_back(m_first_block + b);
     pattern.add_clique(clique.data(), static_cast<int>(clique.size()));
   }
-}
-
-Eigen::VectorXd MorleyBendingEnergy::hinge_angles(const Eigen::VectorXd& x) const {
-  return hinge_angles_at(m_hinges, x);
 }
 
 void MorleyBendingEnergy::unknowns(const Eigen::VectorXd& x, Eigen::VectorXd& theta, Eigen::VectorXd& psi) const {

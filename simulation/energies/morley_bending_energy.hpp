@@ -43,7 +43,6 @@
 
 #include "remesh/sheet_mesh.hpp"
 #include "simulation/energies/bending_energy.hpp"
-#include "simulation/energies/energy_term.hpp"
 #include "simulation/material.hpp"
 
 namespace papersim::simulation {
@@ -66,11 +65,6 @@ class MorleyBendingEnergy : public BendingEnergy {
   /// Curvature tensor of every face at x, #F by 3 (K_xx, K_yy, K_xy) [1/m] (clamped faces:
   /// their plastic curvature).
   Eigen::MatrixX3d face_curvatures(const Eigen::VectorXd& x) const override;
-  /// Signed dihedral angle of every interior hinge [rad].
-  Eigen::VectorXd hinge_angles(const Eigen::VectorXd& x) const override;
-  const remesh::Hinges& hinges() const override { return m_hinges; }
-  /// Number of edge slope unknowns.
-  int num_slopes() const { return m_num_psi; }
 
   /// Replace the plastic state (#F by 3 curvature [1/m], #F damage).
   void set_plastic_state(const Eigen::MatrixX3d& plastic_curvature, const Eigen::VectorXd& damage) override;
@@ -114,7 +108,6 @@ class MorleyBendingEnergy : public BendingEnergy {
   Eigen::VectorXd element_residual(const Element& e, const Eigen::VectorXd& theta,
                                    const Eigen::VectorXd& psi) const;
 
-  remesh::Hinges m_hinges;
   std::vector<Face> m_faces;
   std::vector<Element> m_elements;  // one per unclamped face, then the boundary penalties
   std::vector<int> m_face_element;  // face -> its element, -1 for clamped faces
@@ -125,11 +118,8 @@ class MorleyBendingEnergy : public BendingEnergy {
   Eigen::SparseMatrix<double> m_A_psi_theta;  // d2E / dpsi dtheta
   Eigen::VectorXd m_b_psi;                     // C psi* = b_psi - A_psi_theta theta
   std::unique_ptr<Factor> m_C;
-  Eigen::Matrix3d m_Q;  // plate energy density in Voigt: e = k^T Q k
-  double m_D, m_weakening;
   int m_num_psi = 0;
   int m_first_block = -1;
-  BendingHessian m_hessian_kind;
 };
 
 }  // namespace papersim::simulation
