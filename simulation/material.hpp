@@ -16,7 +16,7 @@ struct Material {
   double thickness = 1e-4;            ///< physical thickness [m] (for reports and contact)
   double yield_curvature = 200.0;     ///< plastic yield curvature [1/m]
   double weakening = 1.0;             ///< D / (1 + weakening * damage) [-]
-  BendingModel bending_model = BendingModel::fit;  ///< "fit" or "morley"
+  BendingModel bending_model = BendingModel::morley;  ///< "fit" or "morley"
 };
 
 }  // namespace papersim::simulation

@@ -759,9 +759,9 @@ int main(int argc, char** argv) {
   app.add_option("--only", only,
                  "run only these families: elastica, convergence, greenhill, cylinder, damping, friction")
       ->check(CLI::IsMember({"elastica", "convergence", "greenhill", "cylinder", "damping", "friction"}));
-  std::string bending = "fit";
+  std::string bending = "morley";
   app.add_option("--bending", bending,
-                 "bending discretisation under test: fit (the simulator's default) or morley")
+                 "bending discretisation under test: morley (the simulator's default) or fit")
       ->check(CLI::IsMember({"fit", "morley"}));
   CLI11_PARSE(app, argc, argv);
   g_bending_model = bending == "morley" ? ps::BendingModel::morley : ps::BendingModel::fit;

@@ -1,12 +1,12 @@
 #pragma once
 /// Bending energy: the interface of the two discretisations and the factory that picks one by
 /// Material::bending_model.
-///   - fit (default): a per-face curvature tensor fitted to a stencil of hinge angles, with a
-///     residual penalty against hourglass modes (fit_bending_energy.hpp);
-///   - morley: the Morley plate, one slope unknown per edge condensed out of the state
+///   - morley (default): the Morley plate, one slope unknown per edge condensed out of the state
 ///     (morley_bending_energy.hpp); consistent on every mesh (heavy elastica within 0.4% along
-///     the grid and at 30 degrees to it at 2.5 mm), not yet the default
-///     (docs/elastica_30deg_diagnosis.md, section 6).
+///     the grid and at 30 degrees to it at 2.5 mm);
+///   - fit: a per-face curvature tensor fitted to a stencil of hinge angles, with a residual
+///     penalty against hourglass modes (fit_bending_energy.hpp); cheaper, but 2-5% stiff at 30
+///     degrees to the mesh grain at 2.5 mm (docs/elastica_30deg_diagnosis.md).
 #include <memory>
 #include <vector>
 
