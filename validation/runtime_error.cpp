@@ -6,9 +6,13 @@
 // setting beats on both time and error (the Pareto front), and the cheapest setting whose RMS
 // error is below --target.
 //   papersim_runtime_error --out DIR [--scenario pull] [--seed 1] [--edges 20,14,10,7]
-//       [--steps 20,10,5] [--reference-edge 5] [--reference-step 2.5] [--target 2] [--replot]
+//       [--steps 20,10,5] [--reference-edge 5] [--reference-step 2.5] [--target 2]
+//       [--check-edge 3.5] [--replot]
 // Edges and the target are in mm, steps in ms. The reference is written to DIR/reference and
-// reused by later runs with the same scenario, seed and reference settings.
+// reused by later runs with the same scenario, seed and reference settings. --check-edge runs
+// the draw once more, finer (DIR/reference_check), and compares it with the reference: a draw
+// whose end state changes under refinement (a draped sheet choosing another fold pattern) has
+// no converged reference, and then no setting is recommended and the exit status is 1.
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
@@ -66,9 +70,10 @@ ps::RunOptions progress_options(const std::string& label) {
   return o;
 }
 
-/// The reference run, read back from DIR/reference when it was made with the same settings.
-pv::SheetGeometry reference_run(const ps::Scene& scene, const fs::path& dir, double& wall) {
-  const fs::path ref = dir / "reference";
+/// A reference run, read back from DIR/NAME when it was made with the same settings.
+pv::SheetGeometry reference_run(const ps::Scene& scene, const fs::path& dir, const std::string& name,
+                                double& wall) {
+  const fs::path ref = dir / name;
   const nlohmann::json key = {{"scenario", scene.scenario}, {"seed", scene.seed},
                               {"edge_length", scene.sheet.edge_length}, {"time_step", scene.time_step}};
   if (fs::exists(ref / "sheet.obj") && fs::exists(ref / "meta.json")) {
@@ -77,17 +82,23 @@ pv::SheetGeometry reference_run(const ps::Scene& scene, const fs::path& dir, dou
     if (!meta.is_discarded() && meta.contains("study_key") && meta["study_key"] == key) {
       const auto data = papersim::remesh::read_sheet((ref / "sheet.obj").string());
       wall = meta["run"]["wall_seconds"];
-      std::printf("reference: reused %s (%.1f s when made)\n", ref.c_str(), wall);
+      std::printf("%s: reused %s (%.1f s when made)\n", name.c_str(), ref.c_str(), wall);
       return geometry_of(data.mesh, data.positions);
     }
   }
   fs::remove_all(ref);
-  ps::RunOptions o = progress_options("reference");
+  ps::RunOptions o = progress_options(name);
   o.out_dir = ref.string();
   o.extra_meta = {{"study_key", key}};
   const ps::RunResult r = ps::run_scene(scene, o);
   wall = r.meta["run"]["wall_seconds"];
   return geometry_of(r.mesh, as_rows(r.state.positions));
+}
+
+std::string format_mm(double x) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g", x);
+  return text;
 }
 
 std::vector<double> parse_list(const std::string& text, const char* what) {
@@ -162,6 +173,11 @@ int main(int argc, char** argv) {
   app.add_option("--reference-edge", ref_edge, "edge length of the reference [mm]")->capture_default_str();
   app.add_option("--reference-step", ref_step, "time step of the reference [ms]")->capture_default_str();
   app.add_option("--target", target, "RMS error to recommend a setting for [mm]")->capture_default_str();
+  double check_edge = 0;
+  app.add_option("--check-edge", check_edge,
+                 "also run the draw at this finer edge length [mm] (reference step) and compare it with the "
+                 "reference: when they differ by more than the target, the reference is not converged, no "
+                 "setting is recommended and the exit status is 1");
   bool replot = false;
   app.add_flag("--replot", replot, "only redraw OUT/runtime_error.png from OUT/runtime_error.csv");
   CLI11_PARSE(app, argc, argv);
@@ -180,9 +196,26 @@ int main(int argc, char** argv) {
     fs::create_directories(out);
     const auto t0 = std::chrono::steady_clock::now();
     double ref_wall = 0;
-    const pv::SheetGeometry reference = reference_run(with_resolution(base, ref_edge, ref_step), out, ref_wall);
+    if (check_edge != 0 && !(check_edge > 0 && check_edge < ref_edge))
+      throw std::runtime_error("--check-edge: " + format_mm(check_edge) +
+                               " mm is not a positive edge length finer than --reference-edge (" +
+                               format_mm(ref_edge) + " mm)");
+    const pv::SheetGeometry reference =
+        reference_run(with_resolution(base, ref_edge, ref_step), out, "reference", ref_wall);
     std::printf("reference: %s seed %lld, edge %g mm, step %g ms, %ld vertices, %.1f s\n", scenario.c_str(), seed,
                 ref_edge, ref_step, static_cast<long>(reference.material.rows()), ref_wall);
+    bool converged = true;
+    if (check_edge > 0) {
+      double check_wall = 0;
+      const pv::SheetGeometry check =
+          reference_run(with_resolution(base, check_edge, ref_step), out, "reference_check", check_wall);
+      const pv::SheetDifference d = pv::compare_sheets(check, reference);
+      converged = 1e3 * d.rms <= target;
+      std::printf("reference check: edge %g mm (%ld vertices, %.1f s) against the reference: RMS %.3f mm, max %.3f mm, "
+                  "Hausdorff %.3f mm: %s\n", check_edge, static_cast<long>(check.material.rows()), check_wall,
+                  1e3 * d.rms, 1e3 * d.max, 1e3 * d.hausdorff,
+                  converged ? "converged within the target" : "NOT converged within the target");
+    }
     std::printf("%8s %8s %8s %7s %8s %9s %10s %10s %10s\n", "edge_mm", "step_ms", "vertices", "steps", "newton",
                 "wall_s", "rms_mm", "max_mm", "hausd_mm");
     std::vector<Sample> samples;
@@ -215,16 +248,21 @@ int main(int argc, char** argv) {
                     1e3 * s.error.rms, 1e3 * s.error.max);
     }
     const Sample* best = nullptr;
+    if (converged)
     for (const Sample& s : samples)
       if (1e3 * s.error.rms <= target && (!best || s.wall < best->wall)) best = &s;
     if (best)
       std::printf("cheapest setting with RMS error <= %g mm: edge %g mm, step %g ms (%.2f s, RMS %.3f mm, max %.3f mm; "
                   "%.1fx faster than the reference)\n", target, best->edge_mm, best->step_ms, best->wall,
                   1e3 * best->error.rms, 1e3 * best->error.max, ref_wall / best->wall);
-    else
+    else if (converged)
       std::printf("no setting of the sweep reaches RMS error <= %g mm\n", target);
+    else
+      std::printf("no setting recommended: the reference itself moves by more than %g mm RMS under refinement\n",
+                  target);
     std::printf("wrote %s/runtime_error.csv and runtime_error.png (%.1f s in all)\n", out.c_str(),
                 std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    if (!converged) return 1;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "papersim_runtime_error: %s\n", e.what());
     return 1;
