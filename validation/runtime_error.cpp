@@ -95,7 +95,8 @@ pv::SheetGeometry reference_run(const ps::Scene& scene, const fs::path& dir, con
   return geometry_of(r.mesh, as_rows(r.state.positions));
 }
 
-std::string format_mm(double x) {
+/// x with %g (shortest form: 2.5, not 2.500000).
+std::string format_number(double x) {
   char text[32];
   std::snprintf(text, sizeof text, "%g", x);
   return text;
@@ -184,7 +185,7 @@ int main(int argc, char** argv) {
   try {
     const std::vector<double> edges = parse_list(edges_text, "edges"), steps = parse_list(steps_text, "steps");
     const std::string title = scenario + " seed " + std::to_string(seed) + ": reference edge " +
-                              std::to_string(ref_edge).substr(0, 4) + " mm, step " + std::to_string(ref_step).substr(0, 4) + " ms";
+                              format_number(ref_edge) + " mm, step " + format_number(ref_step) + " ms";
     if (replot) {
       if (!fs::exists(fs::path(out) / "runtime_error.csv"))
         throw std::runtime_error("--replot: no " + (fs::path(out) / "runtime_error.csv").string());
@@ -197,9 +198,9 @@ int main(int argc, char** argv) {
     const auto t0 = std::chrono::steady_clock::now();
     double ref_wall = 0;
     if (check_edge != 0 && !(check_edge > 0 && check_edge < ref_edge))
-      throw std::runtime_error("--check-edge: " + format_mm(check_edge) +
+      throw std::runtime_error("--check-edge: " + format_number(check_edge) +
                                " mm is not a positive edge length finer than --reference-edge (" +
-                               format_mm(ref_edge) + " mm)");
+                               format_number(ref_edge) + " mm)");
     const pv::SheetGeometry reference =
         reference_run(with_resolution(base, ref_edge, ref_step), out, "reference", ref_wall);
     std::printf("reference: %s seed %lld, edge %g mm, step %g ms, %ld vertices, %.1f s\n", scenario.c_str(), seed,
@@ -223,7 +224,7 @@ int main(int argc, char** argv) {
       for (double h : steps) {
         const ps::Scene scene = with_resolution(base, e, h);
         const ps::RunResult r = ps::run_scene(scene, progress_options(
-            std::string("edge ") + std::to_string(e).substr(0, 4) + " mm, step " + std::to_string(h).substr(0, 4) + " ms"));
+            "edge " + format_number(e) + " mm, step " + format_number(h) + " ms"));
         Sample s;
         s.edge_mm = e, s.step_ms = h;
         s.vertices = r.mesh.num_vertices();
@@ -248,9 +249,8 @@ int main(int argc, char** argv) {
                     1e3 * s.error.rms, 1e3 * s.error.max);
     }
     const Sample* best = nullptr;
-    if (converged)
     for (const Sample& s : samples)
-      if (1e3 * s.error.rms <= target && (!best || s.wall < best->wall)) best = &s;
+      if (converged && 1e3 * s.error.rms <= target && (!best || s.wall < best->wall)) best = &s;
     if (best)
       std::printf("cheapest setting with RMS error <= %g mm: edge %g mm, step %g ms (%.2f s, RMS %.3f mm, max %.3f mm; "
                   "%.1fx faster than the reference)\n", target, best->edge_mm, best->step_ms, best->wall,
