@@ -182,6 +182,23 @@ NewtonResult Integrator::solve(const StepContext& ctx, Eigen::VectorXd& x, StepS
       r.failure = "line search found no decrease";
       return r;
     }
+    if (project && alpha == 1.0 && m_params.max_extrapolation > 1) {
+      // Lengthen the projected step while the energy keeps falling (sufficient decrease
+      // against the longer step too) and every term allows the longer step.
+      for (int m = 2; m <= m_params.max_extrapolation; m *= 2) {
+        double feasible = 1.0;
+        const Eigen::VectorXd dm = m * dx;
+        for (const auto& t : m_terms) feasible = std::min(feasible, t->max_step(x, dm));
+        if (feasible < 1.0) break;
+        Eigen::VectorXd x_try = x + dm;
+        const double e_try = energy(x_try);
+        ++r.line_search_evaluations;
+        if (!(std::isfinite(e_try) && e_try < e_new && e_try <= e + m_params.armijo * m * slope)) break;
+        x_new.swap(x_try);
+        e_new = e_try;
+        if (m == 2) ++r.extrapolations;
+      }
+    }
     x = x_new;
     e = e_new;
   }
@@ -216,6 +233,7 @@ bool Integrator::advance(SheetState& state, double h, int depth, StepStats& stat
   const NewtonResult r = solve(ctx, x, stats);
   stats.newton_iterations += r.iterations;
   stats.line_search_evaluations += r.line_search_evaluations;
+  stats.extrapolations += r.extrapolations;
   stats.residual = std::max(stats.residual, r.residual);
   if (!r.converged) {
     ++stats.failed_solves;

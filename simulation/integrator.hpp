@@ -24,6 +24,11 @@ struct NewtonParams {
   /// negative curvature of compressed, buckling regions, and Newton then converges linearly
   /// there (measured on the pull scenario: 4x the iterations).
   bool exact_hessian_first = true;
+  /// After a full step taken with a projected Hessian, try 2, 4, ... up to this many times the
+  /// step while the energy keeps falling (1: off). Projection replaces the negative curvature
+  /// of a sheet escaping a saddle by inertia alone, so the projected step is too short there and
+  /// Newton crawls for tens of iterations (see docs/performance.md, "Bending model").
+  int max_extrapolation = 1;
 };
 
 /// What one Newton solve did.
@@ -31,6 +36,7 @@ struct NewtonResult {
   bool converged = false;
   int iterations = 0;
   int line_search_evaluations = 0;
+  int extrapolations = 0;  ///< iterations whose step was lengthened (NewtonParams::max_extrapolation)
   double residual = 0.0;  ///< last max |dx_v| / h [m/s]
   std::string failure;    ///< why it did not converge
 };
@@ -42,6 +48,7 @@ struct StepStats {
   int projected_hessians = 0;  ///< iterations whose exact Hessian was indefinite (projected)
   int newton_iterations = 0;
   int line_search_evaluations = 0;
+  int extrapolations = 0;  ///< Newton steps lengthened beyond the full step
   double seconds_assembly = 0, seconds_solve = 0, seconds_line_search = 0;
   double residual = 0;
 };

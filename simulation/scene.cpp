@@ -315,6 +315,7 @@ Scene scene_from_json(const json& j, const std::string& source) {
     s.newton.max_iterations = n.integer("max_iterations", s.newton.max_iterations, 1, 10000);
     s.newton.tolerance = n.number("tolerance", s.newton.tolerance, 0, 1e3, true);
     s.newton.max_halvings = n.integer("max_halvings", s.newton.max_halvings, 0, 30);
+    s.newton.max_extrapolation = n.integer("max_extrapolation", s.newton.max_extrapolation, 1, 1024);
     n.finish();
   }
   {
@@ -429,7 +430,8 @@ json scene_to_json(const Scene& s) {
                        {"friction", s.self_contact.friction}};
   j["solver"] = {{"max_iterations", s.newton.max_iterations},
                  {"tolerance", s.newton.tolerance},
-                 {"max_halvings", s.newton.max_halvings}};
+                 {"max_halvings", s.newton.max_halvings},
+                 {"max_extrapolation", s.newton.max_extrapolation}};
   j["output"] = {{"frames_every", s.output.frames_every}, {"ply", s.output.write_ply}};
   if (!s.scenario.empty()) j["scenario"] = s.scenario;
   if (s.seed >= 0) j["seed"] = s.seed;

@@ -296,6 +296,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
     total.newton_iterations += s.newton_iterations;
     total.projected_hessians += s.projected_hessians;
     total.line_search_evaluations += s.line_search_evaluations;
+    total.extrapolations += s.extrapolations;
     total.seconds_assembly += s.seconds_assembly;
     total.seconds_solve += s.seconds_solve;
     total.seconds_line_search += s.seconds_line_search;
@@ -342,6 +343,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
               {"newton_iterations", total.newton_iterations},
               {"projected_hessians", total.projected_hessians},
               {"line_search_evaluations", total.line_search_evaluations},
+              {"extrapolations", total.extrapolations},
               {"seconds_assembly", total.seconds_assembly},
               {"seconds_solve", total.seconds_solve},
               {"seconds_line_search", total.seconds_line_search},
