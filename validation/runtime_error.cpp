@@ -7,7 +7,7 @@
 // worst RMS error, one series per time step), prints the tables, the settings no other setting
 // beats on both time and error (the Pareto front), and the cheapest setting whose RMS error is
 // below --target on every draw.
-//   papersim_runtime_error --out DIR [--scenario pull] [--seeds 2,4,6,7] [--edges 20,14,10,7]
+//   papersim_runtime_error --out DIR [--scenario pull] [--seeds 0,1,2,3,4,5,6,7] [--edges 20,14,10,7]
 //       [--steps 20,10,5] [--reference-edge 5] [--reference-step 2.5] [--target 2]
 //       [--check-edge 3.5] [--replot]
 // Edges and the target are in mm, steps in ms. Each draw's reference is written to
@@ -283,7 +283,7 @@ SeedResult study_draw(const std::string& scenario, long long seed, const fs::pat
 
 int main(int argc, char** argv) {
   CLI::App app{"papersim_runtime_error: wall time against error for a sweep of edge length and time step"};
-  std::string out, scenario = "pull", seeds_text = "2,4,6,7", edges_text = "20,14,10,7", steps_text = "20,10,5";
+  std::string out, scenario = "pull", seeds_text = "0,1,2,3,4,5,6,7", edges_text = "20,14,10,7", steps_text = "20,10,5";
   double ref_edge = 5, ref_step = 2.5, target = 2;
   app.add_option("--out", out, "output folder (CSV, plot, reference runs)")->required();
   app.add_option("--scenario", scenario, "scenario name")->capture_default_str();
