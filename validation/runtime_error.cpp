@@ -140,6 +140,7 @@ struct SeedResult {
 struct Aggregate {
   double edge_mm = 0, step_ms = 0;
   int draws = 0;
+  std::string seeds;  ///< the draws used, space separated
   double median_wall = 0, median_rms = 0, worst_rms = 0, worst_max = 0;
 };
 
@@ -161,6 +162,7 @@ std::vector<Aggregate> aggregate(const std::vector<SeedResult>& draws) {
     for (const SeedResult& d : draws) {
       if (!d.converged) continue;
       const Sample& s = d.samples[k];
+      a.seeds += (a.seeds.empty() ? "" : " ") + std::to_string(d.seed);
       walls.push_back(s.wall);
       rms.push_back(s.error.rms);
       a.worst_rms = std::max(a.worst_rms, s.error.rms);
@@ -199,29 +201,32 @@ void write_csv(const fs::path& path, const std::vector<SeedResult>& draws) {
 
 void write_summary_csv(const fs::path& path, const std::vector<Aggregate>& settings) {
   std::ostringstream out;
-  out << "edge_mm,step_ms,draws,median_wall_seconds,median_rms_error_m,worst_rms_error_m,worst_max_error_m\n";
+  out << "edge_mm,step_ms,draws,median_wall_seconds,median_rms_error_m,worst_rms_error_m,worst_max_error_m,seeds\n";
   for (const Aggregate& a : settings)
     out << a.edge_mm << ',' << a.step_ms << ',' << a.draws << ',' << a.median_wall << ',' << a.median_rms << ','
-        << a.worst_rms << ',' << a.worst_max << '\n';
+        << a.worst_rms << ',' << a.worst_max << ',' << a.seeds << '\n';
   write_file(path, out.str());
 }
 
-/// gnuplot, from OUT/runtime_error_summary.csv: median wall time against the worst RMS error over
-/// the draws, log-log, one series per time step, points labelled by the edge length.
+/// gnuplot, from OUT/runtime_error_summary.csv: median wall time against the worst (filled) and
+/// the median (open) RMS error over the draws, log-log, one colour per time step, points
+/// labelled by the edge length.
 void write_plot(const fs::path& dir, const std::vector<double>& steps, const std::string& title) {
   std::ostringstream gp;
   gp << "set terminal pngcairo size 900,600 font 'DejaVu Sans,11'\n"
      << "set output 'runtime_error.png.tmp'\n"
      << "set title '" << title << "'\n"
      << "set logscale xy\nset grid\n"
-     << "set xlabel 'worst RMS position error over the draws, against their references [mm]'\n"
+     << "set xlabel 'RMS position error against the reference of each draw: worst (filled), median (open) [mm]'\n"
      << "set ylabel 'median wall time per run [s]'\n"
      << "set key top right\nset datafile separator ','\n";
   gp << "plot ";
   for (size_t i = 0; i < steps.size(); ++i) {
     if (i) gp << ", \\\n     ";
     gp << "'runtime_error_summary.csv' every ::1 using ($2==" << steps[i] << " ? $6*1e3 : 1/0):4 with points pt 7 "
-       << "ps 1.3 title 'step " << steps[i] << " ms', "
+       << "ps 1.3 lc " << i + 1 << " title 'step " << steps[i] << " ms', "
+       << "'' every ::1 using ($2==" << steps[i] << " ? $5*1e3 : 1/0):4 with points pt 6 ps 1.3 lc " << i + 1
+       << " notitle, "
        << "'' every ::1 using ($2==" << steps[i] << " ? $6*1e3 : 1/0):4:(sprintf('%g mm', $1)) "
        << "with labels offset 1.2,0.6 font ',9' notitle";
   }
@@ -306,12 +311,18 @@ int main(int argc, char** argv) {
     const std::vector<double> edges = parse_list(edges_text, "edges"), steps = parse_list(steps_text, "steps");
     std::vector<long long> seeds;
     for (double x : parse_list(seeds_text, "seeds", true)) seeds.push_back(static_cast<long long>(x));
-    const std::string title = scenario + " seeds " + seeds_text + ": references edge " + format_number(ref_edge) +
-                              " mm, step " + format_number(ref_step) + " ms";
+    // The plot's title names the draws it summarises (those whose reference holds).
+    const auto title = [&](const std::string& used) {
+      return scenario + ", seeds " + used + ": references edge " + format_number(ref_edge) + " mm, step " +
+             format_number(ref_step) + " ms";
+    };
     if (replot) {
-      if (!fs::exists(fs::path(out) / "runtime_error_summary.csv"))
-        throw std::runtime_error("--replot: no " + (fs::path(out) / "runtime_error_summary.csv").string());
-      write_plot(out, steps, title);
+      const fs::path summary = fs::path(out) / "runtime_error_summary.csv";
+      std::ifstream in(summary);
+      std::string header, row;
+      if (!in || !std::getline(in, header) || !std::getline(in, row) || row.rfind(',') == std::string::npos)
+        throw std::runtime_error("--replot: no summary rows in " + summary.string());
+      write_plot(out, steps, title(row.substr(row.rfind(',') + 1)));
       std::printf("wrote %s/runtime_error.png\n", out.c_str());
       return 0;
     }
@@ -337,9 +348,12 @@ int main(int argc, char** argv) {
     for (const SeedResult& d : draws)
       if (!d.converged) std::printf("%s seed %lld left out", held < static_cast<int>(draws.size()) ? ";" : "", d.seed);
     std::printf("\n");
-    if (!settings.empty()) {
+    if (settings.empty()) {  // no summary: an older one in OUT must not stand in for it
+      fs::remove(fs::path(out) / "runtime_error_summary.csv");
+      fs::remove(fs::path(out) / "runtime_error.png");
+    } else {
       write_summary_csv(fs::path(out) / "runtime_error_summary.csv", settings);
-      write_plot(out, steps, title);
+      write_plot(out, steps, title(settings.front().seeds));
       std::printf("%8s %8s %6s %14s %14s %13s %13s\n", "edge_mm", "step_ms", "draws", "median_wall_s",
                   "median_rms_mm", "worst_rms_mm", "worst_max_mm");
       for (const Aggregate& a : settings)
