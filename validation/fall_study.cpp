@@ -11,16 +11,13 @@
 
 #include "simulation/scenario.hpp"
 #include "simulation/simulate.hpp"
+#include "validation/statistics.hpp"
 
 namespace ps = papersim::simulation;
 
 namespace {
 
-double median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
-}
+using papersim::validation::median;
 
 }  // namespace
 

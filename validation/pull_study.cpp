@@ -14,6 +14,7 @@
 #include "simulation/scenario.hpp"
 #include "simulation/simulate.hpp"
 #include "validation/metrics.hpp"
+#include "validation/statistics.hpp"
 
 namespace ps = papersim::simulation;
 
@@ -77,6 +78,6 @@ int main(int argc, char** argv) {
   }
   std::sort(walls.begin(), walls.end());
   std::printf("%d seeds, %d failed; wall time median %.2f s, worst %.2f s\n", seeds, failures,
-              walls[walls.size() / 2], walls.back());
+              papersim::validation::median(walls), walls.back());
   return failures == 0 ? 0 : 1;
 }

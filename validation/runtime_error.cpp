@@ -34,6 +34,7 @@
 #include "simulation/scenario.hpp"
 #include "simulation/simulate.hpp"
 #include "validation/compare.hpp"
+#include "validation/statistics.hpp"
 
 namespace fs = std::filesystem;
 namespace ps = papersim::simulation;
@@ -144,12 +145,7 @@ struct Aggregate {
   double median_wall = 0, median_rms = 0, worst_rms = 0, worst_max = 0;
 };
 
-double median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  const size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
+using pv::median;
 
 std::vector<Aggregate> aggregate(const std::vector<SeedResult>& draws) {
   std::vector<Aggregate> out;
