@@ -11,8 +11,8 @@
 //       [--steps 20,10,5] [--reference-edge 5] [--reference-step 2.5] [--target 2]
 //       [--check-edge 3.5] [--replot]
 // Edges and the target are in mm, steps in ms. Each draw's reference is written to
-// DIR/seed_N/reference and reused by later runs with the same scenario, seed and reference
-// settings. --check-edge runs each draw once more, finer (DIR/seed_N/reference_check), and
+// DIR/seed_N/reference and reused by later runs from the same scene (draw, resolution, material,
+// solver settings: the whole scene file). --check-edge runs each draw once more, finer (DIR/seed_N/reference_check), and
 // compares it with its reference: a draw whose end state changes under refinement (a draped
 // sheet choosing another fold pattern) has no converged reference, so it is reported and left
 // out of the summary; when no draw holds, no setting is recommended and the exit status is 1.
@@ -75,12 +75,12 @@ ps::RunOptions progress_options(const std::string& label) {
   return o;
 }
 
-/// A reference run, read back from DIR/NAME when it was made with the same settings.
+/// A reference run, read back from DIR/NAME when it was made from the same scene (every field:
+/// draw, resolution, material and bending model, solver settings).
 pv::SheetGeometry reference_run(const ps::Scene& scene, const fs::path& dir, const std::string& name,
                                 double& wall) {
   const fs::path ref = dir / name;
-  const nlohmann::json key = {{"scenario", scene.scenario}, {"seed", scene.seed},
-                              {"edge_length", scene.sheet.edge_length}, {"time_step", scene.time_step}};
+  const nlohmann::json key = ps::scene_to_json(scene);
   if (fs::exists(ref / "sheet.obj") && fs::exists(ref / "meta.json")) {
     std::ifstream in(ref / "meta.json");
     const nlohmann::json meta = nlohmann::json::parse(in, nullptr, false);
