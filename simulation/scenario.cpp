@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <random>
+#include <string>
+#include <string_view>
 
 #include <Eigen/Geometry>
 
@@ -16,9 +18,13 @@ constexpr double FALL_HEIGHT = 0.5;  ///< start height of the sheet in the fall 
 
 /// Uniform draws from a 64-bit Mersenne Twister. std::uniform_real_distribution is not
 /// specified bit-for-bit across standard libraries, so draws are made from raw 53-bit integers.
+/// Each quantity of a scenario draws from its own named stream (`Draw(seed, "gravity")`), so
+/// adding or removing a draw of one quantity never shifts another's.
 class Draw {
  public:
-  explicit Draw(std::uint64_t seed) : m_rng(seed) {}
+  Draw(std::uint64_t seed, std::string_view stream) : m_rng(stream_seed(seed, stream)) {}
+  Draw(std::uint64_t seed, std::string_view stream, int index)
+      : Draw(seed, std::string(stream) + "/" + std::to_string(index)) {}
   double uniform(double a, double b) { return a + (b - a) * unit(); }
   double unit() { return static_cast<double>(m_rng() >> 11) * 0x1.0p-53; }
   bool chance(double p) { return unit() < p; }
@@ -26,6 +32,15 @@ class Draw {
   int integer(int a, int b) { return a + static_cast<int>(std::min<double>(b - a, std::floor(unit() * (b - a + 1)))); }
 
  private:
+  /// splitmix64 of the seed mixed with the FNV-1a hash of the stream name.
+  static std::uint64_t stream_seed(std::uint64_t seed, std::string_view stream) {
+    std::uint64_t h = 1469598103934665603ULL;
+    for (char c : stream) h = (h ^ static_cast<unsigned char>(c)) * 1099511628211ULL;
+    std::uint64_t z = seed ^ (h * 0x9E3779B97F4A7C15ULL);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
+    return z ^ (z >> 31);
+  }
   std::mt19937_64 m_rng;
 };
 
@@ -33,13 +48,12 @@ class Draw {
 /// on it are lifted linearly to U[0.03, 0.08] m over 1 s under gravity U[-100, -9.8] m/s^2.
 /// The handles set the points' height; their horizontal position is free.
 Scene pull(std::uint64_t seed) {
-  Draw d(seed);
   Scene s;
   s.name = "pull";
   s.scenario = "pull";
   s.seed = static_cast<long long>(seed);
   s.sheet.position = Eigen::Vector3d(0, 0, 1e-3);
-  s.gravity = Eigen::Vector3d(0, 0, d.uniform(-100, -9.8));
+  s.gravity = Eigen::Vector3d(0, 0, Draw(seed, "gravity").uniform(-100, -9.8));
   s.duration = 1.0;
   s.time_step = 1e-2;
   // 7 mm edges (1,333 vertices; the reference pipeline used 1,681): the run-time-against-error
@@ -48,8 +62,9 @@ Scene pull(std::uint64_t seed) {
   s.sheet.edge_length = 7e-3;
   s.ground = true;
   s.ground_friction = 0.3;
-  const int points = d.chance(0.05) ? 1 : 2;
+  const int points = Draw(seed, "points").chance(0.05) ? 1 : 2;
   for (int i = 0; i < points; ++i) {
+    Draw d(seed, "handle", i);
     HandleSpec h;
     double lift = 0;
     // Two points at material distance r cannot end at heights more than r apart on an
@@ -130,12 +145,12 @@ double reachable_gravity(Draw& d, double lo, double hi, double duration, double 
 /// horizontal, random heading, centre x U[-0.15, 0.15], y U[-0.2, 0.2], z U[-r, r]; gravity
 /// -9.8; 1 s; friction U[0.2, 0.5].
 Scene fall_cylinder(std::uint64_t seed) {
-  Draw d(seed);
   Scene s = fall_base("fall-cylinder", seed, 1.0, 2e-3);
   s.gravity = Eigen::Vector3d(0, 0, -9.8);
-  const int n = d.integer(1, 3);
-  const double friction = d.uniform(0.2, 0.5);
+  const int n = Draw(seed, "count").integer(1, 3);
+  const double friction = Draw(seed, "friction").uniform(0.2, 0.5);
   for (int i = 0; i < n; ++i) {
+    Draw d(seed, "obstacle", i);
     const double r = d.uniform(0.01, 0.10);
     const double length = d.uniform(0.10, 1.0);
     const double tilt = d.uniform(-5, 5), heading = d.uniform(0, 360);
@@ -153,13 +168,13 @@ Scene fall_cylinder(std::uint64_t seed) {
 /// U[0, 180] deg, centre x U[-0.12, 0.12], y U[-0.15, 0.15]; gravity U[-1000, -100]; 0.2 s;
 /// friction U[0.2, 0.5].
 Scene fall_gable(std::uint64_t seed) {
-  Draw d(seed);
   Scene s = fall_base("fall-gable", seed, 0.2, 1e-3);
   s.contact.faces = true;  // the ridge is sharper than the sheet's edges
-  const int n = d.integer(1, 3);
-  const double friction = d.uniform(0.2, 0.5);
+  const int n = Draw(seed, "count").integer(1, 3);
+  const double friction = Draw(seed, "friction").uniform(0.2, 0.5);
   double top = 0;
   for (int i = 0; i < n; ++i) {
+    Draw d(seed, "obstacle", i);
     const double half_width = d.uniform(0.015, 0.075);
     const double length = d.uniform(0.10, 0.50);
     const double heading = d.uniform(0, 180);
@@ -171,7 +186,8 @@ Scene fall_gable(std::uint64_t seed) {
     s.obstacles.push_back(o);
     top = std::max(top, half_width);
   }
-  s.gravity = Eigen::Vector3d(0, 0, -reachable_gravity(d, 100, 1000, s.duration, top));
+  Draw gravity(seed, "gravity");
+  s.gravity = Eigen::Vector3d(0, 0, -reachable_gravity(gravity, 100, 1000, s.duration, top));
   return s;
 }
 
@@ -179,13 +195,13 @@ Scene fall_gable(std::uint64_t seed) {
 /// z U[-r, r]; gravity U[-1000, -9.8] (redrawn when the sheet could not reach the spheres);
 /// 0.2 s; friction U[0.2, 0.5].
 Scene fall_sphere(std::uint64_t seed) {
-  Draw d(seed);
   Scene s = fall_base("fall-sphere", seed, 0.2, 1e-3);
   s.contact.faces = true;
-  const int n = d.integer(1, 3);
-  const double friction = d.uniform(0.2, 0.5);
+  const int n = Draw(seed, "count").integer(1, 3);
+  const double friction = Draw(seed, "friction").uniform(0.2, 0.5);
   double top = 0;
   for (int i = 0; i < n; ++i) {
+    Draw d(seed, "obstacle", i);
     const double r = d.uniform(0.01, 0.05);
     const Eigen::Vector3d c(d.uniform(-0.05, 0.05), d.uniform(-0.15, 0.15), d.uniform(-r, r));
     auto o = placed(collision::ColliderKind::sphere, c, Eigen::Quaterniond::Identity(), friction);
@@ -193,7 +209,8 @@ Scene fall_sphere(std::uint64_t seed) {
     s.obstacles.push_back(o);
     top = std::max(top, c.z() + r);
   }
-  s.gravity = Eigen::Vector3d(0, 0, -reachable_gravity(d, 9.8, 1000, s.duration, top));
+  Draw gravity(seed, "gravity");
+  s.gravity = Eigen::Vector3d(0, 0, -reachable_gravity(gravity, 9.8, 1000, s.duration, top));
   return s;
 }
 
@@ -202,17 +219,17 @@ Scene fall_sphere(std::uint64_t seed) {
 /// +-0.4 spacing in x and y, U[-0.5, 0.5] r in z); gravity U[-5000, -1000]; 0.1 s; friction
 /// U[0.25, 0.5]; paper yield curvature 50 1/m and weakening 0.2.
 Scene fall_spheres(std::uint64_t seed) {
-  Draw d(seed);
   Scene s = fall_base("fall-spheres", seed, 0.1, 5e-4);
   s.contact.faces = true;  // spheres of 5-10 mm against 10 mm edges
-  s.gravity = Eigen::Vector3d(0, 0, -d.uniform(1000, 5000));
+  s.gravity = Eigen::Vector3d(0, 0, -Draw(seed, "gravity").uniform(1000, 5000));
   s.sheet.material.yield_curvature = 50.0;
   s.sheet.material.weakening = 0.2;
-  const int g = static_cast<int>(std::floor(std::sqrt(static_cast<double>(d.integer(30, 150)))));
-  const double friction = d.uniform(0.25, 0.5);
+  const int g = static_cast<int>(std::floor(std::sqrt(static_cast<double>(Draw(seed, "count").integer(30, 150)))));
+  const double friction = Draw(seed, "friction").uniform(0.25, 0.5);
   const double dx = 0.30 / (g - 1), dy = 0.42 / (g - 1);
   for (int i = 0; i < g; ++i)
     for (int j = 0; j < g; ++j) {
+      Draw d(seed, "sphere", i * g + j);
       const double r = d.uniform(0.005, 0.01);
       const Eigen::Vector3d c(-0.15 + i * dx + d.uniform(-0.4, 0.4) * dx,
                               -0.21 + j * dy + d.uniform(-0.4, 0.4) * dy, d.uniform(-0.5, 0.5) * r);
