@@ -7,6 +7,9 @@
 #include <utility>
 #include <vector>
 
+#include <Eigen/Geometry>
+#include <Eigen/LU>
+
 #include "remesh/mesh_editor.hpp"
 #include "remesh/sizing.hpp"
 
