@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include <Eigen/LU>
+
 #include "remesh_test_support.hpp"
 
 using namespace papersim::remesh;
@@ -211,4 +213,55 @@ TEST(Remesh, ExceptionFromTheVetoLeavesTheInputsUntouched) {
                std::runtime_error);
   EXPECT_EQ(mesh.faces(), before.faces());
   EXPECT_EQ(state.positions.rows(), before.num_vertices());
+}
+
+namespace {
+
+/// sin(alpha + beta) of the two angles opposite interior edge e, measured in metric m: negative
+/// when the edge violates the Delaunay condition under m.
+double delaunay_margin(const SheetMesh& mesh, OpenMesh::EdgeHandle e, const Eigen::Matrix2d& m) {
+  const TriMesh& t = mesh.mesh();
+  const auto h0 = t.halfedge_handle(e, 0), h1 = t.halfedge_handle(e, 1);
+  const Eigen::Vector2d a = mesh.material_coord(t.from_vertex_handle(h0).idx());
+  const Eigen::Vector2d b = mesh.material_coord(t.to_vertex_handle(h0).idx());
+  double s = 0, c = 0, s2 = 0, c2 = 0;
+  for (int k = 0; k < 2; ++k) {
+    const auto h = k == 0 ? h0 : h1;
+    const Eigen::Vector2d apex = mesh.material_coord(t.to_vertex_handle(t.next_halfedge_handle(h)).idx());
+    const Eigen::Vector2d u = a - apex, v = b - apex;
+    const double n = std::sqrt(u.dot(m * u) * v.dot(m * v));
+    (k == 0 ? s : s2) = std::sqrt(m.determinant()) * std::abs(u.x() * v.y() - u.y() * v.x()) / n;
+    (k == 0 ? c : c2) = u.dot(m * v) / n;
+  }
+  return s * c2 + c * s2;
+}
+
+}  // namespace
+
+// Under a uniform anisotropic metric (a velocity gradient along x asks for 10 mm edges along x,
+// the aspect clamp allows 50 mm along y), with splits and collapses vetoed, the flips alone must
+// bring every interior edge to the anisotropic Delaunay condition (to the flip threshold 1e-2 in
+// sin(alpha + beta)).
+TEST(Remesh, FlipsReachTheAnisotropicDelaunayCondition) {
+  SheetMesh mesh = grid(0.2, 0.2, 21, 21, 0.3, 5);
+  RemeshState state = flat_state(mesh);
+  const double omega = 10.0;  // [1/s]
+  state.velocities.col(2) = omega * mesh.material_coords().col(0);
+  RemeshParams p;
+  p.refine_velocity = 0.1;  // [m/s]: 10 mm along x
+  const Eigen::Matrix2d m = sizing(mesh, state, p)[0];
+  EXPECT_NEAR(m(0, 0), 1e4, 1e-6 * 1e4);
+  EXPECT_NEAR(m(1, 1), 400, 1e-6 * 1e4);
+  int violations_before = 0;
+  for (auto e : mesh.mesh().edges())
+    if (!mesh.mesh().is_boundary(e) && delaunay_margin(mesh, e, m) < -1e-2) ++violations_before;
+  const RemeshStats stats = remesh(mesh, state, p, [](const EditProposal& prop) {
+    return prop.kind == EditKind::flip ? std::string() : std::string("flips only");
+  });
+  EXPECT_GT(violations_before, 50);
+  EXPECT_GT(stats.flips, 0);
+  for (auto e : mesh.mesh().edges()) {
+    if (mesh.mesh().is_boundary(e)) continue;
+    EXPECT_GE(delaunay_margin(mesh, e, m), -1e-2);
+  }
 }
