@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <random>
 
 #include <Eigen/LU>
 
@@ -263,5 +264,28 @@ TEST(Remesh, FlipsReachTheAnisotropicDelaunayCondition) {
   for (auto e : mesh.mesh().edges()) {
     if (mesh.mesh().is_boundary(e)) continue;
     EXPECT_GE(delaunay_margin(mesh, e, m), -1e-2);
+  }
+}
+
+// A crumpled sheet (random world displacements of the order of the edge length, random plastic
+// state and velocities): a pass refines most of it to size_min and must keep every invariant.
+TEST(Remesh, CrumpledSheetKeepsEveryInvariant) {
+  for (unsigned seed = 1; seed <= 3; ++seed) {
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    SheetMesh mesh = grid(0.08, 0.1, 17, 21, 0.3, seed);
+    RemeshState state = flat_state(mesh);
+    randomize_attributes(mesh, state, seed);
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> u(-2.5e-3, 2.5e-3);
+    for (int v = 0; v < mesh.num_vertices(); ++v) state.positions(v, 2) = u(rng);
+    const Eigen::Vector4d bounds = mesh.material_bounds();
+    const Eigen::Vector4d before = integrals(mesh), scale = abs_integrals(mesh);
+    RemeshParams p;
+    p.refine_velocity = 0.5;
+    const RemeshStats stats = remesh(mesh, state, p);
+    EXPECT_GT(stats.splits, 100);
+    const Eigen::Vector4d after = integrals(mesh);
+    for (int i = 0; i < 4; ++i) EXPECT_NEAR(after(i), before(i), 1e-12 * scale(i)) << i;
+    expect_quality(mesh, state, bounds, p);
   }
 }
