@@ -243,49 +243,61 @@ EditProposal MeshEditor::propose_collapse(HalfedgeHandle h) const {
   return p;
 }
 
-VertexHandle MeshEditor::split(EdgeHandle e, const EditCheck& check) {
+VertexHandle MeshEditor::add_midpoint(VertexHandle a, VertexHandle b) {
   TriMesh& m = m_sheet.mesh();
-  const EditProposal p = propose_split(e);
-  if (!accept(p, inverted_reason(p), check)) return VertexHandle();
-  struct Side {
-    VertexHandle opposite;
-    OpenMesh::Vec3d plastic;
-    double damage, area, children_area = 0.0;
-  };
-  std::vector<Side> sides;
-  for (int s = 0; s < 2; ++s) {
-    const HalfedgeHandle h = m.halfedge_handle(e, s);
-    if (m.is_boundary(h)) continue;
-    const FaceHandle f = m.face_handle(h);
-    sides.push_back({m.to_vertex_handle(m.next_halfedge_handle(h)),
-                     m.property(m_sheet.plastic_curvature_handle(), f),
-                     m.property(m_sheet.damage_handle(), f), face_area(f)});
-  }
-  const VertexHandle a = m.from_vertex_handle(m.halfedge_handle(e, 0));
-  const VertexHandle b = m.to_vertex_handle(m.halfedge_handle(e, 0));
   // The midpoint of two points on an axis-aligned boundary line is exactly on that line.
   const VertexHandle v = m.add_vertex((m.point(a) + m.point(b)) * 0.5);
   m.property(m_position, v) = (m.property(m_position, a) + m.property(m_position, b)) * 0.5;
   m.property(m_velocity, v) = (m.property(m_velocity, a) + m.property(m_velocity, b)) * 0.5;
   m.property(m_metric, v) = (m.property(m_metric, a) + m.property(m_metric, b)) * 0.5;
   m.property(m_distance, v) = 0.5 * (m.property(m_distance, a) + m.property(m_distance, b));
-  m.split(e, v);
-  // Each child inherits its parent's value, scaled so that the area integral is exact.
-  std::vector<std::pair<FaceHandle, Side*>> children;
+  return v;
+}
+
+std::vector<MeshEditor::ParentFace> MeshEditor::faces_of_edge(EdgeHandle e) const {
+  const TriMesh& m = mesh();
+  std::vector<ParentFace> parents;
+  for (int s = 0; s < 2; ++s) {
+    const HalfedgeHandle h = m.halfedge_handle(e, s);
+    if (m.is_boundary(h)) continue;
+    const FaceHandle f = m.face_handle(h);
+    parents.push_back({m.to_vertex_handle(m.next_halfedge_handle(h)),
+                       m.property(m_sheet.plastic_curvature_handle(), f),
+                       m.property(m_sheet.damage_handle(), f), face_area(f)});
+  }
+  return parents;
+}
+
+void MeshEditor::pass_to_children(VertexHandle v, std::vector<ParentFace>& parents) {
+  TriMesh& m = m_sheet.mesh();
+  // A child is recognised by its parent's vertex opposite the split edge.
+  std::vector<std::pair<FaceHandle, ParentFace*>> children;
   for (auto f : m.vf_range(v)) {
-    Side* side = nullptr;
+    ParentFace* parent = nullptr;
     for (auto c : m.fv_range(f))
-      for (Side& s : sides)
-        if (c == s.opposite) side = &s;
-    PAPERSIM_ASSERT(side != nullptr, "split: a child face without its parent");
-    side->children_area += face_area(f);
-    children.emplace_back(f, side);
+      for (ParentFace& p : parents)
+        if (c == p.opposite) parent = &p;
+    PAPERSIM_ASSERT(parent != nullptr, "split: a child face without its parent");
+    parent->children_area += face_area(f);
+    children.emplace_back(f, parent);
   }
-  for (auto& [f, side] : children) {
-    const double scale = side->area / side->children_area;
-    m.property(m_sheet.plastic_curvature_handle(), f) = side->plastic * scale;
-    m.property(m_sheet.damage_handle(), f) = side->damage * scale;
+  // Each child inherits its parent's value, scaled so that the area integral is exact.
+  for (auto& [f, parent] : children) {
+    const double scale = parent->area / parent->children_area;
+    m.property(m_sheet.plastic_curvature_handle(), f) = parent->plastic * scale;
+    m.property(m_sheet.damage_handle(), f) = parent->damage * scale;
   }
+}
+
+VertexHandle MeshEditor::split(EdgeHandle e, const EditCheck& check) {
+  TriMesh& m = m_sheet.mesh();
+  const EditProposal p = propose_split(e);
+  if (!accept(p, inverted_reason(p), check)) return VertexHandle();
+  std::vector<ParentFace> parents = faces_of_edge(e);
+  const VertexHandle v = add_midpoint(m.from_vertex_handle(m.halfedge_handle(e, 0)),
+                                      m.to_vertex_handle(m.halfedge_handle(e, 0)));
+  m.split(e, v);
+  pass_to_children(v, parents);
   ++m_stats.splits;
   return v;
 }
@@ -352,19 +364,50 @@ bool MeshEditor::collapse(HalfedgeHandle h, const EditCheck& check) {
   return true;
 }
 
+namespace {
+
+/// A face of the fan around a collapsing vertex, before or after the collapse.
+struct FanFace {
+  FaceHandle f;
+  Triangle2 x;  ///< material corners [m]
+  double area;  ///< material area [m^2]
+  OpenMesh::Vec3d plastic = {0, 0, 0};
+  double damage = 0.0;
+};
+
+/// The new faces tile the same polygon as the old ones: each old face's integral is shared among
+/// the new faces in proportion to their overlaps, normalised so that it is conserved exactly.
+void share_by_overlap(const std::vector<FanFace>& old_faces, std::vector<FanFace>& new_faces) {
+  std::vector<double> overlap(new_faces.size());
+  for (const FanFace& o : old_faces) {
+    double total = 0.0;
+    for (size_t i = 0; i < new_faces.size(); ++i)
+      total += overlap[i] = triangle_overlap(new_faces[i].x, o.x);
+    if (!(total > 0)) {
+      // Numerically no overlap (a sliver): share by area.
+      total = 0.0;
+      for (size_t i = 0; i < new_faces.size(); ++i) total += overlap[i] = new_faces[i].area;
+    }
+    for (size_t i = 0; i < new_faces.size(); ++i) {
+      const double share = o.area * overlap[i] / total;
+      new_faces[i].plastic += o.plastic * share;
+      new_faces[i].damage += o.damage * share;
+    }
+  }
+  for (FanFace& n : new_faces) {
+    n.plastic /= n.area;
+    n.damage /= n.area;
+  }
+}
+
+}  // namespace
+
 void MeshEditor::transfer_collapse(HalfedgeHandle h) {
   TriMesh& m = m_sheet.mesh();
   const auto& kh = m_sheet.plastic_curvature_handle();
   const auto& dh = m_sheet.damage_handle();
   const VertexHandle u = m.from_vertex_handle(h), w = m.to_vertex_handle(h);
-  struct Piece {
-    FaceHandle f;
-    Triangle2 x;
-    double area;
-  };
-  std::vector<Piece> old_faces, new_faces;
-  std::vector<OpenMesh::Vec3d> old_k;
-  std::vector<double> old_d;
+  std::vector<FanFace> old_faces, new_faces;
   for (auto f : m.vf_range(u)) {
     Triangle2 before, after;
     bool has_w = false;
@@ -374,34 +417,14 @@ void MeshEditor::transfer_collapse(HalfedgeHandle h) {
       before.row(k) = material(v).transpose();
       after.row(k++) = material(v == u ? w : VertexHandle(v)).transpose();
     }
-    old_faces.push_back({f, before, triangle_area(before)});
-    old_k.push_back(m.property(kh, f));
-    old_d.push_back(m.property(dh, f));
+    old_faces.push_back({f, before, triangle_area(before), m.property(kh, f), m.property(dh, f)});
     if (!has_w) new_faces.push_back({f, after, triangle_area(after)});
   }
-  // The new faces tile the same polygon as the old ones: each old face's integral is shared
-  // among the new faces in proportion to their overlaps (normalised, so it is conserved exactly).
-  std::vector<OpenMesh::Vec3d> new_k(new_faces.size(), OpenMesh::Vec3d(0, 0, 0));
-  std::vector<double> new_d(new_faces.size(), 0.0);
-  for (size_t j = 0; j < old_faces.size(); ++j) {
-    std::vector<double> overlap(new_faces.size());
-    double total = 0.0;
-    for (size_t i = 0; i < new_faces.size(); ++i)
-      total += overlap[i] = triangle_overlap(new_faces[i].x, old_faces[j].x);
-    if (!(total > 0)) {
-      // Numerically no overlap (a sliver): give it to the new faces by area.
-      for (size_t i = 0; i < new_faces.size(); ++i) total += overlap[i] = new_faces[i].area;
-    }
-    for (size_t i = 0; i < new_faces.size(); ++i) {
-      const double share = old_faces[j].area * overlap[i] / total;
-      new_k[i] += old_k[j] * share;
-      new_d[i] += old_d[j] * share;
-    }
-  }
+  share_by_overlap(old_faces, new_faces);
   m.collapse(h);
-  for (size_t i = 0; i < new_faces.size(); ++i) {
-    m.property(kh, new_faces[i].f) = new_k[i] / new_faces[i].area;
-    m.property(dh, new_faces[i].f) = new_d[i] / new_faces[i].area;
+  for (const FanFace& n : new_faces) {
+    m.property(kh, n.f) = n.plastic;
+    m.property(dh, n.f) = n.damage;
   }
 }
 

@@ -10,6 +10,7 @@
 /// finish().
 #include <functional>
 #include <string>
+#include <vector>
 
 #include <Eigen/Core>
 
@@ -75,6 +76,16 @@ class MeshEditor {
   void finish();
 
  private:
+  /// A face next to an edge being split: its vertex opposite the edge and its plastic state.
+  struct ParentFace {
+    OpenMesh::VertexHandle opposite;
+    OpenMesh::Vec3d plastic;
+    double damage, area, children_area = 0.0;
+  };
+  /// A new vertex at the midpoint of a and b, every vertex attribute the mean of theirs.
+  OpenMesh::VertexHandle add_midpoint(OpenMesh::VertexHandle a, OpenMesh::VertexHandle b);
+  std::vector<ParentFace> faces_of_edge(OpenMesh::EdgeHandle e) const;
+  void pass_to_children(OpenMesh::VertexHandle v, std::vector<ParentFace>& parents);
   bool accept(const EditProposal& proposal, const std::string& own_reason, const EditCheck& check);
   void refuse(const std::string& reason);
   double face_area(OpenMesh::FaceHandle f) const;

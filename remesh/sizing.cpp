@@ -287,6 +287,35 @@ Eigen::Matrix2d obstacle_metric(const Eigen::Vector3d& d, const Eigen::Matrix2d&
   return o / 3.0;
 }
 
+/// One face's corners (columns): material [m], world [m], velocities [m/s], obstacle distances [m].
+struct FaceInputs {
+  Eigen::Matrix<double, 2, 3> material;
+  Eigen::Matrix3d world, velocity;
+  Eigen::Vector3d distance = Eigen::Vector3d::Zero();
+};
+
+/// The unclamped criteria of one face, combined by the anisotropic maximum (Narain et al. 2012,
+/// section 4); s is the face's curvature in material coordinates [1/m].
+Eigen::Matrix2d combined_metric(const FaceInputs& in, const Eigen::Matrix2d& s,
+                                const RemeshParams& p, bool use_obstacles) {
+  const Eigen::Matrix2d dm_inv =
+      material_gradient<2>(in.material, Eigen::Matrix2d::Identity()).inverse();
+  const Eigen::Matrix2d s2 = s.transpose() * s;
+  std::vector<Eigen::Matrix2d> terms = {s2 / (p.refine_angle * p.refine_angle)};
+  if (p.refine_compression > 0) {
+    const Eigen::Matrix<double, 3, 2> def = material_gradient<3>(in.world, dm_inv);
+    const Eigen::Matrix2d green = def.transpose() * def - Eigen::Matrix2d::Identity();
+    terms.push_back(compression_metric(green, s2, p.refine_compression));
+  }
+  if (p.refine_velocity > 0) {
+    const Eigen::Matrix<double, 3, 2> grad_v = material_gradient<3>(in.velocity, dm_inv);
+    terms.push_back(grad_v.transpose() * grad_v / (p.refine_velocity * p.refine_velocity));
+  }
+  if (use_obstacles)
+    terms.push_back(obstacle_metric(in.distance, dm_inv, p.obstacle_distance, 1e-3 * p.size_min));
+  return tensor_max(terms);
+}
+
 }  // namespace
 
 std::vector<Eigen::Matrix2d> sizing(const SheetMesh& mesh, const RemeshState& state,
@@ -298,32 +327,15 @@ std::vector<Eigen::Matrix2d> sizing(const SheetMesh& mesh, const RemeshState& st
   const bool use_obstacles = p.obstacle_distance > 0 && state.obstacle_distance.size() > 0;
   std::vector<Eigen::Matrix2d> out(faces.rows());
   for (int f = 0; f < faces.rows(); ++f) {
-    Eigen::Matrix<double, 2, 3> xm;
-    Eigen::Matrix3d xw, vw;
-    Eigen::Vector3d dist = Eigen::Vector3d::Zero();
+    FaceInputs in;
     for (int k = 0; k < 3; ++k) {
       const int v = faces(f, k);
-      xm.col(k) = mesh.material_coord(v);
-      xw.col(k) = state.positions.row(v).transpose();
-      vw.col(k) = state.velocities.row(v).transpose();
-      if (use_obstacles) dist(k) = state.obstacle_distance(v);
+      in.material.col(k) = mesh.material_coord(v);
+      in.world.col(k) = state.positions.row(v).transpose();
+      in.velocity.col(k) = state.velocities.row(v).transpose();
+      if (use_obstacles) in.distance(k) = state.obstacle_distance(v);
     }
-    const Eigen::Matrix2d dm_inv = material_gradient<2>(xm, Eigen::Matrix2d::Identity()).inverse();
-    const Eigen::Matrix2d s = face_curvature(mesh, f, angles);
-    const Eigen::Matrix2d s2 = s.transpose() * s;
-    std::vector<Eigen::Matrix2d> terms = {s2 / (p.refine_angle * p.refine_angle)};
-    if (p.refine_compression > 0) {
-      const Eigen::Matrix<double, 3, 2> def = material_gradient<3>(xw, dm_inv);
-      const Eigen::Matrix2d green = def.transpose() * def - Eigen::Matrix2d::Identity();
-      terms.push_back(compression_metric(green, s2, p.refine_compression));
-    }
-    if (p.refine_velocity > 0) {
-      const Eigen::Matrix<double, 3, 2> grad_v = material_gradient<3>(vw, dm_inv);
-      terms.push_back(grad_v.transpose() * grad_v / (p.refine_velocity * p.refine_velocity));
-    }
-    if (use_obstacles)
-      terms.push_back(obstacle_metric(dist, dm_inv, p.obstacle_distance, 1e-3 * p.size_min));
-    out[f] = clamp_metric(tensor_max(terms), p);
+    out[f] = clamp_metric(combined_metric(in, face_curvature(mesh, f, angles), p, use_obstacles), p);
   }
   return out;
 }
