@@ -1,0 +1,120 @@
+#pragma once
+/// Adaptive anisotropic remeshing of the sheet (Narain, Samii, O'Brien 2012, "Adaptive
+/// anisotropic remeshing for cloth simulation", the method of ArcSim).
+///
+/// A sizing metric M (2 x 2, symmetric positive definite, material space [1/m^2]) is computed per
+/// face from the world state; an edge with material vector u has the size l^2 = u^T M u under it
+/// (M the mean of its end vertices' metrics) and wants splitting when l^2 > 1. One pass of
+/// remesh() splits every edge that is too long (longest first), flips edges to the anisotropic
+/// Delaunay condition, collapses edges wherever the result has no edge longer than 0.9 under the
+/// metric, and flips again. Every edit goes through one MeshEditor (mesh_editor.hpp), which
+/// carries every attribute across it and hands each proposed edit to a caller's veto first.
+#include <array>
+#include <functional>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "remesh/sheet_mesh.hpp"
+
+namespace papersim::remesh {
+
+/// Parameters of the sizing metric and of the remeshing pass. Defaults are the reference values
+/// of the published pipeline (refine_angle 0.2 rad, refine_compression 1e-4, edges 3-100 mm,
+/// minimum aspect 0.2, velocity criterion off).
+struct RemeshParams {
+  /// [rad] dihedral angle an edge may span (curvature criterion): across a bend of radius R the
+  /// wanted edge length is refine_angle * R. Must be > 0.
+  double refine_angle = 0.2;
+  /// [m] compression criterion of ArcSim, <= 0 off: an edge of length l under compressive
+  /// (Green) strain e is split when l^2 |e| > refine_compression^2, i.e. when a buckle of
+  /// amplitude about refine_compression could hide inside it. Curvature lowers the demand.
+  double refine_compression = 1e-4;
+  /// [m/s] velocity difference an edge may span (velocity-gradient criterion), <= 0 off.
+  double refine_velocity = 0.0;
+  /// [m] only vertices closer than this to an obstacle (RemeshState::obstacle_distance) ask for
+  /// refinement: edges no longer than d / |grad d| along the direction in which the distance d
+  /// changes (ArcSim's obstacle metric from a per-vertex distance), <= 0 off.
+  double obstacle_distance = 0.0;
+  double size_min = 3e-3;    ///< [m] shortest edge the metric asks for (> 0)
+  double size_max = 0.1;     ///< [m] longest edge the metric allows (>= size_min)
+  double aspect_min = 0.2;   ///< [-] smallest aspect ratio of the metric, and of a face a
+                             ///< collapse may create (12 sqrt(3) area / perimeter^2), in (0, 1]
+  /// [rad] no flip across a hinge whose world dihedral angle (or the one the flip would create)
+  /// exceeds this: a flip there would cut a crease (ArcSim 0.2 uses 40 degrees). In (0, pi].
+  double flip_angle_max = 0.7;
+};
+
+/// The per-vertex state carried through the edits, indexed by vertex (#V rows).
+struct RemeshState {
+  Eigen::MatrixX3d positions;   ///< world positions [m], #V by 3
+  Eigen::MatrixX3d velocities;  ///< [m/s], #V by 3
+  /// Distance to the nearest obstacle [m], #V (input of the sizing; may be empty). When given it
+  /// is carried like the positions (linear on split), so it keeps #V rows: recompute it before
+  /// relying on it again.
+  Eigen::VectorXd obstacle_distance;
+};
+
+enum class EditKind { split, flip, collapse };
+
+class MeshEditor;
+
+/// What an edit would create, handed to the caller's veto before it is applied.
+struct EditProposal {
+  EditKind kind = EditKind::split;
+  /// The faces the edit creates (counter-clockwise in material space): corner vertex indices in
+  /// the mesh as it is before the edit (the editor's working mesh, see MeshEditor), -1 for the
+  /// vertex a split inserts.
+  std::vector<std::array<int, 3>> vertices;
+  std::vector<Eigen::Matrix3d> world;                 ///< per new face, rows = corners [m]
+  std::vector<Eigen::Matrix<double, 3, 2>> material;  ///< per new face, rows = corners [m]
+  /// Face indices the edit removes or rewrites (working mesh).
+  std::vector<int> removed_faces;
+  /// The editor proposing the edit: its working mesh and world positions, for checks against
+  /// the rest of the sheet. Never null inside a veto.
+  const MeshEditor* editor = nullptr;
+};
+
+/// Returns an empty string to allow the edit, or the reason it is refused (counted per reason as
+/// "veto: <reason>").
+using EditVeto = std::function<std::string(const EditProposal&)>;
+
+/// Edits applied and refused in one pass. Refusal reasons of the editor: "topology" (OpenMesh
+/// link condition), "boundary" (would move a boundary vertex off the boundary or remove a corner
+/// of the sheet), "inverted" (a new face with non-positive area in material space), "crease"
+/// (flip across a sharp hinge); of the remesh loop: "too long" (a collapse would make an edge
+/// longer than 0.9 under the metric), "too thin" (a collapse would make a face with aspect below
+/// aspect_min); of the caller: "veto: <reason>".
+struct RemeshStats {
+  int splits = 0, flips = 0, collapses = 0;
+  std::map<std::string, int> refusals;
+};
+
+/// One remeshing pass (split, flip, collapse, flip) of `mesh` and `state`. Vertices and faces are
+/// renumbered (garbage collected); material coordinates are exact (new vertices at edge
+/// midpoints, boundary vertices stay on the boundary, corners stay); positions, velocities and
+/// obstacle distances are linear on split, kept on collapse; plastic curvature and damage are
+/// transferred by material area so their area integrals are conserved.
+/// @throw ParameterError when a parameter is out of range (the message names it).
+/// @throw MeshError when the state does not have one row per vertex or holds NaN or inf.
+RemeshStats remesh(SheetMesh& mesh, RemeshState& state, const RemeshParams& params,
+                   const EditVeto& veto = {});
+
+/// The sizing metric per face (#F, each 2 x 2 symmetric positive definite, material space
+/// [1/m^2]): the anisotropic maximum of the curvature, compression, velocity and obstacle
+/// metrics, its eigenvalues clamped to [1/size_max^2, 1/size_min^2] and to an aspect of at least
+/// aspect_min. Exposed for tests.
+/// @throw ParameterError, MeshError as remesh().
+std::vector<Eigen::Matrix2d> sizing(const SheetMesh& mesh, const RemeshState& state,
+                                    const RemeshParams& params);
+
+/// Checks the parameters. @throw ParameterError naming the first one out of range.
+void check_params(const RemeshParams& params);
+
+/// Checks that the state has one finite row per vertex of `mesh`.
+/// @throw MeshError naming the array and the vertex.
+void check_state(const SheetMesh& mesh, const RemeshState& state);
+
+}  // namespace papersim::remesh

@@ -1,0 +1,158 @@
+#include <gtest/gtest.h>
+
+#include <Eigen/Eigenvalues>
+#include <random>
+
+#include "remesh/sizing.hpp"
+#include "remesh_test_support.hpp"
+
+using namespace papersim::remesh;
+using namespace papersim::remesh::testing;
+
+namespace {
+
+Eigen::Vector2d eigenvalues(const Eigen::Matrix2d& m) {
+  return Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(m).eigenvalues();
+}
+
+Eigen::Matrix2d random_psd(std::mt19937& rng) {
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  Eigen::Matrix2d a;
+  a << u(rng), u(rng), u(rng), u(rng);
+  return 100.0 * a * a.transpose();
+}
+
+}  // namespace
+
+TEST(TensorMax, DominatesEveryTensorAndIsTight) {
+  std::mt19937 rng(7);
+  for (int trial = 0; trial < 200; ++trial) {
+    std::vector<Eigen::Matrix2d> ts;
+    for (int i = 0; i < 1 + trial % 4; ++i) ts.push_back(random_psd(rng));
+    const Eigen::Matrix2d m = tensor_max(ts);
+    double scale = 0;
+    for (const auto& t : ts) scale = std::max(scale, t.trace());
+    // M - M_i is positive semi-definite (to rounding of the tensors' size).
+    for (const auto& t : ts) EXPECT_GE(eigenvalues(m - t).minCoeff(), -1e-9 * scale);
+    // Tight: no smaller trace can dominate the largest of the tensors, and the maximum never
+    // exceeds the sum.
+    EXPECT_GE(m.trace(), scale * (1 - 1e-12));
+    Eigen::Matrix2d sum = Eigen::Matrix2d::Zero();
+    for (const auto& t : ts) sum += t;
+    EXPECT_LE(m.trace(), sum.trace() * (1 + 1e-12));
+  }
+  // Two orthogonal rank-one tensors: the maximum is their sum, diag(a, b).
+  const Eigen::Matrix2d m = tensor_max({Eigen::Vector2d(4, 0).asDiagonal(), Eigen::Vector2d(0, 9).asDiagonal()});
+  EXPECT_TRUE(m.isApprox(Eigen::Matrix2d(Eigen::Vector2d(4, 9).asDiagonal()), 1e-12)) << m;
+  // A tensor that dominates the others is the maximum.
+  const Eigen::Matrix2d big = Eigen::Vector2d(10, 10).asDiagonal();
+  EXPECT_TRUE(tensor_max({Eigen::Vector2d(3, 1).asDiagonal(), big}).isApprox(big, 1e-12));
+  EXPECT_EQ(tensor_max({}), Eigen::Matrix2d::Zero());
+}
+
+TEST(ClampMetric, BoundsSizesAndAspect) {
+  RemeshParams p;
+  const Eigen::Vector2d l = eigenvalues(clamp_metric(Eigen::Vector2d(1e9, 0).asDiagonal(), p));
+  EXPECT_NEAR(l(1), 1 / (p.size_min * p.size_min), 1e-6 * l(1));
+  EXPECT_NEAR(l(0), p.aspect_min * p.aspect_min * l(1), 1e-6 * l(0));
+  const Eigen::Vector2d z = eigenvalues(clamp_metric(Eigen::Matrix2d::Zero(), p));
+  EXPECT_NEAR(z(0), 1 / (p.size_max * p.size_max), 1e-9);
+  EXPECT_NEAR(z(1), 1 / (p.size_max * p.size_max), 1e-9);
+}
+
+TEST(CompressionMetric, AsksForBucklesOfTheGivenAmplitude) {
+  // Compressed along x by Green strain e (no curvature): l^2 |e| = c^2 along x, nothing along y.
+  const double c = 1e-4, e = -4e-4;
+  const Eigen::Matrix2d m = compression_metric(Eigen::Vector2d(e, 0).asDiagonal(), Eigen::Matrix2d::Zero(), c);
+  EXPECT_NEAR(m(0, 0), -e / (c * c), 1e-9 * (-e / (c * c)));
+  EXPECT_NEAR(m(1, 1), 0.0, 1e-9 * (-e / (c * c)));
+  // Stretching asks for nothing.
+  EXPECT_LT(compression_metric(Eigen::Vector2d(1e-3, 1e-3).asDiagonal(), Eigen::Matrix2d::Zero(), c).norm(), 1e-6);
+}
+
+TEST(Sizing, CylinderCurvatureAcrossTheAxis) {
+  // A fine grid wrapped on a cylinder of radius R (axis along x): the curvature criterion asks
+  // for l = refine_angle * R across the axis; along it the aspect clamp (l / aspect_min) or
+  // size_max, whichever is shorter.
+  const double r = 0.05;
+  SheetMesh mesh = grid(0.2, 0.2, 41, 41);
+  RemeshParams p;
+  p.refine_compression = 0;
+  const std::vector<Eigen::Matrix2d> m = sizing(mesh, cylinder_state(mesh, r), p);
+  const double across = p.refine_angle * r;
+  const double along = std::min(p.size_max, across / p.aspect_min);
+  // Per face the discrete shape operator of a triangle depends on its three hinges; its mean
+  // over the sheet is the curvature to O(h^2 / R^2) (h = 5 mm, R = 50 mm: 1%), so the mean
+  // metric is checked to 5 %.
+  Eigen::Matrix2d mean = Eigen::Matrix2d::Zero();
+  for (const auto& mf : m) mean += mf / m.size();
+  EXPECT_NEAR(1 / std::sqrt(mean(1, 1)), across, 0.05 * across);
+  EXPECT_NEAR(1 / std::sqrt(mean(0, 0)), along, 0.05 * along);
+}
+
+TEST(Sizing, DegenerateInputDoesNotBreakIt) {
+  SheetMesh mesh = grid(0.03, 0.04, 5, 6);
+  RemeshState s = flat_state(mesh);
+  s.positions.setZero();  // every world edge has zero length
+  RemeshParams p;
+  p.obstacle_distance = 0.01;  // on, but no distances given
+  const std::vector<Eigen::Matrix2d> m = sizing(mesh, s, p);
+  ASSERT_EQ(static_cast<int>(m.size()), mesh.num_faces());
+  for (const auto& mf : m) {
+    ASSERT_TRUE(mf.allFinite());
+    // Crushed to a point: maximal compression, so the finest size.
+    EXPECT_NEAR(eigenvalues(mf).maxCoeff(), 1 / (p.size_min * p.size_min), 1e-6 / (p.size_min * p.size_min));
+  }
+  const RemeshStats stats = remesh(mesh, s, p);
+  EXPECT_GT(stats.splits, 0);
+  EXPECT_EQ(s.positions.rows(), mesh.num_vertices());
+  EXPECT_TRUE(s.positions.allFinite());
+}
+
+TEST(Sizing, ObstacleProximityRefinesWhereTheDistanceChanges) {
+  // A flat sheet tilted over a plane: the distance grows along y, 1 mm at y = 0.
+  SheetMesh mesh = grid(0.2, 0.2, 11, 11);
+  RemeshState s = flat_state(mesh);
+  const Eigen::MatrixX2d x = mesh.material_coords();
+  s.obstacle_distance = 1e-3 + 0.5 * x.col(1).array();
+  RemeshParams p;
+  p.obstacle_distance = 0.02;
+  const std::vector<Eigen::Matrix2d> m = sizing(mesh, s, p);
+  const Eigen::MatrixX3i f = mesh.faces();
+  for (int i = 0; i < f.rows(); ++i) {
+    const double y = (x(f(i, 0), 1) + x(f(i, 1), 1) + x(f(i, 2), 1)) / 3;
+    if (y > 0.1) {
+      // Far from the obstacle (every corner beyond obstacle_distance): size_max.
+      EXPECT_NEAR(m[i](1, 1), 1 / (p.size_max * p.size_max), 1e-9);
+    }
+  }
+  // Next to it the wanted size across is about d / |grad d| (1 mm / 0.5, clamped to size_min).
+  EXPECT_NEAR(m[0](1, 1), 1 / (p.size_min * p.size_min), 1e-6 / (p.size_min * p.size_min));
+}
+
+TEST(Sizing, ErrorsNameTheParameterOrArray) {
+  SheetMesh mesh = grid(0.2, 0.3, 5, 6);
+  RemeshState s = flat_state(mesh);
+  RemeshParams p;
+  p.size_max = 1e-3;
+  try {
+    sizing(mesh, s, p);
+    FAIL() << "expected ParameterError";
+  } catch (const ParameterError& e) {
+    EXPECT_NE(std::string(e.what()).find("size_max"), std::string::npos) << e.what();
+  }
+  p = RemeshParams();
+  p.aspect_min = 0;
+  EXPECT_THROW(sizing(mesh, s, p), ParameterError);
+  p = RemeshParams();
+  s.obstacle_distance = Eigen::VectorXd::Zero(3);
+  try {
+    remesh(mesh, s, p);
+    FAIL() << "expected MeshError";
+  } catch (const MeshError& e) {
+    EXPECT_NE(std::string(e.what()).find("state.obstacle_distance"), std::string::npos) << e.what();
+  }
+  s = flat_state(mesh);
+  s.positions(2, 1) = std::nan("");
+  EXPECT_THROW(remesh(mesh, s, p), MeshError);
+}
