@@ -39,6 +39,20 @@ Eigen::VectorXd flatten(const Eigen::MatrixX3d& m) {
   return Eigen::Map<const Eigen::VectorXd>(r.data(), r.size());
 }
 
+StepStats& StepStats::operator+=(const StepStats& o) {
+  substeps += o.substeps;
+  failed_solves += o.failed_solves;
+  projected_hessians += o.projected_hessians;
+  newton_iterations += o.newton_iterations;
+  line_search_evaluations += o.line_search_evaluations;
+  extrapolations += o.extrapolations;
+  seconds_assembly += o.seconds_assembly;
+  seconds_solve += o.seconds_solve;
+  seconds_line_search += o.seconds_line_search;
+  residual = std::max(residual, o.residual);
+  return *this;
+}
+
 Integrator::Integrator(int num_vertices, std::vector<std::unique_ptr<EnergyTerm>> terms,
                        const NewtonParams& params)
     : m_terms(std::move(terms)), m_params(params) {
@@ -77,6 +91,16 @@ double Integrator::energy(const Eigen::VectorXd& x) const {
     if (!std::isfinite(e)) return INF;
   }
   return e;
+}
+
+double Integrator::start_energy(const SheetState& state, double h) {
+  StepContext ctx;
+  ctx.time_t0 = state.time;
+  ctx.h = h;
+  ctx.x_t0 = &state.positions;
+  ctx.v_t0 = &state.velocities;
+  for (const auto& t : m_terms) t->begin_step(ctx, state.positions);
+  return energy(state.positions);
 }
 
 NewtonResult Integrator::solve(const StepContext& ctx, Eigen::VectorXd& x, StepStats& stats) {

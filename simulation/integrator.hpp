@@ -50,7 +50,9 @@ struct StepStats {
   int line_search_evaluations = 0;
   int extrapolations = 0;  ///< Newton steps lengthened beyond the full step
   double seconds_assembly = 0, seconds_solve = 0, seconds_line_search = 0;
-  double residual = 0;
+  double residual = 0;  ///< largest final residual [m/s]
+  /// Sums the counts and times; keeps the larger residual.
+  StepStats& operator+=(const StepStats& o);
 };
 
 class Integrator {
@@ -63,6 +65,10 @@ class Integrator {
   /// @throw NumericError when the step fails even after max_halvings splits, or NaN appears.
   StepStats step(SheetState& state, double h);
 
+  /// Begins a step of length h from `state` and returns the incremental potential at its start
+  /// (+inf when the state is infeasible for some term): the check of a state the integrator has
+  /// not produced itself, such as a remeshed sheet.
+  double start_energy(const SheetState& state, double h);
   /// Total incremental potential at x for the step last begun (for tests and diagnostics).
   double energy(const Eigen::VectorXd& x) const;
   const std::vector<std::unique_ptr<EnergyTerm>>& terms() const { return m_terms; }

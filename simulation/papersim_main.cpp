@@ -46,11 +46,10 @@ int simulate(const ps::Scene& scene, const std::string& out, int frames, bool qu
   options.frames_every = frames;
   if (!quiet) options.progress = progress_printer(label);
   const ps::RunResult r = ps::run_scene(scene, options);
-  const auto& q = r.meta["quality"];
   std::cout << "wrote " << (fs::path(out) / "sheet.obj").string() << ", sheet.ply and meta.json ("
-            << r.meta["sheet"]["vertices"] << " vertices, " << r.meta["run"]["steps"] << " steps, "
-            << std::setprecision(3) << r.meta["run"]["wall_seconds"].get<double>() << " s; max stretch "
-            << std::setprecision(6) << q["max_principal_stretch"].get<double>() << ")\n";
+            << r.sheet.vertices << " vertices, " << r.steps << " steps, " << std::setprecision(3)
+            << r.wall_seconds << " s; max stretch " << std::setprecision(6)
+            << r.quality.max_principal_stretch << ")\n";
   return 0;
 }
 

@@ -232,6 +232,24 @@ ClampSpec read_clamp(Reader r) {
   return c;
 }
 
+RemeshSpec read_remesh(Reader r) {
+  RemeshSpec s;
+  remesh::RemeshParams& p = s.params;
+  s.enabled = r.boolean("enabled", s.enabled);
+  s.every = r.integer("every", s.every, 1, 1 << 30);
+  p.refine_angle = r.number("refine_angle", p.refine_angle, 0, M_PI, true);
+  p.refine_compression = r.number("refine_compression", p.refine_compression, -1, 1);
+  p.refine_velocity = r.number("refine_velocity", p.refine_velocity, -1, 1e3);
+  p.obstacle_distance = r.number("obstacle_distance", p.obstacle_distance, -1, 10);
+  p.size_min = r.number("size_min", p.size_min, 0, 100, true);
+  p.size_max = r.number("size_max", p.size_max, 0, 100, true);
+  if (p.size_max < p.size_min) r.fail("size_max", "smaller than size_min");
+  p.aspect_min = r.number("aspect_min", p.aspect_min, 0, 1, true);
+  p.flip_angle_max = r.number("flip_angle_max", p.flip_angle_max, 0, M_PI, true);
+  r.finish();
+  return s;
+}
+
 collision::ColliderSpec read_obstacle(Reader r) {
   collision::ColliderSpec c;
   try {
@@ -318,6 +336,7 @@ Scene scene_from_json(const json& j, const std::string& source) {
     s.newton.max_extrapolation = n.integer("max_extrapolation", s.newton.max_extrapolation, 1, 1024);
     n.finish();
   }
+  s.remesh = read_remesh(r.child("remesh"));
   {
     Reader o = r.child("output");
     s.output.frames_every = o.integer("frames_every", s.output.frames_every, 0, 1 << 30);
@@ -432,6 +451,17 @@ json scene_to_json(const Scene& s) {
                  {"tolerance", s.newton.tolerance},
                  {"max_halvings", s.newton.max_halvings},
                  {"max_extrapolation", s.newton.max_extrapolation}};
+  const remesh::RemeshParams& rp = s.remesh.params;
+  j["remesh"] = {{"enabled", s.remesh.enabled},
+                 {"every", s.remesh.every},
+                 {"refine_angle", rp.refine_angle},
+                 {"refine_compression", rp.refine_compression},
+                 {"refine_velocity", rp.refine_velocity},
+                 {"obstacle_distance", rp.obstacle_distance},
+                 {"size_min", rp.size_min},
+                 {"size_max", rp.size_max},
+                 {"aspect_min", rp.aspect_min},
+                 {"flip_angle_max", rp.flip_angle_max}};
   j["output"] = {{"frames_every", s.output.frames_every}, {"ply", s.output.write_ply}};
   if (!s.scenario.empty()) j["scenario"] = s.scenario;
   if (s.seed >= 0) j["seed"] = s.seed;

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "collision/collider_factory.hpp"
+#include "remesh/remesh.hpp"
 #include "remesh/sheet_generator.hpp"
 #include "simulation/energies/contact_energy.hpp"
 #include "simulation/energies/handle_energy.hpp"
@@ -40,6 +41,14 @@ struct OutputSpec {
   bool write_ply = true;  ///< sheet.ply beside sheet.obj
 };
 
+/// Adaptive remeshing during a run (remesh/remesh.hpp; keys under `remesh` in docs/scene.md).
+struct RemeshSpec {
+  bool enabled = false;
+  /// Remesh before the first step, after it, and then after every `every` steps.
+  int every = 1;
+  remesh::RemeshParams params;
+};
+
 /// ContactParams with the stiffness left to the scene (0: automatic).
 inline ContactParams automatic_contact() {
   ContactParams c;
@@ -65,6 +74,7 @@ struct Scene {
   /// always contact.eps_velocity).
   SelfContactParams self_contact;
   NewtonParams newton;
+  RemeshSpec remesh;
   OutputSpec output;
   /// Provenance when a scenario drew the scene.
   std::string scenario;

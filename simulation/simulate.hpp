@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "remesh/sheet_mesh.hpp"
+#include "simulation/run.hpp"
 #include "simulation/scene.hpp"
 #include "simulation/sheet_state.hpp"
 
@@ -19,6 +20,7 @@ using ProgressFn = std::function<void(double fraction, double seconds)>;
 struct StepReport {
   int step = 0;                          ///< 1-based
   const SheetState* state = nullptr;     ///< the state after the step
+  const remesh::SheetMesh* mesh = nullptr;  ///< the mesh of that state (it may change during a run)
   /// Kinetic + gravity + stretching (with the strain-limit barrier) + bending energy [J];
   /// contact and handle potentials are not included.
   double mechanical_energy = 0.0;
@@ -38,16 +40,10 @@ struct RunOptions {
   StepObserver on_step;
 };
 
-/// What a finished run measured (also written to meta.json).
-struct RunResult {
-  remesh::SheetMesh mesh;
-  SheetState state;
-  nlohmann::json meta;
-};
-
-/// The sheet of a scene in its initial pose.
-/// @throw SceneError, remesh::IoError, remesh::MeshError
-void initial_sheet(const Scene& scene, remesh::SheetMesh& mesh, SheetState& state);
+/// meta.json of a finished run: the scene, provenance, run statistics, quality and energies,
+/// with `extra` merged in at the top level.
+nlohmann::json meta_json(const Scene& scene, const RunResult& result,
+                         const nlohmann::json& extra = nlohmann::json::object());
 
 /// Simulate `scene`; with a non-empty out_dir, write the outputs there.
 /// @throw SceneError for a scene that cannot be built, NumericError when a step fails, and

@@ -48,23 +48,22 @@ int main(int argc, char** argv) {
     int newton = 0, halved = 0, verts = 0, self = -1;
     try {
       const ps::RunResult r = ps::run_scene(scene, {});
-      const auto& q = r.meta["quality"];
-      const auto& run = r.meta["run"];
-      wall = run["wall_seconds"];
-      newton = run["newton_iterations"];
-      halved = run["failed_solves"];
-      verts = r.meta["sheet"]["vertices"];
-      s1 = q["max_principal_stretch"];
-      self = q["self_intersections"];
-      const auto& d = q["min_obstacle_distance"];
+      const ps::RunQuality& q = r.quality;
+      wall = r.wall_seconds;
+      newton = r.totals.newton_iterations;
+      halved = r.totals.failed_solves;
+      verts = r.sheet.vertices;
+      s1 = q.max_principal_stretch;
+      self = q.self_intersections;
+      const std::vector<double>& d = q.min_obstacle_distance;
       for (size_t o = 0; o < d.size(); ++o) {
         if (o == 0 && scene.ground)
           ground = d[o];
         else
-          obstacle = std::min(obstacle, d[o].get<double>());
+          obstacle = std::min(obstacle, d[o]);
       }
-      share = run["contact"]["seconds"].get<double>() / wall;
-      if (run.contains("self_contact")) self_share = run["self_contact"]["seconds"].get<double>() / wall;
+      if (r.contact) share = r.contact->seconds / wall;
+      if (r.self_contact) self_share = r.self_contact->seconds / wall;
       if (!r.state.positions.allFinite())
         verdict = "FAIL nan";
       else if (!(obstacle > 0) || !(ground > 0))

@@ -27,12 +27,8 @@
 
 #include "collision/collider.hpp"
 #include "remesh/sheet_generator.hpp"
-#include "simulation/energies/bending_energy.hpp"
-#include "simulation/energies/contact_energy.hpp"
-#include "simulation/energies/handle_energy.hpp"
-#include "simulation/energies/membrane_energy.hpp"
 #include "simulation/energies/vertex_energies.hpp"
-#include "simulation/integrator.hpp"
+#include "simulation/run.hpp"
 #include "validation/metrics.hpp"
 
 namespace ps = papersim::simulation;
@@ -156,8 +152,9 @@ struct SimulationSetup {
   ps::Material material;
   Eigen::Vector3d gravity = Eigen::Vector3d::Zero();  ///< [m/s^2]
   double damping = 0.0;                               ///< mass-proportional [1/s]; 0 = none
-  std::vector<ps::HandleSpec> handles;
-  std::vector<int> clamped_faces;  ///< faces whose slopes a clamp holds (BendingEnergy)
+  /// Clamp of a strip: the band of material x <= clamp_x is held where it starts, slopes
+  /// included; none when negative.
+  double clamp_x = -1.0;  ///< [m]
   std::vector<std::shared_ptr<const pc::Collider>> obstacles;
   ps::ContactParams contact;
   ps::NewtonParams newton;
@@ -169,25 +166,29 @@ struct Simulation {
   const ps::BendingEnergy* bending = nullptr;
 };
 
+/// The run's composition of the incremental potential (ps::build_terms) for this setup.
 Simulation make_simulation(const rm::SheetMesh& mesh, const Eigen::VectorXd& x0,
                            const SimulationSetup& s) {
-  const Eigen::MatrixX2d X = mesh.material_coords();
-  const Eigen::MatrixX3i F = mesh.faces();
-  const Eigen::VectorXd mass = ps::lumped_masses(X, F, s.material.density);
-  std::vector<std::unique_ptr<ps::EnergyTerm>> terms;
-  terms.push_back(std::make_unique<ps::InertiaEnergy>(mass));
-  if (s.damping > 0) terms.push_back(std::make_unique<ps::DampingEnergy>(mass, s.damping));
-  if (s.gravity.norm() > 0) terms.push_back(std::make_unique<ps::GravityEnergy>(mass, s.gravity));
-  terms.push_back(std::make_unique<ps::MembraneEnergy>(X, F, s.material));
-  auto bending = ps::make_bending_energy(mesh, s.material, ps::BendingHessian::gauss_newton, s.clamped_faces);
+  ps::PhysicsSetup p;
+  p.material = s.material;
+  p.material.damping = s.damping;
+  p.gravity = s.gravity;
+  if (s.clamp_x >= 0) {
+    constexpr double inf = std::numeric_limits<double>::infinity();
+    ps::ClampSpec c;
+    c.region = Eigen::Vector4d(-inf, -inf, s.clamp_x, inf);
+    c.stiffness = 1e6;  // [N/m]
+    p.clamps = {c};
+    p.placement = ps::InitialPlacement(mesh, x0);
+  }
+  p.obstacles = s.obstacles;
+  p.contact = s.contact;
+  p.impact_rule = false;
+  p.self_contact = false;
+  ps::Terms terms = ps::build_terms(mesh, p);
   Simulation sim;
-  sim.bending = bending.get();
-  terms.push_back(std::move(bending));
-  if (!s.handles.empty()) terms.push_back(std::make_unique<ps::HandleEnergy>(mesh, x0, s.handles));
-  if (!s.obstacles.empty())
-    terms.push_back(std::make_unique<ps::ObstacleContactEnergy>(mass / s.material.density,
-                                                                 s.obstacles, s.contact));
-  sim.integrator = std::make_unique<ps::Integrator>(mesh.num_vertices(), std::move(terms), s.newton);
+  sim.bending = terms.bending;
+  sim.integrator = std::make_unique<ps::Integrator>(mesh.num_vertices(), std::move(terms.list), s.newton);
   sim.state.positions = x0;
   sim.state.velocities = Eigen::VectorXd::Zero(x0.size());
   return sim;
@@ -199,20 +200,6 @@ Eigen::VectorXd flat_positions(const rm::SheetMesh& mesh) {
   Eigen::VectorXd x(3 * X.rows());
   for (int v = 0; v < X.rows(); ++v) x.segment<3>(3 * v) << X(v, 0), X(v, 1), 0.0;
   return x;
-}
-
-/// Fixed handles on every vertex with material x <= clamp (stiffness as in the elastica test).
-std::vector<ps::HandleSpec> clamp_handles(const rm::SheetMesh& mesh, double clamp) {
-  const Eigen::MatrixX2d X = mesh.material_coords();
-  std::vector<ps::HandleSpec> handles;
-  for (int v = 0; v < X.rows(); ++v)
-    if (X(v, 0) <= clamp + 1e-12) {
-      ps::HandleSpec h;
-      h.material_point = X.row(v).transpose();
-      h.stiffness = 1e6;  // [N/m]
-      handles.push_back(h);
-    }
-  return handles;
 }
 
 /// Vertices at the free end (largest material x) of a strip.
@@ -276,12 +263,6 @@ Strip strip_rotated(double h, double angle_deg) {
   s.mesh = rm::make_rotated_lattice(o);
   s.label = fmt("%gdeg", angle_deg);
   return s;
-}
-
-/// Faces of the clamp band x <= clamp: the clamp holds their slopes as well as their corners.
-std::vector<int> clamped_faces(const Strip& strip) {
-  constexpr double inf = std::numeric_limits<double>::infinity();
-  return rm::faces_inside(strip.mesh, Eigen::Vector4d(-inf, -inf, strip.clamp, inf));
 }
 
 /// The table is for a beam (one-dimensional elastica). A plate strip with nu > 0 is stiffer
@@ -376,8 +357,7 @@ ElasticaResult relax_elastica(const Strip& strip, double G) {
   const double L = strip.length;
   s.gravity = Eigen::Vector3d(0, 0, -G * s.material.bending_stiffness / (s.material.density * L * L * L));
   s.damping = 20.0;  // [1/s], near critical for the first mode (24.9 rad/s)
-  s.handles = clamp_handles(strip.mesh, strip.clamp);
-  s.clamped_faces = clamped_faces(strip);
+  s.clamp_x = strip.clamp;
   // The rest test below (|v| < 1e-6 m/s) must not be met by a Newton solve that stops early:
   // with the default stopping speed (1e-4 m/s, 2 micrometres per 20 ms step) a slow creep
   // towards equilibrium stalls (measured: 30 degrees, 0.8 mm, G = 1 rested at -2.93% instead of
@@ -491,8 +471,7 @@ BucklingResult relax_vertical(const Strip& strip, double G) {
   const double g = G * s.material.bending_stiffness / (s.material.density * L * L * L);
   s.gravity = Eigen::Vector3d(-1e-3 * g, 0, -g);
   s.damping = 20.0;
-  s.handles = clamp_handles(strip.mesh, strip.clamp);
-  s.clamped_faces = clamped_faces(strip);
+  s.clamp_x = strip.clamp;
   const Eigen::MatrixX2d X = strip.mesh.material_coords();
   Eigen::VectorXd x0(3 * X.rows());
   for (int v = 0; v < X.rows(); ++v) x0.segment<3>(3 * v) << 0.0, X(v, 1), X(v, 0);
@@ -627,8 +606,7 @@ void run_damping(Report& report, bool quick) {
   sag.material = material;
   sag.gravity = Eigen::Vector3d(0, 0, -0.2 * material.bending_stiffness / (material.density * L * L * L));
   sag.damping = 20.0;
-  sag.handles = clamp_handles(strip.mesh, strip.clamp);
-  sag.clamped_faces = clamped_faces(strip);
+  sag.clamp_x = strip.clamp;
   sag.newton.tolerance = 1e-7;
   Simulation relax = make_simulation(strip.mesh, flat_positions(strip.mesh), sag);
   for (int k = 0; k < 400 && !(k > 10 && relax.state.velocities.cwiseAbs().maxCoeff() < 1e-8); ++k)
@@ -639,8 +617,7 @@ void run_damping(Report& report, bool quick) {
     const auto t0 = std::chrono::steady_clock::now();
     SimulationSetup s;
     s.material = material;
-    s.handles = clamp_handles(strip.mesh, strip.clamp);
-    s.clamped_faces = clamped_faces(strip);
+    s.clamp_x = strip.clamp;
     s.newton.tolerance = 1e-7;
     Simulation sim = make_simulation(strip.mesh, flat_positions(strip.mesh), s);
     sim.state.positions = relax.state.positions;

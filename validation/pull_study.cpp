@@ -42,13 +42,12 @@ int main(int argc, char** argv) {
     int newton = 0, verts = 0;
     try {
       const ps::RunResult r = ps::run_scene(scene, {});
-      const auto& q = r.meta["quality"];
-      wall = r.meta["run"]["wall_seconds"];
-      newton = r.meta["run"]["newton_iterations"];
-      verts = r.meta["sheet"]["vertices"];
-      s1 = q["max_principal_stretch"];
-      herr = q["max_handle_error"];
-      ground = q["min_obstacle_distance"][0];
+      wall = r.wall_seconds;
+      newton = r.totals.newton_iterations;
+      verts = r.sheet.vertices;
+      s1 = r.quality.max_principal_stretch;
+      herr = r.quality.max_handle_error.value_or(0.0);
+      ground = r.quality.min_obstacle_distance.at(0);
       const Eigen::MatrixX3i F = r.mesh.faces();
       const Eigen::MatrixX3d P = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(
           r.state.positions.data(), r.mesh.num_vertices(), 3);

@@ -96,7 +96,7 @@ pv::SheetGeometry reference_run(const ps::Scene& scene, const fs::path& dir, con
   o.out_dir = ref.string();
   o.extra_meta = {{"study_key", key}};
   const ps::RunResult r = ps::run_scene(scene, o);
-  wall = r.meta["run"]["wall_seconds"];
+  wall = r.wall_seconds;
   return geometry_of(r.mesh, as_rows(r.state.positions));
 }
 
@@ -268,9 +268,9 @@ SeedResult study_draw(const std::string& scenario, long long seed, const fs::pat
       Sample s;
       s.edge_mm = e, s.step_ms = h;
       s.vertices = r.mesh.num_vertices();
-      s.steps = r.meta["run"]["steps"];
-      s.newton = r.meta["run"]["newton_iterations"];
-      s.wall = r.meta["run"]["wall_seconds"];
+      s.steps = r.steps;
+      s.newton = r.totals.newton_iterations;
+      s.wall = r.wall_seconds;
       s.error = pv::compare_sheets(reference, geometry_of(r.mesh, as_rows(r.state.positions)));
       d.samples.push_back(s);
       std::printf("%6lld %8g %8g %8d %7d %8ld %9.2f %10.3f %10.3f %10.3f\n", seed, e, h, s.vertices, s.steps,

@@ -274,7 +274,7 @@ bool ObstacleContactEnergy::near_bounds(int o, const Eigen::Vector3d& p) const {
 }
 
 void ObstacleContactEnergy::begin_step(const StepContext& ctx, const Eigen::VectorXd& x_t0) {
-  ScopedTimer timer(m_seconds);
+  ScopedTimer timer(m_stats->seconds);
   m_t1 = ctx.time_t1();
   m_eps = m_params.eps_velocity * ctx.h;
   m_bounds.clear();
@@ -382,8 +382,8 @@ void ObstacleContactEnergy::begin_step(const StepContext& ctx, const Eigen::Vect
     add_friction(fp, *m_obstacles[p.obstacle], -kappa_pair * m * barrier_first_derivative(d, m_params.dhat),
                  contact_point(fp, x_t0), r.normalized());
   }
-  m_max_friction = std::max(m_max_friction, active_friction());
-  m_max_normal_force = std::max(m_max_normal_force, m_normal_force);
+  m_stats->max_friction_points = std::max(m_stats->max_friction_points, active_friction());
+  m_stats->max_normal_force = std::max(m_stats->max_normal_force, m_normal_force);
 }
 
 namespace {
@@ -401,7 +401,7 @@ collision::DistanceStencil pair_stencil(bool edge_edge, const collision::PairPoi
 }  // namespace
 
 double ObstacleContactEnergy::value(const Eigen::VectorXd& x) const {
-  ScopedTimer timer(m_seconds);
+  ScopedTimer timer(m_stats->seconds);
   double e = 0;
   const int nv = static_cast<int>(m_area.size());
   const double dhat = m_params.dhat;
@@ -445,7 +445,7 @@ double ObstacleContactEnergy::value(const Eigen::VectorXd& x) const {
 
 void ObstacleContactEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd& g,
                                             BlockSymmetricMatrix* H) const {
-  ScopedTimer timer(m_seconds);
+  ScopedTimer timer(m_stats->seconds);
   const int nv = static_cast<int>(m_area.size());
   const double dhat = m_params.dhat;
   const auto add_weighted = [&](const std::array<int, 3>& vs, const Eigen::Vector3d& w, int count,
@@ -543,7 +543,7 @@ void ObstacleContactEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::Vec
 }
 
 double ObstacleContactEnergy::max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const {
-  ScopedTimer timer(m_seconds);
+  ScopedTimer timer(m_stats->seconds);
   double alpha = 1.0;
   const int nv = static_cast<int>(m_area.size());
   for (int o = 0; o < num_obstacles(); ++o) {
@@ -685,7 +685,7 @@ double ObstacleContactEnergy::max_step(const Eigen::VectorXd& x, const Eigen::Ve
 }
 
 double ObstacleContactEnergy::surface_distance(int o, const Eigen::VectorXd& x, double t) const {
-  ScopedTimer timer(m_seconds);
+  ScopedTimer timer(m_stats->seconds);
   const collision::Collider& obs = *m_obstacles[o];
   double m = INF;
   for (int v = 0; v < m_area.size(); ++v) m = std::min(m, obs.distance(x.segment<3>(3 * v), t));

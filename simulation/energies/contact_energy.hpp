@@ -67,6 +67,14 @@ struct ContactParams {
   bool faces = false;
 };
 
+/// Counters of obstacle contact over a run. The run owns them and hands them to every term it
+/// builds, so rebuilding the terms (after remeshing) loses nothing.
+struct ContactStatistics {
+  double seconds = 0.0;          ///< wall time in the term (field queries, barrier, friction, CCD) [s]
+  int max_friction_points = 0;   ///< most friction contacts (vertices, faces, pairs) in one step
+  double max_normal_force = 0.0; ///< largest total normal force at a step start [N]
+};
+
 class ObstacleContactEnergy : public EnergyTerm {
  public:
   /// @param vertex_areas material area per vertex [m^2] (a third of the incident faces)
@@ -104,12 +112,9 @@ class ObstacleContactEnergy : public EnergyTerm {
   /// vertices, and with face contact over the faces (spheres, searched fields) or the corner-
   /// triangle and edge-edge pairs (polyhedra) too, so a ridge between vertices counts.
   double surface_distance(int o, const Eigen::VectorXd& x, double t) const;
-  /// Wall time spent in this term (field queries, barrier, friction, CCD) [s].
-  double seconds() const { return m_seconds; }
-  /// Most friction contacts (vertices, faces, pairs) in one step, and the largest total normal
-  /// force at a step start over the run [N].
-  int max_friction_points() const { return m_max_friction; }
-  double max_normal_force() const { return m_max_normal_force; }
+  /// Where the term counts (see ContactStatistics); null: a counter of its own.
+  void set_statistics(ContactStatistics* statistics) { m_stats = statistics ? statistics : &m_own_stats; }
+  const ContactStatistics& statistics() const { return *m_stats; }
 
  private:
   struct FrictionPoint {
@@ -183,9 +188,8 @@ class ObstacleContactEnergy : public EnergyTerm {
   double m_t1 = 0.0, m_eps = 1e-6, m_normal_force = 0.0;
   double m_impact_density = 0.0;  // rho_A for the impact rule; 0: off
   double m_stiffness = 0.0;       // this step's stiffness [Pa]
-  mutable double m_seconds = 0.0;
-  int m_max_friction = 0;
-  double m_max_normal_force = 0.0;
+  ContactStatistics m_own_stats;
+  ContactStatistics* m_stats = &m_own_stats;
 };
 
 }  // namespace papersim::simulation

@@ -43,23 +43,49 @@ MaterialLocation locate_material_point(const remesh::SheetMesh& mesh, const Eige
   return best;
 }
 
-HandleEnergy::HandleEnergy(const remesh::SheetMesh& mesh, const Eigen::VectorXd& x0,
-                           std::vector<HandleSpec> handles) {
+namespace {
+
+MaterialLocation locate_or_throw(const remesh::SheetMesh& mesh, const Eigen::Vector2d& p) {
+  const MaterialLocation loc = locate_material_point(mesh, p);
+  if (loc.face < 0) {
+    std::ostringstream s;
+    s << "handle: material point (" << p.x() << ", " << p.y() << ") lies outside the sheet";
+    throw SceneError(s.str());
+  }
+  return loc;
+}
+
+}  // namespace
+
+std::vector<AnchoredHandle> anchor_handles(const remesh::SheetMesh& mesh, const Eigen::VectorXd& x,
+                                           const std::vector<HandleSpec>& handles) {
   const Eigen::MatrixX3i F = mesh.faces();
-  for (auto& spec : handles) {
-    const MaterialLocation loc = locate_material_point(mesh, spec.material_point);
-    if (loc.face < 0) {
-      std::ostringstream s;
-      s << "handle: material point (" << spec.material_point.x() << ", " << spec.material_point.y()
-        << ") lies outside the sheet";
-      throw SceneError(s.str());
-    }
+  std::vector<AnchoredHandle> anchored;
+  anchored.reserve(handles.size());
+  for (const HandleSpec& spec : handles) {
+    const MaterialLocation loc = locate_or_throw(mesh, spec.material_point);
+    AnchoredHandle a;
+    a.spec = spec;
+    for (int k = 0; k < 3; ++k) a.anchor += loc.weights[k] * x.segment<3>(3 * F(loc.face, k));
+    anchored.push_back(a);
+  }
+  return anchored;
+}
+
+HandleEnergy::HandleEnergy(const remesh::SheetMesh& mesh, const Eigen::VectorXd& x0,
+                           const std::vector<HandleSpec>& handles)
+    : HandleEnergy(mesh, anchor_handles(mesh, x0, handles)) {}
+
+HandleEnergy::HandleEnergy(const remesh::SheetMesh& mesh, const std::vector<AnchoredHandle>& handles) {
+  const Eigen::MatrixX3i F = mesh.faces();
+  m_handles.reserve(handles.size());
+  for (const AnchoredHandle& a : handles) {
+    const MaterialLocation loc = locate_or_throw(mesh, a.spec.material_point);
     Bound b;
-    b.spec = spec;
+    b.spec = a.spec;
     b.v = {F(loc.face, 0), F(loc.face, 1), F(loc.face, 2)};
     b.w = loc.weights;
-    b.start.setZero();
-    for (int k = 0; k < 3; ++k) b.start += b.w[k] * x0.segment<3>(3 * b.v[k]);
+    b.start = a.anchor;
     m_handles.push_back(b);
   }
 }

@@ -29,12 +29,29 @@ struct HandleSpec {
 /// Displacement of a handle at time t (linear interpolation of the keyframes) [m].
 Eigen::Vector3d handle_displacement(const HandleSpec& spec, double t);
 
+/// A handle whose world anchor (the initial world position of its material point, from which
+/// the keyframe displacements are measured) was fixed at the start of the run, so the handle
+/// means the same on every mesh the run passes through.
+struct AnchoredHandle {
+  HandleSpec spec;
+  Eigen::Vector3d anchor = Eigen::Vector3d::Zero();  ///< [m]
+};
+
+/// Anchors handles at the world positions their material points have in (mesh, positions).
+/// @param positions 3N world positions [m]
+/// @throw SceneError when a material point lies outside the sheet.
+std::vector<AnchoredHandle> anchor_handles(const remesh::SheetMesh& mesh, const Eigen::VectorXd& positions,
+                                           const std::vector<HandleSpec>& handles);
+
 class HandleEnergy : public EnergyTerm {
  public:
-  /// @param positions_t0 initial world positions (3N) [m]
+  /// Binds each handle's material point to the face of `mesh` that holds it.
+  /// @throw SceneError when a material point lies outside the sheet.
+  HandleEnergy(const remesh::SheetMesh& mesh, const std::vector<AnchoredHandle>& handles);
+  /// Handles anchored at the world positions of their material points in positions_t0 (3N) [m].
   /// @throw SceneError when a material point lies outside the sheet.
   HandleEnergy(const remesh::SheetMesh& mesh, const Eigen::VectorXd& positions_t0,
-               std::vector<HandleSpec> handles);
+               const std::vector<HandleSpec>& handles);
 
   std::string name() const override { return "handles"; }
   void add_pattern(SparsityBuilder& pattern) const override;

@@ -154,7 +154,7 @@ double SelfContactEnergy::stencil_distance2(const Pair& p, const PairPoints& pts
 }
 
 void SelfContactEnergy::begin_step(const StepContext& ctx, const Eigen::VectorXd& x_t0) {
-  ScopedTimer timer(m_seconds);
+  ScopedTimer timer(m_stats->seconds);
   m_eps = m_params.eps_velocity * ctx.h;
   ensure_candidates(x_t0);
   m_friction.clear();
@@ -187,7 +187,7 @@ void SelfContactEnergy::begin_step(const StepContext& ctx, const Eigen::VectorXd
 }
 
 bool SelfContactEnergy::update_pattern(const Eigen::VectorXd& x) {
-  ScopedTimer timer(m_seconds);
+  ScopedTimer timer(m_stats->seconds);
   ensure_candidates(x);
   const double dhat2 = m_params.dhat * m_params.dhat, near2 = 4 * dhat2;
   bool missing = !std::includes(m_pattern.begin(), m_pattern.end(), m_friction_keys.begin(), m_friction_keys.end());
@@ -215,7 +215,7 @@ bool SelfContactEnergy::update_pattern(const Eigen::VectorXd& x) {
   m_pattern.insert(m_pattern.end(), m_friction_keys.begin(), m_friction_keys.end());
   std::sort(m_pattern.begin(), m_pattern.end());
   m_pattern.erase(std::unique(m_pattern.begin(), m_pattern.end()), m_pattern.end());
-  ++m_pattern_changes;
+  ++m_stats->pattern_changes;
   return true;
 }
 
@@ -228,7 +228,7 @@ void SelfContactEnergy::add_dynamic_pattern(SparsityBuilder& pattern) const {
 }
 
 double SelfContactEnergy::value(const Eigen::VectorXd& x) const {
-  ScopedTimer timer(m_seconds);
+  ScopedTimer timer(m_stats->seconds);
   ensure_candidates(x);
   const double dhat = m_params.dhat, kappa = m_params.stiffness / dhat;
   double e = 0;
@@ -283,7 +283,7 @@ void SelfContactEnergy::add_friction(const Eigen::VectorXd& x, Eigen::VectorXd& 
 
 void SelfContactEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd& g,
                                         BlockSymmetricMatrix* H) const {
-  ScopedTimer timer(m_seconds);
+  ScopedTimer timer(m_stats->seconds);
   ensure_candidates(x);
   const double dhat2 = m_params.dhat * m_params.dhat;
   int active = 0;
@@ -297,11 +297,11 @@ void SelfContactEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::VectorX
   }
   add_friction(x, g, H);
   m_active = active;
-  m_max_active = std::max(m_max_active, active);
+  m_stats->max_active_pairs = std::max(m_stats->max_active_pairs, active);
 }
 
 double SelfContactEnergy::max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const {
-  ScopedTimer timer(m_seconds);
+  ScopedTimer timer(m_stats->seconds);
   // One broad phase over the swept boxes serves the CCD here (a superset of the pairs whose
   // swept boxes meet) and every energy evaluation of the line search after it.
   build_candidates(x, dx);

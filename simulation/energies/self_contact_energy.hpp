@@ -51,6 +51,13 @@ struct SelfContactParams {
   double ccd_min_separation = 0.1;
 };
 
+/// Counters of self-contact over a run, owned by the run (as ContactStatistics).
+struct SelfContactStatistics {
+  double seconds = 0.0;     ///< wall time in the term (broad phase, barrier, friction, CCD) [s]
+  int max_active_pairs = 0; ///< most pairs within dhat at one derivative evaluation
+  int pattern_changes = 0;  ///< how often update_pattern() reported a change
+};
+
 class SelfContactEnergy : public EnergyTerm {
  public:
   /// @param material_coords #V by 2 flat sheet coordinates [m] (rest edge lengths)
@@ -77,13 +84,11 @@ class SelfContactEnergy : public EnergyTerm {
   double min_distance(const Eigen::VectorXd& x, double radius) const;
   /// Pairs within dhat at the last derivative evaluation, and the most over the run.
   int active_pairs() const { return m_active; }
-  int max_active_pairs() const { return m_max_active; }
   /// Pairs with friction in the current step.
   int active_friction() const { return static_cast<int>(m_friction.size()); }
-  /// Wall time spent in this term (broad phase, barrier, friction, CCD) [s].
-  double seconds() const { return m_seconds; }
-  /// How often update_pattern() reported a change.
-  int pattern_changes() const { return m_pattern_changes; }
+  /// Where the term counts (see SelfContactStatistics); null: a counter of its own.
+  void set_statistics(SelfContactStatistics* statistics) { m_stats = statistics ? statistics : &m_own_stats; }
+  const SelfContactStatistics& statistics() const { return *m_stats; }
   const SelfContactParams& params() const { return m_params; }
 
  private:
@@ -150,9 +155,9 @@ class SelfContactEnergy : public EnergyTerm {
   std::vector<FrictionPair> m_friction;
   std::vector<std::uint64_t> m_friction_keys;
 
-  mutable double m_seconds = 0;
-  mutable int m_active = 0, m_max_active = 0;
-  int m_pattern_changes = 0;
+  mutable int m_active = 0;
+  SelfContactStatistics m_own_stats;
+  SelfContactStatistics* m_stats = &m_own_stats;
 };
 
 }  // namespace papersim::simulation

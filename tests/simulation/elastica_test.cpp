@@ -10,11 +10,7 @@
 #include <memory>
 
 #include "remesh/sheet_generator.hpp"
-#include "simulation/energies/bending_energy.hpp"
-#include "simulation/energies/handle_energy.hpp"
-#include "simulation/energies/membrane_energy.hpp"
-#include "simulation/energies/vertex_energies.hpp"
-#include "simulation/integrator.hpp"
+#include "simulation/run.hpp"
 
 using namespace papersim;
 using namespace papersim::simulation;
@@ -36,32 +32,26 @@ ElasticaResult run_elastica(const remesh::SheetMesh& mesh, double L, double c, d
   m.poisson = 0.0;  // the table is for a beam: no anticlastic (Poisson) stiffening
   const double g = G * m.bending_stiffness / (m.density * L * L * L);
   const Eigen::MatrixX2d X = mesh.material_coords();
-  const Eigen::MatrixX3i F = mesh.faces();
   const int nv = mesh.num_vertices();
   Eigen::VectorXd x0(3 * nv);
   for (int v = 0; v < nv; ++v) x0.segment<3>(3 * v) << X(v, 0), X(v, 1), 0.0;
-  std::vector<HandleSpec> clamp;
-  for (int v = 0; v < nv; ++v)
-    if (X(v, 0) <= c + 1e-12) {
-      HandleSpec h;
-      h.material_point = X.row(v).transpose();
-      h.stiffness = 1e6;
-      clamp.push_back(h);
-    }
-  const Eigen::VectorXd mass = lumped_masses(X, F, m.density);
-  std::vector<std::unique_ptr<EnergyTerm>> terms;
-  terms.push_back(std::make_unique<InertiaEnergy>(mass));
-  terms.push_back(std::make_unique<DampingEnergy>(mass, 20.0));
-  terms.push_back(std::make_unique<GravityEnergy>(mass, Eigen::Vector3d(0, 0, -g)));
-  terms.push_back(std::make_unique<MembraneEnergy>(X, F, m));
-  // The clamp holds the band's slopes as well as its corners.
+  // The run's composition of the incremental potential, with the band x <= c clamped (its
+  // slopes as well as its corners).
+  PhysicsSetup setup;
+  setup.material = m;
+  setup.material.damping = 20.0;
+  setup.gravity = Eigen::Vector3d(0, 0, -g);
   const double inf = std::numeric_limits<double>::infinity();
-  terms.push_back(make_bending_energy(mesh, m, BendingHessian::gauss_newton,
-                                     remesh::faces_inside(mesh, Eigen::Vector4d(-inf, -inf, c, inf))));
-  terms.push_back(std::make_unique<HandleEnergy>(mesh, x0, clamp));
+  ClampSpec clamp;
+  clamp.region = Eigen::Vector4d(-inf, -inf, c, inf);
+  clamp.stiffness = 1e6;
+  setup.clamps = {clamp};
+  setup.placement = InitialPlacement(mesh, x0);
+  setup.self_contact = false;
+  Terms terms = build_terms(mesh, setup);
   NewtonParams newton;
   newton.tolerance = 1e-6;  // [m/s]: solves that stop early stall the creep to rest (known_answers)
-  Integrator integrator(nv, std::move(terms), newton);
+  Integrator integrator(nv, std::move(terms.list), newton);
   SheetState state;
   state.positions = x0;
   state.velocities = Eigen::VectorXd::Zero(3 * nv);

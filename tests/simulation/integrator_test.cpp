@@ -6,11 +6,7 @@
 #include <memory>
 
 #include "remesh/sheet_generator.hpp"
-#include "simulation/energies/bending_energy.hpp"
-#include "simulation/energies/handle_energy.hpp"
-#include "simulation/energies/membrane_energy.hpp"
-#include "simulation/energies/vertex_energies.hpp"
-#include "simulation/integrator.hpp"
+#include "simulation/run.hpp"
 
 using namespace papersim;
 using namespace papersim::simulation;
@@ -31,7 +27,6 @@ Outcome squeeze_sheet(double strain, bool exact_first) {
   o.nx = o.ny = 11;
   const remesh::SheetMesh mesh = remesh::make_rectangle(o);
   const Eigen::MatrixX2d X = mesh.material_coords();
-  const Eigen::MatrixX3i F = mesh.faces();
   const int nv = mesh.num_vertices();
   Eigen::VectorXd x0(3 * nv);
   for (int v = 0; v < nv; ++v)
@@ -44,16 +39,14 @@ Outcome squeeze_sheet(double strain, bool exact_first) {
     h.material_point = X.row(v).transpose();
     handles.push_back(h);
   }
-  Material m;
-  const Eigen::VectorXd mass = lumped_masses(X, F, m.density);
-  std::vector<std::unique_ptr<EnergyTerm>> terms;
-  terms.push_back(std::make_unique<InertiaEnergy>(mass));
-  terms.push_back(std::make_unique<MembraneEnergy>(X, F, m));
-  terms.push_back(make_bending_energy(mesh, m));
-  terms.push_back(std::make_unique<HandleEnergy>(mesh, x0, handles));
+  PhysicsSetup setup;
+  setup.gravity.setZero();
+  setup.handles = anchor_handles(mesh, x0, handles);
+  setup.self_contact = false;
+  Terms terms = build_terms(mesh, setup);
   NewtonParams p;
   p.exact_hessian_first = exact_first;
-  Integrator integrator(nv, std::move(terms), p);
+  Integrator integrator(nv, std::move(terms.list), p);
   SheetState state;
   state.positions = x0;
   state.velocities = Eigen::VectorXd::Zero(3 * nv);

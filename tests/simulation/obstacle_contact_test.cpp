@@ -62,11 +62,12 @@ TEST(ObstacleContact, MovingSphereSqueezesAndDragsTheSheet) {
     const RunResult dragged = run_scene(press_and_drag(0.8, 0.1, model), {});
     const RunResult held = run_scene(press_and_drag(0.1, 0.8, model), {});
     for (const RunResult* r : {&dragged, &held}) {
-      const auto& d = r->meta["quality"]["min_obstacle_distance"];
-      EXPECT_GT(d[0].get<double>(), 0.0);  // ground
-      EXPECT_GT(d[1].get<double>(), 0.0);  // sphere
-      EXPECT_LT(d[1].get<double>(), 3e-4);  // it did press the sheet (within the contact thickness)
-      EXPECT_EQ(r->meta["quality"]["self_intersections"].get<int>(), 0);
+      const std::vector<double>& d = r->quality.min_obstacle_distance;
+      ASSERT_EQ(d.size(), 2u);
+      EXPECT_GT(d[0], 0.0);  // ground
+      EXPECT_GT(d[1], 0.0);  // sphere
+      EXPECT_LT(d[1], 3e-4);  // it did press the sheet (within the contact thickness)
+      EXPECT_EQ(r->quality.self_intersections, 0);
     }
     EXPECT_GT(mean_x(dragged), 0.015);
     EXPECT_LT(std::abs(mean_x(held)), 0.002);

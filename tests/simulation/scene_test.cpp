@@ -119,11 +119,12 @@ TEST(Run, WritesOutputsAndLeavesNothingOnFailure) {
   const RunResult r = run_scene(small_scene(), options_for(dir.string()));
   EXPECT_TRUE(fs::exists(dir / "sheet.obj") && fs::exists(dir / "sheet.ply") && fs::exists(dir / "meta.json"));
   EXPECT_FALSE(fs::exists(dir / ".papersim-partial"));
-  EXPECT_LE(r.meta["quality"]["max_principal_stretch"].get<double>(), 1.005);
-  EXPECT_GT(r.meta["quality"]["min_obstacle_distance"][0].get<double>(), 0.0);
-  EXPECT_EQ(r.meta["quality"]["self_intersections"].get<int>(), 0);
-  EXPECT_EQ(r.meta["run"]["self_contact"]["max_active_pairs"].get<int>(), 0) << "a flat sheet is far from itself";
-  EXPECT_GE(r.meta["run"]["self_contact"]["seconds"].get<double>(), 0.0);
+  EXPECT_LE(r.quality.max_principal_stretch, 1.005);
+  EXPECT_GT(r.quality.min_obstacle_distance.at(0), 0.0);
+  EXPECT_EQ(r.quality.self_intersections, 0);
+  ASSERT_TRUE(r.self_contact.has_value());
+  EXPECT_EQ(r.self_contact->max_active_pairs, 0) << "a flat sheet is far from itself";
+  EXPECT_GE(r.self_contact->seconds, 0.0);
   fs::remove_all(dir);
   // A step that cannot converge (one Newton iteration, no halving) fails: no folder is left.
   Scene failing = small_scene();
@@ -224,13 +225,13 @@ TEST(Run, ExtrapolatedProjectedStepsSaveIterationsAndKeepTheResult) {
   const RunResult plain = run_scene(scene, quiet);
   scene.newton.max_extrapolation = 8;
   const RunResult longer = run_scene(scene, quiet);
-  const int it_plain = plain.meta["run"]["newton_iterations"], it_longer = longer.meta["run"]["newton_iterations"];
-  EXPECT_EQ(plain.meta["run"]["extrapolations"], 0);
-  EXPECT_GT(longer.meta["run"]["extrapolations"], 0);
+  const int it_plain = plain.totals.newton_iterations, it_longer = longer.totals.newton_iterations;
+  EXPECT_EQ(plain.totals.extrapolations, 0);
+  EXPECT_GT(longer.totals.extrapolations, 0);
   EXPECT_LT(it_longer, it_plain);
   const double diff = (plain.state.positions - longer.state.positions).cwiseAbs().maxCoeff();
   std::printf("iterations %d plain, %d with extrapolation (%d extrapolated); largest coordinate difference %.3g m\n",
-              it_plain, it_longer, static_cast<int>(longer.meta["run"]["extrapolations"]), diff);
+              it_plain, it_longer, longer.totals.extrapolations, diff);
   // Each step stops within 1e-4 m/s x h = 1 micrometre of its minimiser; 10 micrometres allows
   // 40 steps of such differences to grow through the buckling (measured: 2e-8 m).
   EXPECT_LT(diff, 1e-5);

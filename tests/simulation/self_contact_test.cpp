@@ -53,12 +53,11 @@ Watched watch(const Scene& scene, const std::function<double(const Eigen::Vector
 }
 
 void report(const char* name, const Watched& w) {
-  const nlohmann::json& run = w.result.meta["run"];
-  const nlohmann::json sc = run.value("self_contact", nlohmann::json::object());
+  const SelfContactStatistics sc = w.result.self_contact.value_or(SelfContactStatistics{});
   std::printf("%s: %d steps, %.2f s, min separation %.3g m, max active pairs %d, self-contact %.2f s, "
               "pattern changes %d, Newton iterations %d, most intersecting pairs %d, min height %.3g m\n",
-              name, w.steps, w.seconds, w.min_separation, sc.value("max_active_pairs", 0),
-              sc.value("seconds", 0.0), sc.value("pattern_changes", 0), run["newton_iterations"].get<int>(),
+              name, w.steps, w.seconds, w.min_separation, sc.max_active_pairs,
+              sc.seconds, sc.pattern_changes, w.result.totals.newton_iterations,
               w.max_intersections, w.min_ground);
 }
 
@@ -114,9 +113,9 @@ TEST(SelfContact, StripOverRodEndsCrossWithoutIntersecting) {
   std::printf("strip over rod: closest approach of the two ends %.3g m\n", w.min_extra);
   EXPECT_LT(w.min_extra, s.contact.dhat) << "the ends met under the rod";
   EXPECT_EQ(w.max_intersections, 0) << "first at step " << w.first_bad_step;
-  EXPECT_EQ(w.result.meta["quality"]["self_intersections"].get<int>(), 0);
+  EXPECT_EQ(w.result.quality.self_intersections, 0);
   // The ends did meet: pairs came within the contact thickness.
-  EXPECT_GT(w.result.meta["run"]["self_contact"]["max_active_pairs"].get<int>(), 0);
+  EXPECT_GT(w.result.self_contact.value_or(SelfContactStatistics{}).max_active_pairs, 0);
   EXPECT_GT(w.min_separation, 0.0);
   EXPECT_LT(w.min_separation, s.contact.dhat);
 }
@@ -156,7 +155,7 @@ TEST(SelfContact, SheetFoldedOntoItself) {
   report("fold", w);
   EXPECT_EQ(w.max_intersections, 0) << "first at step " << w.first_bad_step;
   EXPECT_GT(w.min_ground, 0.0) << "no vertex below the ground";
-  EXPECT_GT(w.result.meta["run"]["self_contact"]["max_active_pairs"].get<int>(), 0);
+  EXPECT_GT(w.result.self_contact.value_or(SelfContactStatistics{}).max_active_pairs, 0);
   EXPECT_GT(w.min_separation, 0.0);
   EXPECT_LT(w.min_separation, s.contact.dhat);
   // Folded: the lifted edge lies over the left half at the end, above the layer under it.

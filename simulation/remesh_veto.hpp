@@ -1,0 +1,65 @@
+#pragma once
+/// The simulation's veto on remeshing edits: an edit may not create a triangle that exceeds the
+/// strain limit, comes within a tenth of the contact thickness of an obstacle, or comes within a
+/// tenth of the self-contact thickness of (or passes through) the rest of the sheet. The barriers
+/// are finite there, so the next step starts from a feasible state; the solver's invariants
+/// (no penetration, no self-intersection, stretch within the limit) hold across the remesh.
+///
+/// What each kind of edit can break: a split inserts a vertex at the material midpoint of an edge
+/// and its world position at the world midpoint, so its new triangles lie in the planes of the
+/// old ones with the same deformation gradient; only the new vertex can come close to a curved
+/// obstacle (the chord cuts into it). Flips and collapses move triangles: they are checked for
+/// strain, obstacles (centroid and edge midpoints) and the rest of the sheet. On a bent sheet a
+/// flip or a collapse makes triangles whose world shape differs from their material shape (a
+/// chord is shorter than its arc), and the stiff membrane turns even a small strain into a large
+/// energy (Eh = 5e5 N/m: 0.1% strain over 1 cm^2 stores 25 uJ, the order of a sheet's whole
+/// bending energy), so such edits are refused unless their strain stays within
+/// `strain_tolerance`: coarsening happens where the sheet is flat.
+#include <memory>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include "collision/collider.hpp"
+#include "remesh/remesh.hpp"
+
+namespace papersim::simulation {
+
+struct RemeshVetoParams {
+  double strain_limit = 0.005;   ///< largest principal stretch 1 + strain_limit [-]
+  /// Flips and collapses may not make a face whose principal stretches leave
+  /// [1 - strain_tolerance, 1 + strain_tolerance] [-].
+  double strain_tolerance = 2e-4;
+  double obstacle_gap = 3e-5;    ///< closest a new point may come to an obstacle [m]
+  double self_gap = 3e-5;        ///< closest a new triangle may come to the sheet [m]; <= 0 off
+  double time = 0.0;             ///< obstacles' time [s]
+};
+
+class RemeshVeto {
+ public:
+  /// @param positions world positions of the mesh the pass starts from (#V by 3) [m]
+  RemeshVeto(std::vector<std::shared_ptr<const collision::Collider>> obstacles,
+             const remesh::SheetMesh& mesh, const Eigen::MatrixX3d& positions,
+             const RemeshVetoParams& params);
+
+  /// Empty to allow the edit, else the reason ("stretch", "obstacle", "self").
+  std::string operator()(const remesh::EditProposal& edit) const;
+
+ private:
+  std::string stretch_reason(const remesh::EditProposal& edit) const;
+  bool near_obstacle(const Eigen::Vector3d& p) const;
+  bool near_sheet(const remesh::EditProposal& edit, int face) const;
+  std::vector<int> faces_near(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) const;
+  long long cell_key(const Eigen::Vector3i& c) const;
+
+  std::vector<std::shared_ptr<const collision::Collider>> m_obstacles;
+  std::vector<collision::Aabb> m_bounds;  // obstacles at the pass's time, grown by the gap
+  RemeshVetoParams m_params;
+  double m_cell = 1.0;                    // grid cell size [m]
+  std::unordered_map<long long, std::vector<int>> m_grid;  // faces of the starting mesh by cell
+};
+
+/// Smallest distance between two triangles (rows = corners) [m]: 0 when they intersect.
+double triangle_distance(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b);
+
+}  // namespace papersim::simulation

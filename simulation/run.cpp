@@ -1,0 +1,377 @@
+#include "simulation/run.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include <Eigen/Geometry>
+
+#include "collision/errors.hpp"
+#include "collision/self_intersection.hpp"
+#include "remesh/errors.hpp"
+#include "remesh/sheet_io.hpp"
+#include "simulation/energies/vertex_energies.hpp"
+#include "simulation/errors.hpp"
+#include "simulation/remesh_veto.hpp"
+
+namespace papersim::simulation {
+
+namespace {
+
+Eigen::Matrix3d rotation(const Eigen::Vector3d& deg) {
+  const Eigen::Vector3d a = deg * M_PI / 180;
+  return (Eigen::AngleAxisd(a.z(), Eigen::Vector3d::UnitZ()) *
+          Eigen::AngleAxisd(a.y(), Eigen::Vector3d::UnitY()) *
+          Eigen::AngleAxisd(a.x(), Eigen::Vector3d::UnitX()))
+      .toRotationMatrix();
+}
+
+bool inside(const Eigen::Vector4d& box, const Eigen::Vector2d& p) {
+  return p.x() >= box[0] - 1e-12 && p.x() <= box[2] + 1e-12 && p.y() >= box[1] - 1e-12 &&
+         p.y() <= box[3] + 1e-12;
+}
+
+/// The clamps of `setup` on `mesh`: a handle on every vertex inside a clamp's region, anchored
+/// where its material point was at the start.
+std::vector<AnchoredHandle> clamp_handles(const remesh::SheetMesh& mesh, const PhysicsSetup& setup) {
+  std::vector<AnchoredHandle> handles;
+  const Eigen::MatrixX2d X = mesh.material_coords();
+  for (size_t c = 0; c < setup.clamps.size(); ++c) {
+    const ClampSpec& clamp = setup.clamps[c];
+    int held = 0;
+    for (int v = 0; v < X.rows(); ++v) {
+      if (!inside(clamp.region, X.row(v).transpose())) continue;
+      AnchoredHandle h;
+      h.spec.material_point = X.row(v).transpose();
+      h.spec.release_time = clamp.release_time;
+      h.spec.stiffness = clamp.stiffness;
+      h.anchor = setup.placement(h.spec.material_point);
+      handles.push_back(h);
+      ++held;
+    }
+    if (held == 0) throw SceneError("clamps[" + std::to_string(c) + "]: the region holds no vertex of the sheet");
+  }
+  return handles;
+}
+
+/// Faces held by clamps that are never released: they keep their slopes (Morley model).
+std::vector<int> clamped_faces(const remesh::SheetMesh& mesh, const std::vector<ClampSpec>& clamps) {
+  std::vector<int> faces;
+  for (const ClampSpec& c : clamps)
+    if (std::isinf(c.release_time))
+      for (int f : remesh::faces_inside(mesh, c.region)) faces.push_back(f);
+  std::sort(faces.begin(), faces.end());
+  faces.erase(std::unique(faces.begin(), faces.end()), faces.end());
+  return faces;
+}
+
+void add_contact_terms(const remesh::SheetMesh& mesh, const PhysicsSetup& setup, TermStatistics* stats,
+                       Terms& t) {
+  const Eigen::MatrixX2d X = mesh.material_coords();
+  const Eigen::MatrixX3i F = mesh.faces();
+  if (!setup.obstacles.empty()) {
+    auto c = std::make_unique<ObstacleContactEnergy>(t.masses / setup.material.density, setup.obstacles,
+                                                     setup.contact);
+    if (setup.contact.faces) c->set_faces(F, X);
+    if (setup.impact_rule) c->set_impact_density(setup.material.density);
+    if (stats) c->set_statistics(&stats->contact);
+    t.contact = c.get();
+    t.list.push_back(std::move(c));
+  }
+  if (setup.self_contact) {
+    auto c = std::make_unique<SelfContactEnergy>(X, F, setup.self_contact_params);
+    if (stats) c->set_statistics(&stats->self_contact);
+    t.self_contact = c.get();
+    t.list.push_back(std::move(c));
+  }
+}
+
+}  // namespace
+
+void initial_sheet(const Scene& scene, remesh::SheetMesh& mesh, SheetState& state) {
+  const SheetSpec& sp = scene.sheet;
+  Eigen::MatrixX3d x;
+  if (!sp.mesh_path.empty()) {
+    remesh::SheetData d = remesh::read_sheet(sp.mesh_path);
+    mesh = d.mesh;
+    x = d.positions;
+  } else {
+    const Eigen::Vector2i n = remesh::grid_for_edge_length(sp.width, sp.height, sp.edge_length);
+    remesh::RectangleOptions o;
+    o.width = sp.width;
+    o.height = sp.height;
+    o.nx = n.x();
+    o.ny = n.y();
+    o.triangulation = sp.triangulation;
+    o.seed = scene.seed >= 0 ? static_cast<std::uint64_t>(scene.seed) : 0;
+    mesh = remesh::make_rectangle(o);
+    const Eigen::MatrixX2d X = mesh.material_coords();
+    const Eigen::Matrix3d R = rotation(sp.rotation_deg);
+    x.resize(X.rows(), 3);
+    for (int v = 0; v < X.rows(); ++v) {
+      const Eigen::Vector3d local(X(v, 0) - 0.5 * sp.width, X(v, 1) - 0.5 * sp.height, 0.0);
+      x.row(v) = (R * local + sp.position).transpose();
+    }
+  }
+  state.positions = flatten(x);
+  state.velocities = Eigen::VectorXd::Zero(state.positions.size());
+  state.time = 0.0;
+}
+
+InitialPlacement::InitialPlacement(const remesh::SheetMesh& mesh, const Eigen::VectorXd& positions)
+    : m_mesh(std::make_shared<const remesh::SheetMesh>(mesh)), m_positions(positions) {}
+
+Eigen::Vector3d InitialPlacement::operator()(const Eigen::Vector2d& p) const {
+  PAPERSIM_ASSERT(m_mesh != nullptr, "InitialPlacement: no mesh");
+  HandleSpec point;
+  point.material_point = p;
+  return anchor_handles(*m_mesh, m_positions, {point}).front().anchor;
+}
+
+PhysicsSetup physics_setup(const Scene& scene, const remesh::SheetMesh& mesh, const SheetState& initial) {
+  PhysicsSetup s;
+  s.material = scene.sheet.material;
+  s.gravity = scene.gravity;
+  s.handles = anchor_handles(mesh, initial.positions, scene.handles);
+  s.clamps = scene.clamps;
+  if (!s.clamps.empty()) s.placement = InitialPlacement(mesh, initial.positions);
+  if (scene.ground) {
+    auto ground = std::make_shared<collision::PlaneCollider>();
+    ground->friction = scene.ground_friction;
+    s.obstacles.push_back(ground);
+  }
+  for (size_t i = 0; i < scene.obstacles.size(); ++i) {
+    try {
+      s.obstacles.push_back(collision::make_collider(scene.obstacles[i]));
+    } catch (const collision::ColliderError& e) {
+      throw SceneError("obstacles[" + std::to_string(i) + "]: " + e.what());
+    }
+  }
+  s.contact = scene.contact;
+  if (s.contact.stiffness <= 0) s.contact.stiffness = s.material.density * std::max(scene.gravity.norm(), 1.0);
+  s.self_contact = scene.self_contact.enabled;
+  s.self_contact_params = scene.self_contact;
+  if (s.self_contact_params.dhat <= 0) s.self_contact_params.dhat = s.contact.dhat;
+  if (s.self_contact_params.stiffness <= 0) s.self_contact_params.stiffness = s.contact.stiffness;
+  s.self_contact_params.eps_velocity = s.contact.eps_velocity;
+  return s;
+}
+
+Terms build_terms(const remesh::SheetMesh& mesh, const PhysicsSetup& setup, TermStatistics* statistics) {
+  const Eigen::MatrixX2d X = mesh.material_coords();
+  const Eigen::MatrixX3i F = mesh.faces();
+  const Material& m = setup.material;
+  Terms t;
+  t.masses = lumped_masses(X, F, m.density);
+  t.list.push_back(std::make_unique<InertiaEnergy>(t.masses));
+  if (m.damping > 0) t.list.push_back(std::make_unique<DampingEnergy>(t.masses, m.damping));
+  if (setup.gravity.squaredNorm() > 0) t.list.push_back(std::make_unique<GravityEnergy>(t.masses, setup.gravity));
+  auto membrane = std::make_unique<MembraneEnergy>(X, F, m);
+  t.membrane = membrane.get();
+  t.list.push_back(std::move(membrane));
+  auto bending = make_bending_energy(mesh, m, BendingHessian::gauss_newton, clamped_faces(mesh, setup.clamps));
+  t.bending = bending.get();
+  t.list.push_back(std::move(bending));
+  std::vector<AnchoredHandle> handles = setup.handles;
+  const std::vector<AnchoredHandle> clamps = clamp_handles(mesh, setup);
+  handles.insert(handles.end(), clamps.begin(), clamps.end());
+  if (!handles.empty()) {
+    auto h = std::make_unique<HandleEnergy>(mesh, handles);
+    t.handles = h.get();
+    t.list.push_back(std::move(h));
+  }
+  add_contact_terms(mesh, setup, statistics, t);
+  return t;
+}
+
+EnergyBreakdown energy_breakdown(const Terms& terms, const Eigen::Vector3d& gravity, const SheetState& s) {
+  EnergyBreakdown e;
+  for (int v = 0; v < s.num_vertices(); ++v) {
+    e.kinetic += 0.5 * terms.masses[v] * s.velocities.segment<3>(3 * v).squaredNorm();
+    e.gravity -= terms.masses[v] * gravity.dot(s.positions.segment<3>(3 * v));
+  }
+  e.stretch = terms.membrane->value(s.positions);
+  e.bend = terms.bending->value(s.positions);
+  return e;
+}
+
+Run::Run(const Scene& scene) : m_scene(scene) {
+  initial_sheet(scene, m_mesh, m_state);
+  m_setup = physics_setup(scene, m_mesh, m_state);
+  rebuild();
+  if (m_terms.self_contact) {
+    // The barrier keeps an intersection-free sheet so; it cannot undo an intersection.
+    const int crossings = collision::count_self_intersections(m_state.positions_matrix(), m_mesh.faces());
+    if (crossings > 0 || !(m_terms.self_contact->min_distance(m_state.positions, m_setup.self_contact_params.dhat) > 0))
+      throw SceneError("the sheet starts intersecting itself (" + std::to_string(crossings) +
+                       " triangle pairs); self-contact needs an intersection-free start");
+  }
+  for (size_t o = 0; o < m_setup.obstacles.size(); ++o)
+    for (int v = 0; v < m_state.num_vertices(); ++v)
+      if (m_setup.obstacles[o]->distance(m_state.positions.segment<3>(3 * v), 0.0) <= 0)
+        throw SceneError("the sheet starts inside obstacle " + std::to_string(o) +
+                         (scene.ground ? " (0 is the ground)" : ""));
+  m_steps = std::max(1, static_cast<int>(std::lround(scene.duration / scene.time_step)));
+  m_h = scene.duration / m_steps;
+  m_counts.vertices_start = m_counts.vertices_max = m_mesh.num_vertices();
+  m_counts.faces_start = m_counts.faces_max = m_mesh.num_faces();
+  m_quality.strain_limit = m_setup.material.strain_limit;
+  track();
+}
+
+Run::~Run() = default;
+
+namespace {
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+template <typename Map>
+void add_counts(Map& into, const Map& from) {
+  for (const auto& [key, n] : from) into[key] += n;
+}
+
+}  // namespace
+
+void Run::rebuild() {
+  if (m_integrator) m_pattern_changes_done += m_integrator->pattern_id();
+  m_terms = build_terms(m_mesh, m_setup, &m_term_stats);
+  m_integrator = std::make_unique<Integrator>(m_mesh.num_vertices(), std::move(m_terms.list), m_scene.newton);
+}
+
+void Run::track() {
+  if (m_scene.remesh.enabled) {
+    const double e = energies().mechanical();
+    m_energy_min = std::min(m_energy_min, e);
+    m_energy_max = std::max(m_energy_max, e);
+  }
+  const Eigen::MatrixX2d st = m_terms.membrane->principal_stretches(m_state.positions);
+  m_step_stretch = st.col(0).maxCoeff();
+  m_quality.max_principal_stretch = std::max(m_quality.max_principal_stretch, m_step_stretch);
+  m_quality.min_principal_stretch = std::min(m_quality.min_principal_stretch, st.col(1).minCoeff());
+  for (int v = 0; v < m_state.num_vertices(); ++v)
+    m_quality.max_speed = std::max(m_quality.max_speed, m_state.velocities.segment<3>(3 * v).norm());
+  const size_t n = m_setup.obstacles.size();
+  m_quality.min_obstacle_distance.resize(n, INF);
+  m_step_distance.assign(n, INF);
+  for (size_t o = 0; o < n; ++o) {
+    m_step_distance[o] = m_terms.contact->surface_distance(static_cast<int>(o), m_state.positions, m_state.time);
+    m_quality.min_obstacle_distance[o] = std::min(m_quality.min_obstacle_distance[o], m_step_distance[o]);
+  }
+}
+
+const StepStats& Run::step() {
+  PAPERSIM_ASSERT(!finished(), "Run::step: the run is finished");
+  const RemeshSpec& r = m_scene.remesh;
+  if (r.enabled && m_step == 0) remesh_pass();
+  m_last = m_integrator->step(m_state, m_h);
+  m_totals += m_last;
+  ++m_step;
+  track();
+  if (r.enabled && !finished() && (m_step == 1 || m_step % r.every == 0)) remesh_pass();
+  return m_last;
+}
+
+Eigen::VectorXd Run::vertex_obstacle_distance() const {
+  Eigen::VectorXd d = Eigen::VectorXd::Constant(m_state.num_vertices(), INF);
+  for (const auto& o : m_setup.obstacles) {
+    const Eigen::Isometry3d pose = o->motion.pose(m_state.time);
+    for (int v = 0; v < m_state.num_vertices(); ++v)
+      d[v] = std::min(d[v], o->distance_at_pose(m_state.positions.segment<3>(3 * v), pose));
+  }
+  return d;
+}
+
+std::string Run::check_remeshed(const remesh::SheetMesh& mesh, const SheetState& state, Terms& terms) {
+  if (m_setup.self_contact && collision::count_self_intersections(state.positions_matrix(), mesh.faces()) > 0)
+    return "self-intersection";
+  terms = build_terms(mesh, m_setup, &m_term_stats);
+  if (!(terms.membrane->principal_stretches(state.positions).col(0).maxCoeff() < 1 + m_setup.material.strain_limit))
+    return "stretch";
+  return {};
+}
+
+void Run::remesh_pass() {
+  auto t0 = std::chrono::steady_clock::now();
+  remesh::SheetMesh mesh = m_mesh;  // a copy: the pass is undone when its result fails a check
+  remesh::RemeshState rs;
+  rs.positions = m_state.positions_matrix();
+  rs.velocities = m_state.velocities_matrix();
+  if (!m_setup.obstacles.empty()) rs.obstacle_distance = vertex_obstacle_distance();
+  RemeshVetoParams vp;
+  vp.strain_limit = m_setup.material.strain_limit;
+  vp.obstacle_gap = 0.1 * m_setup.contact.dhat;
+  vp.self_gap = m_setup.self_contact ? 0.1 * m_setup.self_contact_params.dhat : 0.0;
+  vp.time = m_state.time;
+  const RemeshVeto veto(m_setup.obstacles, m_mesh, rs.positions, vp);
+  const remesh::RemeshStats st = remesh::remesh(mesh, rs, m_scene.remesh.params, std::cref(veto));
+  add_counts(m_remesh.refusals, st.refusals);
+  m_remesh.seconds_remesh += seconds_since(t0);
+  if (st.splits + st.flips + st.collapses == 0) return;
+  t0 = std::chrono::steady_clock::now();
+  SheetState state;
+  state.positions = flatten(rs.positions);
+  state.velocities = flatten(rs.velocities);
+  state.time = m_state.time;
+  Terms terms;
+  std::string failure = check_remeshed(mesh, state, terms);
+  std::unique_ptr<Integrator> integrator;
+  if (failure.empty()) {
+    integrator = std::make_unique<Integrator>(mesh.num_vertices(), std::move(terms.list), m_scene.newton);
+    if (!std::isfinite(integrator->start_energy(state, m_h))) failure = "infeasible";
+  }
+  if (!failure.empty()) {
+    ++m_remesh.rollbacks;
+    ++m_remesh.rollback_reasons[failure];
+    m_remesh.seconds_rebuild += seconds_since(t0);
+    return;
+  }
+  const double before = energies().mechanical();
+  m_pattern_changes_done += m_integrator->pattern_id();
+  m_mesh = std::move(mesh);
+  m_state = state;
+  m_terms = std::move(terms);
+  m_integrator = std::move(integrator);
+  ++m_remesh.passes;
+  m_remesh.splits += st.splits;
+  m_remesh.flips += st.flips;
+  m_remesh.collapses += st.collapses;
+  const double jump = std::abs(energies().mechanical() - before);
+  m_remesh.max_energy_jump = std::max(m_remesh.max_energy_jump, jump);
+  const double range = m_energy_max - m_energy_min;
+  if (range > 0) m_remesh.max_energy_jump_relative = std::max(m_remesh.max_energy_jump_relative, jump / range);
+  m_counts.vertices_max = std::max(m_counts.vertices_max, m_mesh.num_vertices());
+  m_counts.faces_max = std::max(m_counts.faces_max, m_mesh.num_faces());
+  m_remesh.seconds_rebuild += seconds_since(t0);
+}
+
+RunResult Run::result(double wall_seconds) const {
+  RunResult r;
+  r.mesh = m_mesh;
+  r.state = m_state;
+  r.wall_seconds = wall_seconds;
+  r.steps = m_step;
+  r.time_step = m_h;
+  r.totals = m_totals;
+  r.pattern_changes = m_pattern_changes_done + m_integrator->pattern_id();
+  r.sheet = m_counts;
+  r.sheet.vertices = m_mesh.num_vertices();
+  r.sheet.faces = m_mesh.num_faces();
+  if (m_terms.contact) r.contact = m_term_stats.contact;
+  if (m_terms.self_contact) r.self_contact = m_term_stats.self_contact;
+  r.quality = m_quality;
+  r.quality.self_intersections = collision::count_self_intersections(m_state.positions_matrix(), m_mesh.faces());
+  if (m_terms.handles) {
+    double worst = 0;
+    for (int i = 0; i < m_terms.handles->size(); ++i)
+      if (m_terms.handles->active(i, m_state.time - 1e-12))
+        worst = std::max(worst, m_terms.handles->error(i, m_state.positions, m_state.time));
+    r.quality.max_handle_error = worst;
+  }
+  r.energy = energies();
+  if (m_scene.remesh.enabled) r.remesh = m_remesh;
+  return r;
+}
+
+}  // namespace papersim::simulation

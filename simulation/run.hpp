@@ -1,0 +1,222 @@
+#pragma once
+/// One simulation run and the one place that composes the incremental potential.
+///
+/// A run owns the sheet (a mesh whose topology may change between steps), its state, the
+/// obstacles (built once per scene, never per mesh), the handles (material points with world
+/// anchors fixed at the start), the integrator and the run's statistics. The energy terms are
+/// built for a given mesh by build_terms(), which the CLI, the validation programs and the tests
+/// all use; a run rebuilds them whenever its mesh changes, and the statistics, kept in the run,
+/// survive the rebuild.
+#include <functional>
+#include <map>
+#include <memory>
+#include <string>
+#include <optional>
+#include <vector>
+
+#include "remesh/sheet_mesh.hpp"
+#include "simulation/energies/bending_energy.hpp"
+#include "simulation/energies/contact_energy.hpp"
+#include "simulation/energies/handle_energy.hpp"
+#include "simulation/energies/membrane_energy.hpp"
+#include "simulation/energies/self_contact_energy.hpp"
+#include "simulation/integrator.hpp"
+#include "simulation/scene.hpp"
+#include "simulation/sheet_state.hpp"
+
+namespace papersim::simulation {
+
+/// World positions of the sheet at the start of a run as a function of the material point
+/// (barycentric interpolation in the initial mesh), so that a clamp holds a vertex that
+/// remeshing inserts where that point was at the start.
+class InitialPlacement {
+ public:
+  InitialPlacement() = default;
+  /// @param positions 3N world positions of `mesh`'s vertices [m]
+  InitialPlacement(const remesh::SheetMesh& mesh, const Eigen::VectorXd& positions);
+  /// World position of material point p at the start [m].
+  /// @throw SceneError when p lies outside the sheet.
+  Eigen::Vector3d operator()(const Eigen::Vector2d& p) const;
+
+ private:
+  std::shared_ptr<const remesh::SheetMesh> m_mesh;
+  Eigen::VectorXd m_positions;
+};
+
+/// The sheet of a scene in its initial pose.
+/// @throw SceneError, remesh::IoError, remesh::MeshError
+void initial_sheet(const Scene& scene, remesh::SheetMesh& mesh, SheetState& state);
+
+/// Everything besides the mesh that the incremental potential is built from; fixed for a run.
+struct PhysicsSetup {
+  Material material;
+  Eigen::Vector3d gravity = Eigen::Vector3d(0, 0, -9.8);  ///< [m/s^2]
+  std::vector<AnchoredHandle> handles;
+  /// Each clamp holds every vertex whose material point lies in its region at the world
+  /// position that point had at the start (`placement`); a clamp never released also holds the
+  /// slopes of the faces inside it (Morley model). Re-evaluated on every mesh.
+  std::vector<ClampSpec> clamps;
+  InitialPlacement placement;  ///< needed when there are clamps
+  /// Obstacles, the ground first when there is one; shared by every rebuild of the terms.
+  std::vector<std::shared_ptr<const collision::Collider>> obstacles;
+  ContactParams contact;  ///< stiffness resolved (> 0)
+  /// Raise the contact stiffness at each step start so an impact is stopped within the
+  /// barrier (ObstacleContactEnergy::set_impact_density).
+  bool impact_rule = true;
+  bool self_contact = false;
+  SelfContactParams self_contact_params;  ///< dhat and stiffness resolved (> 0)
+};
+
+/// The physics of a scene: obstacles built, contact stiffness resolved, handles anchored at the
+/// sheet's initial world positions.
+/// @throw SceneError for an obstacle that cannot be built or a handle outside the sheet.
+PhysicsSetup physics_setup(const Scene& scene, const remesh::SheetMesh& mesh, const SheetState& initial);
+
+/// Counters kept by the terms of a run (owned by the run, see ContactStatistics).
+struct TermStatistics {
+  ContactStatistics contact;
+  SelfContactStatistics self_contact;
+};
+
+/// The incremental potential of one mesh, and typed views of the terms the run reports on.
+struct Terms {
+  std::vector<std::unique_ptr<EnergyTerm>> list;  ///< handed to the Integrator
+  Eigen::VectorXd masses;                          ///< lumped vertex masses (#V) [kg]
+  MembraneEnergy* membrane = nullptr;
+  BendingEnergy* bending = nullptr;
+  HandleEnergy* handles = nullptr;                 ///< null without handles or clamps
+  ObstacleContactEnergy* contact = nullptr;        ///< null without obstacles
+  SelfContactEnergy* self_contact = nullptr;       ///< null when self-contact is off
+};
+
+/// Builds the terms (inertia, damping, gravity, stretching with the strain limit, bending,
+/// handles and clamps, obstacle contact and friction, self-contact) for `mesh` under `setup`.
+/// @param statistics where contact terms count; null: counters of their own
+/// @throw SceneError when a clamp holds no vertex or a handle lies outside the sheet.
+Terms build_terms(const remesh::SheetMesh& mesh, const PhysicsSetup& setup,
+                  TermStatistics* statistics = nullptr);
+
+/// Energies of a state [J]: kinetic, gravity, stretching (with the strain-limit barrier) and
+/// bending; contact and handle potentials are not included.
+struct EnergyBreakdown {
+  double stretch = 0, bend = 0, gravity = 0, kinetic = 0;
+  double mechanical() const { return stretch + bend + gravity + kinetic; }
+};
+EnergyBreakdown energy_breakdown(const Terms& terms, const Eigen::Vector3d& gravity, const SheetState& state);
+
+/// Quality figures of a run (running extremes over every step, self-intersections at the end).
+struct RunQuality {
+  double max_principal_stretch = 1.0;  ///< [-]
+  double min_principal_stretch = 1.0;  ///< [-]
+  double strain_limit = 0.0;           ///< the material's limit [-]
+  double max_speed = 0.0;              ///< largest vertex speed [m/s]
+  /// Smallest signed distance of the sheet's surface to each obstacle (the ground first) [m].
+  std::vector<double> min_obstacle_distance;
+  int self_intersections = 0;          ///< intersecting non-adjacent triangle pairs at the end
+  std::optional<double> max_handle_error;  ///< [m], when the scene has handles
+};
+
+/// Vertex and face counts of the sheet over a run.
+struct MeshCounts {
+  int vertices_start = 0, faces_start = 0;
+  int vertices = 0, faces = 0;          ///< at the end
+  int vertices_max = 0, faces_max = 0;
+};
+
+/// Remeshing over a run (Scene::remesh).
+struct RemeshTotals {
+  int passes = 0;     ///< remeshing passes that changed the mesh and were kept
+  int rollbacks = 0;  ///< passes undone because their result failed a check (by reason below)
+  std::map<std::string, int> rollback_reasons;
+  int splits = 0, flips = 0, collapses = 0;  ///< edits of the kept passes
+  std::map<std::string, int> refusals;       ///< edits refused, by reason ("veto: ..." from the run)
+  double seconds_remesh = 0.0;   ///< wall time in the remeshing passes [s]
+  double seconds_rebuild = 0.0;  ///< wall time in checking the result and rebuilding the terms [s]
+  /// Largest change of the mechanical energy (EnergyBreakdown) across a kept pass [J], and that
+  /// change relative to the range the mechanical energy spanned over the run until then [-].
+  double max_energy_jump = 0.0;
+  double max_energy_jump_relative = 0.0;
+};
+
+/// What a finished run measured; turned into meta.json only at the edge (meta_json).
+struct RunResult {
+  remesh::SheetMesh mesh;
+  SheetState state;
+  double wall_seconds = 0.0;
+  int steps = 0;
+  double time_step = 0.0;  ///< [s]
+  StepStats totals;        ///< summed over the steps
+  long pattern_changes = 0;  ///< Hessian pattern rebuilds (dynamic terms)
+  MeshCounts sheet;
+  std::optional<ContactStatistics> contact;
+  std::optional<SelfContactStatistics> self_contact;
+  RunQuality quality;
+  EnergyBreakdown energy;  ///< at the end
+  std::optional<RemeshTotals> remesh;  ///< when the scene remeshes
+};
+
+/// One run of a scene, advanced a step at a time.
+class Run {
+ public:
+  /// Builds the sheet in its initial pose, the obstacles and the terms; checks that the sheet
+  /// starts outside every obstacle and, with self-contact, outside itself.
+  /// @throw SceneError, remesh::IoError, remesh::MeshError
+  explicit Run(const Scene& scene);
+  ~Run();
+  Run(const Run&) = delete;
+  Run& operator=(const Run&) = delete;
+
+  /// Advance by one time step of the scene, remeshing before the first step, after it and then
+  /// after every `remesh.every` steps when the scene remeshes.
+  /// @throw NumericError when the step fails.
+  const StepStats& step();
+  bool finished() const { return m_step >= m_steps; }
+  int steps_done() const { return m_step; }
+  int steps_total() const { return m_steps; }
+  double time_step() const { return m_h; }
+
+  const Scene& scene() const { return m_scene; }
+  const remesh::SheetMesh& mesh() const { return m_mesh; }
+  const SheetState& state() const { return m_state; }
+  const Terms& terms() const { return m_terms; }
+  EnergyBreakdown energies() const { return energy_breakdown(m_terms, m_setup.gravity, m_state); }
+  /// Largest principal stretch at the current state [-].
+  double step_stretch() const { return m_step_stretch; }
+  /// Smallest surface distance to each obstacle at the current state [m].
+  const std::vector<double>& step_obstacle_distance() const { return m_step_distance; }
+
+  /// The result so far (final figures measured at the current state).
+  RunResult result(double wall_seconds) const;
+
+ private:
+  /// Builds the terms and the integrator for the current mesh.
+  void rebuild();
+  void track();
+  /// One remeshing pass: kept when the new mesh passes every check (no self-intersection,
+  /// stretch within the limit, finite energy), undone otherwise.
+  void remesh_pass();
+  /// Why a remeshed sheet cannot be used (empty when it can); builds its terms into `terms`.
+  std::string check_remeshed(const remesh::SheetMesh& mesh, const SheetState& state, Terms& terms);
+  /// Smallest distance of each vertex to any obstacle at the current state [m] (#V).
+  Eigen::VectorXd vertex_obstacle_distance() const;
+
+  Scene m_scene;
+  remesh::SheetMesh m_mesh;
+  SheetState m_state;
+  PhysicsSetup m_setup;
+  Terms m_terms;
+  std::unique_ptr<Integrator> m_integrator;
+  TermStatistics m_term_stats;
+  StepStats m_totals, m_last;
+  long m_pattern_changes_done = 0;  // by integrators already replaced
+  MeshCounts m_counts;
+  RunQuality m_quality;
+  RemeshTotals m_remesh;
+  double m_energy_min = INF, m_energy_max = -INF;  // mechanical energy's range over the run [J]
+  double m_step_stretch = 1.0;
+  std::vector<double> m_step_distance;
+  int m_step = 0, m_steps = 0;
+  double m_h = 0.0;
+};
+
+}  // namespace papersim::simulation

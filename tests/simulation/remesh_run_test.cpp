@@ -1,0 +1,219 @@
+// A run whose mesh changes: terms rebuilt for any mesh (handles and clamps by material point),
+// the simulation's veto on remeshing edits, and remeshing between steps keeping the solver's
+// invariants.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+#include "collision/self_intersection.hpp"
+#include "collision/shapes.hpp"
+#include "remesh/mesh_editor.hpp"
+#include "remesh/sheet_generator.hpp"
+#include "simulation/errors.hpp"
+#include "simulation/remesh_veto.hpp"
+#include "simulation/run.hpp"
+#include "simulation/simulate.hpp"
+
+using namespace papersim::simulation;
+namespace rm = papersim::remesh;
+
+namespace {
+
+rm::SheetMesh rectangle(double w, double h, int nx, int ny) {
+  rm::RectangleOptions o;
+  o.width = w;
+  o.height = h;
+  o.nx = nx;
+  o.ny = ny;
+  return rm::make_rectangle(o);
+}
+
+/// World positions of the flat sheet lifted by z0 and shifted by (dx, 0, 0): (X + dx, Y, z0).
+Eigen::VectorXd placed(const rm::SheetMesh& mesh, double dx, double z0) {
+  const Eigen::MatrixX2d X = mesh.material_coords();
+  Eigen::VectorXd x(3 * X.rows());
+  for (int v = 0; v < X.rows(); ++v) x.segment<3>(3 * v) << X(v, 0) + dx, X(v, 1), z0;
+  return x;
+}
+
+}  // namespace
+
+// A clamp is a material region: on a finer mesh it holds every vertex inside it, each at the
+// world position its material point had at the start (here a translated flat sheet), and a
+// handle keeps its world anchor whatever mesh it is bound to.
+TEST(BuildTerms, ClampsAndHandlesFollowMaterialPointsOntoAnyMesh) {
+  const rm::SheetMesh coarse = rectangle(0.1, 0.05, 6, 4);
+  const rm::SheetMesh fine = rectangle(0.1, 0.05, 21, 11);
+  const double dx = 0.3, z0 = 0.02;
+  PhysicsSetup setup;
+  ClampSpec clamp;
+  clamp.region = Eigen::Vector4d(-1, -1, 0.012, 1);  // x <= 1.2 cm
+  setup.clamps = {clamp};
+  setup.placement = InitialPlacement(coarse, placed(coarse, dx, z0));
+  HandleSpec lift;
+  lift.material_point = Eigen::Vector2d(0.07, 0.03);
+  lift.keyframes = {{0.0, Eigen::Vector3d::Zero()}, {1.0, Eigen::Vector3d(0, 0, 0.05)}};
+  setup.handles = anchor_handles(coarse, placed(coarse, dx, z0), {lift});
+  setup.self_contact = false;
+
+  const Terms on_coarse = build_terms(coarse, setup);
+  const Terms on_fine = build_terms(fine, setup);
+  // Coarse: x in {0, 0.02, ...}: one column of 4 vertices in the clamp; fine: x in {0, 0.005,
+  // 0.01}: three columns of 11.
+  ASSERT_NE(on_fine.handles, nullptr);
+  EXPECT_EQ(on_coarse.handles->size(), 1 + 4);
+  EXPECT_EQ(on_fine.handles->size(), 1 + 3 * 11);
+  const Eigen::VectorXd x_fine = placed(fine, dx, z0);
+  for (int i = 0; i < on_fine.handles->size(); ++i)
+    EXPECT_LT(on_fine.handles->error(i, x_fine, 0.0), 1e-12) << "handle " << i << " is held where it started";
+  // The lift's target at t = 1 is its anchor plus the keyframe displacement on both meshes.
+  const Eigen::Vector3d expected(0.07 + dx, 0.03, z0 + 0.05);
+  EXPECT_LT((on_coarse.handles->target(0, 1.0) - expected).norm(), 1e-12);
+  EXPECT_LT((on_fine.handles->target(0, 1.0) - expected).norm(), 1e-12);
+}
+
+TEST(BuildTerms, AClampHoldingNoVertexIsAnErrorNamingIt) {
+  const rm::SheetMesh mesh = rectangle(0.1, 0.05, 6, 4);
+  PhysicsSetup setup;
+  ClampSpec clamp;
+  clamp.region = Eigen::Vector4d(0.005, 0.005, 0.006, 0.006);
+  setup.clamps = {clamp};
+  setup.placement = InitialPlacement(mesh, placed(mesh, 0, 0));
+  try {
+    build_terms(mesh, setup);
+    FAIL() << "expected a SceneError";
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("clamps[0]"), std::string::npos) << e.what();
+  }
+}
+
+TEST(TriangleDistance, CrossingParallelAndApartTriangles) {
+  Eigen::Matrix3d a, b;
+  a << 0, 0, 0, 1, 0, 0, 0, 1, 0;
+  b = a;
+  b.col(2).setConstant(0.25);  // parallel, 0.25 above
+  EXPECT_NEAR(triangle_distance(a, b), 0.25, 1e-15);
+  // b stands upright through a's interior: they intersect.
+  b << 0.2, 0.2, -0.5, 0.3, 0.2, 0.5, 0.2, 0.3, 0.5;
+  EXPECT_EQ(triangle_distance(a, b), 0.0);
+  // Apart along x: the closest points are a's corner (1, 0, 0) and b's corner (3, 0, 0).
+  b << 3, 0, 0, 4, 0, 0, 3, 1, 0;
+  EXPECT_NEAR(triangle_distance(a, b), 2.0, 1e-15);
+}
+
+// The veto of a run: a flip that would fold a triangle through a layer of the sheet lying just
+// above is refused as "self"; a split next to a sphere whose chord midpoint would sink into it is
+// refused as "obstacle"; and a flip that would stretch beyond the limit is refused as "stretch".
+TEST(RemeshVeto, RefusesEditsThatBreakTheSolversInvariants) {
+  // Two triangles (0, 1, 2) and (1, 3, 2) forming a unit square in material space, whose world
+  // square is creased along the diagonal 1-2 by lifting corner 3.
+  Eigen::MatrixX2d X(4, 2);
+  X << 0, 0, 1, 0, 0, 1, 1, 1;
+  X *= 0.01;
+  Eigen::MatrixX3i F(2, 3);
+  F << 0, 1, 2, 1, 3, 2;
+  rm::SheetMesh mesh(X, F);
+  rm::RemeshState state;
+  state.positions.resize(4, 3);
+  const double s = 0.01 / std::sqrt(2.0);  // height of corner 3 when bent 90 degrees
+  // Flat: corner 3 at its material place. Flipping the diagonal keeps every triangle isometric.
+  state.positions << 0, 0, 0, 0.01, 0, 0, 0, 0.01, 0, 0.01, 0.01, 0;
+  state.velocities = Eigen::MatrixX3d::Zero(4, 3);
+  RemeshVetoParams p;
+  p.strain_limit = 0.005;
+  p.self_gap = 0;
+  const RemeshVeto veto({}, mesh, state.positions, p);
+  rm::MeshEditor editor(mesh, state);
+  OpenMesh::EdgeHandle diagonal;
+  for (auto e : editor.mesh().edges())
+    if (!editor.mesh().is_boundary(e)) diagonal = e;
+  rm::EditProposal flip = editor.propose_flip(diagonal);
+  EXPECT_EQ(veto(flip), "");
+  // Bent 90 degrees about the diagonal 1-2 (isometrically: corner 3 at (0.005, 0.005, s)), the
+  // new diagonal 0-3 is a chord 0.01 long against 0.01 sqrt(2) in material space: the flip
+  // would squash its triangles (and stretch them across), so it is refused.
+  for (size_t f = 0; f < flip.world.size(); ++f)
+    for (int k = 0; k < 3; ++k)
+      if (flip.vertices[f][k] == 3) flip.world[f].row(k) << 0.005, 0.005, s;
+  const std::string bent = veto(flip);
+  EXPECT_TRUE(bent == "stretch" || bent == "compression") << bent;
+
+  // A sphere of radius 1 cm touching the middle of edge 0-1 from below: the edge's ends are
+  // outside, its midpoint 10 micrometres inside the veto's gap.
+  papersim::collision::Shape ball;
+  ball.kind = papersim::collision::ShapeKind::sphere;
+  ball.radius = 0.01;
+  auto sphere = std::make_shared<papersim::collision::AnalyticCollider>(ball);
+  const Eigen::Vector3d centre(0.005, 0, -0.01 - 1e-5);
+  papersim::collision::Keyframe k;
+  k.translation = centre;
+  sphere->motion = papersim::collision::RigidMotion({k});
+  RemeshVetoParams q = p;
+  q.obstacle_gap = 3e-5;
+  const RemeshVeto near_sphere({sphere}, mesh, state.positions, q);
+  OpenMesh::EdgeHandle bottom;
+  for (auto e : editor.mesh().edges()) {
+    const auto h = editor.mesh().halfedge_handle(e, 0);
+    const int a = editor.mesh().from_vertex_handle(h).idx(), b = editor.mesh().to_vertex_handle(h).idx();
+    if ((a == 0 && b == 1) || (a == 1 && b == 0)) bottom = e;
+  }
+  EXPECT_EQ(near_sphere(editor.propose_split(bottom)), "obstacle");
+  // The same split next to a sphere 1 mm lower is allowed.
+  k.translation = centre - Eigen::Vector3d(0, 0, 1e-3);
+  sphere->motion = papersim::collision::RigidMotion({k});
+  const RemeshVeto far_sphere({sphere}, mesh, state.positions, q);
+  EXPECT_EQ(far_sphere(editor.propose_split(bottom)), "");
+}
+
+// Remeshing inside a run: a 15 x 15 cm sheet on a 10 mm grid lifted at one point for 0.2 s
+// coarsens where it stays flat and refines where it bends; every pass keeps the sheet free of
+// self-intersections, off the ground and within the strain limit, the lifted point follows its
+// handle on every mesh, and meta.json reports the passes.
+TEST(RemeshRun, LiftedSheetRemeshesAndKeepsEveryInvariant) {
+  Scene s;
+  s.sheet.width = s.sheet.height = 0.15;
+  s.sheet.edge_length = 0.01;
+  s.sheet.position = Eigen::Vector3d(0, 0, 1e-3);
+  s.duration = 0.2;
+  s.time_step = 0.01;
+  HandleSpec h;
+  h.material_point = Eigen::Vector2d(0.075, 0.075);
+  h.keyframes = {{0.0, Eigen::Vector3d::Zero()}, {0.2, Eigen::Vector3d(0, 0, 0.04)}};
+  h.axes = Eigen::Vector3d(0, 0, 1);
+  s.handles = {h};
+  s.remesh.enabled = true;
+  s.remesh.every = 2;
+  s.remesh.params.size_min = 4e-3;
+  s.remesh.params.size_max = 0.04;
+  int min_vertices = 1 << 30, max_vertices = 0;
+  RunOptions o;
+  o.on_step = [&](const StepReport& r) {
+    EXPECT_EQ(papersim::collision::count_self_intersections(r.state->positions_matrix(), r.mesh->faces()), 0)
+        << "step " << r.step;
+    EXPECT_LT(r.max_stretch, 1.005) << "step " << r.step;
+    EXPECT_GT(r.obstacle_distance.at(0), 0.0) << "step " << r.step;
+    min_vertices = std::min(min_vertices, r.mesh->num_vertices());
+    max_vertices = std::max(max_vertices, r.mesh->num_vertices());
+  };
+  const RunResult r = run_scene(s, o);
+  ASSERT_TRUE(r.remesh.has_value());
+  EXPECT_GT(r.remesh->passes, 2);
+  EXPECT_GT(r.remesh->collapses, 0) << "the flat parts coarsen";
+  EXPECT_GT(r.remesh->splits, 0) << "the tent around the lifted point refines";
+  EXPECT_EQ(r.sheet.vertices_start, 256);  // 16 x 16 grid
+  EXPECT_LT(min_vertices, r.sheet.vertices_start);
+  EXPECT_EQ(r.sheet.vertices_max, std::max(max_vertices, r.sheet.vertices_start));
+  EXPECT_LT(r.quality.max_handle_error.value(), 1e-3);
+  EXPECT_EQ(r.quality.self_intersections, 0);
+  EXPECT_LT(r.quality.max_principal_stretch, 1.005);
+  const nlohmann::json meta = meta_json(s, r);
+  EXPECT_EQ(meta["run"]["remesh"]["passes"].get<int>(), r.remesh->passes);
+  EXPECT_EQ(meta["sheet"]["vertices"].get<int>(), r.mesh.num_vertices());
+  std::printf("remeshed lift: %d passes (%d rolled back), %d splits, %d flips, %d collapses, vertices %d -> "
+              "%d (min %d, max %d), largest energy jump %.3g J (%.3g of the range), remeshing %.2f s of %.2f s\n",
+              r.remesh->passes, r.remesh->rollbacks, r.remesh->splits, r.remesh->flips, r.remesh->collapses,
+              r.sheet.vertices_start, r.sheet.vertices, min_vertices, r.sheet.vertices_max,
+              r.remesh->max_energy_jump, r.remesh->max_energy_jump_relative,
+              r.remesh->seconds_remesh + r.remesh->seconds_rebuild, r.wall_seconds);
+}
