@@ -163,8 +163,7 @@ bool MeshEditor::accept(const EditProposal& proposal, const std::string& own_rea
   return true;
 }
 
-void MeshEditor::fill_geometry(EditProposal& p, VertexHandle inserted,
-                               const Eigen::Vector3d& inserted_world,
+void MeshEditor::fill_geometry(EditProposal& p, const Eigen::Vector3d& inserted_world,
                                const Eigen::Vector2d& inserted_material) const {
   p.editor = this;
   p.world.clear();
@@ -173,10 +172,9 @@ void MeshEditor::fill_geometry(EditProposal& p, VertexHandle inserted,
     Eigen::Matrix3d w;
     Triangle2 x;
     for (int k = 0; k < 3; ++k) {
-      const bool is_new = face[k] < 0;
-      const VertexHandle v = is_new ? inserted : VertexHandle(face[k]);
-      const Eigen::Vector3d world = is_new ? inserted_world : position(v);
-      const Eigen::Vector2d mat = is_new ? inserted_material : material(v);
+      const bool is_new = face[k] < 0;  // the vertex a split inserts
+      const Eigen::Vector3d world = is_new ? inserted_world : position(VertexHandle(face[k]));
+      const Eigen::Vector2d mat = is_new ? inserted_material : material(VertexHandle(face[k]));
       w.row(k) = world.transpose();
       x.row(k) = mat.transpose();
     }
@@ -200,7 +198,7 @@ EditProposal MeshEditor::propose_split(EdgeHandle e) const {
   }
   const VertexHandle a = m.from_vertex_handle(m.halfedge_handle(e, 0));
   const VertexHandle b = m.to_vertex_handle(m.halfedge_handle(e, 0));
-  fill_geometry(p, VertexHandle(), 0.5 * (position(a) + position(b)),
+  fill_geometry(p, 0.5 * (position(a) + position(b)),
                 0.5 * (material(a) + material(b)));
   return p;
 }
@@ -219,7 +217,7 @@ EditProposal MeshEditor::propose_flip(EdgeHandle e) const {
     p.vertices.push_back({d, b, c});
     p.removed_faces = {m.face_handle(h0).idx(), m.face_handle(h1).idx()};
   }
-  fill_geometry(p, VertexHandle(), Eigen::Vector3d::Zero(), Eigen::Vector2d::Zero());
+  fill_geometry(p, Eigen::Vector3d::Zero(), Eigen::Vector2d::Zero());
   return p;
 }
 
@@ -239,7 +237,7 @@ EditProposal MeshEditor::propose_collapse(HalfedgeHandle h) const {
     }
     if (!has_w) p.vertices.push_back(corners);
   }
-  fill_geometry(p, VertexHandle(), Eigen::Vector3d::Zero(), Eigen::Vector2d::Zero());
+  fill_geometry(p, Eigen::Vector3d::Zero(), Eigen::Vector2d::Zero());
   return p;
 }
 

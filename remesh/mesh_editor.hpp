@@ -91,8 +91,8 @@ class MeshEditor {
   double face_area(OpenMesh::FaceHandle f) const;
   std::string collapse_boundary_reason(OpenMesh::HalfedgeHandle h) const;
   void transfer_collapse(OpenMesh::HalfedgeHandle h);
-  void fill_geometry(EditProposal& proposal, OpenMesh::VertexHandle inserted,
-                     const Eigen::Vector3d& inserted_world,
+  /// Fills world and material corners of the proposal's faces (index -1: the inserted vertex).
+  void fill_geometry(EditProposal& proposal, const Eigen::Vector3d& inserted_world,
                      const Eigen::Vector2d& inserted_material) const;
 
   SheetMesh& m_sheet;

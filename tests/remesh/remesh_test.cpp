@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <random>
+#include <set>
 
 #include <Eigen/LU>
 
@@ -288,4 +289,36 @@ TEST(Remesh, CrumpledSheetKeepsEveryInvariant) {
     for (int i = 0; i < 4; ++i) EXPECT_NEAR(after(i), before(i), 1e-12 * scale(i)) << i;
     expect_quality(mesh, state, bounds, p);
   }
+}
+
+// Splits go longest first: under the uniform metric of a flat sheet (1 / size_max^2) the first
+// split the veto is asked about is the longest edge of the input, and the first sweep (the input's
+// edges, sorted before any split) asks about edges that get no longer.
+TEST(Remesh, SplitsLongestFirst) {
+  SheetMesh mesh = grid(0.2, 0.2, 6, 6, 0.3, 11);
+  RemeshState state = flat_state(mesh);
+  RemeshParams p;
+  p.size_max = 0.01;  // every input edge (16-64 mm) is too long
+  double longest = 0;
+  std::set<std::pair<int, int>> input_edges;
+  const TriMesh& m = mesh.mesh();
+  for (auto e : m.edges()) {
+    const auto h = m.halfedge_handle(e, 0);
+    input_edges.insert(std::minmax(m.from_vertex_handle(h).idx(), m.to_vertex_handle(h).idx()));
+  }
+  for (const Edge& e : material_edges(mesh)) longest = std::max(longest, e.length);
+  std::vector<double> sweep;  // lengths of the first splits, while they are input edges
+  bool first_sweep = true;
+  remesh(mesh, state, p, [&](const EditProposal& prop) {
+    if (prop.kind != EditKind::split || !first_sweep) return std::string();
+    // New faces (a, -1, c) and (-1, b, c): the split edge is a-b.
+    const auto ab = std::minmax(prop.vertices[0][0], prop.vertices[1][1]);
+    first_sweep = input_edges.count(ab) > 0;
+    if (first_sweep)
+      sweep.push_back((prop.material[1].row(1) - prop.material[0].row(0)).norm());
+    return std::string();
+  });
+  ASSERT_GT(sweep.size(), 10u);
+  EXPECT_EQ(sweep.front(), longest);
+  for (size_t i = 0; i + 1 < sweep.size(); ++i) EXPECT_GE(sweep[i], sweep[i + 1]) << i;
 }
