@@ -115,6 +115,7 @@ batch::BatchSpec render_batch_spec(const fs::path& root, const fs::path& scenege
                                   "--seed", std::to_string(t.info.at("render_seed").get<std::uint64_t>()),
                                   "--size", o.size, "--quality", o.quality, "--passes", o.passes,
                                   "--parallel", "1", "--threads", std::to_string(o.threads), "--quiet"};
+    if (o.dpi > 0) argv.insert(argv.end(), {"--dpi", std::to_string(o.dpi)});
     if (!o.documents_dir.empty()) argv.insert(argv.end(), {"--documents", o.documents_dir});
     if (!o.backgrounds_dir.empty()) argv.insert(argv.end(), {"--backgrounds", o.backgrounds_dir});
     return std::vector<batch::Command>{{argv, {}}};

@@ -23,6 +23,7 @@ struct RenderBatchOptions {
   std::string documents_dir;      ///< folder of pages to draw from (empty: built-in generator)
   std::string backgrounds_dir;    ///< folder of background images (empty: procedural only)
   int threads = 1;                ///< POV-Ray threads per view (1 keeps radiosity reproducible)
+  int dpi = 0;                    ///< built-in page resolution [dpi]; 0: scenegen render's default
 };
 
 /// The sheet seen from its other side: turned over about the material y axis (x -> -x,

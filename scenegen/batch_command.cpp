@@ -19,6 +19,7 @@ std::vector<std::string> shard_command(const RenderBatchCommand& c) {
                                "--views", std::to_string(r.views), "--size", r.size, "--quality", r.quality,
                                "--passes", r.passes, "--threads", std::to_string(r.threads), "--quiet"};
   if (r.flip) cmd.push_back("--flip");
+  if (r.dpi > 0) cmd.insert(cmd.end(), {"--dpi", std::to_string(r.dpi)});
   if (!r.documents_dir.empty()) cmd.insert(cmd.end(), {"--documents", fs::absolute(r.documents_dir).string()});
   if (!r.backgrounds_dir.empty()) cmd.insert(cmd.end(), {"--backgrounds", fs::absolute(r.backgrounds_dir).string()});
   if (c.common.time_limit > 0) cmd.insert(cmd.end(), {"--time-limit", std::to_string(c.common.time_limit)});
@@ -65,6 +66,8 @@ void add_render_batch_subcommand(CLI::App& app, RenderBatchCommand& c) {
   c.app->add_option("--passes", c.render.passes, "as scenegen render --passes")->capture_default_str();
   c.app->add_option("--documents", c.render.documents_dir, "folder of PNG/JPEG pages to draw from");
   c.app->add_option("--backgrounds", c.render.backgrounds_dir, "folder of PNG/JPEG background images");
+  c.app->add_option("--dpi", c.render.dpi, "built-in page resolution [dpi] (0: scenegen render's default)")
+      ->check(CLI::NonNegativeNumber)->capture_default_str();
   c.app->add_option("--threads", c.render.threads, "POV-Ray threads per view (1 keeps radiosity reproducible)")
       ->check(CLI::PositiveNumber)->capture_default_str();
   batch::add_batch_cli_options(c.app, c.common);
