@@ -20,9 +20,9 @@ using nlohmann::json;
 namespace {
 
 const std::vector<std::string> MESH_FIGURES = {
-    "wall_seconds", "vertices", "newton_iterations", "max_stretch", "closest_obstacle_distance",
+    "wall_seconds", "cpu_seconds", "vertices", "newton_iterations", "max_stretch", "closest_obstacle_distance",
     "self_intersections", "crease_length", "abs_curvature_integral"};
-const std::vector<std::string> RENDER_FIGURES = {"wall_seconds"};
+const std::vector<std::string> RENDER_FIGURES = {"wall_seconds", "cpu_seconds"};
 
 double quantile(const std::vector<double>& sorted, double q) {
   const double pos = q * static_cast<double>(sorted.size() - 1);
@@ -83,10 +83,15 @@ void write_distributions(std::ostream& out, const PartStats& p) {
                     fmt(d.max).c_str(), fmt(d.mean).c_str());
       out << line;
     }
-    if (figure == "wall_seconds") {
+    if (figure == "wall_seconds" || figure == "cpu_seconds") {
       double total = 0;
-      for (const auto& [s, v] : per) total += distribution(v).sum;
-      out << "  total " << fmt(total / 3600.0) << " core-hours (one sample per core)\n";
+      for (const auto& [s, v] : per) {
+        const Distribution d = distribution(v);
+        total += d.sum;
+        out << "  " << s << ": " << fmt(3600.0 / d.mean) << " samples per core-hour\n";
+      }
+      out << "  total " << fmt(total / 3600.0) << " core-hours"
+          << (figure == "wall_seconds" ? " (one sample per core)\n" : " of CPU time\n");
     }
   }
 }

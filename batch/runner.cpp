@@ -4,6 +4,7 @@
 #include <signal.h>
 #include <sys/file.h>
 #include <sys/prctl.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -161,6 +162,7 @@ struct Slot {
   std::size_t next = 0;  ///< index of the command running now
   pid_t pid = -1;
   Clock::time_point start;
+  double cpu_seconds = 0.0;  ///< user + system time of the finished commands [s]
   bool timed_out = false;
 };
 
@@ -185,7 +187,7 @@ class Runner {
 
   void scan();
   void repair(const std::vector<std::size_t>& missing_rows);
-  void append_manifest_row(const Task& t, double wall);
+  void append_manifest_row(const Task& t, double wall, double cpu);
   void record_failure(const Task& t, const std::string& reason, const std::string& detail, double wall);
   void remove_stages(const Task& t) const;
   void fill_slots();
@@ -234,15 +236,16 @@ void Runner::repair(const std::vector<std::size_t>& missing_rows) {
     if (j.contains("key")) rows.insert(j["key"].get<std::string>());
   for (auto& [i, lock] : held) {
     if (rows.count(m_tasks[i].key)) continue;
-    append_manifest_row(m_tasks[i], -1.0);
+    append_manifest_row(m_tasks[i], -1.0, -1.0);
     ++m_sum.repaired;
   }
 }
 
-void Runner::append_manifest_row(const Task& t, double wall) {
+void Runner::append_manifest_row(const Task& t, double wall, double cpu) {
   nlohmann::json row = t.info;
   row["key"] = t.key;
   row["path"] = t.final_dir.generic_string();
+  row["cpu_seconds"] = cpu >= 0 ? nlohmann::json(cpu) : nlohmann::json(nullptr);
   if (m_spec.manifest_row) row.update(m_spec.manifest_row(t, m_spec.root / t.final_dir, wall));
   append_line(manifest(), row.dump());
 }
@@ -321,8 +324,11 @@ void Runner::poll() {
   for (std::size_t k = 0; k < m_slots.size();) {
     Slot& s = *m_slots[k];
     int status = 0;
-    const pid_t r = waitpid(s.pid, &status, WNOHANG);
+    struct rusage usage {};
+    const pid_t r = wait4(s.pid, &status, WNOHANG, &usage);
     if (r == s.pid) {
+      s.cpu_seconds += static_cast<double>(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
+                       1e-6 * static_cast<double>(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
       on_exit(s, status);
     } else if (m_spec.time_limit > 0 && !s.timed_out && seconds_since(s.start) > m_spec.time_limit) {
       s.timed_out = true;
@@ -365,7 +371,7 @@ void Runner::on_exit(Slot& s, int status) {
 
 void Runner::finish(Slot& s) {
   const Task& t = m_tasks[s.task];
-  const Attempt attempt{s.stage, seconds_since(s.start)};
+  const Attempt attempt{s.stage, seconds_since(s.start), s.cpu_seconds};
   fs::path product;
   try {
     product = m_spec.finalize(t, attempt);
@@ -378,7 +384,7 @@ void Runner::finish(Slot& s) {
   fs::rename(product, target);  // the one step that makes the sample exist
   std::error_code ec;
   fs::remove_all(s.stage, ec);
-  append_manifest_row(t, attempt.wall_seconds);
+  append_manifest_row(t, attempt.wall_seconds, attempt.cpu_seconds);
   s.lock.release();
   ++m_sum.done;
   ++m_sum.done_now;

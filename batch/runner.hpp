@@ -38,6 +38,7 @@ struct Command {
 struct Attempt {
   std::filesystem::path stage;  ///< the staging folder of the attempt
   double wall_seconds = 0.0;    ///< from the first command's start to the last one's end [s]
+  double cpu_seconds = 0.0;     ///< user + system time of the commands (and children they waited for) [s]
 };
 
 /// The slice `index` of `count` (0 <= index < count): tasks whose position p in the list has
@@ -81,7 +82,7 @@ struct BatchSpec {
   /// stage) that becomes the task's final folder. Throw to record a failure ("outputs").
   std::function<std::filesystem::path(const Task&, const Attempt&)> finalize;
   /// The manifest row of a finished task (its final folder given); the runner adds "key",
-  /// "path" and the task's info. For a task found finished without a row, wall_seconds is
+  /// "path", "cpu_seconds" (null when unknown) and the task's info. For a task found finished without a row, wall_seconds is
   /// unknown (negative) and the hook should read it from the outputs.
   std::function<nlohmann::json(const Task&, const std::filesystem::path& final_dir,
                                double wall_seconds)> manifest_row;

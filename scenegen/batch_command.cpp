@@ -32,8 +32,16 @@ void check_options(const RenderBatchCommand& c) {
   if (!fs::is_directory(c.dataset)) throw InputError("dataset '" + c.dataset + "' is not a folder");
   if (!fs::is_directory(fs::path(c.dataset) / "meshes"))
     throw InputError("dataset '" + c.dataset + "' has no meshes/ folder (run papersim batch --out " + c.dataset + " first)");
-  parse_passes(c.render.passes);
-  parse_quality(c.render.quality);
+  try {
+    parse_passes(c.render.passes);
+  } catch (const InputError& e) {
+    throw InputError(std::string("--passes: ") + e.what());
+  }
+  try {
+    parse_quality(c.render.quality);
+  } catch (const InputError& e) {
+    throw InputError(std::string("--quality: ") + e.what());
+  }
   const auto x = c.render.size.find('x');
   if (x == std::string::npos || c.render.size.find_first_not_of("0123456789x") != std::string::npos ||
       x == 0 || x + 1 == c.render.size.size())

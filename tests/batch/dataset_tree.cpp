@@ -43,6 +43,7 @@ std::map<std::string, json> manifest_rows(const fs::path& file) {
   for (json r : papersim::batch::read_json_lines(file)) {
     r.erase("wall_seconds");
     r.erase("sim_wall_seconds");
+    r.erase("cpu_seconds");
     rows[r["key"].get<std::string>()] = r;
   }
   return rows;

@@ -11,8 +11,8 @@ namespace papersim::test {
 /// Differences between two datasets, one line each (empty: equal). Compared: the same files
 /// under `part` (meshes or renders); every file byte for byte except meshes' meta.json, which is
 /// compared as JSON without its wall times ("wall_seconds", "seconds", "seconds_*": they measure
-/// this run, not the sample); the manifest as a set of rows by key, without wall_seconds and
-/// sim_wall_seconds. Also reports staging leftovers.
+/// this run, not the sample); the manifest as a set of rows by key, without wall_seconds,
+/// sim_wall_seconds and cpu_seconds. Also reports staging leftovers.
 std::vector<std::string> dataset_differences(const std::filesystem::path& a, const std::filesystem::path& b,
                                              const std::string& part, const std::string& manifest);
 
