@@ -6,6 +6,7 @@
 #include <fcntl.h>
 #include <signal.h>
 #include <sys/file.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -72,7 +73,14 @@ std::pair<int, std::size_t> interrupt_at_half(const std::vector<std::string>& ar
                                               std::size_t total, int signal, const fs::path& log) {
   const pid_t pid = pt::start(argv, log);
   std::size_t rows = 0;
-  while ((rows = pt::line_count(manifest)) < total / 2) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  int status = 0;
+  while ((rows = pt::line_count(manifest)) < total / 2) {
+    if (waitpid(pid, &status, WNOHANG) == pid) {  // ended before half: the caller's checks fail
+      ADD_FAILURE() << "the batch ended on its own before half its samples: " << pt::read_text(log);
+      return {WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status), rows};
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
   kill(pid, signal);
   return {pt::wait_status(pid), rows};
 }
