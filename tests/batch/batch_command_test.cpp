@@ -29,14 +29,22 @@ const std::string PAPERSIM = PAPERSIM_EXE;
 constexpr const char* SEEDS = "1-40";
 constexpr std::size_t SAMPLES = 40;
 
+/// This process's scratch folder, removed when the process ends.
+struct ScratchDir {
+  fs::path path = fs::temp_directory_path() / ("papersim_batch_test_" + std::to_string(getpid()));
+  ScratchDir() {
+    fs::remove_all(path);
+    fs::create_directories(path);
+  }
+  ~ScratchDir() {
+    std::error_code ec;
+    fs::remove_all(path, ec);
+  }
+};
+
 fs::path work_dir() {
-  static const fs::path d = [] {
-    const fs::path p = fs::temp_directory_path() / ("papersim_batch_test_" + std::to_string(getpid()));
-    fs::remove_all(p);
-    fs::create_directories(p);
-    return p;
-  }();
-  return d;
+  static const ScratchDir d;
+  return d.path;
 }
 
 /// Four scenarios, tiny: 48 vertices, 5 steps of 10 ms.
