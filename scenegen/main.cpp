@@ -8,6 +8,7 @@
 
 #include <fstream>
 
+#include "scenegen/batch_command.hpp"
 #include "scenegen/errors.hpp"
 #include "scenegen/example_sheets.hpp"
 #include "scenegen/job.hpp"
@@ -101,8 +102,11 @@ int main(int argc, char** argv) {
   auto* example = app.add_subcommand("example", "write a synthetic sheet OBJ (flat, cylinder, fold, bump)");
   example->add_option("kind", example_kind, "flat | cylinder | fold | bump")->required();
   example->add_option("--out", c.out, "OBJ file")->required();
+  sg::RenderBatchCommand batch;
+  sg::add_render_batch_subcommand(app, batch);
   CLI11_PARSE(app, argc, argv);
   try {
+    if (batch.app->parsed()) return sg::run_render_batch(batch, std::cout, std::cerr);
     if (render->parsed()) {
       finalise(c);
       const auto report = sg::render_sample(c.sample, c.out, run_options(c), c.keep_job);

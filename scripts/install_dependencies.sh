@@ -12,6 +12,7 @@ PACKAGES=(
   nlohmann-json3-dev libcli11-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   povray gnuplot-nox fonts-dejavu-core fonts-liberation
+  slurm-wlm munge  # the one-node Slurm test of the batch job arrays (scripts/slurm_cluster.sh)
 )
 
 missing=()

@@ -11,6 +11,7 @@
 
 #include "collision/errors.hpp"
 #include "remesh/errors.hpp"
+#include "simulation/batch_command.hpp"
 #include "simulation/errors.hpp"
 #include "simulation/scenario.hpp"
 #include "simulation/scene.hpp"
@@ -18,6 +19,9 @@
 
 #ifdef PAPERSIM_WITH_METRICS
 #include "validation/metrics_command.hpp"
+#define PAPERSIM_HAS_METRICS true
+#else
+#define PAPERSIM_HAS_METRICS false
 #endif
 
 namespace ps = papersim::simulation;
@@ -92,6 +96,9 @@ int main(int argc, char** argv) {
   bool draw_only = false;
   scen->add_flag("--draw-only", draw_only, "Only write OUT/scene.json (edit it, then: papersim run)");
 
+  ps::BatchCommand batch_command;
+  ps::add_batch_subcommands(app, batch_command);
+
 #ifdef PAPERSIM_WITH_METRICS
   int metrics_code = 0;
   papersim::validation::add_metrics_subcommand(app, metrics_code, std::cout, std::cerr);
@@ -99,6 +106,8 @@ int main(int argc, char** argv) {
 
   CLI11_PARSE(app, argc, argv);
   try {
+    if (batch_command.batch->parsed() || batch_command.stats->parsed())
+      return ps::run_batch_subcommand(batch_command, PAPERSIM_HAS_METRICS, std::cout, std::cerr);
     if (run->parsed()) {
       const ps::Scene scene = ps::load_scene(scene_path);
       return simulate(scene, out_dir, frames, quiet, "run");

@@ -1,0 +1,54 @@
+#pragma once
+/// The options every batch command shares (--jobs, --time-limit, --shard, --retry-failed,
+/// --slurm ...), its progress line and the Slurm script it can write instead of running.
+#include <filesystem>
+#include <functional>
+#include <iosfwd>
+#include <string>
+#include <vector>
+
+#include "batch/runner.hpp"
+#include "batch/slurm.hpp"
+
+namespace CLI {
+class App;
+}
+
+namespace papersim::batch {
+
+/// Parsed shared options.
+struct BatchCliOptions {
+  int jobs = 0;               ///< 0: one per core
+  double time_limit = 0.0;    ///< per sample [s]; 0: none
+  std::string shard;          ///< "I/N" or empty
+  bool retry_failed = false;
+  bool quiet = false;
+  int slurm_shards = 0;       ///< > 0: write the sbatch script instead of running
+  SlurmOptions slurm;
+};
+
+/// Register the shared options on `app`.
+void add_batch_cli_options(CLI::App* app, BatchCliOptions& options);
+
+/// A progress printer: "done D/T  failed F  running R  S samples/h  ETA ...", redrawn on a
+/// terminal, one line per `every_seconds` otherwise.
+ProgressFn progress_printer(std::ostream& out, bool tty, const std::string& label);
+
+/// Shard the tasks when --shard was given, fill jobs / time limit / retry / progress into the
+/// spec and run. --jobs 0 means one per core.
+/// @throw std::invalid_argument naming --shard when it is malformed
+BatchSummary run_cli_batch(const std::vector<Task>& tasks, BatchSpec spec, const BatchCliOptions& options,
+                           std::ostream& progress_out, const std::string& label);
+
+/// Write ROOT/slurm/NAME.sbatch for `command` (the batch command line without --shard and
+/// --jobs; absolute paths) and return its path.
+/// @throw std::runtime_error when the file cannot be written
+std::filesystem::path write_slurm_script(const std::filesystem::path& root, const std::string& name,
+                                         const std::vector<std::string>& command,
+                                         const BatchCliOptions& options);
+
+/// One line: "N done (M now, R manifest rows restored), F failed; ..." for the end of a run.
+std::string summary_line(const BatchSummary& summary, const std::filesystem::path& root,
+                         const BatchSpec& spec);
+
+}  // namespace papersim::batch

@@ -1,0 +1,224 @@
+#include "batch/dataset_stats.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <ostream>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+
+#include "batch/runner.hpp"
+#include "batch/slurm.hpp"
+
+namespace papersim::batch {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+const std::vector<std::string> MESH_FIGURES = {
+    "wall_seconds", "cpu_seconds", "vertices", "newton_iterations", "max_stretch", "closest_obstacle_distance",
+    "self_intersections", "crease_length", "abs_curvature_integral"};
+const std::vector<std::string> RENDER_FIGURES = {"wall_seconds", "cpu_seconds"};
+
+double quantile(const std::vector<double>& sorted, double q) {
+  const double pos = q * static_cast<double>(sorted.size() - 1);
+  const auto i = static_cast<std::size_t>(std::floor(pos));
+  const std::size_t j = std::min(i + 1, sorted.size() - 1);
+  return sorted[i] + (pos - static_cast<double>(i)) * (sorted[j] - sorted[i]);
+}
+
+std::string scenario_of(const json& row) { return row.value("scenario", std::string("?")); }
+
+std::string fmt(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.4g", v);
+  return b;
+}
+
+void write_counts(std::ostream& out, const PartStats& p) {
+  std::set<std::string> names;
+  for (const auto& [s, n] : p.done) names.insert(s);
+  for (const auto& [s, n] : p.failed) names.insert(s);
+  out << p.name << ": samples per scenario\n";
+  char line[256];
+  std::snprintf(line, sizeof line, "  %-16s %10s %10s %12s\n", "scenario", "done", "failed", "failure rate");
+  out << line;
+  long long td = 0, tf = 0;
+  for (const auto& s : names) {
+    const long long d = p.done.count(s) ? p.done.at(s) : 0, f = p.failed.count(s) ? p.failed.at(s) : 0;
+    td += d;
+    tf += f;
+    std::snprintf(line, sizeof line, "  %-16s %10lld %10lld %11.1f%%\n", s.c_str(), d, f,
+                  d + f > 0 ? 100.0 * static_cast<double>(f) / static_cast<double>(d + f) : 0.0);
+    out << line;
+  }
+  std::snprintf(line, sizeof line, "  %-16s %10lld %10lld %11.1f%%\n", "all", td, tf,
+                td + tf > 0 ? 100.0 * static_cast<double>(tf) / static_cast<double>(td + tf) : 0.0);
+  out << line;
+  if (!p.reasons.empty()) {
+    out << p.name << ": failures by reason (" << p.failed_attempts << " failed attempts in all)\n";
+    for (const auto& [r, n] : p.reasons) {
+      std::snprintf(line, sizeof line, "  %-40s %8lld  %5.1f%% of samples\n", r.c_str(), n,
+                    100.0 * static_cast<double>(n) / static_cast<double>(td + tf));
+      out << line;
+    }
+  }
+}
+
+void write_distributions(std::ostream& out, const PartStats& p) {
+  char line[256];
+  for (const auto& [figure, per] : p.values) {
+    out << p.name << ": " << figure << "\n";
+    std::snprintf(line, sizeof line, "  %-16s %7s %10s %10s %10s %10s %10s %10s\n", "scenario", "n", "min",
+                  "p10", "median", "p90", "max", "mean");
+    out << line;
+    for (const auto& [s, v] : per) {
+      const Distribution d = distribution(v);
+      std::snprintf(line, sizeof line, "  %-16s %7zu %10s %10s %10s %10s %10s %10s\n", s.c_str(), d.count,
+                    fmt(d.min).c_str(), fmt(d.p10).c_str(), fmt(d.median).c_str(), fmt(d.p90).c_str(),
+                    fmt(d.max).c_str(), fmt(d.mean).c_str());
+      out << line;
+    }
+    if (figure == "wall_seconds" || figure == "cpu_seconds") {
+      double total = 0;
+      for (const auto& [s, v] : per) {
+        const Distribution d = distribution(v);
+        total += d.sum;
+        out << "  " << s << ": " << fmt(3600.0 / d.mean) << " samples per core-hour\n";
+      }
+      out << "  total " << fmt(total / 3600.0) << " core-hours"
+          << (figure == "wall_seconds" ? " (one sample per core)\n" : " of CPU time\n");
+    }
+  }
+}
+
+std::string gp_quoted(const std::string& text) {
+  std::string out = "'";
+  for (char c : text) out += c == '\'' ? std::string("''") : std::string(1, c);
+  return out + "'";
+}
+
+/// One histogram file: bin centre, then one count column per scenario.
+std::string write_histogram(const fs::path& dat, const std::map<std::string, std::vector<double>>& per, int bins) {
+  double lo = INFINITY, hi = -INFINITY;
+  for (const auto& [s, v] : per)
+    for (double x : v) lo = std::min(lo, x), hi = std::max(hi, x);
+  if (!(hi > lo)) hi = lo + 1;
+  const double w = (hi - lo) / bins;
+  std::vector<std::vector<long long>> counts(per.size(), std::vector<long long>(static_cast<std::size_t>(bins), 0));
+  std::size_t k = 0;
+  for (const auto& [s, v] : per) {
+    for (double x : v)
+      ++counts[k][std::min(static_cast<std::size_t>(bins - 1), static_cast<std::size_t>((x - lo) / w))];
+    ++k;
+  }
+  std::ofstream out(dat);
+  for (int b = 0; b < bins; ++b) {
+    out << lo + (b + 0.5) * w;
+    for (const auto& c : counts) out << ' ' << c[static_cast<std::size_t>(b)];
+    out << '\n';
+  }
+  if (!out.flush()) throw std::runtime_error("dataset-stats: cannot write '" + dat.string() + "'");
+  return fmt(w);
+}
+
+}  // namespace
+
+Distribution distribution(std::vector<double> v) {
+  Distribution d;
+  if (v.empty()) return d;
+  std::sort(v.begin(), v.end());
+  d.count = v.size();
+  d.min = v.front();
+  d.max = v.back();
+  d.p10 = quantile(v, 0.1);
+  d.median = quantile(v, 0.5);
+  d.p90 = quantile(v, 0.9);
+  for (double x : v) d.sum += x;
+  d.mean = d.sum / static_cast<double>(v.size());
+  return d;
+}
+
+PartStats read_part(const std::string& name, const fs::path& manifest, const fs::path& failures,
+                    const std::vector<std::string>& figures) {
+  PartStats p;
+  p.name = name;
+  std::set<std::string> done_keys;
+  for (const auto& row : read_json_lines(manifest)) {
+    if (!done_keys.insert(row.value("key", std::string())).second) continue;
+    const std::string s = scenario_of(row);
+    ++p.done[s];
+    for (const auto& f : figures)
+      if (row.contains(f) && row[f].is_number()) p.values[f][s].push_back(row[f].get<double>());
+  }
+  std::map<std::string, json> latest_failure;
+  for (const auto& row : read_json_lines(failures)) {
+    ++p.failed_attempts;
+    latest_failure[row.value("key", std::string())] = row;
+  }
+  for (const auto& [key, row] : latest_failure) {
+    if (done_keys.count(key)) continue;
+    ++p.failed[scenario_of(row)];
+    ++p.reasons[row.value("reason", std::string("?"))];
+  }
+  return p;
+}
+
+std::vector<PartStats> read_dataset(const fs::path& root) {
+  if (!fs::is_directory(root)) throw std::runtime_error("dataset-stats: '" + root.string() + "' is not a folder");
+  std::vector<PartStats> parts;
+  const auto add = [&](const std::string& name, const char* manifest, const char* failures,
+                       const std::vector<std::string>& figures) {
+    if (fs::exists(root / manifest) || fs::exists(root / failures))
+      parts.push_back(read_part(name, root / manifest, root / failures, figures));
+  };
+  add("meshes", "manifest.jsonl", "failures.jsonl", MESH_FIGURES);
+  add("renders", "renders.jsonl", "renders_failures.jsonl", RENDER_FIGURES);
+  return parts;
+}
+
+void write_dataset_report(std::ostream& out, const std::vector<PartStats>& parts) {
+  if (parts.empty()) out << "no manifest or failures file: nothing has run in this dataset yet\n";
+  for (const auto& p : parts) {
+    write_counts(out, p);
+    write_distributions(out, p);
+  }
+}
+
+std::vector<std::string> write_dataset_plots(const fs::path& dir, const std::vector<PartStats>& parts, int bins) {
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec) throw std::runtime_error("dataset-stats: cannot create '" + dir.string() + "': " + ec.message());
+  std::ostringstream gp;
+  gp << "set terminal svg size 800,500 dynamic\nset style fill transparent solid 0.4 border -1\n"
+     << "set ylabel 'samples'\nset grid\nset key top right\n";
+  std::vector<std::string> written;
+  for (const auto& p : parts) {
+    for (const auto& [figure, per] : p.values) {
+      const std::string name = p.name + "_" + figure;
+      const std::string width = write_histogram(dir / (name + ".dat"), per, bins);
+      gp << "set output " << gp_quoted(name + ".svg") << "\nset title " << gp_quoted(p.name + ": " + figure)
+         << "\nset xlabel " << gp_quoted(figure) << "\nset boxwidth " << width << "\nplot ";
+      int col = 2;
+      for (const auto& [s, v] : per) {
+        gp << (col > 2 ? ", " : "") << gp_quoted(name + ".dat") << " using 1:" << col
+           << " with boxes title " << gp_quoted(s);
+        ++col;
+      }
+      gp << "\n";
+      written.push_back((dir / (name + ".svg")).string());
+    }
+  }
+  if (written.empty()) return written;
+  std::ofstream(dir / "stats.gp") << gp.str();
+  const std::string command = "cd " + shell_quote(dir.string()) + " && gnuplot stats.gp 2> gnuplot.log";
+  if (std::system(command.c_str()) != 0)
+    throw std::runtime_error("dataset-stats: gnuplot failed; see '" + (dir / "gnuplot.log").string() + "'");
+  return written;
+}
+
+}  // namespace papersim::batch

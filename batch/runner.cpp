@@ -1,0 +1,550 @@
+#include "batch/runner.hpp"
+
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/file.h>
+#include <sys/prctl.h>
+#include <sys/resource.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <chrono>
+#include <cstring>
+#include <deque>
+#include <fstream>
+#include <memory>
+#include <sstream>
+#include <stdexcept>
+#include <thread>
+#include <unordered_set>
+
+namespace papersim::batch {
+namespace fs = std::filesystem;
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+volatile sig_atomic_t g_stop_signal = 0;
+void on_stop_signal(int signal) { g_stop_signal = signal; }
+
+/// SIGINT and SIGTERM set a flag for the duration of a batch; the old handlers come back after.
+class StopSignals {
+ public:
+  StopSignals() {
+    g_stop_signal = 0;
+    struct sigaction sa {};
+    sa.sa_handler = on_stop_signal;
+    sigemptyset(&sa.sa_mask);
+    sigaction(SIGINT, &sa, &m_old_int);
+    sigaction(SIGTERM, &sa, &m_old_term);
+  }
+  ~StopSignals() {
+    sigaction(SIGINT, &m_old_int, nullptr);
+    sigaction(SIGTERM, &m_old_term, nullptr);
+  }
+  StopSignals(const StopSignals&) = delete;
+  StopSignals& operator=(const StopSignals&) = delete;
+
+ private:
+  struct sigaction m_old_int {}, m_old_term {};
+};
+
+double seconds_since(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+std::string safe_name(const std::string& key) {
+  std::string s = key;
+  for (char& c : s)
+    if (c == '/' || c == ' ') c = '_';
+  return s;
+}
+
+/// An flock on ROOT/.locks/<task>.lock; released when every copy of the descriptor is closed
+/// (the child running the task holds a copy, so a lock outlives a killed batch only as long
+/// as its child).
+class TaskLock {
+ public:
+  TaskLock() = default;
+  explicit TaskLock(int fd) : m_fd(fd) {}
+  TaskLock(TaskLock&& o) noexcept : m_fd(o.m_fd) { o.m_fd = -1; }
+  TaskLock& operator=(TaskLock&& o) noexcept {
+    release();
+    m_fd = o.m_fd;
+    o.m_fd = -1;
+    return *this;
+  }
+  TaskLock(const TaskLock&) = delete;
+  TaskLock& operator=(const TaskLock&) = delete;
+  ~TaskLock() { release(); }
+  bool held() const { return m_fd >= 0; }
+  int fd() const { return m_fd; }
+  void release() {
+    if (m_fd >= 0) close(m_fd);
+    m_fd = -1;
+  }
+
+  /// @throw std::runtime_error when the lock file cannot be opened
+  static TaskLock try_take(const fs::path& file) {
+    const int fd = open(file.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+    if (fd < 0)
+      throw std::runtime_error("cannot open lock file '" + file.string() + "': " + std::strerror(errno));
+    if (flock(fd, LOCK_EX | LOCK_NB) != 0) {
+      close(fd);
+      return TaskLock();
+    }
+    return TaskLock(fd);
+  }
+
+ private:
+  int m_fd = -1;
+};
+
+/// The last non-empty line of a text file (its final 4 KiB).
+std::string last_line(const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) return "";
+  in.seekg(0, std::ios::end);
+  const std::streamoff size = in.tellg();
+  const std::streamoff start = size > 4096 ? size - 4096 : 0;
+  in.seekg(start);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  while (!text.empty() && (text.back() == '\n' || text.back() == '\r' || text.back() == ' ')) text.pop_back();
+  const auto nl = text.find_last_of('\n');
+  return nl == std::string::npos ? text : text.substr(nl + 1);
+}
+
+/// Fork and exec `cmd` in its own process group, stdout to `out`, stderr to `log`, holding a
+/// copy of `lock_fd`, and dying with this process.
+/// @throw std::runtime_error when fork fails
+pid_t spawn(const Command& cmd, const fs::path& log, int lock_fd) {
+  std::vector<char*> argv;
+  for (const auto& a : cmd.argv) argv.push_back(const_cast<char*>(a.c_str()));
+  argv.push_back(nullptr);
+  const std::string out_path = cmd.stdout_path.empty() ? log.string() : cmd.stdout_path.string();
+  const std::string log_path = log.string();
+  const pid_t parent = getpid();
+  const pid_t pid = fork();
+  if (pid < 0) throw std::runtime_error(std::string("cannot fork: ") + std::strerror(errno));
+  if (pid > 0) {
+    setpgid(pid, pid);  // also in the child: whichever runs first
+    return pid;
+  }
+  // Child: only async-signal-safe calls until exec.
+  setpgid(0, 0);
+  prctl(PR_SET_PDEATHSIG, SIGKILL);
+  if (getppid() != parent) _exit(137);
+  signal(SIGINT, SIG_DFL);
+  signal(SIGTERM, SIG_DFL);
+  const int in = open("/dev/null", O_RDONLY);
+  const int out = open(out_path.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
+  const int err = open(log_path.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
+  if (in < 0 || out < 0 || err < 0) _exit(126);
+  dup2(in, 0);
+  dup2(out, 1);
+  dup2(err, 2);
+  if (lock_fd >= 0 && dup(lock_fd) < 0) _exit(126);  // dup clears close-on-exec: the child holds the lock
+  execv(argv[0], argv.data());
+  const char msg[] = "batch: cannot execute the sample program\n";
+  [[maybe_unused]] const ssize_t w = write(2, msg, sizeof msg - 1);
+  _exit(127);
+}
+
+/// A task at work: its lock, staging folder and current child.
+struct Slot {
+  std::size_t task = 0;
+  TaskLock lock;
+  fs::path stage, log;
+  std::vector<Command> commands;
+  std::size_t next = 0;  ///< index of the command running now
+  pid_t pid = -1;
+  Clock::time_point start;
+  double cpu_seconds = 0.0;  ///< user + system time of the finished commands [s]
+  bool timed_out = false;
+};
+
+class Runner {
+ public:
+  Runner(const std::vector<Task>& tasks, const BatchSpec& spec) : m_tasks(tasks), m_spec(spec) {}
+  BatchSummary run();
+
+ private:
+  const std::vector<Task>& m_tasks;
+  const BatchSpec& m_spec;
+  std::deque<std::size_t> m_pending, m_waiting;
+  std::vector<std::unique_ptr<Slot>> m_slots;
+  BatchSummary m_sum;
+  Clock::time_point m_t0 = Clock::now(), m_last_progress = Clock::now(), m_last_wait_check;
+  unsigned m_attempt = 0;
+
+  fs::path manifest() const { return m_spec.root / m_spec.manifest_name; }
+  fs::path failures() const { return m_spec.root / m_spec.failures_name; }
+  fs::path lock_file(const Task& t) const { return m_spec.root / ".locks" / (safe_name(t.key) + ".lock"); }
+  bool finished(const Task& t) const { return fs::exists(m_spec.root / t.final_dir); }
+
+  void scan();
+  void repair(const std::vector<std::size_t>& missing_rows);
+  void append_manifest_row(const Task& t, double wall, double cpu);
+  void record_failure(const Task& t, const std::string& reason, const std::string& detail, double wall);
+  void remove_stages(const Task& t) const;
+  void fill_slots();
+  bool try_start(std::size_t task);
+  void start_next_command(Slot& s);
+  void poll();
+  void on_exit(Slot& s, int status);
+  void finish(Slot& s);
+  void fail(Slot& s, const std::string& reason, const std::string& detail);
+  void stop_all();
+  void report(bool force);
+};
+
+void Runner::scan() {
+  std::unordered_set<std::string> rows, failed;
+  for (const auto& j : read_json_lines(manifest()))
+    if (j.contains("key")) rows.insert(j["key"].get<std::string>());
+  for (const auto& j : read_json_lines(failures()))
+    if (j.contains("key")) failed.insert(j["key"].get<std::string>());
+  std::vector<std::size_t> missing_rows;
+  for (std::size_t i = 0; i < m_tasks.size(); ++i) {
+    const Task& t = m_tasks[i];
+    if (finished(t)) {
+      ++m_sum.done;
+      if (!rows.count(t.key)) missing_rows.push_back(i);
+    } else if (failed.count(t.key) && !m_spec.retry_failed) {
+      ++m_sum.failed;
+    } else {
+      m_pending.push_back(i);
+    }
+  }
+  repair(missing_rows);
+}
+
+/// Rows for tasks finished just before a crash. Locked first, then the manifest is read again,
+/// so a batch that is appending the same row right now is not doubled.
+void Runner::repair(const std::vector<std::size_t>& missing_rows) {
+  if (missing_rows.empty()) return;
+  std::vector<std::pair<std::size_t, TaskLock>> held;
+  for (std::size_t i : missing_rows) {
+    TaskLock lock = TaskLock::try_take(lock_file(m_tasks[i]));
+    if (lock.held()) held.emplace_back(i, std::move(lock));
+  }
+  std::unordered_set<std::string> rows;
+  for (const auto& j : read_json_lines(manifest()))
+    if (j.contains("key")) rows.insert(j["key"].get<std::string>());
+  for (auto& [i, lock] : held) {
+    if (rows.count(m_tasks[i].key)) continue;
+    append_manifest_row(m_tasks[i], -1.0, -1.0);
+    ++m_sum.repaired;
+  }
+}
+
+void Runner::append_manifest_row(const Task& t, double wall, double cpu) {
+  nlohmann::json row = t.info;
+  row["key"] = t.key;
+  row["path"] = t.final_dir.generic_string();
+  row["cpu_seconds"] = cpu >= 0 ? nlohmann::json(cpu) : nlohmann::json(nullptr);
+  if (m_spec.manifest_row) row.update(m_spec.manifest_row(t, m_spec.root / t.final_dir, wall));
+  append_line(manifest(), row.dump());
+}
+
+void Runner::record_failure(const Task& t, const std::string& reason, const std::string& detail,
+                            double wall) {
+  nlohmann::json row = t.info;
+  row["key"] = t.key;
+  row["reason"] = reason;
+  row["detail"] = detail;
+  row["wall_seconds"] = wall;
+  append_line(failures(), row.dump());
+  ++m_sum.failed;
+  ++m_sum.failed_now;
+}
+
+void Runner::remove_stages(const Task& t) const {
+  const std::string prefix = safe_name(t.key) + ".";
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(m_spec.root / ".staging", ec))
+    if (e.path().filename().string().rfind(prefix, 0) == 0) fs::remove_all(e.path(), ec);
+}
+
+bool Runner::try_start(std::size_t task) {
+  const Task& t = m_tasks[task];
+  TaskLock lock = TaskLock::try_take(lock_file(t));
+  if (!lock.held()) return false;
+  if (finished(t)) {  // another process finished it since the scan
+    ++m_sum.done;
+    return true;
+  }
+  remove_stages(t);
+  auto s = std::make_unique<Slot>();
+  s->task = task;
+  s->lock = std::move(lock);
+  s->stage = m_spec.root / ".staging" /
+             (safe_name(t.key) + "." + std::to_string(getpid()) + "." + std::to_string(m_attempt++));
+  s->log = s->stage / "log.txt";
+  s->start = Clock::now();
+  fs::create_directories(s->stage);
+  try {
+    if (m_spec.prepare) m_spec.prepare(t, s->stage);
+    s->commands = m_spec.commands(t, s->stage);
+  } catch (const std::exception& e) {
+    fail(*s, "prepare", e.what());
+    return true;
+  }
+  start_next_command(*s);
+  m_slots.push_back(std::move(s));
+  return true;
+}
+
+void Runner::start_next_command(Slot& s) {
+  s.pid = spawn(s.commands[s.next], s.log, s.lock.fd());
+}
+
+void Runner::fill_slots() {
+  while (static_cast<int>(m_slots.size()) < m_spec.jobs && !m_pending.empty()) {
+    const std::size_t i = m_pending.front();
+    m_pending.pop_front();
+    if (!try_start(i)) m_waiting.push_back(i);
+  }
+  // Tasks another process holds: look again twice a second while a slot is free.
+  if (m_waiting.empty() || static_cast<int>(m_slots.size()) >= m_spec.jobs) return;
+  if (seconds_since(m_last_wait_check) < 0.5) return;
+  m_last_wait_check = Clock::now();
+  const std::size_t n = m_waiting.size();
+  for (std::size_t k = 0; k < n && static_cast<int>(m_slots.size()) < m_spec.jobs; ++k) {
+    const std::size_t i = m_waiting.front();
+    m_waiting.pop_front();
+    if (!try_start(i)) m_waiting.push_back(i);
+  }
+}
+
+void Runner::poll() {
+  for (std::size_t k = 0; k < m_slots.size();) {
+    Slot& s = *m_slots[k];
+    int status = 0;
+    struct rusage usage {};
+    const pid_t r = wait4(s.pid, &status, WNOHANG, &usage);
+    if (r == s.pid) {
+      s.cpu_seconds += static_cast<double>(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
+                       1e-6 * static_cast<double>(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
+      on_exit(s, status);
+    } else if (m_spec.time_limit > 0 && !s.timed_out && seconds_since(s.start) > m_spec.time_limit) {
+      s.timed_out = true;
+      kill(-s.pid, SIGKILL);
+    }
+    if (s.pid < 0) {
+      m_slots.erase(m_slots.begin() + static_cast<std::ptrdiff_t>(k));
+    } else {
+      ++k;
+    }
+  }
+}
+
+void Runner::on_exit(Slot& s, int status) {
+  kill(-s.pid, SIGKILL);  // anything the child left behind in its group
+  s.pid = -1;
+  if (s.timed_out) {
+    fail(s, "time limit", "exceeded " + std::to_string(m_spec.time_limit) + " s");
+    return;
+  }
+  if (WIFSIGNALED(status)) {
+    fail(s, "signal " + std::to_string(WTERMSIG(status)) + " (" + strsignal(WTERMSIG(status)) + ")",
+         last_line(s.log));
+    return;
+  }
+  const int code = WEXITSTATUS(status);
+  if (code != 0) {
+    const std::string line = last_line(s.log);
+    std::string reason = m_spec.failure_reason ? m_spec.failure_reason(code, line) : "";
+    if (reason.empty()) reason = "exit status " + std::to_string(code);
+    fail(s, reason, line);
+    return;
+  }
+  if (++s.next < s.commands.size()) {
+    start_next_command(s);
+    return;
+  }
+  finish(s);
+}
+
+void Runner::finish(Slot& s) {
+  const Task& t = m_tasks[s.task];
+  const Attempt attempt{s.stage, seconds_since(s.start), s.cpu_seconds};
+  fs::path product;
+  try {
+    product = m_spec.finalize(t, attempt);
+  } catch (const std::exception& e) {
+    fail(s, "outputs", e.what());
+    return;
+  }
+  const fs::path target = m_spec.root / t.final_dir;
+  fs::create_directories(target.parent_path());
+  fs::rename(product, target);  // the one step that makes the sample exist
+  std::error_code ec;
+  fs::remove_all(s.stage, ec);
+  append_manifest_row(t, attempt.wall_seconds, attempt.cpu_seconds);
+  s.lock.release();
+  ++m_sum.done;
+  ++m_sum.done_now;
+}
+
+void Runner::fail(Slot& s, const std::string& reason, const std::string& detail) {
+  record_failure(m_tasks[s.task], reason, detail, seconds_since(s.start));
+  std::error_code ec;
+  fs::remove_all(s.stage, ec);
+  s.lock.release();
+  s.pid = -1;
+}
+
+/// Interrupted: terminate every child's group, give them 3 s, then kill; nothing is recorded.
+void Runner::stop_all() {
+  for (auto& s : m_slots)
+    if (s->pid > 0) kill(-s->pid, SIGTERM);
+  const auto t0 = Clock::now();
+  for (auto& s : m_slots) {
+    while (s->pid > 0) {
+      int status = 0;
+      if (waitpid(s->pid, &status, WNOHANG) == s->pid) {
+        kill(-s->pid, SIGKILL);
+        s->pid = -1;
+      } else if (seconds_since(t0) > 3.0) {
+        kill(-s->pid, SIGKILL);
+        waitpid(s->pid, &status, 0);
+        s->pid = -1;
+      } else {
+        std::this_thread::sleep_for(std::chrono::milliseconds(20));
+      }
+    }
+    std::error_code ec;
+    fs::remove_all(s->stage, ec);
+  }
+  m_slots.clear();
+  m_sum.interrupted = true;
+}
+
+void Runner::report(bool force) {
+  if (!m_spec.progress || (!force && seconds_since(m_last_progress) < m_spec.progress_every)) return;
+  m_last_progress = Clock::now();
+  Progress p;
+  p.total = m_sum.total;
+  p.done = m_sum.done;
+  p.failed = m_sum.failed;
+  p.running = static_cast<long long>(m_slots.size());
+  p.waiting = static_cast<long long>(m_waiting.size());
+  p.done_now = m_sum.done_now;
+  p.elapsed = seconds_since(m_t0);
+  const long long ended_now = m_sum.done_now + m_sum.failed_now;
+  if (ended_now > 0 && p.elapsed > 0) {
+    p.per_hour = 3600.0 * static_cast<double>(m_sum.done_now) / p.elapsed;
+    const long long left = p.total - p.done - p.failed;
+    p.eta = static_cast<double>(left) * p.elapsed / static_cast<double>(ended_now);
+  }
+  m_spec.progress(p);
+}
+
+BatchSummary Runner::run() {
+  fs::create_directories(m_spec.root / ".locks");
+  fs::create_directories(m_spec.root / ".staging");
+  m_sum.total = static_cast<long long>(m_tasks.size());
+  StopSignals signals;
+  scan();
+  m_last_wait_check = Clock::now() - std::chrono::seconds(1);
+  while (!m_pending.empty() || !m_waiting.empty() || !m_slots.empty()) {
+    if (g_stop_signal) {
+      stop_all();
+      break;
+    }
+    fill_slots();
+    poll();
+    report(false);
+    // Tasks another process held may have finished meanwhile: fill_slots counts them then.
+    std::this_thread::sleep_for(std::chrono::milliseconds(m_slots.empty() ? 100 : 20));
+  }
+  m_sum.elapsed = seconds_since(m_t0);
+  report(true);
+  return m_sum;
+}
+
+}  // namespace
+
+std::vector<Task> select_shard(const std::vector<Task>& tasks, int index, int count) {
+  if (count < 1 || index < 0 || index >= count)
+    throw std::invalid_argument("shard " + std::to_string(index) + "/" + std::to_string(count) +
+                                " is not I/N with 0 <= I < N");
+  std::vector<Task> out;
+  for (std::size_t p = static_cast<std::size_t>(index); p < tasks.size(); p += static_cast<std::size_t>(count))
+    out.push_back(tasks[p]);
+  return out;
+}
+
+std::pair<int, int> parse_shard(const std::string& text, const std::string& option) {
+  const auto slash = text.find('/');
+  try {
+    if (slash == std::string::npos) throw std::invalid_argument(text);
+    std::size_t used_i = 0, used_n = 0;
+    const int i = std::stoi(text.substr(0, slash), &used_i);
+    const int n = std::stoi(text.substr(slash + 1), &used_n);
+    if (used_i != slash || used_n != text.size() - slash - 1 || n < 1 || i < 0 || i >= n)
+      throw std::invalid_argument(text);
+    return {i, n};
+  } catch (const std::logic_error&) {
+    throw std::invalid_argument(option + " '" + text + "' is not I/N with 0 <= I < N (e.g. 0/4)");
+  }
+}
+
+BatchSummary run_batch(const std::vector<Task>& tasks, const BatchSpec& spec) {
+  if (spec.jobs < 1) throw std::invalid_argument("jobs must be >= 1");
+  if (!spec.commands || !spec.finalize) throw std::invalid_argument("batch spec needs commands and finalize");
+  Runner runner(tasks, spec);
+  return runner.run();
+}
+
+void append_line(const fs::path& path, const std::string& text) {
+  const std::string line = text + "\n";
+  const int fd = open(path.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
+  if (fd < 0) throw std::runtime_error("cannot open '" + path.string() + "': " + std::strerror(errno));
+  const ssize_t w = write(fd, line.data(), line.size());
+  const int write_errno = errno;
+  const bool synced = fdatasync(fd) == 0;
+  close(fd);
+  if (w != static_cast<ssize_t>(line.size()) || !synced)
+    throw std::runtime_error("cannot append to '" + path.string() + "': " +
+                             (w < 0 ? std::strerror(write_errno) : "short write"));
+}
+
+std::vector<nlohmann::json> read_json_lines(const fs::path& path) {
+  std::vector<nlohmann::json> rows;
+  std::ifstream in(path);
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.empty()) continue;
+    nlohmann::json j = nlohmann::json::parse(line, nullptr, false);
+    if (!j.is_discarded() && j.is_object()) rows.push_back(std::move(j));
+  }
+  return rows;
+}
+
+void write_file_atomically(const fs::path& path, const std::string& text) {
+  const fs::path tmp = path.string() + ".tmp" + std::to_string(getpid());
+  {
+    std::ofstream out(tmp, std::ios::binary);
+    out << text;
+    if (!out.flush()) {
+      std::error_code ec;
+      fs::remove(tmp, ec);
+      throw std::runtime_error("cannot write '" + path.string() + "'");
+    }
+  }
+  std::error_code ec;
+  fs::rename(tmp, path, ec);
+  if (ec) {
+    fs::remove(tmp, ec);
+    throw std::runtime_error("cannot write '" + path.string() + "': " + ec.message());
+  }
+}
+
+fs::path self_executable() { return fs::read_symlink("/proc/self/exe"); }
+
+}  // namespace papersim::batch

@@ -1,0 +1,127 @@
+#pragma once
+/// A resumable, failure-isolated batch of samples run as child processes, one per core.
+///
+/// Dataset layout under the batch root (shared by `papersim batch` and `scenegen batch`):
+///   ROOT/<final_dir of each task>/   a finished sample: exists only when complete (renamed in)
+///   ROOT/<manifest_name>             one JSON line per finished sample (appended atomically)
+///   ROOT/<failures_name>             one JSON line per failed attempt (appended atomically)
+///   ROOT/.locks/<task>.lock          flock held while a process works on the task
+///   ROOT/.staging/<task>.<attempt>/  work folder of a running attempt; never counted
+///
+/// A task is finished exactly when its final folder exists: outputs are written into a
+/// staging folder and renamed into place in one step after they were checked, so a crash at
+/// any point leaves either nothing or the whole sample. Running again skips finished tasks,
+/// appends a missing manifest row for a task finished just before a crash, and redoes the rest.
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+namespace papersim::batch {
+
+/// One sample of a batch.
+struct Task {
+  std::string key;                  ///< unique within the batch, e.g. "pull/0/17"; used in file names
+  std::filesystem::path final_dir;  ///< relative to the root; exists only when finished
+  nlohmann::json info = nlohmann::json::object();  ///< copied into manifest and failure rows
+};
+
+/// One child process of a task: argv[0] is the executable path.
+struct Command {
+  std::vector<std::string> argv;
+  std::filesystem::path stdout_path;  ///< where the child's stdout goes; empty: the task log
+};
+
+/// What a finished attempt reports to the caller's hooks.
+struct Attempt {
+  std::filesystem::path stage;  ///< the staging folder of the attempt
+  double wall_seconds = 0.0;    ///< from the first command's start to the last one's end [s]
+  double cpu_seconds = 0.0;     ///< user + system time of the commands (and children they waited for) [s]
+};
+
+/// The slice `index` of `count` (0 <= index < count): tasks whose position p in the list has
+/// p % count == index. Round robin, so every shard gets a similar mix of scenarios.
+/// @throw std::invalid_argument when count < 1 or index is outside [0, count)
+std::vector<Task> select_shard(const std::vector<Task>& tasks, int index, int count);
+
+/// Parse "I/N" into (index, count) with 0 <= I < N.
+/// @throw std::invalid_argument naming `option` when the text is not of that form
+std::pair<int, int> parse_shard(const std::string& text, const std::string& option);
+
+/// Progress of a running batch.
+struct Progress {
+  long long total = 0;     ///< tasks of this batch (this shard)
+  long long done = 0;      ///< finished, including those finished before this run
+  long long failed = 0;    ///< failed (in this run, or recorded earlier and not retried)
+  long long running = 0;   ///< child processes at work now
+  long long waiting = 0;   ///< tasks held by another process (lock taken)
+  long long done_now = 0;  ///< finished by this run
+  double elapsed = 0.0;    ///< wall seconds since this run started [s]
+  double per_hour = 0.0;   ///< samples finished by this run per hour of wall time
+  double eta = -1.0;       ///< seconds to finish the rest at that rate, -1 when unknown [s]
+};
+using ProgressFn = std::function<void(const Progress&)>;
+
+/// How a batch runs and what it does with each task.
+struct BatchSpec {
+  std::filesystem::path root;              ///< dataset folder (created if missing)
+  std::string manifest_name = "manifest.jsonl";
+  std::string failures_name = "failures.jsonl";
+  int jobs = 1;                            ///< child processes at once (>= 1)
+  double time_limit = 0.0;                 ///< per task, all its commands [s]; <= 0: none
+  bool retry_failed = false;               ///< run tasks with a recorded failure again
+  double progress_every = 1.0;             ///< seconds between progress calls [s]
+  /// Write the inputs of a task into its (empty) staging folder; runs in this process, so
+  /// keep it cheap. A throw is recorded as a failure with reason "prepare".
+  std::function<void(const Task&, const std::filesystem::path& stage)> prepare;
+  /// The commands of a task, run one after the other in the staging folder's context.
+  std::function<std::vector<Command>(const Task&, const std::filesystem::path& stage)> commands;
+  /// After every command succeeded: check the outputs and return the folder (inside the
+  /// stage) that becomes the task's final folder. Throw to record a failure ("outputs").
+  std::function<std::filesystem::path(const Task&, const Attempt&)> finalize;
+  /// The manifest row of a finished task (its final folder given); the runner adds "key",
+  /// "path", "cpu_seconds" (null when unknown) and the task's info. For a task found finished without a row, wall_seconds is
+  /// unknown (negative) and the hook should read it from the outputs.
+  std::function<nlohmann::json(const Task&, const std::filesystem::path& final_dir,
+                               double wall_seconds)> manifest_row;
+  /// The reason of a failed command from its exit status (>= 0) and last log line; empty
+  /// means "exit status N".
+  std::function<std::string(int exit_status, const std::string& last_line)> failure_reason;
+  ProgressFn progress;                     ///< called every progress_every and at the end
+};
+
+/// What a batch run did.
+struct BatchSummary {
+  long long total = 0, done = 0, failed = 0;
+  long long done_now = 0, failed_now = 0, repaired = 0;  ///< repaired: manifest rows added
+  bool interrupted = false;   ///< stopped by SIGINT or SIGTERM; unfinished tasks left as they were
+  double elapsed = 0.0;       ///< [s]
+};
+
+/// Run every unfinished task of `tasks` under spec.root. SIGINT and SIGTERM stop the batch:
+/// running children are killed (with their process groups) and their staging folders removed,
+/// so the same call later resumes. Children die with this process (PR_SET_PDEATHSIG), and each
+/// holds its task's lock, so a second batch on the same root never runs a task twice: it waits
+/// for tasks another process holds and counts them when they appear.
+/// @throw std::runtime_error when the root, the lock folder or the manifest cannot be written
+BatchSummary run_batch(const std::vector<Task>& tasks, const BatchSpec& spec);
+
+/// Append one line (text + '\n') to `path` with a single write on an O_APPEND descriptor, then
+/// fdatasync: concurrent writers never interleave inside a line.
+/// @throw std::runtime_error naming the file when it cannot be opened or fully written
+void append_line(const std::filesystem::path& path, const std::string& text);
+
+/// Every JSON object of a JSON-lines file, in order; a missing file gives none. A line that is
+/// not JSON (an incomplete last line after power loss) is skipped.
+std::vector<nlohmann::json> read_json_lines(const std::filesystem::path& path);
+
+/// Write `text` to `path` through a temporary file in the same folder and a rename.
+/// @throw std::runtime_error naming the file when it cannot be written
+void write_file_atomically(const std::filesystem::path& path, const std::string& text);
+
+/// The path of the running executable (/proc/self/exe).
+std::filesystem::path self_executable();
+
+}  // namespace papersim::batch

@@ -1,0 +1,31 @@
+#pragma once
+/// Slurm job-array scripts for a sharded batch: array task I runs shard I/N of the same batch.
+/// Slurm is the scheduler; nothing here schedules.
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace papersim::batch {
+
+/// What the `sbatch` script asks for, per array task.
+struct SlurmOptions {
+  int shards = 1;                ///< array tasks (0 .. shards-1), each one shard I/N
+  int cpus_per_task = 1;         ///< cores per array task; the shard runs this many samples at once
+  std::string mem = "2G";        ///< memory per array task (sbatch --mem syntax)
+  std::string time = "24:00:00"; ///< wall-time limit per array task (sbatch --time syntax)
+  std::string partition;         ///< sbatch --partition; empty: the cluster's default
+  std::string job_name = "papersim";
+  int max_running = 0;           ///< at most this many array tasks at once (%M); 0: no limit
+};
+
+/// A bash word in single quotes.
+std::string shell_quote(const std::string& word);
+
+/// The script: #SBATCH lines (--array, --cpus-per-task, --mem, --time, --output, --error,
+/// --job-name, --partition), then `command` with "--shard ${SLURM_ARRAY_TASK_ID}/N --jobs C"
+/// appended. Logs go to LOG_DIR/%A_%a.out and .err.
+/// @throw std::invalid_argument when shards or cpus_per_task < 1
+std::string slurm_script(const std::vector<std::string>& command, const SlurmOptions& options,
+                         const std::filesystem::path& log_dir);
+
+}  // namespace papersim::batch

@@ -1,0 +1,139 @@
+#include "scenegen/batch.hpp"
+
+#include <algorithm>
+#include <fstream>
+#include <sstream>
+
+#include "scenegen/errors.hpp"
+
+namespace papersim::scenegen {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+std::uint64_t splitmix64(std::uint64_t x) {
+  x += 0x9e3779b97f4a7c15ULL;
+  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
+  return x ^ (x >> 31);
+}
+
+std::uint64_t fnv1a(const std::string& s) {
+  std::uint64_t h = 0xcbf29ce484222325ULL;
+  for (unsigned char c : s) h = (h ^ c) * 0x100000001b3ULL;
+  return h;
+}
+
+bool all_digits(const std::string& s) {
+  return !s.empty() && s.size() < 19 && s.find_first_not_of("0123456789") == std::string::npos;
+}
+
+struct MeshEntry {
+  std::string scenario;
+  std::uint64_t seed = 0;
+  fs::path dir;  ///< relative to the root
+};
+
+/// Finished meshes: meshes/<scenario>/<bucket>/<seed>/ holding sheet.obj.
+std::vector<MeshEntry> finished_meshes(const fs::path& root) {
+  std::vector<MeshEntry> out;
+  std::error_code ec;
+  for (const auto& sc : fs::directory_iterator(root / "meshes", ec)) {
+    if (!sc.is_directory()) continue;
+    for (const auto& bucket : fs::directory_iterator(sc.path(), ec)) {
+      if (!bucket.is_directory()) continue;
+      for (const auto& d : fs::directory_iterator(bucket.path(), ec)) {
+        const std::string name = d.path().filename().string();
+        if (!d.is_directory() || !all_digits(name) || !fs::exists(d.path() / "sheet.obj")) continue;
+        out.push_back({sc.path().filename().string(), std::stoull(name), fs::relative(d.path(), root)});
+      }
+    }
+  }
+  std::sort(out.begin(), out.end(), [](const MeshEntry& a, const MeshEntry& b) {
+    return a.scenario != b.scenario ? a.scenario < b.scenario : a.seed < b.seed;
+  });
+  return out;
+}
+
+void write_obj_file(const fs::path& path, const SheetMesh& mesh) {
+  std::ofstream out(path);
+  write_sheet_obj(out, mesh);
+  if (!out.flush()) throw IoError("cannot write '" + path.string() + "'");
+}
+
+}  // namespace
+
+SheetMesh flipped_sheet(const SheetMesh& mesh) {
+  SheetMesh f = mesh;
+  f.positions.col(0) = -mesh.positions.col(0);
+  f.positions.col(2) = -mesh.positions.col(2);
+  f.uv.col(0) = Eigen::VectorXd::Ones(mesh.uv.rows()) - mesh.uv.col(0);
+  // u -> 1 - u turns every face's UV area negative: reverse the faces so the printed side
+  // faces along the face normal again (the convention of parse_sheet_obj).
+  f.faces.col(1) = mesh.faces.col(2);
+  f.faces.col(2) = mesh.faces.col(1);
+  return f;
+}
+
+std::uint64_t view_seed(const std::string& scenario, std::uint64_t seed, int view) {
+  return splitmix64(fnv1a(scenario) ^ splitmix64(seed * 64 + static_cast<std::uint64_t>(view))) >> 33;
+}
+
+std::vector<batch::Task> render_tasks(const fs::path& root, const RenderBatchOptions& o) {
+  if (o.views < 1) throw InputError("--views must be >= 1");
+  std::vector<batch::Task> tasks;
+  for (const MeshEntry& m : finished_meshes(root)) {
+    const fs::path bucket = fs::path(std::to_string(m.seed / 1000)) / std::to_string(m.seed);
+    for (int k = 0; k < o.views; ++k) {
+      batch::Task t;
+      t.final_dir = fs::path("renders") / m.scenario / bucket / ("view" + std::to_string(k));
+      t.key = t.final_dir.generic_string();
+      t.info = {{"scenario", m.scenario}, {"seed", m.seed}, {"view", k},
+                {"flipped", o.flip && k % 2 == 1}, {"render_seed", view_seed(m.scenario, m.seed, k)},
+                {"mesh", (m.dir / "sheet.obj").generic_string()}};
+      tasks.push_back(std::move(t));
+    }
+  }
+  return tasks;
+}
+
+batch::BatchSpec render_batch_spec(const fs::path& root, const fs::path& scenegen, const RenderBatchOptions& o) {
+  batch::BatchSpec spec;
+  spec.root = root;
+  spec.manifest_name = "renders.jsonl";
+  spec.failures_name = "renders_failures.jsonl";
+  spec.prepare = [root](const batch::Task& t, const fs::path& stage) {
+    if (!t.info.at("flipped").get<bool>()) return;
+    const SheetMesh mesh = read_sheet_obj((root / t.info.at("mesh").get<std::string>()).string());
+    write_obj_file(stage / "flipped.obj", flipped_sheet(mesh));
+  };
+  spec.commands = [root, scenegen, o](const batch::Task& t, const fs::path& stage) {
+    const bool flipped = t.info.at("flipped").get<bool>();
+    const fs::path mesh = flipped ? stage / "flipped.obj" : root / t.info.at("mesh").get<std::string>();
+    std::vector<std::string> argv{scenegen.string(), "render", mesh.string(), "--out", (stage / "out").string(),
+                                  "--seed", std::to_string(t.info.at("render_seed").get<std::uint64_t>()),
+                                  "--size", o.size, "--quality", o.quality, "--passes", o.passes,
+                                  "--parallel", "1", "--threads", std::to_string(o.threads), "--quiet"};
+    if (o.dpi > 0) argv.insert(argv.end(), {"--dpi", std::to_string(o.dpi)});
+    if (!o.documents_dir.empty()) argv.insert(argv.end(), {"--documents", o.documents_dir});
+    if (!o.backgrounds_dir.empty()) argv.insert(argv.end(), {"--backgrounds", o.backgrounds_dir});
+    return std::vector<batch::Command>{{argv, {}}};
+  };
+  spec.finalize = [](const batch::Task&, const batch::Attempt& a) {
+    const fs::path out = a.stage / "out";
+    if (!fs::exists(out / "meta.json")) throw IoError("missing meta.json");
+    return out;
+  };
+  spec.manifest_row = [](const batch::Task&, const fs::path&, double wall) {
+    return json{{"wall_seconds", wall >= 0 ? json(wall) : json(nullptr)}};
+  };
+  spec.failure_reason = [](int code, const std::string&) -> std::string {
+    if (code == 3) return "no valid camera";
+    if (code == 2) return "render failed";
+    return "";
+  };
+  return spec;
+}
+
+}  // namespace papersim::scenegen

@@ -1,0 +1,48 @@
+#pragma once
+/// `scenegen batch DATASET`: render every finished mesh of a dataset K times, one child
+/// `scenegen render` per view, resumable and failure-isolated like `papersim batch`
+/// (batch/runner.hpp). Views go to renders/<scenario>/<seed/1000>/<seed>/view<k>/; renders.jsonl
+/// has one row per finished view, renders_failures.jsonl one per failed attempt.
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "batch/runner.hpp"
+#include "scenegen/sheet_obj.hpp"
+
+namespace papersim::scenegen {
+
+/// What every view of a render batch shares.
+struct RenderBatchOptions {
+  int views = 4;                  ///< renders per mesh (>= 1)
+  bool flip = false;              ///< odd views show the flipped sheet (u -> 1 - u, seen from the back)
+  std::string size = "1024x1440"; ///< WIDTHxHEIGHT [pixels]
+  std::string quality = "final";  ///< draft | final
+  std::string passes = "all";     ///< as scenegen render --passes
+  std::string documents_dir;      ///< folder of pages to draw from (empty: built-in generator)
+  std::string backgrounds_dir;    ///< folder of background images (empty: procedural only)
+  int threads = 1;                ///< POV-Ray threads per view (1 keeps radiosity reproducible)
+  int dpi = 0;                    ///< built-in page resolution [dpi]; 0: scenegen render's default
+};
+
+/// The sheet seen from its other side: turned over about the material y axis (x -> -x,
+/// z -> -z, a rotation, so nothing is mirrored in space) with u -> 1 - u, so the document is
+/// printed, readable, on the side that now faces up.
+SheetMesh flipped_sheet(const SheetMesh& mesh);
+
+/// The render seed of view `view` of mesh (scenario, seed): a fixed hash, so shards agree.
+std::uint64_t view_seed(const std::string& scenario, std::uint64_t seed, int view);
+
+/// One task per (finished mesh, view) under root/meshes/<scenario>/<bucket>/<seed>/sheet.obj,
+/// sorted by scenario, then seed, then view.
+/// @throw InputError when views < 1
+std::vector<batch::Task> render_tasks(const std::filesystem::path& root, const RenderBatchOptions& options);
+
+/// Hooks: prepare writes the flipped OBJ for flipped views, the command is
+/// `scenegen render MESH --out ... --seed S --parallel 1 --threads T --quiet ...`.
+/// @param scenegen the scenegen executable the children run
+batch::BatchSpec render_batch_spec(const std::filesystem::path& root, const std::filesystem::path& scenegen,
+                                   const RenderBatchOptions& options);
+
+}  // namespace papersim::scenegen

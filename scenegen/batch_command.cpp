@@ -1,0 +1,101 @@
+#include "scenegen/batch_command.hpp"
+
+#include <CLI/CLI.hpp>
+#include <ostream>
+
+#include "scenegen/errors.hpp"
+#include "scenegen/passes.hpp"
+#include "scenegen/pov_writer.hpp"
+
+namespace papersim::scenegen {
+namespace fs = std::filesystem;
+
+namespace {
+
+/// The same batch as a command line for the Slurm script: absolute paths, no --shard / --jobs.
+std::vector<std::string> shard_command(const RenderBatchCommand& c) {
+  const RenderBatchOptions& r = c.render;
+  std::vector<std::string> cmd{batch::self_executable().string(), "batch", fs::absolute(c.dataset).string(),
+                               "--views", std::to_string(r.views), "--size", r.size, "--quality", r.quality,
+                               "--passes", r.passes, "--threads", std::to_string(r.threads), "--quiet"};
+  if (r.flip) cmd.push_back("--flip");
+  if (r.dpi > 0) cmd.insert(cmd.end(), {"--dpi", std::to_string(r.dpi)});
+  if (!r.documents_dir.empty()) cmd.insert(cmd.end(), {"--documents", fs::absolute(r.documents_dir).string()});
+  if (!r.backgrounds_dir.empty()) cmd.insert(cmd.end(), {"--backgrounds", fs::absolute(r.backgrounds_dir).string()});
+  if (c.common.time_limit > 0) cmd.insert(cmd.end(), {"--time-limit", std::to_string(c.common.time_limit)});
+  if (c.common.retry_failed) cmd.push_back("--retry-failed");
+  return cmd;
+}
+
+/// Bad values fail here, before any view runs (scenegen render would reject them per view).
+void check_options(const RenderBatchCommand& c) {
+  if (!fs::is_directory(c.dataset)) throw InputError("dataset '" + c.dataset + "' is not a folder");
+  if (!fs::is_directory(fs::path(c.dataset) / "meshes"))
+    throw InputError("dataset '" + c.dataset + "' has no meshes/ folder (run papersim batch --out " + c.dataset + " first)");
+  try {
+    parse_passes(c.render.passes);
+  } catch (const InputError& e) {
+    throw InputError(std::string("--passes: ") + e.what());
+  }
+  try {
+    parse_quality(c.render.quality);
+  } catch (const InputError& e) {
+    throw InputError(std::string("--quality: ") + e.what());
+  }
+  const auto x = c.render.size.find('x');
+  if (x == std::string::npos || c.render.size.find_first_not_of("0123456789x") != std::string::npos ||
+      x == 0 || x + 1 == c.render.size.size())
+    throw InputError("--size '" + c.render.size + "' is not WIDTHxHEIGHT");
+  for (const auto& [opt, dir] : {std::pair<const char*, std::string>{"--documents", c.render.documents_dir},
+                                 {"--backgrounds", c.render.backgrounds_dir}})
+    if (!dir.empty() && !fs::is_directory(dir)) throw InputError(std::string(opt) + " '" + dir + "' is not a folder");
+  if (!c.common.shard.empty()) {
+    try {
+      batch::parse_shard(c.common.shard, "--shard");
+    } catch (const std::invalid_argument& e) {
+      throw InputError(e.what());
+    }
+  }
+}
+
+}  // namespace
+
+void add_render_batch_subcommand(CLI::App& app, RenderBatchCommand& c) {
+  c.app = app.add_subcommand(
+      "batch", "Render every finished mesh of a dataset (DATASET/meshes/, from papersim batch) --views times, one "
+               "child scenegen render per view, --jobs at once; resumable (run the same command again), failures "
+               "recorded and skipped. Writes DATASET/renders/.../view<k>/, renders.jsonl, renders_failures.jsonl.");
+  c.app->add_option("dataset", c.dataset, "dataset folder")->required();
+  c.app->add_option("--views", c.render.views, "renders per mesh, each with its own seed")
+      ->check(CLI::PositiveNumber)->capture_default_str();
+  c.app->add_flag("--flip", c.render.flip, "odd views show the sheet turned over (u -> 1 - u, printed side up)");
+  c.app->add_option("--size", c.render.size, "image size WIDTHxHEIGHT [pixels]")->capture_default_str();
+  c.app->add_option("--quality", c.render.quality, "draft | final")->capture_default_str();
+  c.app->add_option("--passes", c.render.passes, "as scenegen render --passes")->capture_default_str();
+  c.app->add_option("--documents", c.render.documents_dir, "folder of PNG/JPEG pages to draw from");
+  c.app->add_option("--backgrounds", c.render.backgrounds_dir, "folder of PNG/JPEG background images");
+  c.app->add_option("--dpi", c.render.dpi, "built-in page resolution [dpi] (0: scenegen render's default)")
+      ->check(CLI::NonNegativeNumber)->capture_default_str();
+  c.app->add_option("--threads", c.render.threads, "POV-Ray threads per view (1 keeps radiosity reproducible)")
+      ->check(CLI::PositiveNumber)->capture_default_str();
+  batch::add_batch_cli_options(c.app, c.common);
+}
+
+int run_render_batch(const RenderBatchCommand& c, std::ostream& out, std::ostream& err) {
+  check_options(c);
+  const std::vector<batch::Task> tasks = render_tasks(c.dataset, c.render);
+  if (c.common.slurm_shards > 0) {
+    const fs::path script = batch::write_slurm_script(c.dataset, "scenegen-batch", shard_command(c), c.common);
+    out << "wrote " << script.string() << " (" << c.common.slurm_shards << " array tasks over " << tasks.size()
+        << " views)\nsubmit it with:  sbatch " << script.string()
+        << "\na task that died: sbatch --array=I " << script.string() << "  (it resumes shard I)\n";
+    return 0;
+  }
+  const batch::BatchSpec spec = render_batch_spec(c.dataset, batch::self_executable(), c.render);
+  const batch::BatchSummary s = batch::run_cli_batch(tasks, spec, c.common, err, "scenegen batch");
+  out << batch::summary_line(s, c.dataset, spec) << '\n';
+  if (s.interrupted) return 130;
+  return s.done == s.total ? 0 : 1;
+}
+
+}  // namespace papersim::scenegen

@@ -1,0 +1,300 @@
+#include "simulation/batch.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <iomanip>
+#include <limits>
+#include <set>
+#include <sstream>
+
+#include "simulation/errors.hpp"
+#include "simulation/scenario.hpp"
+
+namespace papersim::simulation {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+std::uint64_t splitmix64(std::uint64_t x) {
+  x += 0x9e3779b97f4a7c15ULL;
+  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
+  return x ^ (x >> 31);
+}
+
+void check_scenario(const std::string& name, const std::string& where) {
+  const auto names = scenario_names();
+  if (std::find(names.begin(), names.end(), name) != names.end()) return;
+  std::string known;
+  for (const auto& n : names) known += (known.empty() ? "" : ", ") + n;
+  throw SceneError(where + ": unknown scenario '" + name + "' (known: " + known + ")");
+}
+
+/// One mix entry: a weight, or {"weight": w, "set": {...}}.
+void add_mix_entry(Mix& mix, const std::string& name, const json& v, const std::string& source) {
+  const std::string where = source + ": scenarios." + name;
+  check_scenario(name, source + ": scenarios");
+  double weight = 1.0;
+  json set = json::object();
+  if (v.is_number()) {
+    weight = v.get<double>();
+  } else if (v.is_object()) {
+    for (const auto& [k, x] : v.items())
+      if (k != "weight" && k != "set") throw SceneError(where + ": unknown key '" + k + "'");
+    if (v.contains("weight")) {
+      if (!v["weight"].is_number()) throw SceneError(where + ".weight: not a number");
+      weight = v["weight"].get<double>();
+    }
+    if (v.contains("set")) {
+      if (!v["set"].is_object()) throw SceneError(where + ".set: not an object of scene keys");
+      set = v["set"];
+    }
+  } else {
+    throw SceneError(where + ": a weight or {\"weight\": W, \"set\": {...}}");
+  }
+  if (!(weight > 0) || !std::isfinite(weight)) throw SceneError(where + ": weight must be > 0");
+  mix.scenarios.push_back(name);
+  mix.weights.push_back(weight);
+  mix.overrides.push_back(set);
+}
+
+/// The JSON node at a dotted key; every part must exist (array parts are indices).
+json& node_at(json& root, const std::string& key, const std::string& source) {
+  json* node = &root;
+  std::stringstream parts(key);
+  std::string part, walked;
+  while (std::getline(parts, part, '.')) {
+    walked += (walked.empty() ? "" : ".") + part;
+    if (node->is_object() && node->contains(part)) {
+      node = &(*node)[part];
+    } else if (node->is_array() && !part.empty() &&
+               part.find_first_not_of("0123456789") == std::string::npos &&
+               std::stoul(part) < node->size()) {
+      node = &(*node)[std::stoul(part)];
+    } else {
+      throw SceneError(source + ": '" + key + "' is not a key of the scene ('" + walked +
+                       "' does not exist)");
+    }
+  }
+  return *node;
+}
+
+std::string seed_bucket(std::uint64_t seed) { return std::to_string(seed / 1000); }
+
+double number_or(const json& j, const char* key, double fallback) {
+  return j.contains(key) && j[key].is_number() ? j[key].get<double>() : fallback;
+}
+
+json read_json_file(const fs::path& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error("cannot read '" + path.string() + "'");
+  json j = json::parse(in, nullptr, false);
+  if (j.is_discarded()) throw std::runtime_error("'" + path.string() + "' is not valid JSON");
+  return j;
+}
+
+}  // namespace
+
+Mix mix_from_json(const json& j, const std::string& source) {
+  if (!j.is_object()) throw SceneError(source + ": a mix file is a JSON object");
+  for (const auto& [k, v] : j.items())
+    if (k != "scenarios" && k != "set") throw SceneError(source + ": unknown key '" + k + "'");
+  if (!j.contains("scenarios") || !j["scenarios"].is_object() || j["scenarios"].empty())
+    throw SceneError(source + ": 'scenarios' must be a non-empty object {name: weight}");
+  Mix mix;
+  for (const auto& [name, v] : j["scenarios"].items()) add_mix_entry(mix, name, v, source);
+  if (j.contains("set")) {
+    if (!j["set"].is_object()) throw SceneError(source + ": 'set' must be an object of scene keys");
+    mix.common = j["set"];
+  }
+  return mix;
+}
+
+Mix load_mix(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw SceneError("--mix: cannot read '" + path + "'");
+  const json j = json::parse(in, nullptr, false);
+  if (j.is_discarded()) throw SceneError("--mix: '" + path + "' is not valid JSON");
+  return mix_from_json(j, path);
+}
+
+std::size_t mix_pick(const Mix& mix, std::uint64_t seed) {
+  double total = 0;
+  for (double w : mix.weights) total += w;
+  const double u = static_cast<double>(splitmix64(seed ^ 0x6d69785f7069636bULL) >> 11) * 0x1.0p-53;
+  double acc = 0;
+  for (std::size_t i = 0; i < mix.weights.size(); ++i) {
+    acc += mix.weights[i] / total;
+    if (u < acc) return i;
+  }
+  return mix.weights.size() - 1;
+}
+
+json parse_overrides(const std::vector<std::string>& pairs) {
+  json out = json::object();
+  for (const auto& p : pairs) {
+    const auto eq = p.find('=');
+    if (eq == std::string::npos || eq == 0)
+      throw SceneError("--set '" + p + "': expected KEY=VALUE (e.g. duration=0.2)");
+    const std::string value = p.substr(eq + 1);
+    json v = json::parse(value, nullptr, false);
+    out[p.substr(0, eq)] = v.is_discarded() ? json(value) : v;
+  }
+  return out;
+}
+
+Scene apply_overrides(const Scene& scene, const json& overrides, const std::string& source) {
+  if (overrides.empty()) return scene;
+  json j = scene_to_json(scene);
+  for (const auto& [key, value] : overrides.items()) node_at(j, key, source) = value;
+  return scene_from_json(j, source);
+}
+
+std::vector<SampleDraw> draw_samples(const MeshBatchSelection& sel) {
+  if (sel.last_seed < sel.first_seed) throw SceneError("--seeds: the last seed is below the first");
+  if (sel.scenarios.empty() == sel.mix_path.empty())
+    throw SceneError("give either --scenarios or --mix");
+  Mix mix;
+  if (!sel.mix_path.empty()) {
+    mix = load_mix(sel.mix_path);
+  } else {
+    for (const auto& s : sel.scenarios) {
+      check_scenario(s, "--scenarios");
+      mix.scenarios.push_back(s);
+      mix.weights.push_back(1.0);
+      mix.overrides.push_back(json::object());
+    }
+  }
+  std::vector<json> merged(mix.scenarios.size());
+  for (std::size_t i = 0; i < merged.size(); ++i) {
+    merged[i] = mix.common;
+    merged[i].update(mix.overrides[i]);
+    merged[i].update(sel.overrides);
+  }
+  std::vector<SampleDraw> draws;
+  std::set<std::size_t> checked;
+  for (std::uint64_t seed = sel.first_seed;; ++seed) {
+    std::vector<std::size_t> picks;
+    if (sel.mix_path.empty()) {
+      for (std::size_t i = 0; i < mix.scenarios.size(); ++i) picks.push_back(i);
+    } else {
+      picks.push_back(mix_pick(mix, seed));
+    }
+    for (std::size_t i : picks) {
+      // An override that is not a scene key fails here, before any sample runs.
+      if (checked.insert(i).second)
+        apply_overrides(make_scenario(mix.scenarios[i], seed), merged[i],
+                        sel.mix_path.empty() ? "--set" : sel.mix_path + " / --set");
+      draws.push_back({mix.scenarios[i], seed, merged[i]});
+    }
+    if (seed == sel.last_seed) break;
+  }
+  return draws;
+}
+
+std::vector<batch::Task> mesh_tasks(const std::vector<SampleDraw>& draws) {
+  std::vector<batch::Task> tasks;
+  tasks.reserve(draws.size());
+  for (const auto& d : draws) {
+    batch::Task t;
+    t.final_dir = fs::path("meshes") / d.scenario / seed_bucket(d.seed) / std::to_string(d.seed);
+    t.key = t.final_dir.generic_string();
+    t.info = {{"scenario", d.scenario}, {"seed", d.seed}};
+    if (!d.overrides.empty()) t.info["set"] = d.overrides;
+    tasks.push_back(std::move(t));
+  }
+  return tasks;
+}
+
+json mesh_manifest_fields(const fs::path& dir) {
+  const json meta = read_json_file(dir / "meta.json");
+  const json& run = meta.at("run");
+  const json& q = meta.at("quality");
+  double closest = std::numeric_limits<double>::infinity();
+  if (q.contains("min_obstacle_distance"))
+    for (const auto& d : q["min_obstacle_distance"])
+      if (d.is_number()) closest = std::min(closest, d.get<double>());
+  json row = {{"vertices", meta.at("sheet").value("vertices", 0)},
+              {"steps", run.value("steps", 0)},
+              {"newton_iterations", run.value("newton_iterations", 0)},
+              {"sim_wall_seconds", number_or(run, "wall_seconds", -1)},
+              {"max_stretch", number_or(q, "max_principal_stretch", -1)},
+              {"closest_obstacle_distance", std::isfinite(closest) ? json(closest) : json(nullptr)},
+              {"self_intersections", q.value("self_intersections", -1)},
+              {"crease_length", nullptr},
+              {"abs_curvature_integral", nullptr}};
+  if (fs::exists(dir / "metrics.json")) {
+    const json m = read_json_file(dir / "metrics.json");
+    const json& entry = m.contains("meshes") && !m["meshes"].empty() ? m["meshes"][0] : m;
+    const json& mesh = entry.contains("metrics") ? entry["metrics"] : entry;
+    if (mesh.contains("creases")) row["crease_length"] = mesh["creases"].value("total_length", 0.0);
+    if (mesh.contains("developability"))
+      row["abs_curvature_integral"] = mesh["developability"].value("angle_defect_integral", 0.0);
+  }
+  return row;
+}
+
+batch::BatchSpec mesh_batch_spec(const fs::path& root, const fs::path& papersim, bool with_metrics) {
+  batch::BatchSpec spec;
+  spec.root = root;
+  spec.prepare = [](const batch::Task& t, const fs::path& stage) {
+    const Scene scene = apply_overrides(
+        make_scenario(t.info.at("scenario").get<std::string>(), t.info.at("seed").get<std::uint64_t>()),
+        t.info.value("set", json::object()), "--set");
+    fs::create_directories(stage / "out");
+    std::ostringstream text;
+    text << std::setw(2) << scene_to_json(scene) << '\n';
+    batch::write_file_atomically(stage / "out" / "scene.json", text.str());
+  };
+  spec.commands = [papersim, with_metrics](const batch::Task&, const fs::path& stage) {
+    const fs::path out = stage / "out";
+    std::vector<batch::Command> c{{{papersim.string(), "run", (out / "scene.json").string(), "--out",
+                                    out.string(), "--quiet"}, {}}};
+    if (with_metrics)
+      c.push_back({{papersim.string(), "metrics", (out / "sheet.ply").string(), "--json"},
+                   stage / "metrics.json"});
+    return c;
+  };
+  spec.finalize = [with_metrics](const batch::Task&, const batch::Attempt& a) {
+    const fs::path out = a.stage / "out";
+    for (const char* f : {"scene.json", "sheet.obj", "sheet.ply", "meta.json"})
+      if (!fs::exists(out / f)) throw std::runtime_error(std::string("missing ") + f);
+    if (with_metrics) {
+      json m = read_json_file(a.stage / "metrics.json");  // throws when incomplete
+      // The mesh path names the staging folder: make it relative to the sample folder.
+      if (m.contains("meshes") && !m["meshes"].empty()) m["meshes"][0]["path"] = "sheet.ply";
+      std::ostringstream text;
+      text << std::setw(2) << m << '\n';
+      batch::write_file_atomically(out / "metrics.json", text.str());
+    }
+    return out;
+  };
+  spec.manifest_row = [](const batch::Task&, const fs::path& dir, double wall) {
+    json row = mesh_manifest_fields(dir);
+    row["wall_seconds"] = wall >= 0 ? wall : row["sim_wall_seconds"].get<double>();
+    return row;
+  };
+  spec.failure_reason = [](int code, const std::string&) -> std::string {
+    if (code == 2) return "bad scene";
+    if (code == 3) return "simulation failed";
+    return "";
+  };
+  return spec;
+}
+
+std::pair<std::uint64_t, std::uint64_t> parse_seed_range(const std::string& text) {
+  const auto dash = text.find('-');
+  const std::string a = text.substr(0, dash), b = dash == std::string::npos ? a : text.substr(dash + 1);
+  auto digits = [](const std::string& s) {
+    return !s.empty() && s.size() < 19 && s.find_first_not_of("0123456789") == std::string::npos;
+  };
+  if (!digits(a) || !digits(b))
+    throw SceneError("--seeds '" + text + "': expected A-B or A (non-negative integers)");
+  const std::uint64_t first = std::stoull(a), last = std::stoull(b);
+  if (last < first) throw SceneError("--seeds '" + text + "': the last seed is below the first");
+  return {first, last};
+}
+
+}  // namespace papersim::simulation

@@ -1,0 +1,87 @@
+#pragma once
+/// `papersim batch`: a dataset of simulated sheets, one child `papersim run` per sample.
+///
+/// Layout under DATASET: meshes/<scenario>/<seed / 1000>/<seed>/ holds scene.json, sheet.obj,
+/// sheet.ply, meta.json and (when the metrics command is built) metrics.json; manifest.jsonl
+/// has one row per finished sample, failures.jsonl one per failed attempt (batch/runner.hpp).
+#include <cstdint>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "batch/runner.hpp"
+#include "simulation/scene.hpp"
+
+namespace papersim::simulation {
+
+/// One sample to draw: a scenario, a seed and scene overrides applied after the draw.
+struct SampleDraw {
+  std::string scenario;
+  std::uint64_t seed = 0;
+  /// Dotted scene keys to values, e.g. {"duration": 0.1, "sheet.edge_length": 0.02}.
+  nlohmann::json overrides = nlohmann::json::object();
+};
+
+/// A mix of scenarios: each seed draws one scenario with probability weight / sum of weights.
+struct Mix {
+  std::vector<std::string> scenarios;
+  std::vector<double> weights;                   ///< > 0 each [-]
+  std::vector<nlohmann::json> overrides;          ///< per scenario, over `common`
+  nlohmann::json common = nlohmann::json::object();  ///< overrides for every scenario
+};
+
+/// Parse a mix file:
+///   {"scenarios": {"pull": 2, "fall-sphere": {"weight": 1, "set": {"duration": 0.5}}},
+///    "set": {"sheet.edge_length": 0.01}}
+/// @throw SceneError naming the file and the key (unknown key or scenario, weight <= 0)
+Mix mix_from_json(const nlohmann::json& j, const std::string& source);
+/// @throw SceneError when the file is missing or not JSON, or as mix_from_json
+Mix load_mix(const std::string& path);
+
+/// The scenario a mix gives `seed` (a fixed hash of the seed, so any shard agrees).
+std::size_t mix_pick(const Mix& mix, std::uint64_t seed);
+
+/// "key=value" pairs into {key: value}; the value is read as JSON, else taken as a string.
+/// @throw SceneError naming the pair when it has no '=' or an empty key
+nlohmann::json parse_overrides(const std::vector<std::string>& pairs);
+
+/// `scene` with dotted-key overrides applied ("sheet.edge_length", "obstacles.0.radius"),
+/// checked like a scene file. `source` names where the overrides come from in errors.
+/// @throw SceneError naming the key when it is not a key of the scene, or a value is invalid
+Scene apply_overrides(const Scene& scene, const nlohmann::json& overrides, const std::string& source);
+
+/// Which samples a batch makes.
+struct MeshBatchSelection {
+  std::vector<std::string> scenarios;  ///< every scenario for every seed (when no mix)
+  std::string mix_path;                ///< or one scenario per seed from this mix file
+  std::uint64_t first_seed = 0, last_seed = 0;  ///< inclusive
+  nlohmann::json overrides = nlohmann::json::object();  ///< --set, over the mix's
+};
+
+/// The samples of a selection, seeds in order (and scenarios in the given order per seed).
+/// Checks every distinct scenario and override set once by drawing its first seed.
+/// @throw SceneError for an unknown scenario, a bad mix file or an invalid override
+std::vector<SampleDraw> draw_samples(const MeshBatchSelection& selection);
+
+/// The runner tasks of `draws`: key and folder meshes/<scenario>/<seed/1000>/<seed>.
+std::vector<batch::Task> mesh_tasks(const std::vector<SampleDraw>& draws);
+
+/// Hooks of a mesh batch: prepare writes scene.json, the commands are `papersim run` (and
+/// `papersim metrics --json` into metrics.json when with_metrics), the manifest row carries
+/// the run and quality figures of meta.json and metrics.json.
+/// @param papersim the papersim executable the children run
+batch::BatchSpec mesh_batch_spec(const std::filesystem::path& root, const std::filesystem::path& papersim,
+                                 bool with_metrics);
+
+/// The manifest fields of a finished sample folder: vertices, Newton iterations, steps,
+/// simulation wall time, largest stretch, closest obstacle distance, self-intersections and,
+/// from metrics.json, crease length and the integral of |K|.
+/// @throw std::runtime_error when meta.json cannot be read
+nlohmann::json mesh_manifest_fields(const std::filesystem::path& sample_dir);
+
+/// Parse "A-B" or "A" into an inclusive seed range.
+/// @throw SceneError naming --seeds when the text is not of that form or B < A
+std::pair<std::uint64_t, std::uint64_t> parse_seed_range(const std::string& text);
+
+}  // namespace papersim::simulation

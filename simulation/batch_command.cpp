@@ -1,0 +1,103 @@
+#include "simulation/batch_command.hpp"
+
+#include <CLI/CLI.hpp>
+#include <ostream>
+#include <sstream>
+
+#include "batch/dataset_stats.hpp"
+#include "simulation/batch.hpp"
+#include "simulation/errors.hpp"
+#include "simulation/scenario.hpp"
+
+namespace papersim::simulation {
+namespace fs = std::filesystem;
+
+namespace {
+
+std::vector<std::string> split_commas(const std::string& text) {
+  std::vector<std::string> out;
+  std::stringstream s(text);
+  std::string part;
+  while (std::getline(s, part, ','))
+    if (!part.empty()) out.push_back(part);
+  return out;
+}
+
+/// The same batch as a command line for the Slurm script: absolute paths, no --shard / --jobs.
+std::vector<std::string> shard_command(const BatchCommand& c) {
+  std::vector<std::string> cmd{batch::self_executable().string(), "batch", "--out",
+                               fs::absolute(c.out).string(), "--seeds", c.seeds, "--quiet"};
+  if (!c.scenarios.empty()) cmd.insert(cmd.end(), {"--scenarios", c.scenarios});
+  if (!c.mix.empty()) cmd.insert(cmd.end(), {"--mix", fs::absolute(c.mix).string()});
+  for (const auto& s : c.set) cmd.insert(cmd.end(), {"--set", s});
+  if (c.common.time_limit > 0) cmd.insert(cmd.end(), {"--time-limit", std::to_string(c.common.time_limit)});
+  if (c.common.retry_failed) cmd.push_back("--retry-failed");
+  return cmd;
+}
+
+int run_mesh_batch(const BatchCommand& c, bool with_metrics, std::ostream& out, std::ostream& err) {
+  MeshBatchSelection sel;
+  sel.scenarios = split_commas(c.scenarios);
+  sel.mix_path = c.mix;
+  std::tie(sel.first_seed, sel.last_seed) = parse_seed_range(c.seeds);
+  sel.overrides = parse_overrides(c.set);
+  const std::vector<SampleDraw> draws = draw_samples(sel);  // checks every option first
+  if (!c.common.shard.empty()) batch::parse_shard(c.common.shard, "--shard");
+  if (c.common.slurm_shards > 0) {
+    const fs::path script = batch::write_slurm_script(c.out, "papersim-batch", shard_command(c), c.common);
+    out << "wrote " << script.string() << " (" << c.common.slurm_shards << " array tasks over "
+        << draws.size() << " samples)\nsubmit it with:  sbatch " << script.string()
+        << "\na task that died: sbatch --array=I " << script.string() << "  (it resumes shard I)\n";
+    return 0;
+  }
+  const batch::BatchSpec spec = mesh_batch_spec(c.out, batch::self_executable(), with_metrics);
+  const batch::BatchSummary s = batch::run_cli_batch(mesh_tasks(draws), spec, c.common, err, "papersim batch");
+  out << batch::summary_line(s, c.out, spec) << '\n';
+  if (s.interrupted) return 130;
+  return s.done == s.total ? 0 : 1;
+}
+
+int run_stats(const BatchCommand& c, std::ostream& out) {
+  const auto parts = batch::read_dataset(c.dataset);
+  batch::write_dataset_report(out, parts);
+  if (!c.plots.empty()) {
+    const auto files = batch::write_dataset_plots(c.plots, parts);
+    out << "wrote " << files.size() << " plots in " << c.plots << '\n';
+  }
+  return 0;
+}
+
+}  // namespace
+
+void add_batch_subcommands(CLI::App& app, BatchCommand& c) {
+  c.batch = app.add_subcommand(
+      "batch", "Make a dataset: one child process per sample, --jobs at once; resumable (run the same "
+               "command again), failures recorded and skipped. Writes DATASET/meshes/<scenario>/<seed/1000>/<seed>/, "
+               "manifest.jsonl and failures.jsonl.");
+  c.batch->add_option("--out", c.out, "dataset folder")->required();
+  c.batch->add_option("--scenarios", c.scenarios, "comma list of scenarios; every one for every seed ("
+                      + [] { std::string s; for (const auto& n : scenario_names()) s += (s.empty() ? "" : ", ") + n; return s; }() + ")");
+  c.batch->add_option("--mix", c.mix, "JSON mix file instead: {\"scenarios\": {NAME: WEIGHT or {\"weight\": W, \"set\": {...}}}, \"set\": {...}}; each seed draws one scenario");
+  c.batch->add_option("--seeds", c.seeds, "seed range A-B (inclusive) or one seed A")->required();
+  c.batch->add_option("--set", c.set, "scene override KEY=VALUE after the draw (dotted scene keys, e.g. duration=0.2 sheet.edge_length=0.02); repeatable");
+  batch::add_batch_cli_options(c.batch, c.common);
+  c.stats = app.add_subcommand("dataset-stats", "Counts per scenario, failure rate by reason, run-time and quality "
+                                                "distributions of a dataset, from its manifests (no mesh is opened).");
+  c.stats->add_option("dataset", c.dataset, "dataset folder")->required();
+  c.stats->add_option("--plots", c.plots, "also write histograms (SVG, gnuplot) into this folder");
+}
+
+int run_batch_subcommand(const BatchCommand& c, bool with_metrics, std::ostream& out, std::ostream& err) {
+  if (c.stats->parsed()) return run_stats(c, out);
+  try {
+    return run_mesh_batch(c, with_metrics, out, err);
+  } catch (const SceneError& e) {  // a bad option or override: name it, no sample has run
+    err << "papersim batch: " << e.what() << '\n';
+    return 2;
+  } catch (const std::invalid_argument& e) {
+    err << "papersim batch: " << e.what() << '\n';
+    return 2;
+  }
+}
+
+}  // namespace papersim::simulation

@@ -1,0 +1,239 @@
+// papersim batch and scenegen batch end to end on tiny samples (4 cm edges, 0.05 s): a batch
+// killed at about half (SIGKILL or SIGINT) and run again ends with the same dataset as one that
+// was never interrupted; a sample that cannot finish is recorded and the rest finish; two
+// batches on one dataset run each sample once; bad options are named.
+#include <gtest/gtest.h>
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/file.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <fstream>
+#include <set>
+#include <thread>
+
+#include "batch/runner.hpp"
+#include "dataset_tree.hpp"
+#include "simulation/batch.hpp"
+
+namespace fs = std::filesystem;
+namespace pt = papersim::test;
+using nlohmann::json;
+
+namespace {
+
+const std::string PAPERSIM = PAPERSIM_EXE;
+constexpr const char* SEEDS = "1-40";
+constexpr std::size_t SAMPLES = 40;
+
+/// This process's scratch folder, removed when the process ends.
+struct ScratchDir {
+  fs::path path = fs::temp_directory_path() / ("papersim_batch_test_" + std::to_string(getpid()));
+  ScratchDir() {
+    fs::remove_all(path);
+    fs::create_directories(path);
+  }
+  ~ScratchDir() {
+    std::error_code ec;
+    fs::remove_all(path, ec);
+  }
+};
+
+fs::path work_dir() {
+  static const ScratchDir d;
+  return d.path;
+}
+
+/// Four scenarios, tiny: 48 vertices, 5 steps of 10 ms.
+fs::path tiny_mix() { return TINY_MIX; }
+
+std::vector<std::string> batch_argv(const fs::path& out) {
+  return {PAPERSIM, "batch", "--out", out.string(), "--mix", tiny_mix().string(), "--seeds", SEEDS, "--jobs", "2"};
+}
+
+int run(const std::vector<std::string>& argv, const fs::path& log) { return pt::wait_status(pt::start(argv, log)); }
+
+/// The uninterrupted batch every resume is compared with: made by the ctest fixture
+/// PapersimBatch.ReferenceDataset, or here (under a lock) when the tests run on their own.
+const fs::path& reference() {
+  static const fs::path ref = [] {
+    const fs::path d = BATCH_REFERENCE_DIR;
+    fs::create_directories(d.parent_path());
+    const int fd = open((d.string() + ".lock").c_str(), O_RDWR | O_CREAT, 0644);
+    flock(fd, LOCK_EX);
+    if (pt::line_count(d / "manifest.jsonl") != SAMPLES) {
+      fs::remove_all(d);
+      const int status = run(batch_argv(d), work_dir() / "reference.log");
+      EXPECT_EQ(status, 0) << pt::read_text(work_dir() / "reference.log");
+    }
+    close(fd);
+    return d;
+  }();
+  return ref;
+}
+
+/// Start a batch, send `signal` once the manifest holds half the samples, wait for it.
+/// Returns the batch's exit status and the rows it had at the signal.
+std::pair<int, std::size_t> interrupt_at_half(const std::vector<std::string>& argv, const fs::path& manifest,
+                                              std::size_t total, int signal, const fs::path& log) {
+  const pid_t pid = pt::start(argv, log);
+  std::size_t rows = 0;
+  int status = 0;
+  while ((rows = pt::line_count(manifest)) < total / 2) {
+    if (waitpid(pid, &status, WNOHANG) == pid) {  // ended before half: the caller's checks fail
+      ADD_FAILURE() << "the batch ended on its own before half its samples: " << pt::read_text(log);
+      return {WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status), rows};
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  kill(pid, signal);
+  return {pt::wait_status(pid), rows};
+}
+
+std::string joined(const std::vector<std::string>& lines) {
+  std::string s;
+  for (const auto& l : lines) s += l + "\n";
+  return s;
+}
+
+}  // namespace
+
+TEST(PapersimBatch, ResumedAfterSigkillEqualsAnUninterruptedBatch) {
+  const fs::path d = work_dir() / "sigkill";
+  const auto [status, rows] = interrupt_at_half(batch_argv(d), d / "manifest.jsonl", SAMPLES, SIGKILL, work_dir() / "sigkill.log");
+  EXPECT_EQ(status, 128 + SIGKILL);
+  EXPECT_LT(rows, SAMPLES) << "the batch ended before it was killed";
+  ASSERT_EQ(run(batch_argv(d), work_dir() / "sigkill_resume.log"), 0) << pt::read_text(work_dir() / "sigkill_resume.log");
+  EXPECT_EQ(pt::line_count(d / "manifest.jsonl"), SAMPLES);
+  EXPECT_FALSE(fs::exists(d / "failures.jsonl"));
+  const auto diffs = pt::dataset_differences(reference(), d, "meshes", "manifest.jsonl");
+  EXPECT_TRUE(diffs.empty()) << joined(diffs);
+}
+
+TEST(PapersimBatch, ResumedAfterSigintEqualsAnUninterruptedBatch) {
+  const fs::path d = work_dir() / "sigint";
+  const auto [status, rows] = interrupt_at_half(batch_argv(d), d / "manifest.jsonl", SAMPLES, SIGINT, work_dir() / "sigint.log");
+  EXPECT_EQ(status, 130) << pt::read_text(work_dir() / "sigint.log");
+  EXPECT_LT(rows, SAMPLES);
+  EXPECT_NE(pt::read_text(work_dir() / "sigint.log").find("interrupted"), std::string::npos);
+  EXPECT_TRUE(fs::is_empty(d / ".staging")) << "an interrupted batch left a half-written sample";
+  EXPECT_FALSE(fs::exists(d / "failures.jsonl")) << "an interrupted sample was recorded as failed";
+  ASSERT_EQ(run(batch_argv(d), work_dir() / "sigint_resume.log"), 0) << pt::read_text(work_dir() / "sigint_resume.log");
+  const auto diffs = pt::dataset_differences(reference(), d, "meshes", "manifest.jsonl");
+  EXPECT_TRUE(diffs.empty()) << joined(diffs);
+}
+
+TEST(PapersimBatch, TwoBatchesOnOneDatasetRunEachSampleOnce) {
+  const fs::path d = work_dir() / "twice";
+  const pid_t a = pt::start(batch_argv(d), work_dir() / "twice_a.log");
+  const pid_t b = pt::start(batch_argv(d), work_dir() / "twice_b.log");
+  EXPECT_EQ(pt::wait_status(a), 0) << pt::read_text(work_dir() / "twice_a.log");
+  EXPECT_EQ(pt::wait_status(b), 0) << pt::read_text(work_dir() / "twice_b.log");
+  const auto diffs = pt::dataset_differences(reference(), d, "meshes", "manifest.jsonl");
+  EXPECT_TRUE(diffs.empty()) << joined(diffs);
+}
+
+TEST(PapersimBatch, ASampleOverTheTimeLimitIsRecordedAndTheOthersFinish) {
+  // fall-sphere at its default settings (about a minute) against a 10 s limit; tiny pulls.
+  const fs::path d = work_dir() / "isolation", mix = work_dir() / "isolation_mix.json";
+  std::ofstream(mix) << R"({"scenarios": {"pull": {"weight": 3, "set": {"duration": 0.05, "time_step": 0.01,
+                            "sheet.edge_length": 0.04}}, "fall-sphere": 1}})";
+  const papersim::simulation::Mix m = papersim::simulation::load_mix(mix.string());
+  std::set<std::uint64_t> slow;
+  for (std::uint64_t seed = 1; seed <= 8; ++seed)
+    if (m.scenarios[papersim::simulation::mix_pick(m, seed)] == "fall-sphere") slow.insert(seed);
+  ASSERT_FALSE(slow.empty());
+  const int status = run({PAPERSIM, "batch", "--out", d.string(), "--mix", mix.string(), "--seeds", "1-8",
+                          "--jobs", "2", "--time-limit", "10"}, work_dir() / "isolation.log");
+  EXPECT_EQ(status, 1) << pt::read_text(work_dir() / "isolation.log");
+  std::set<std::uint64_t> failed, done;
+  for (const auto& r : papersim::batch::read_json_lines(d / "failures.jsonl")) {
+    failed.insert(r["seed"].get<std::uint64_t>());
+    EXPECT_EQ(r["reason"], "time limit");
+    EXPECT_EQ(r["scenario"], "fall-sphere");
+    EXPECT_GE(r["wall_seconds"].get<double>(), 10.0);
+  }
+  for (const auto& r : papersim::batch::read_json_lines(d / "manifest.jsonl")) done.insert(r["seed"].get<std::uint64_t>());
+  EXPECT_EQ(failed, slow);
+  EXPECT_EQ(done.size() + slow.size(), 8u);
+  for (std::uint64_t s : slow) EXPECT_FALSE(fs::exists(d / "meshes" / "fall-sphere" / "0" / std::to_string(s)));
+  // dataset-stats reads it back: 1 failure reason, counts per scenario, plots.
+  ASSERT_EQ(run({PAPERSIM, "dataset-stats", d.string(), "--plots", (d / "plots").string()}, work_dir() / "stats.log"), 0)
+      << pt::read_text(work_dir() / "stats.log");
+  const std::string stats = pt::read_text(work_dir() / "stats.log");
+  EXPECT_NE(stats.find("time limit"), std::string::npos) << stats;
+  EXPECT_NE(stats.find("fall-sphere"), std::string::npos) << stats;
+  EXPECT_TRUE(fs::exists(d / "plots" / "meshes_wall_seconds.svg"));
+}
+
+TEST(PapersimBatch, BadOptionsAreNamedAndNothingRuns) {
+  const fs::path d = work_dir() / "bad";
+  const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
+      {{"--scenarios", "pull", "--seeds", "5-1"}, "--seeds"},
+      {{"--scenarios", "pull", "--seeds", "1-2", "--set", "sheet.edge_lenght=0.02"}, "sheet.edge_lenght"},
+      {{"--scenarios", "pull", "--seeds", "1-2", "--set", "duration=-1"}, "duration"},
+      {{"--scenarios", "pull,pulll", "--seeds", "1-2"}, "pulll"},
+      {{"--mix", (work_dir() / "missing.json").string(), "--seeds", "1-2"}, "--mix"},
+      {{"--scenarios", "pull", "--seeds", "1-2", "--shard", "2/2"}, "--shard"},
+      {{"--seeds", "1-2"}, "--scenarios or --mix"},
+  };
+  for (const auto& [args, named] : cases) {
+    std::vector<std::string> argv{PAPERSIM, "batch", "--out", d.string()};
+    argv.insert(argv.end(), args.begin(), args.end());
+    EXPECT_EQ(run(argv, work_dir() / "bad.log"), 2) << named;
+    EXPECT_NE(pt::read_text(work_dir() / "bad.log").find(named), std::string::npos)
+        << named << ": " << pt::read_text(work_dir() / "bad.log");
+    EXPECT_FALSE(fs::exists(d / "meshes"));
+  }
+}
+
+TEST(PapersimBatch, SlurmWritesAJobArrayAndRunsNothing) {
+  const fs::path d = work_dir() / "slurm";
+  ASSERT_EQ(run({PAPERSIM, "batch", "--out", d.string(), "--mix", tiny_mix().string(), "--seeds", "1-10", "--slurm", "3",
+                 "--slurm-cpus", "2", "--slurm-time", "00:10:00"}, work_dir() / "slurm.log"), 0)
+      << pt::read_text(work_dir() / "slurm.log");
+  const std::string script = pt::read_text(d / "slurm" / "papersim-batch.sbatch");
+  EXPECT_NE(script.find("#SBATCH --array=0-2\n"), std::string::npos) << script;
+  EXPECT_NE(script.find("#SBATCH --cpus-per-task=2\n"), std::string::npos) << script;
+  EXPECT_NE(script.find("#SBATCH --time=00:10:00\n"), std::string::npos) << script;
+  EXPECT_NE(script.find("--shard \"${SLURM_ARRAY_TASK_ID}/3\""), std::string::npos) << script;
+  EXPECT_NE(pt::read_text(work_dir() / "slurm.log").find("sbatch " + (fs::absolute(d) / "slurm" / "papersim-batch.sbatch").string()),
+            std::string::npos);
+  EXPECT_FALSE(fs::exists(d / "meshes"));
+}
+
+#ifdef SCENEGEN_EXE
+TEST(ScenegenBatch, ResumedAfterSigkillEqualsAnUninterruptedBatch) {
+  // Three meshes of the reference, two views each (one flipped), tiny renders.
+  const fs::path a = work_dir() / "render_ref", b = work_dir() / "render_kill";
+  for (const fs::path& d : {a, b})
+    for (const char* m : {"meshes/pull", "meshes/fall-gable"}) {
+      fs::create_directories(d / m);
+      fs::copy(reference() / m, d / m, fs::copy_options::recursive);
+    }
+  const auto argv = [](const fs::path& d) {
+    return std::vector<std::string>{SCENEGEN_EXE, "batch", d.string(), "--views", "2", "--flip", "--size", "48x64",
+                                    "--quality", "draft", "--passes", "image,uv,mask", "--dpi", "30", "--jobs", "2"};
+  };
+  // Keep it small: the first three meshes of the copy (by seed) stay.
+  for (const fs::path& d : {a, b}) {
+    std::vector<fs::path> all;
+    for (const auto& e : fs::recursive_directory_iterator(d / "meshes"))
+      if (e.path().filename() == "sheet.obj") all.push_back(e.path().parent_path());
+    std::sort(all.begin(), all.end());
+    for (std::size_t i = 3; i < all.size(); ++i) fs::remove_all(all[i]);
+  }
+  ASSERT_EQ(run(argv(a), work_dir() / "render_ref.log"), 0) << pt::read_text(work_dir() / "render_ref.log");
+  const std::size_t views = pt::line_count(a / "renders.jsonl");
+  EXPECT_EQ(views, 6u);
+  const auto [status, rows] = interrupt_at_half(argv(b), b / "renders.jsonl", views, SIGKILL, work_dir() / "render_kill.log");
+  EXPECT_EQ(status, 128 + SIGKILL);
+  EXPECT_LT(rows, views);
+  ASSERT_EQ(run(argv(b), work_dir() / "render_resume.log"), 0) << pt::read_text(work_dir() / "render_resume.log");
+  const auto diffs = pt::dataset_differences(a, b, "renders", "renders.jsonl");
+  EXPECT_TRUE(diffs.empty()) << joined(diffs);
+}
+#endif

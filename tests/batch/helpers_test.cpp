@@ -1,0 +1,117 @@
+// Mix files, scene overrides, seed ranges and dataset statistics of papersim batch.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <fstream>
+
+#include "batch/dataset_stats.hpp"
+#include "batch/runner.hpp"
+#include "simulation/batch.hpp"
+#include "simulation/errors.hpp"
+#include "simulation/scenario.hpp"
+
+namespace fs = std::filesystem;
+namespace ps = papersim::simulation;
+using nlohmann::json;
+
+namespace {
+
+/// The message of the SceneError `f` throws ("" when it does not throw).
+template <class F>
+std::string scene_error(F f) {
+  try {
+    f();
+  } catch (const ps::SceneError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+}  // namespace
+
+TEST(Overrides, SetDottedKeysAndRefuseUnknownOnesByName) {
+  const ps::Scene base = ps::make_scenario("pull", 3);
+  const ps::Scene s = ps::apply_overrides(base, ps::parse_overrides({"duration=0.2", "sheet.edge_length=0.02"}), "--set");
+  EXPECT_EQ(s.duration, 0.2);
+  EXPECT_EQ(s.sheet.edge_length, 0.02);
+  EXPECT_EQ(s.time_step, base.time_step);
+  EXPECT_NE(scene_error([&] { ps::apply_overrides(base, ps::parse_overrides({"sheet.edge_lenght=0.02"}), "--set"); })
+                .find("sheet.edge_lenght"), std::string::npos);
+  EXPECT_NE(scene_error([&] { ps::apply_overrides(base, ps::parse_overrides({"duration=-1"}), "--set"); })
+                .find("duration"), std::string::npos);
+  EXPECT_NE(scene_error([] { ps::parse_overrides({"duration"}); }).find("KEY=VALUE"), std::string::npos);
+}
+
+TEST(Mix, ParsesWeightsAndOverridesAndRefusesBadKeys) {
+  const ps::Mix m = ps::mix_from_json(
+      json::parse(R"({"scenarios": {"pull": 3, "fall-sphere": {"weight": 1, "set": {"duration": 0.5}}},
+                      "set": {"sheet.edge_length": 0.01}})"), "mix.json");
+  ASSERT_EQ(m.scenarios.size(), 2u);
+  const std::size_t pull = m.scenarios[0] == "pull" ? 0 : 1;
+  EXPECT_EQ(m.scenarios[1 - pull], "fall-sphere");
+  EXPECT_EQ(m.weights[pull], 3.0);
+  EXPECT_EQ(m.overrides[pull], json::object());
+  EXPECT_EQ(m.overrides[1 - pull]["duration"], 0.5);
+  EXPECT_EQ(m.common["sheet.edge_length"], 0.01);
+  EXPECT_NE(scene_error([] { ps::mix_from_json(json::parse(R"({"scenarios": {"pul": 1}})"), "m.json"); }).find("pul"),
+            std::string::npos);
+  EXPECT_NE(scene_error([] { ps::mix_from_json(json::parse(R"({"scenarios": {"pull": 0}})"), "m.json"); }).find("weight"),
+            std::string::npos);
+  EXPECT_NE(scene_error([] { ps::mix_from_json(json::parse(R"({"scenario": {"pull": 1}})"), "m.json"); }).find("scenario"),
+            std::string::npos);
+}
+
+TEST(Mix, DrawsScenariosInProportionToTheirWeights) {
+  ps::Mix m;
+  m.scenarios = {"pull", "fall-sphere"};
+  m.weights = {3, 1};
+  m.overrides = {json::object(), json::object()};
+  int pulls = 0;
+  const int n = 20000;
+  for (int seed = 0; seed < n; ++seed) pulls += ps::mix_pick(m, static_cast<std::uint64_t>(seed)) == 0;
+  // Binomial(20000, 0.75): standard deviation 61; 5 sigma.
+  EXPECT_NEAR(pulls, 0.75 * n, 5 * 61.2);
+  EXPECT_EQ(ps::mix_pick(m, 12345), ps::mix_pick(m, 12345));
+}
+
+TEST(Selection, ProductOfScenariosAndSeedsWithFoldersPerSeed) {
+  ps::MeshBatchSelection sel;
+  sel.scenarios = {"pull", "fall-gable"};
+  std::tie(sel.first_seed, sel.last_seed) = ps::parse_seed_range("998-1001");
+  const auto draws = ps::draw_samples(sel);
+  ASSERT_EQ(draws.size(), 8u);
+  EXPECT_EQ(draws[1].scenario, "fall-gable");
+  EXPECT_EQ(draws[1].seed, 998u);
+  const auto tasks = ps::mesh_tasks(draws);
+  EXPECT_EQ(tasks[0].final_dir, fs::path("meshes/pull/0/998"));
+  EXPECT_EQ(tasks[7].final_dir, fs::path("meshes/fall-gable/1/1001"));
+  for (const char* bad : {"5-1", "a-3", "-3", "1-", ""})
+    EXPECT_NE(scene_error([&] { ps::parse_seed_range(bad); }).find("--seeds"), std::string::npos) << bad;
+}
+
+TEST(DatasetStats, CountsLatestStatePerSampleAndQuantiles) {
+  const fs::path root = fs::temp_directory_path() / ("papersim_stats_" + std::to_string(getpid()));
+  fs::remove_all(root);
+  fs::create_directories(root);
+  for (int i = 0; i < 5; ++i)
+    papersim::batch::append_line(root / "manifest.jsonl",
+                                 json{{"key", "p" + std::to_string(i)}, {"scenario", "pull"}, {"wall_seconds", i + 1.0}}.dump());
+  papersim::batch::append_line(root / "manifest.jsonl", json{{"key", "p0"}, {"scenario", "pull"}, {"wall_seconds", 99.0}}.dump());
+  papersim::batch::append_line(root / "failures.jsonl", json{{"key", "p1"}, {"scenario", "pull"}, {"reason", "time limit"}}.dump());
+  papersim::batch::append_line(root / "failures.jsonl", json{{"key", "f0"}, {"scenario", "fall-sphere"}, {"reason", "time limit"}}.dump());
+  papersim::batch::append_line(root / "failures.jsonl", json{{"key", "f1"}, {"scenario", "fall-sphere"}, {"reason", "simulation failed"}}.dump());
+  const auto parts = papersim::batch::read_dataset(root);
+  ASSERT_EQ(parts.size(), 1u);
+  const auto& p = parts[0];
+  EXPECT_EQ(p.done.at("pull"), 5);
+  EXPECT_EQ(p.failed.count("pull"), 0u) << "a failure later finished counts as done";
+  EXPECT_EQ(p.failed.at("fall-sphere"), 2);
+  EXPECT_EQ(p.reasons.at("time limit"), 1);
+  EXPECT_EQ(p.failed_attempts, 3);
+  const auto d = papersim::batch::distribution(p.values.at("wall_seconds").at("pull"));
+  EXPECT_EQ(d.count, 5u);  // the duplicate row counts once
+  EXPECT_DOUBLE_EQ(d.median, 3.0);
+  EXPECT_DOUBLE_EQ(d.p90, 4.6);
+  EXPECT_DOUBLE_EQ(d.sum, 15.0);
+  fs::remove_all(root);
+}

@@ -1,0 +1,198 @@
+// The batch runner on small shell commands: finished tasks are never redone, failures are
+// recorded with their reason and do not stop the batch, the time limit kills, a lost manifest
+// row is restored, shards partition the tasks, and concurrent appends never interleave.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <fstream>
+#include <set>
+
+#include "batch/runner.hpp"
+#include "batch/slurm.hpp"
+
+namespace fs = std::filesystem;
+using papersim::batch::BatchSpec;
+using papersim::batch::Command;
+using papersim::batch::Task;
+using nlohmann::json;
+
+namespace {
+
+fs::path fresh_dir(const std::string& name) {
+  const fs::path d = fs::temp_directory_path() / ("papersim_runner_" + name + "_" + std::to_string(getpid()));
+  fs::remove_all(d);
+  return d;
+}
+
+std::vector<Task> numbered_tasks(int n) {
+  std::vector<Task> tasks;
+  for (int i = 0; i < n; ++i)
+    tasks.push_back({"t/" + std::to_string(i), fs::path("t") / std::to_string(i), {{"index", i}}});
+  return tasks;
+}
+
+/// Each task runs `script` in sh with $1 = its output folder and $2 = its index; a run count
+/// per task is appended to ROOT/runs.txt so a test can tell what ran.
+BatchSpec shell_spec(const fs::path& root, const std::string& script) {
+  BatchSpec spec;
+  spec.root = root;
+  spec.jobs = 2;
+  spec.commands = [root, script](const Task& t, const fs::path& stage) {
+    const std::string index = std::to_string(t.info.at("index").get<int>());
+    return std::vector<Command>{{{"/bin/sh", "-c", "echo " + index + " >> '" + (root / "runs.txt").string() +
+                                  "'; mkdir -p \"$1\" && " + script, "sh", (stage / "out").string(), index}, {}}};
+  };
+  spec.finalize = [](const Task&, const papersim::batch::Attempt& a) { return a.stage / "out"; };
+  spec.manifest_row = [](const Task&, const fs::path& dir, double) {
+    std::ifstream in(dir / "value");
+    std::string v;
+    in >> v;
+    return json{{"value", v}};
+  };
+  return spec;
+}
+
+std::vector<std::string> lines(const fs::path& p) {
+  std::ifstream in(p);
+  std::vector<std::string> out;
+  for (std::string l; std::getline(in, l);) out.push_back(l);
+  return out;
+}
+
+}  // namespace
+
+TEST(Runner, RunsEveryTaskOnceAndNeverRedoesAFinishedOne) {
+  const fs::path root = fresh_dir("once");
+  const auto tasks = numbered_tasks(6);
+  const auto spec = shell_spec(root, "echo v$2 > \"$1/value\"");
+  const auto first = papersim::batch::run_batch(tasks, spec);
+  EXPECT_EQ(first.done, 6);
+  EXPECT_EQ(first.done_now, 6);
+  EXPECT_EQ(lines(root / "runs.txt").size(), 6u);
+  const auto rows = papersim::batch::read_json_lines(root / "manifest.jsonl");
+  ASSERT_EQ(rows.size(), 6u);
+  for (const auto& r : rows) EXPECT_EQ(r["value"], "v" + std::to_string(r["index"].get<int>()));
+  const auto second = papersim::batch::run_batch(tasks, spec);
+  EXPECT_EQ(second.done, 6);
+  EXPECT_EQ(second.done_now, 0);
+  EXPECT_EQ(lines(root / "runs.txt").size(), 6u) << "a finished task ran again";
+  EXPECT_TRUE(fs::is_empty(root / ".staging"));
+  fs::remove_all(root);
+}
+
+TEST(Runner, FailuresAreRecordedWithTheirReasonAndTheRestFinishes) {
+  const fs::path root = fresh_dir("fail");
+  const auto tasks = numbered_tasks(6);
+  auto spec = shell_spec(root, "if [ $2 = 2 ]; then echo 'diverged at step 3' >&2; exit 3; fi; "
+                               "if [ $2 = 4 ]; then sleep 30; fi; echo ok > \"$1/value\"");
+  spec.time_limit = 1.0;
+  spec.failure_reason = [](int code, const std::string&) { return code == 3 ? std::string("simulation failed") : std::string(); };
+  const auto s = papersim::batch::run_batch(tasks, spec);
+  EXPECT_EQ(s.done, 4);
+  EXPECT_EQ(s.failed, 2);
+  EXPECT_LT(s.elapsed, 20.0) << "the time limit did not stop the sleeping task";
+  std::map<int, json> failures;
+  for (const auto& r : papersim::batch::read_json_lines(root / "failures.jsonl")) failures[r["index"].get<int>()] = r;
+  ASSERT_EQ(failures.size(), 2u);
+  EXPECT_EQ(failures[2]["reason"], "simulation failed");
+  EXPECT_EQ(failures[2]["detail"], "diverged at step 3");
+  EXPECT_EQ(failures[4]["reason"], "time limit");
+  EXPECT_FALSE(fs::exists(root / "t" / "2"));
+  // Recorded failures are skipped, and run again with retry_failed.
+  EXPECT_EQ(papersim::batch::run_batch(tasks, spec).done_now, 0);
+  EXPECT_EQ(lines(root / "runs.txt").size(), 6u);
+  spec.retry_failed = true;
+  const auto retry = papersim::batch::run_batch(tasks, spec);
+  EXPECT_EQ(lines(root / "runs.txt").size(), 8u);
+  EXPECT_EQ(retry.failed_now, 2);
+  fs::remove_all(root);
+}
+
+TEST(Runner, RestoresTheManifestRowOfATaskFinishedBeforeACrash) {
+  const fs::path root = fresh_dir("repair");
+  const auto tasks = numbered_tasks(4);
+  const auto spec = shell_spec(root, "echo v$2 > \"$1/value\"");
+  papersim::batch::run_batch(tasks, spec);
+  // A crash between the rename and the append: drop two rows.
+  auto rows = lines(root / "manifest.jsonl");
+  std::ofstream(root / "manifest.jsonl") << rows[0] << '\n' << rows[1] << '\n';
+  const auto s = papersim::batch::run_batch(tasks, spec);
+  EXPECT_EQ(s.repaired, 2);
+  EXPECT_EQ(s.done_now, 0);
+  std::set<std::string> keys;
+  for (const auto& r : papersim::batch::read_json_lines(root / "manifest.jsonl")) keys.insert(r["key"]);
+  EXPECT_EQ(keys.size(), 4u);
+  EXPECT_EQ(lines(root / "manifest.jsonl").size(), 4u);
+  fs::remove_all(root);
+}
+
+TEST(Runner, AFailedOutputCheckIsRecordedAndLeavesNoFolder) {
+  const fs::path root = fresh_dir("outputs");
+  auto spec = shell_spec(root, "true");
+  spec.finalize = [](const Task&, const papersim::batch::Attempt&) -> fs::path {
+    throw std::runtime_error("missing sheet.obj");
+  };
+  const auto s = papersim::batch::run_batch(numbered_tasks(2), spec);
+  EXPECT_EQ(s.failed, 2);
+  const auto f = papersim::batch::read_json_lines(root / "failures.jsonl");
+  ASSERT_EQ(f.size(), 2u);
+  EXPECT_EQ(f[0]["reason"], "outputs");
+  EXPECT_FALSE(fs::exists(root / "t"));
+  fs::remove_all(root);
+}
+
+TEST(Runner, ShardsPartitionTheTasks) {
+  const auto tasks = numbered_tasks(23);
+  std::multiset<std::string> seen;
+  for (int i = 0; i < 4; ++i)
+    for (const auto& t : papersim::batch::select_shard(tasks, i, 4)) seen.insert(t.key);
+  EXPECT_EQ(seen.size(), 23u);
+  EXPECT_EQ(std::set<std::string>(seen.begin(), seen.end()).size(), 23u);
+  EXPECT_EQ(papersim::batch::parse_shard("3/4", "--shard"), std::make_pair(3, 4));
+  for (const char* bad : {"4/4", "-1/4", "1", "a/b", "1/0", "1/4x"})
+    EXPECT_THROW(papersim::batch::parse_shard(bad, "--shard"), std::invalid_argument) << bad;
+  try {
+    papersim::batch::parse_shard("5/2", "--shard");
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("--shard"), std::string::npos);
+  }
+}
+
+TEST(Runner, ConcurrentAppendsNeverInterleave) {
+  const fs::path root = fresh_dir("append");
+  fs::create_directories(root);
+  const fs::path file = root / "rows.jsonl";
+  const std::string pad(3000, 'x');  // lines far above PIPE_BUF
+  std::vector<pid_t> kids;
+  for (int w = 0; w < 4; ++w) {
+    const pid_t pid = fork();
+    if (pid == 0) {
+      for (int i = 0; i < 100; ++i) papersim::batch::append_line(file, json{{"w", w}, {"i", i}, {"pad", pad}}.dump());
+      _exit(0);
+    }
+    kids.push_back(pid);
+  }
+  for (pid_t p : kids) waitpid(p, nullptr, 0);
+  const auto all = lines(file);
+  EXPECT_EQ(all.size(), 400u);
+  EXPECT_EQ(papersim::batch::read_json_lines(file).size(), 400u) << "a line was torn";
+  fs::remove_all(root);
+}
+
+TEST(Slurm, ScriptMapsTheArrayIndexToTheShard) {
+  papersim::batch::SlurmOptions o;
+  o.shards = 8;
+  o.cpus_per_task = 4;
+  o.mem = "8G";
+  o.time = "02:00:00";
+  o.partition = "cpu";
+  const std::string s = papersim::batch::slurm_script({"/opt/papersim", "batch", "--out", "/data/it's"}, o, "/data/slurm");
+  for (const char* line : {"#SBATCH --array=0-7\n", "#SBATCH --cpus-per-task=4\n", "#SBATCH --mem=8G\n",
+                           "#SBATCH --time=02:00:00\n", "#SBATCH --partition=cpu\n",
+                           "#SBATCH --output=/data/slurm/%A_%a.out\n",
+                           "exec '/opt/papersim' 'batch' '--out' '/data/it'\\''s' --shard \"${SLURM_ARRAY_TASK_ID}/8\""})
+    EXPECT_NE(s.find(line), std::string::npos) << line << "\nin\n" << s;
+  o.shards = 0;
+  EXPECT_THROW(papersim::batch::slurm_script({"x"}, o, "/tmp"), std::invalid_argument);
+}
