@@ -286,7 +286,12 @@ Eigen::VectorXd Run::vertex_obstacle_distance() const {
 std::string Run::check_remeshed(const remesh::SheetMesh& mesh, const SheetState& state, Terms& terms) {
   if (m_setup.self_contact && collision::count_self_intersections(state.positions_matrix(), mesh.faces()) > 0)
     return "self-intersection";
-  terms = build_terms(mesh, m_setup, &m_term_stats);
+  try {
+    terms = build_terms(mesh, m_setup, &m_term_stats);
+  } catch (const NumericError&) {
+    // A term that cannot be built on the new mesh (a face too thin for the bending model).
+    return "degenerate";
+  }
   if (!(terms.membrane->principal_stretches(state.positions).col(0).maxCoeff() < 1 + m_setup.material.strain_limit))
     return "stretch";
   return {};
