@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <csignal>
+#include <cstdio>
 #include <thread>
 
 #include <algorithm>
@@ -143,6 +144,11 @@ std::pair<std::string, json> place_document(const SampleOptions& o, const SheetM
   return {"document.png", j};
 }
 
+/// Random stream of a component for a view: view 0 uses the sample's own streams.
+std::string view_stream(const std::string& component, int view) {
+  return view == 0 ? component : component + "/view" + std::to_string(view);
+}
+
 void remove_quietly(const fs::path& p) {
   std::error_code ec;
   fs::remove_all(p, ec);
@@ -160,9 +166,14 @@ const std::string& failed_meta() { return g_failed_meta; }
 
 void prepare_job(const SampleOptions& o, const std::string& job_dir) {
   if (o.width < 8 || o.height < 8) throw InputError("image size must be at least 8 x 8");
-  const SheetMesh mesh = read_sheet_obj(o.mesh_path);
+  if (o.view < 0) throw InputError("view index " + std::to_string(o.view) + " is negative");
+  const SheetMesh read_mesh = read_sheet_obj(o.mesh_path);
+  const SheetMesh mesh = o.flip ? flip_sheet(read_mesh) : read_mesh;
+  // Draws (resting pose, camera) use the simulated vertices, so they do not depend on the
+  // refinement level; every pass is rendered and decoded on the refined surface.
+  const SheetMesh surface = refine_surface(mesh, o.surface);
   const Stage stage = find_resting_pose(mesh);
-  Rng cam_rng(o.seed, "camera");
+  Rng cam_rng(o.seed, view_stream("camera", o.view));
   const CameraChoice choice = choose_camera(mesh, stage, o.width, o.height, o.camera, cam_rng);
 
   json meta;
@@ -172,6 +183,10 @@ void prepare_job(const SampleOptions& o, const std::string& job_dir) {
                   {"fnv1a64", hex(fnv1a_file(o.mesh_path))}, {"vertices", mesh.num_vertices()},
                   {"faces", mesh.num_faces()}, {"width_m", mesh.width}, {"height_m", mesh.height},
                   {"size_from_header", mesh.size_from_header}};
+  meta["flip"] = o.flip;
+  meta["view"] = o.view;
+  meta["surface"] = {{"kind", "modified_butterfly"}, {"level", o.surface.level},
+                     {"vertices", surface.num_vertices()}, {"faces", surface.num_faces()}};
   meta["stage"] = to_json(stage);
   meta["camera"] = to_json(choice, o.camera);
   if (!choice.valid) {
@@ -194,8 +209,14 @@ void prepare_job(const SampleOptions& o, const std::string& job_dir) {
     scene.quality = quality_settings(o.quality);
     scene.sheet_width = mesh.width;
     scene.sheet_height = mesh.height;
-    Rng light_rng(o.seed, "lighting"), bg_rng(o.seed, "background"), paper_rng(o.seed, "paper");
+    Rng light_rng(o.seed, view_stream("lighting", o.view));
+    Rng bg_rng(o.seed, view_stream("background", o.view));
+    Rng paper_rng(o.seed, view_stream("paper", o.view));
     scene.lighting = draw_lighting(light_rng, stage, stage.centre_of_mass, o.rig);
+    if (!o.lights.empty()) {
+      scene.lighting.rig = "custom";
+      scene.lighting.lights = o.lights;
+    }
     std::vector<std::string> bg_images;
     std::vector<fs::path> bg_files;
     if (!o.backgrounds_dir.empty()) {
@@ -210,15 +231,15 @@ void prepare_job(const SampleOptions& o, const std::string& job_dir) {
       fs::copy_file(src, tmp / scene.background.image, fs::copy_options::overwrite_existing);
     }
     scene.paper = draw_paper(paper_rng);
-    set_coords_encoding(scene, mesh);
+    set_coords_encoding(scene, surface);
     const auto [doc_file, doc_meta] = place_document(o, mesh, tmp, o.threads, o.templates_dir);
     scene.document_file = doc_file;
 
     for (const char* name : {"main.pov", "passes.inc", "paper.inc", "backgrounds.inc", "lights.inc"})
       write_text(tmp / name, template_text(name, o.templates_dir));
-    write_with(tmp / "sheet.inc", [&](std::ostream& out) { write_sheet_inc(out, mesh, vertex_normals(mesh)); });
+    write_with(tmp / "sheet.inc", [&](std::ostream& out) { write_sheet_inc(out, surface, vertex_normals(surface)); });
     write_with(tmp / "scene.inc", [&](std::ostream& out) { write_scene_inc(out, scene); });
-    write_with(tmp / "sheet.obj", [&](std::ostream& out) { write_sheet_obj(out, mesh); });
+    write_with(tmp / "sheet.obj", [&](std::ostream& out) { write_sheet_obj(out, surface); });
     const auto raw = raw_passes_for(o.passes, o.fine_passes);
     std::string run_sh = "#!/bin/sh\n# Renders this job with POV-Ray 3.7 alone; then: scenegen finish THIS_DIR --out DIR\nset -e\ncd \"$(dirname \"$0\")\"\n";
     if (fs::exists(tmp / "document.ini")) run_sh += "povray document.ini\n";
@@ -509,6 +530,22 @@ RunReport render_sample(const SampleOptions& options, const std::string& out_dir
     if (created) remove_quietly(out);
     throw;
   }
+}
+
+RunReport render_views(const SampleOptions& options, int views, const std::string& out_dir,
+                       const RunOptions& run, bool keep_job) {
+  if (views < 1) throw InputError("--views must be at least 1 (got " + std::to_string(views) + ")");
+  if (views == 1) return render_sample(options, out_dir, run, keep_job);
+  RunReport total;
+  for (int k = 0; k < views; ++k) {
+    SampleOptions o = options;
+    o.view = k;
+    char name[32];
+    std::snprintf(name, sizeof name, "view_%02d", k);
+    const RunReport r = render_sample(o, (fs::path(out_dir) / name).string(), run, keep_job);
+    for (const auto& [pass, sec] : r.seconds) total.seconds.emplace_back(std::string(name) + "/" + pass, sec);
+  }
+  return total;
 }
 
 }  // namespace papersim::scenegen

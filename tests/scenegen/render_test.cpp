@@ -58,9 +58,14 @@ TEST_F(RenderedSample, WritesEveryFile) {
 }
 
 TEST_F(RenderedSample, UvCoordsAndNormalsAreExact) {
-  const SheetMesh mesh = read_sheet_obj(s_dir->str("cylinder.obj"));
-  const UvLocator locator(mesh);
+  // Exact for the surface rendered: the mesh refined at the recorded level.
   const json meta = read_json(sample() / "meta.json");
+  ASSERT_GE(meta["surface"]["level"].get<int>(), 1);
+  SurfaceParams surface;
+  surface.level = meta["surface"]["level"];
+  const SheetMesh mesh = refine_surface(read_sheet_obj(s_dir->str("cylinder.obj")), surface);
+  ASSERT_EQ(mesh.num_faces(), meta["surface"]["faces"].get<int>());
+  const UvLocator locator(mesh);
   const Camera cam = camera_from_json(meta["camera"]);
   const ImageF uv = read_exr((sample() / "uv.exr").string(), {"R", "G", "B"});
   const ImageF xyz = read_exr((sample() / "coords.exr").string(), {"R", "G", "B"});
