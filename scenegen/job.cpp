@@ -166,6 +166,10 @@ const std::string& failed_meta() { return g_failed_meta; }
 
 void prepare_job(const SampleOptions& o, const std::string& job_dir) {
   if (o.width < 8 || o.height < 8) throw InputError("image size must be at least 8 x 8");
+  if (!(o.shadow_offset >= 0.0 && o.shadow_offset < 3e-4))
+    throw InputError("shadow offset must be in [0, 0.3 mm) (the gap to the table), got " + std::to_string(o.shadow_offset) + " m");
+  if (std::find(layout_names().begin(), layout_names().end(), o.layout) == layout_names().end())
+    throw InputError("unknown layout '" + o.layout + "' (scenegen, syntheticdoc)");
   if (o.view < 0) throw InputError("view index " + std::to_string(o.view) + " is negative");
   const SheetMesh read_mesh = read_sheet_obj(o.mesh_path);
   const SheetMesh mesh = o.flip ? flip_sheet(read_mesh) : read_mesh;
@@ -184,6 +188,7 @@ void prepare_job(const SampleOptions& o, const std::string& job_dir) {
                   {"faces", mesh.num_faces()}, {"width_m", mesh.width}, {"height_m", mesh.height},
                   {"size_from_header", mesh.size_from_header}};
   meta["flip"] = o.flip;
+  meta["shadow_offset_m"] = o.shadow_offset;
   meta["view"] = o.view;
   meta["surface"] = {{"kind", "modified_butterfly"}, {"level", o.surface.level},
                      {"vertices", surface.num_vertices()}, {"faces", surface.num_faces()}};
@@ -237,7 +242,9 @@ void prepare_job(const SampleOptions& o, const std::string& job_dir) {
 
     for (const char* name : {"main.pov", "passes.inc", "paper.inc", "backgrounds.inc", "lights.inc"})
       write_text(tmp / name, template_text(name, o.templates_dir));
-    write_with(tmp / "sheet.inc", [&](std::ostream& out) { write_sheet_inc(out, surface, vertex_normals(surface)); });
+    const Eigen::MatrixX3d normals = carried_normals(mesh, surface);
+    write_with(tmp / "sheet.inc", [&](std::ostream& out) { write_sheet_inc(out, surface, normals); });
+    write_with(tmp / "shadow.inc", [&](std::ostream& out) { write_shadow_inc(out, surface, normals, o.shadow_offset); });
     write_with(tmp / "scene.inc", [&](std::ostream& out) { write_scene_inc(out, scene); });
     write_with(tmp / "sheet.obj", [&](std::ostream& out) { write_sheet_obj(out, surface); });
     const auto raw = raw_passes_for(o.passes, o.fine_passes);
@@ -266,6 +273,7 @@ void prepare_job(const SampleOptions& o, const std::string& job_dir) {
     json job = options_json(o, raw, doc_meta.value("width_px", 0), doc_meta.value("height_px", 0));
     job["meta"] = meta;
     job["document_file"] = doc_file;
+    job["layout"] = o.layout;
     write_text(tmp / "job.json", job.dump(2) + "\n");
     remove_quietly(final_dir);
     fs::rename(tmp, final_dir, ec);
@@ -387,6 +395,45 @@ ImageF channel(const ImageF& img, int c) {
   return out;
 }
 
+/// Rename a staged file (when present) and move its meta.json description along.
+void rename_staged(const fs::path& stage, json& files, const std::string& from, const std::string& to) {
+  if (!fs::exists(stage / from)) return;
+  fs::rename(stage / from, stage / to);
+  files[to] = files[from];
+  files.erase(from);
+}
+
+/// The reference dataset's names and conventions (docs/scenegen.md, "Layouts"): photo
+/// render.png, shading shadow.png, UV uv_inverse.exr, coords 3d.exr, backward_map.npy of shape
+/// (grid_height, grid_width, 2) float32 = pixel coordinates normalised to [-1, 1]
+/// (grid_sample with align_corners=False), metadata.json.
+void apply_syntheticdoc_layout(const fs::path& stage, json& meta) {
+  json& files = meta["files"];
+  rename_staged(stage, files, "image.png", "render.png");
+  rename_staged(stage, files, "shading.png", "shadow.png");
+  rename_staged(stage, files, "uv.exr", "uv_inverse.exr");
+  rename_staged(stage, files, "coords.exr", "3d.exr");
+  if (fs::exists(stage / "backward.exr")) {
+    const ImageF back = read_exr((stage / "backward.exr").string(), {"R", "G", "B"});
+    const int w = meta["image"]["width"], h = meta["image"]["height"];
+    ImageF grid(back.width, back.height, 2);
+    for (int r = 0; r < back.height; ++r)
+      for (int c = 0; c < back.width; ++c) {
+        grid.at(c, r, 0) = static_cast<float>(std::clamp(2.0 * back.at(c, r, 0) / w - 1.0, -1.0, 1.0));
+        grid.at(c, r, 1) = static_cast<float>(std::clamp(2.0 * back.at(c, r, 1) / h - 1.0, -1.0, 1.0));
+      }
+    write_npy((stage / "backward_map.npy").string(), grid);
+    files["backward_map.npy"] = "float32 (grid_height, grid_width, 2): 2 x / width - 1, 2 y / height - 1 "
+                                "(clamped to [-1, 1]); row 0 = top of the page";
+    // backward.exr keeps the visibility flag the reference's map does not have.
+    fs::remove(stage / "backward.npy");
+    files.erase("backward.npy");
+  }
+  meta["layout"] = "syntheticdoc";
+  files.erase("meta.json");
+  files["metadata.json"] = "this file";
+}
+
 void finish_into(const fs::path& job, const fs::path& stage) {
   const json j = read_job(job);
   json meta = j.at("meta");
@@ -461,7 +508,13 @@ void finish_into(const fs::path& job, const fs::path& stage) {
   meta["fine_passes"] = fine;
   files["meta.json"] = "this file";
   meta["files"] = files;
-  write_text(stage / "meta.json", meta.dump(2) + "\n");
+  meta["layout"] = "scenegen";
+  if (j.value("layout", "scenegen") == "syntheticdoc") {
+    apply_syntheticdoc_layout(stage, meta);
+    write_text(stage / "metadata.json", meta.dump(2) + "\n");
+  } else {
+    write_text(stage / "meta.json", meta.dump(2) + "\n");
+  }
 }
 
 /// Move every file of `stage` into `out` (rename), then remove `stage`.
@@ -531,6 +584,8 @@ RunReport render_sample(const SampleOptions& options, const std::string& out_dir
     throw;
   }
 }
+
+std::vector<std::string> layout_names() { return {"scenegen", "syntheticdoc"}; }
 
 RunReport render_views(const SampleOptions& options, int views, const std::string& out_dir,
                        const RunOptions& run, bool keep_job) {

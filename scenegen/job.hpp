@@ -35,6 +35,8 @@ struct SampleOptions {
   int threads = 1;                 ///< threads per POV-Ray process (1: reproducible radiosity)
   std::string templates_dir;       ///< empty: the templates embedded in the binary
   SurfaceParams surface;           ///< smooth render surface through the mesh (PN triangles)
+  double shadow_offset = 1e-4;     ///< shadow caster behind the printed side [m] (paper thickness)
+  std::string layout = "scenegen";  ///< file names: scenegen | syntheticdoc (the reference's)
   bool flip = false;               ///< render the sheet from its other side (flip_sheet)
   std::vector<Light> lights;       ///< non-empty: these lights replace the drawn rig's (studies,
                                    ///< tests); colour and sky are still drawn
@@ -82,6 +84,9 @@ void finish_job(const std::string& job_dir, const std::string& out_dir);
 /// @param keep_job  keep the job folder as out_dir/job
 RunReport render_sample(const SampleOptions& options, const std::string& out_dir,
                         const RunOptions& run, bool keep_job = false);
+
+/// File layouts of a sample.
+std::vector<std::string> layout_names();
 
 /// `views` samples of one mesh in out_dir/view_00, view_01, ... (views = 1: out_dir itself),
 /// view k with SampleOptions::view = k: its own camera, lights, background and paper draws, the

@@ -53,6 +53,7 @@ void add_sample_options(CLI::App* app, Cli& c) {
   app->add_option("--threads", c.sample.threads, "threads per POV-Ray process (1 keeps radiosity reproducible; 0: all cores)")->capture_default_str();
   app->add_option("--templates", c.sample.templates_dir, "use POV-Ray templates from this folder instead of the built-in copy");
   app->add_option("--subdivision", c.sample.surface.level, "butterfly subdivision steps of the rendered surface (0: the mesh as it is, at most 4)")->capture_default_str();
+  app->add_option("--layout", c.sample.layout, "output names: scenegen | syntheticdoc (the reference dataset's names and conventions)")->capture_default_str();
   app->add_flag("--flip", c.sample.flip, "render the sheet from its other side (mirror x, u -> 1 - u)");
 }
 

@@ -179,6 +179,21 @@ SheetMesh refine_surface(const SheetMesh& mesh, const SurfaceParams& params) {
   return out;
 }
 
+Eigen::MatrixX3d carried_normals(const SheetMesh& mesh, const SheetMesh& refined) {
+  const Eigen::MatrixX3d vn = vertex_normals(mesh);
+  Eigen::MatrixX3d out(refined.num_vertices(), 3);
+  out.topRows(mesh.num_vertices()) = vn;  // refine_surface keeps the original vertices first
+  const UvLocator loc(mesh);
+  for (int i = mesh.num_vertices(); i < refined.num_vertices(); ++i) {
+    const auto hit = loc.locate(refined.uv.row(i).transpose(), 1e-9);
+    if (!hit) throw InputError("refined vertex " + std::to_string(i) + " lies outside the sheet's UV domain");
+    Vec3 n = Vec3::Zero();
+    for (int k = 0; k < 3; ++k) n += hit->barycentric[k] * Vec3(vn.row(mesh.faces(hit->face, k)));
+    out.row(i) = n.normalized().transpose();
+  }
+  return out;
+}
+
 SheetMesh flip_sheet(const SheetMesh& mesh) {
   SheetMesh out = mesh;
   out.positions.col(0) = -mesh.positions.col(0);

@@ -23,6 +23,13 @@ constexpr int MAX_SURFACE_LEVEL = 4;
 /// @throw InputError when the level is outside [0, MAX_SURFACE_LEVEL]
 SheetMesh refine_surface(const SheetMesh& mesh, const SurfaceParams& params);
 
+/// Shading normals of the refined surface's vertices: the mesh's area-weighted vertex normals
+/// interpolated linearly at each refined vertex's material point (what the raw mesh's smooth
+/// triangles show), normalised. #refined.V by 3. The refined surface's own facet normals wiggle
+/// where the subdivision undulates, which moves the shading terminator; these do not.
+/// @throw InputError when a refined vertex's UV is outside the mesh's UV domain
+Eigen::MatrixX3d carried_normals(const SheetMesh& mesh, const SheetMesh& refined);
+
 /// The sheet seen from its other side, as the reference's flipped samples: the mesh mirrored
 /// (world x -> -x), u -> 1 - u, faces re-oriented so the printed side keeps a positive UV area.
 /// A material point (x, y) of the result is the material point (width - x, y) of `mesh`.

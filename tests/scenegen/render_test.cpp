@@ -63,14 +63,15 @@ TEST_F(RenderedSample, UvCoordsAndNormalsAreExact) {
   ASSERT_GE(meta["surface"]["level"].get<int>(), 1);
   SurfaceParams surface;
   surface.level = meta["surface"]["level"];
-  const SheetMesh mesh = refine_surface(read_sheet_obj(s_dir->str("cylinder.obj")), surface);
+  const SheetMesh raw = read_sheet_obj(s_dir->str("cylinder.obj"));
+  const SheetMesh mesh = refine_surface(raw, surface);
   ASSERT_EQ(mesh.num_faces(), meta["surface"]["faces"].get<int>());
   const UvLocator locator(mesh);
   const Camera cam = camera_from_json(meta["camera"]);
   const ImageF uv = read_exr((sample() / "uv.exr").string(), {"R", "G", "B"});
   const ImageF xyz = read_exr((sample() / "coords.exr").string(), {"R", "G", "B"});
   const ImageF nrm = read_exr((sample() / "normal.exr").string(), {"R", "G", "B"});
-  const Eigen::MatrixX3d vn = vertex_normals(mesh);
+  const Eigen::MatrixX3d vn = carried_normals(raw, mesh);
   std::vector<std::pair<int, int>> mask_pixels;
   for (int y = 0; y < uv.height; ++y)
     for (int x = 0; x < uv.width; ++x)
