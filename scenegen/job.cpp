@@ -144,18 +144,6 @@ std::pair<std::string, json> place_document(const SampleOptions& o, const SheetM
   return {"document.png", j};
 }
 
-/// The interpolating subdivision overshoots where the sheet leaves the table (a flat part
-/// meeting a fold): refined points below the support plane would sink into the table and let
-/// it show through the sheet. They are lifted onto the plane (along its normal: UV unchanged).
-SheetMesh keep_above_stage(SheetMesh surface, const Stage& stage) {
-  for (int i = 0; i < surface.num_vertices(); ++i) {
-    const Eigen::Vector3d p = surface.positions.row(i).transpose();
-    const double h = (p - stage.origin).dot(stage.up);
-    if (h < 0.0) surface.positions.row(i) = (p - h * stage.up).transpose();
-  }
-  return surface;
-}
-
 /// Random stream of a component for a view: view 0 uses the sample's own streams.
 std::string view_stream(const std::string& component, int view) {
   return view == 0 ? component : component + "/view" + std::to_string(view);
@@ -188,7 +176,7 @@ void prepare_job(const SampleOptions& o, const std::string& job_dir) {
   // Draws (resting pose, camera) use the simulated vertices, so they do not depend on the
   // refinement level; every pass is rendered and decoded on the refined surface.
   const Stage stage = find_resting_pose(mesh);
-  const SheetMesh surface = keep_above_stage(refine_surface(mesh, o.surface), stage);
+  const SheetMesh surface = lift_above_plane(refine_surface(mesh, o.surface), stage.origin, stage.up);
   Rng cam_rng(o.seed, view_stream("camera", o.view));
   const CameraChoice choice = choose_camera(mesh, stage, o.width, o.height, o.camera, cam_rng);
 

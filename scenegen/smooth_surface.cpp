@@ -179,6 +179,15 @@ SheetMesh refine_surface(const SheetMesh& mesh, const SurfaceParams& params) {
   return out;
 }
 
+SheetMesh lift_above_plane(SheetMesh surface, const Eigen::Vector3d& origin, const Eigen::Vector3d& up) {
+  for (int i = 0; i < surface.num_vertices(); ++i) {
+    const Eigen::Vector3d p = surface.positions.row(i).transpose();
+    const double h = (p - origin).dot(up);
+    if (h < 0.0) surface.positions.row(i) = (p - h * up).transpose();
+  }
+  return surface;
+}
+
 Eigen::MatrixX3d carried_normals(const SheetMesh& mesh, const SheetMesh& refined) {
   const Eigen::MatrixX3d vn = vertex_normals(mesh);
   Eigen::MatrixX3d out(refined.num_vertices(), 3);

@@ -23,6 +23,13 @@ constexpr int MAX_SURFACE_LEVEL = 4;
 /// @throw InputError when the level is outside [0, MAX_SURFACE_LEVEL]
 SheetMesh refine_surface(const SheetMesh& mesh, const SurfaceParams& params);
 
+/// The interpolating subdivision overshoots where the sheet leaves the table (a flat part
+/// meeting a fold); points below the support plane would sink into the table and let it show
+/// through the sheet. Vertices below the plane (point `origin`, unit normal `up`) are moved
+/// onto it along `up` (UV unchanged). The rendered surface is lift_above_plane(refine_surface
+/// (mesh), stage.origin, stage.up) with the stage of meta.json.
+SheetMesh lift_above_plane(SheetMesh surface, const Eigen::Vector3d& origin, const Eigen::Vector3d& up);
+
 /// Shading normals of the refined surface's vertices: the mesh's area-weighted vertex normals
 /// interpolated linearly at each refined vertex's material point (what the raw mesh's smooth
 /// triangles show), normalised. #refined.V by 3. The refined surface's own facet normals wiggle

@@ -58,13 +58,16 @@ TEST_F(RenderedSample, WritesEveryFile) {
 }
 
 TEST_F(RenderedSample, UvCoordsAndNormalsAreExact) {
-  // Exact for the surface rendered: the mesh refined at the recorded level.
+  // Exact for the surface rendered: the mesh refined at the recorded level, lifted above the
+  // table.
   const json meta = read_json(sample() / "meta.json");
   ASSERT_GE(meta["surface"]["level"].get<int>(), 1);
   SurfaceParams surface;
   surface.level = meta["surface"]["level"];
   const SheetMesh raw = read_sheet_obj(s_dir->str("cylinder.obj"));
-  const SheetMesh mesh = refine_surface(raw, surface);
+  const json& st = meta["stage"];
+  const SheetMesh mesh = lift_above_plane(refine_surface(raw, surface), Eigen::Vector3d(st["origin"][0], st["origin"][1], st["origin"][2]),
+                                          Eigen::Vector3d(st["up"][0], st["up"][1], st["up"][2]));
   ASSERT_EQ(mesh.num_faces(), meta["surface"]["faces"].get<int>());
   const UvLocator locator(mesh);
   const Camera cam = camera_from_json(meta["camera"]);

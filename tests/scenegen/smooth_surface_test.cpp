@@ -132,6 +132,8 @@ TEST(SmoothSurface, RenderedSurfaceNeverSinksIntoTheTable) {
     lowest = std::min(lowest, (Eigen::Vector3d(rendered.positions.row(i)) - origin).dot(up));
     lowest_raw = std::min(lowest_raw, (Eigen::Vector3d(raw.positions.row(i)) - origin).dot(up));
   }
+  const SheetMesh lifted = lift_above_plane(raw, origin, up);
+  EXPECT_EQ((lifted.positions - rendered.positions).cwiseAbs().maxCoeff(), 0.0);  // 17 digits
   std::cout << "[surface] fold, level " << o.surface.level << ": lowest refined point " << lowest_raw
             << " m below the table before lifting, " << lowest << " m after\n";
   EXPECT_LT(lowest_raw, -1e-5);  // the overshoot this guards against is there

@@ -45,7 +45,11 @@ TEST(Views, FlippedUvIsTheMirrorAtTheSameMaterialPoint) {
   sp.level = meta["surface"]["level"];
   // The unflipped rendered surface: material point (1 - u', v') there is the mirror image
   // (x -> -x) of the point the flipped render sees with UV (u', v').
-  const SheetMesh original = refine_surface(read_sheet_obj(o.mesh_path), sp);
+  // The flipped sample was lifted above its table plane; that plane mirrored back (x -> -x).
+  const json& st = meta["stage"];
+  const Eigen::Vector3d origin(-st["origin"][0].get<double>(), st["origin"][1], st["origin"][2]);
+  const Eigen::Vector3d up(-st["up"][0].get<double>(), st["up"][1], st["up"][2]);
+  const SheetMesh original = lift_above_plane(refine_surface(read_sheet_obj(o.mesh_path), sp), origin, up);
   const UvLocator loc(original);
   const ImageF uv = read_exr((dir.path() / "flipped" / "uv.exr").string(), {"R", "G", "B"});
   const ImageF xyz = read_exr((dir.path() / "flipped" / "coords.exr").string(), {"R", "G", "B"});
