@@ -211,7 +211,7 @@ void prepare_job(const SampleOptions& o, const std::string& job_dir) {
     SceneDescription scene;
     scene.camera = choice.camera;
     scene.stage = stage;
-    scene.quality = quality_settings(o.quality);
+    scene.quality = o.quality_override ? *o.quality_override : quality_settings(o.quality);
     scene.sheet_width = mesh.width;
     scene.sheet_height = mesh.height;
     Rng light_rng(o.seed, view_stream("lighting", o.view));
@@ -262,7 +262,13 @@ void prepare_job(const SampleOptions& o, const std::string& job_dir) {
     meta["image"] = {{"width", o.width}, {"height", o.height}};
     meta["quality"] = quality_name(o.quality);
     meta["quality_settings"] = {{"radiosity", scene.quality.radiosity}, {"area_samples", scene.quality.area_samples},
-                                {"antialias", scene.quality.antialias}, {"ambient", scene.quality.ambient}};
+                                {"antialias", scene.quality.antialias}, {"ambient", scene.quality.ambient},
+                                {"radiosity_count", scene.quality.radiosity_count},
+                                {"radiosity_error", scene.quality.radiosity_error},
+                                {"area_adaptive", scene.quality.area_adaptive},
+                                {"antialias_threshold", scene.quality.antialias_threshold},
+                                {"antialias_depth", scene.quality.antialias_depth},
+                                {"custom", o.quality_override.has_value()}};
     meta["lighting"] = to_json(scene.lighting);
     meta["background"] = to_json(scene.background);
     meta["background"]["gap_m"] = scene.background_gap;

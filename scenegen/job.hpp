@@ -4,6 +4,7 @@
 /// `render_sample` = prepare + run + finish with no partial output on failure.
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -27,6 +28,7 @@ struct SampleOptions {
   int height = 1440;               ///< [pixels]
   std::vector<Pass> passes = all_passes();
   Quality quality = Quality::final;
+  std::optional<QualitySettings> quality_override;  ///< replaces quality_settings(quality) (studies)
   bool fine_passes = true;         ///< float32-exact uv / coords (two renders each)
   std::string rig;                 ///< light rig; empty: drawn
   CameraParams camera;
