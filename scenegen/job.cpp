@@ -168,7 +168,8 @@ void prepare_job(const SampleOptions& o, const std::string& job_dir) {
   if (o.width < 8 || o.height < 8) throw InputError("image size must be at least 8 x 8");
   if (!(o.shadow_offset >= 0.0 && o.shadow_offset < 3e-4))
     throw InputError("shadow offset must be in [0, 0.3 mm) (the gap to the table), got " + std::to_string(o.shadow_offset) + " m");
-  if (std::find(layout_names().begin(), layout_names().end(), o.layout) == layout_names().end())
+  const std::vector<std::string> layouts = layout_names();
+  if (std::find(layouts.begin(), layouts.end(), o.layout) == layouts.end())
     throw InputError("unknown layout '" + o.layout + "' (scenegen, syntheticdoc)");
   if (o.view < 0) throw InputError("view index " + std::to_string(o.view) + " is negative");
   const SheetMesh read_mesh = read_sheet_obj(o.mesh_path);

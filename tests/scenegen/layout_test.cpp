@@ -9,6 +9,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "scenegen/errors.hpp"
 #include "scenegen/image_io.hpp"
 #include "scenegen/job.hpp"
 #include "test_support.hpp"
@@ -90,6 +91,20 @@ TEST(Layout, SyntheticDocFilesReadBackWithTheReferenceConventions) {
   const auto meta = nlohmann::json::parse(in);
   EXPECT_EQ(meta["layout"], "syntheticdoc");
   EXPECT_TRUE(meta["files"].contains("backward_map.npy"));
+}
+
+TEST(Layout, UnknownLayoutIsAnInputErrorNamingIt) {
+  test::TempDir dir("badlayout");
+  SampleOptions o;
+  o.mesh_path = test::write_example(dir, "flat", "flat.obj");
+  o.layout = "nope";
+  try {
+    prepare_job(o, dir.str("job"));
+    FAIL() << "expected an InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("'nope'"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(fs::exists(dir.path() / "job"));
 }
 
 }  // namespace
