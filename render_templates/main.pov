@@ -36,7 +36,15 @@ camera { perspective location SG_Cam_Location direction SG_Cam_Direction
   #end
   SG_Lights()
   SG_Background(SG_Shading)
-  object { SG_Sheet_Mesh SG_Paper_Texture(SG_Shading) }
+  // The seen sheet casts no shadow; its copy behind the printed side (shadow.inc) casts them
+  // unseen, so the facets of the mesh do not shadow each other where light grazes them.
+  #include "shadow.inc"
+  #if (SG_Shadow_Caster)
+    object { SG_Sheet_Mesh SG_Paper_Texture(SG_Shading) no_shadow }
+    object { SG_Sheet_Shadow_Mesh pigment { rgb 0 } no_image no_reflection no_radiosity }
+  #else
+    object { SG_Sheet_Mesh SG_Paper_Texture(SG_Shading) }
+  #end
 #else
   background { rgb 0 }
   #switch (SG_PASS)

@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <csignal>
+#include <cstdio>
 #include <thread>
 
 #include <algorithm>
@@ -143,6 +144,11 @@ std::pair<std::string, json> place_document(const SampleOptions& o, const SheetM
   return {"document.png", j};
 }
 
+/// Random stream of a component for a view: view 0 uses the sample's own streams.
+std::string view_stream(const std::string& component, int view) {
+  return view == 0 ? component : component + "/view" + std::to_string(view);
+}
+
 void remove_quietly(const fs::path& p) {
   std::error_code ec;
   fs::remove_all(p, ec);
@@ -160,9 +166,19 @@ const std::string& failed_meta() { return g_failed_meta; }
 
 void prepare_job(const SampleOptions& o, const std::string& job_dir) {
   if (o.width < 8 || o.height < 8) throw InputError("image size must be at least 8 x 8");
-  const SheetMesh mesh = read_sheet_obj(o.mesh_path);
+  if (!(o.shadow_offset >= 0.0 && o.shadow_offset < 3e-4))
+    throw InputError("shadow offset must be in [0, 0.3 mm) (the gap to the table), got " + std::to_string(o.shadow_offset) + " m");
+  const std::vector<std::string> layouts = layout_names();
+  if (std::find(layouts.begin(), layouts.end(), o.layout) == layouts.end())
+    throw InputError("unknown layout '" + o.layout + "' (scenegen, syntheticdoc)");
+  if (o.view < 0) throw InputError("view index " + std::to_string(o.view) + " is negative");
+  const SheetMesh read_mesh = read_sheet_obj(o.mesh_path);
+  const SheetMesh mesh = o.flip ? flip_sheet(read_mesh) : read_mesh;
+  // Draws (resting pose, camera) use the simulated vertices, so they do not depend on the
+  // refinement level; every pass is rendered and decoded on the refined surface.
   const Stage stage = find_resting_pose(mesh);
-  Rng cam_rng(o.seed, "camera");
+  const SheetMesh surface = lift_above_plane(refine_surface(mesh, o.surface), stage.origin, stage.up);
+  Rng cam_rng(o.seed, view_stream("camera", o.view));
   const CameraChoice choice = choose_camera(mesh, stage, o.width, o.height, o.camera, cam_rng);
 
   json meta;
@@ -172,6 +188,11 @@ void prepare_job(const SampleOptions& o, const std::string& job_dir) {
                   {"fnv1a64", hex(fnv1a_file(o.mesh_path))}, {"vertices", mesh.num_vertices()},
                   {"faces", mesh.num_faces()}, {"width_m", mesh.width}, {"height_m", mesh.height},
                   {"size_from_header", mesh.size_from_header}};
+  meta["flip"] = o.flip;
+  meta["shadow_offset_m"] = o.shadow_offset;
+  meta["view"] = o.view;
+  meta["surface"] = {{"kind", "modified_butterfly"}, {"level", o.surface.level},
+                     {"vertices", surface.num_vertices()}, {"faces", surface.num_faces()}};
   meta["stage"] = to_json(stage);
   meta["camera"] = to_json(choice, o.camera);
   if (!choice.valid) {
@@ -191,11 +212,17 @@ void prepare_job(const SampleOptions& o, const std::string& job_dir) {
     SceneDescription scene;
     scene.camera = choice.camera;
     scene.stage = stage;
-    scene.quality = quality_settings(o.quality);
+    scene.quality = o.quality_override ? *o.quality_override : quality_settings(o.quality);
     scene.sheet_width = mesh.width;
     scene.sheet_height = mesh.height;
-    Rng light_rng(o.seed, "lighting"), bg_rng(o.seed, "background"), paper_rng(o.seed, "paper");
+    Rng light_rng(o.seed, view_stream("lighting", o.view));
+    Rng bg_rng(o.seed, view_stream("background", o.view));
+    Rng paper_rng(o.seed, view_stream("paper", o.view));
     scene.lighting = draw_lighting(light_rng, stage, stage.centre_of_mass, o.rig);
+    if (!o.lights.empty()) {
+      scene.lighting.rig = "custom";
+      scene.lighting.lights = o.lights;
+    }
     std::vector<std::string> bg_images;
     std::vector<fs::path> bg_files;
     if (!o.backgrounds_dir.empty()) {
@@ -210,15 +237,17 @@ void prepare_job(const SampleOptions& o, const std::string& job_dir) {
       fs::copy_file(src, tmp / scene.background.image, fs::copy_options::overwrite_existing);
     }
     scene.paper = draw_paper(paper_rng);
-    set_coords_encoding(scene, mesh);
+    set_coords_encoding(scene, surface);
     const auto [doc_file, doc_meta] = place_document(o, mesh, tmp, o.threads, o.templates_dir);
     scene.document_file = doc_file;
 
     for (const char* name : {"main.pov", "passes.inc", "paper.inc", "backgrounds.inc", "lights.inc"})
       write_text(tmp / name, template_text(name, o.templates_dir));
-    write_with(tmp / "sheet.inc", [&](std::ostream& out) { write_sheet_inc(out, mesh, vertex_normals(mesh)); });
+    const Eigen::MatrixX3d normals = carried_normals(mesh, surface);
+    write_with(tmp / "sheet.inc", [&](std::ostream& out) { write_sheet_inc(out, surface, normals); });
+    write_with(tmp / "shadow.inc", [&](std::ostream& out) { write_shadow_inc(out, surface, normals, o.shadow_offset); });
     write_with(tmp / "scene.inc", [&](std::ostream& out) { write_scene_inc(out, scene); });
-    write_with(tmp / "sheet.obj", [&](std::ostream& out) { write_sheet_obj(out, mesh); });
+    write_with(tmp / "sheet.obj", [&](std::ostream& out) { write_sheet_obj(out, surface); });
     const auto raw = raw_passes_for(o.passes, o.fine_passes);
     std::string run_sh = "#!/bin/sh\n# Renders this job with POV-Ray 3.7 alone; then: scenegen finish THIS_DIR --out DIR\nset -e\ncd \"$(dirname \"$0\")\"\n";
     if (fs::exists(tmp / "document.ini")) run_sh += "povray document.ini\n";
@@ -234,7 +263,13 @@ void prepare_job(const SampleOptions& o, const std::string& job_dir) {
     meta["image"] = {{"width", o.width}, {"height", o.height}};
     meta["quality"] = quality_name(o.quality);
     meta["quality_settings"] = {{"radiosity", scene.quality.radiosity}, {"area_samples", scene.quality.area_samples},
-                                {"antialias", scene.quality.antialias}, {"ambient", scene.quality.ambient}};
+                                {"antialias", scene.quality.antialias}, {"ambient", scene.quality.ambient},
+                                {"radiosity_count", scene.quality.radiosity_count},
+                                {"radiosity_error", scene.quality.radiosity_error},
+                                {"area_adaptive", scene.quality.area_adaptive},
+                                {"antialias_threshold", scene.quality.antialias_threshold},
+                                {"antialias_depth", scene.quality.antialias_depth},
+                                {"custom", o.quality_override.has_value()}};
     meta["lighting"] = to_json(scene.lighting);
     meta["background"] = to_json(scene.background);
     meta["background"]["gap_m"] = scene.background_gap;
@@ -245,6 +280,7 @@ void prepare_job(const SampleOptions& o, const std::string& job_dir) {
     json job = options_json(o, raw, doc_meta.value("width_px", 0), doc_meta.value("height_px", 0));
     job["meta"] = meta;
     job["document_file"] = doc_file;
+    job["layout"] = o.layout;
     write_text(tmp / "job.json", job.dump(2) + "\n");
     remove_quietly(final_dir);
     fs::rename(tmp, final_dir, ec);
@@ -366,6 +402,45 @@ ImageF channel(const ImageF& img, int c) {
   return out;
 }
 
+/// Rename a staged file (when present) and move its meta.json description along.
+void rename_staged(const fs::path& stage, json& files, const std::string& from, const std::string& to) {
+  if (!fs::exists(stage / from)) return;
+  fs::rename(stage / from, stage / to);
+  files[to] = files[from];
+  files.erase(from);
+}
+
+/// The reference dataset's names and conventions (docs/scenegen.md, "Layouts"): photo
+/// render.png, shading shadow.png, UV uv_inverse.exr, coords 3d.exr, backward_map.npy of shape
+/// (grid_height, grid_width, 2) float32 = pixel coordinates normalised to [-1, 1]
+/// (grid_sample with align_corners=False), metadata.json.
+void apply_syntheticdoc_layout(const fs::path& stage, json& meta) {
+  json& files = meta["files"];
+  rename_staged(stage, files, "image.png", "render.png");
+  rename_staged(stage, files, "shading.png", "shadow.png");
+  rename_staged(stage, files, "uv.exr", "uv_inverse.exr");
+  rename_staged(stage, files, "coords.exr", "3d.exr");
+  if (fs::exists(stage / "backward.exr")) {
+    const ImageF back = read_exr((stage / "backward.exr").string(), {"R", "G", "B"});
+    const int w = meta["image"]["width"], h = meta["image"]["height"];
+    ImageF grid(back.width, back.height, 2);
+    for (int r = 0; r < back.height; ++r)
+      for (int c = 0; c < back.width; ++c) {
+        grid.at(c, r, 0) = static_cast<float>(std::clamp(2.0 * back.at(c, r, 0) / w - 1.0, -1.0, 1.0));
+        grid.at(c, r, 1) = static_cast<float>(std::clamp(2.0 * back.at(c, r, 1) / h - 1.0, -1.0, 1.0));
+      }
+    write_npy((stage / "backward_map.npy").string(), grid);
+    files["backward_map.npy"] = "float32 (grid_height, grid_width, 2): 2 x / width - 1, 2 y / height - 1 "
+                                "(clamped to [-1, 1]); row 0 = top of the page";
+    // backward.exr keeps the visibility flag the reference's map does not have.
+    fs::remove(stage / "backward.npy");
+    files.erase("backward.npy");
+  }
+  meta["layout"] = "syntheticdoc";
+  files.erase("meta.json");
+  files["metadata.json"] = "this file";
+}
+
 void finish_into(const fs::path& job, const fs::path& stage) {
   const json j = read_job(job);
   json meta = j.at("meta");
@@ -440,7 +515,13 @@ void finish_into(const fs::path& job, const fs::path& stage) {
   meta["fine_passes"] = fine;
   files["meta.json"] = "this file";
   meta["files"] = files;
-  write_text(stage / "meta.json", meta.dump(2) + "\n");
+  meta["layout"] = "scenegen";
+  if (j.value("layout", "scenegen") == "syntheticdoc") {
+    apply_syntheticdoc_layout(stage, meta);
+    write_text(stage / "metadata.json", meta.dump(2) + "\n");
+  } else {
+    write_text(stage / "meta.json", meta.dump(2) + "\n");
+  }
 }
 
 /// Move every file of `stage` into `out` (rename), then remove `stage`.
@@ -509,6 +590,24 @@ RunReport render_sample(const SampleOptions& options, const std::string& out_dir
     if (created) remove_quietly(out);
     throw;
   }
+}
+
+std::vector<std::string> layout_names() { return {"scenegen", "syntheticdoc"}; }
+
+RunReport render_views(const SampleOptions& options, int views, const std::string& out_dir,
+                       const RunOptions& run, bool keep_job) {
+  if (views < 1) throw InputError("--views must be at least 1 (got " + std::to_string(views) + ")");
+  if (views == 1) return render_sample(options, out_dir, run, keep_job);
+  RunReport total;
+  for (int k = 0; k < views; ++k) {
+    SampleOptions o = options;
+    o.view = k;
+    char name[32];
+    std::snprintf(name, sizeof name, "view_%02d", k);
+    const RunReport r = render_sample(o, (fs::path(out_dir) / name).string(), run, keep_job);
+    for (const auto& [pass, sec] : r.seconds) total.seconds.emplace_back(std::string(name) + "/" + pass, sec);
+  }
+  return total;
 }
 
 }  // namespace papersim::scenegen

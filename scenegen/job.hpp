@@ -4,6 +4,7 @@
 /// `render_sample` = prepare + run + finish with no partial output on failure.
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -12,6 +13,7 @@
 #include "scenegen/document.hpp"
 #include "scenegen/passes.hpp"
 #include "scenegen/pov_writer.hpp"
+#include "scenegen/smooth_surface.hpp"
 
 namespace papersim::scenegen {
 
@@ -26,6 +28,7 @@ struct SampleOptions {
   int height = 1440;               ///< [pixels]
   std::vector<Pass> passes = all_passes();
   Quality quality = Quality::final;
+  std::optional<QualitySettings> quality_override;  ///< replaces quality_settings(quality) (studies)
   bool fine_passes = true;         ///< float32-exact uv / coords (two renders each)
   std::string rig;                 ///< light rig; empty: drawn
   CameraParams camera;
@@ -33,6 +36,14 @@ struct SampleOptions {
   double document_dpi = 100.0;     ///< built-in page raster [dpi]: ~1 texel per pixel at 1024 x 1440
   int threads = 1;                 ///< threads per POV-Ray process (1: reproducible radiosity)
   std::string templates_dir;       ///< empty: the templates embedded in the binary
+  SurfaceParams surface;           ///< smooth render surface through the mesh (PN triangles)
+  double shadow_offset = 1e-4;     ///< shadow caster behind the printed side [m] (paper thickness)
+  std::string layout = "scenegen";  ///< file names: scenegen | syntheticdoc (the reference's)
+  bool flip = false;               ///< render the sheet from its other side (flip_sheet)
+  std::vector<Light> lights;       ///< non-empty: these lights replace the drawn rig's (studies,
+                                   ///< tests); colour and sky are still drawn
+  int view = 0;                    ///< view index: views > 0 draw camera, lights, background
+                                   ///< and paper from their own streams; the page is shared
 };
 
 /// What a pass render reports while a job runs.
@@ -75,6 +86,15 @@ void finish_job(const std::string& job_dir, const std::string& out_dir);
 /// @param keep_job  keep the job folder as out_dir/job
 RunReport render_sample(const SampleOptions& options, const std::string& out_dir,
                         const RunOptions& run, bool keep_job = false);
+
+/// File layouts of a sample.
+std::vector<std::string> layout_names();
+
+/// `views` samples of one mesh in out_dir/view_00, view_01, ... (views = 1: out_dir itself),
+/// view k with SampleOptions::view = k: its own camera, lights, background and paper draws, the
+/// same document page. @throw as render_sample; views < 1 is an InputError
+RunReport render_views(const SampleOptions& options, int views, const std::string& out_dir,
+                       const RunOptions& run, bool keep_job = false);
 
 /// meta.json text of the last NoValidCameraError thrown by prepare_job in this thread.
 const std::string& failed_meta();

@@ -22,7 +22,7 @@ struct Cli {
   std::string out, passes = "all", quality = "final", size = "1024x1440", backward_grid = "121x177";
   std::string job, povray = "povray";
   bool exact16 = false, keep_job = false, quiet = false;
-  int parallel = 0;
+  int parallel = 0, views = 1;
 };
 
 void parse_size(const std::string& s, int& w, int& h, const std::string& what, bool allow_full) {
@@ -53,6 +53,9 @@ void add_sample_options(CLI::App* app, Cli& c) {
   app->add_option("--dpi", c.sample.document_dpi, "built-in page resolution [dpi]")->capture_default_str();
   app->add_option("--threads", c.sample.threads, "threads per POV-Ray process (1 keeps radiosity reproducible; 0: all cores)")->capture_default_str();
   app->add_option("--templates", c.sample.templates_dir, "use POV-Ray templates from this folder instead of the built-in copy");
+  app->add_option("--subdivision", c.sample.surface.level, "butterfly subdivision steps of the rendered surface (0: the mesh as it is, at most 4)")->capture_default_str();
+  app->add_option("--layout", c.sample.layout, "output names: scenegen | syntheticdoc (the reference dataset's names and conventions)")->capture_default_str();
+  app->add_flag("--flip", c.sample.flip, "render the sheet from its other side (mirror x, u -> 1 - u)");
 }
 
 void finalise(Cli& c) {
@@ -88,6 +91,7 @@ int main(int argc, char** argv) {
   render->add_option("--parallel", c.parallel, "POV-Ray processes at once (0: one per core)")->capture_default_str();
   render->add_flag("--keep-job", c.keep_job, "keep the POV-Ray job folder as OUT/job");
   render->add_flag("--quiet", c.quiet, "no progress on stderr");
+  render->add_option("--views", c.views, "views of the mesh, each with its own camera, lights, background and paper, in OUT/view_00 ... (1: OUT itself)")->capture_default_str();
   auto* prepare = app.add_subcommand("prepare", "write a self-contained POV-Ray job folder (run it with its run.sh)");
   add_sample_options(prepare, c);
   prepare->add_option("--out", c.out, "job folder")->required();
@@ -109,7 +113,7 @@ int main(int argc, char** argv) {
     if (batch.app->parsed()) return sg::run_render_batch(batch, std::cout, std::cerr);
     if (render->parsed()) {
       finalise(c);
-      const auto report = sg::render_sample(c.sample, c.out, run_options(c), c.keep_job);
+      const auto report = sg::render_views(c.sample, c.views, c.out, run_options(c), c.keep_job);
       std::printf("wrote %s (%.2f s of POV-Ray)\n", c.out.c_str(), report.total());
     } else if (prepare->parsed()) {
       finalise(c);

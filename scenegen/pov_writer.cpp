@@ -153,6 +153,24 @@ void write_sheet_inc(std::ostream& out, const SheetMesh& mesh, const Eigen::Matr
   out << " }\n}\n";
 }
 
+void write_shadow_inc(std::ostream& out, const SheetMesh& mesh, const Eigen::MatrixX3d& normals,
+                      double offset) {
+  if (offset <= 0.0) {
+    out << "// papersim scenegen: no shadow caster, the sheet casts its own shadows\n"
+        << "#declare SG_Shadow_Caster = 0;\n";
+    return;
+  }
+  const int nv = mesh.num_vertices();
+  out << "#declare SG_Shadow_Caster = 1;\n// papersim scenegen: shadow caster, the sheet moved " << num(offset)
+      << " m behind its printed side\n#declare SG_Sheet_Shadow_Mesh = mesh2 {\n  vertex_vectors { " << nv;
+  for (int i = 0; i < nv; ++i)
+    out << ",\n    " << vec((mesh.positions.row(i) - offset * normals.row(i)).transpose());
+  out << " }\n  face_indices { " << mesh.num_faces();
+  for (int f = 0; f < mesh.num_faces(); ++f)
+    out << ",\n    <" << mesh.faces(f, 0) << ", " << mesh.faces(f, 1) << ", " << mesh.faces(f, 2) << ">";
+  out << " }\n}\n";
+}
+
 void write_scene_inc(std::ostream& out, const SceneDescription& s) {
   out << "// papersim scenegen: per-sample declarations (generated; see meta.json)\n";
   write_camera(out, s.camera);

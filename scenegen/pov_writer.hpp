@@ -56,6 +56,15 @@ void set_coords_encoding(SceneDescription& scene, const SheetMesh& mesh);
 /// `#declare SG_Sheet_Mesh = mesh2 {...}` with vertex, normal and uv vectors (17 digits).
 void write_sheet_inc(std::ostream& out, const SheetMesh& mesh, const Eigen::MatrixX3d& normals);
 
+/// `#declare SG_Sheet_Shadow_Mesh = mesh2 {...}`: the sheet moved by `offset` [m] along -normal
+/// (behind the printed side: the paper's back face). The lit passes render the sheet without
+/// shadows of its own and let this copy, unseen, cast them, so a faceted surface does not
+/// shadow itself where light grazes it (the shadow-terminator artefact; Cycles' "shadow
+/// terminator geometry offset" does the same). offset 0: no copy (SG_Shadow_Caster = 0), the
+/// sheet casts its own shadows.
+void write_shadow_inc(std::ostream& out, const SheetMesh& mesh, const Eigen::MatrixX3d& normals,
+                      double offset);
+
 /// scene.inc: every per-sample declaration used by render_templates/main.pov.
 void write_scene_inc(std::ostream& out, const SceneDescription& scene);
 

@@ -22,6 +22,7 @@
 #include "scenegen/job.hpp"
 #include "scenegen/meta.hpp"
 #include "scenegen/random.hpp"
+#include "scenegen/smooth_surface.hpp"
 
 namespace fs = std::filesystem;
 namespace sg = papersim::scenegen;
@@ -33,10 +34,16 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
 }
 
 void exactness(const fs::path& dir, const std::string& mesh_path) {
-  const sg::SheetMesh mesh = sg::read_sheet_obj(mesh_path);
-  const sg::UvLocator loc(mesh);
   std::ifstream in(dir / "meta.json");
   const auto meta = nlohmann::json::parse(in);
+  // Exact for the surface rendered: the mesh refined at the recorded level.
+  sg::SurfaceParams surface;
+  surface.level = meta["surface"]["level"];
+  const auto& st = meta["stage"];
+  const sg::SheetMesh mesh = sg::lift_above_plane(sg::refine_surface(sg::read_sheet_obj(mesh_path), surface),
+                                                  Eigen::Vector3d(st["origin"][0], st["origin"][1], st["origin"][2]),
+                                                  Eigen::Vector3d(st["up"][0], st["up"][1], st["up"][2]));
+  const sg::UvLocator loc(mesh);
   const sg::Camera cam = sg::camera_from_json(meta["camera"]);
   const sg::ImageF uv = sg::read_exr((dir / "uv.exr").string(), {"R", "G", "B"});
   const sg::ImageF xyz = sg::read_exr((dir / "coords.exr").string(), {"R", "G", "B"});
