@@ -137,10 +137,12 @@ TEST(PapersimBatch, TwoBatchesOnOneDatasetRunEachSampleOnce) {
 }
 
 TEST(PapersimBatch, ASampleOverTheTimeLimitIsRecordedAndTheOthersFinish) {
-  // fall-sphere at its default settings (about a minute) against a 10 s limit; tiny pulls.
+  // fall-sphere made long (10,000 steps of 0.1 ms: minutes on any machine) against a 10 s limit;
+  // tiny pulls.
   const fs::path d = work_dir() / "isolation", mix = work_dir() / "isolation_mix.json";
   std::ofstream(mix) << R"({"scenarios": {"pull": {"weight": 3, "set": {"duration": 0.05, "time_step": 0.01,
-                            "sheet.edge_length": 0.04}}, "fall-sphere": 1}})";
+                            "sheet.edge_length": 0.04}}, "fall-sphere": {"weight": 1, "set": {"duration": 1.0,
+                            "time_step": 0.0001}}}})";
   const papersim::simulation::Mix m = papersim::simulation::load_mix(mix.string());
   std::set<std::uint64_t> slow;
   for (std::uint64_t seed = 1; seed <= 8; ++seed)
