@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "remesh/errors.hpp"
+#include "remesh/sizing.hpp"
 
 namespace papersim::remesh {
 
@@ -59,10 +60,15 @@ double triangle_area(const Triangle2& t) {
   return 0.5 * signed_area2(t.row(0).transpose(), t.row(1).transpose(), t.row(2).transpose());
 }
 
-std::string inverted_reason(const EditProposal& p) {
-  for (const Triangle2& t : p.material)
-    if (!is_proper_triangle(t.row(0).transpose(), t.row(1).transpose(), t.row(2).transpose()))
-      return "inverted";
+/// "inverted" when a new face is clockwise or has a negligible area, "degenerate" when it is
+/// thinner than EDIT_ASPECT_MIN (e.g. a split whose opposite vertex is nearly on the split line,
+/// or a flip or collapse making a face through three nearly collinear vertices).
+std::string quality_reason(const EditProposal& p) {
+  for (const Triangle2& t : p.material) {
+    const Eigen::Vector2d a = t.row(0).transpose(), b = t.row(1).transpose(), c = t.row(2).transpose();
+    if (!is_proper_triangle(a, b, c)) return "inverted";
+    if (aspect_ratio(a, b, c) < EDIT_ASPECT_MIN) return "degenerate";
+  }
   return "";
 }
 
@@ -290,7 +296,7 @@ void MeshEditor::pass_to_children(VertexHandle v, std::vector<ParentFace>& paren
 VertexHandle MeshEditor::split(EdgeHandle e, const EditCheck& check) {
   TriMesh& m = m_sheet.mesh();
   const EditProposal p = propose_split(e);
-  if (!accept(p, inverted_reason(p), check)) return VertexHandle();
+  if (!accept(p, quality_reason(p), check)) return VertexHandle();
   std::vector<ParentFace> parents = faces_of_edge(e);
   const VertexHandle v = add_midpoint(m.from_vertex_handle(m.halfedge_handle(e, 0)),
                                       m.to_vertex_handle(m.halfedge_handle(e, 0)));
@@ -308,7 +314,7 @@ bool MeshEditor::flip(EdgeHandle e, const EditCheck& check) {
   else if (!m.is_flip_ok(e))
     own = "topology";
   const EditProposal p = propose_flip(e);
-  if (own.empty()) own = inverted_reason(p);
+  if (own.empty()) own = quality_reason(p);
   if (!accept(p, own, check)) return false;
   const FaceHandle f0 = m.face_handle(m.halfedge_handle(e, 0));
   const FaceHandle f1 = m.face_handle(m.halfedge_handle(e, 1));
@@ -354,7 +360,7 @@ bool MeshEditor::collapse(HalfedgeHandle h, const EditCheck& check) {
   EditProposal p;
   if (own.empty()) {
     p = propose_collapse(h);
-    own = inverted_reason(p);
+    own = quality_reason(p);
   }
   if (!accept(p, own, check)) return false;
   transfer_collapse(h);

@@ -106,6 +106,14 @@ class MeshEditor {
   OpenMesh::VPropHandleT<double> m_distance;
 };
 
+/// [-] Smallest aspect ratio (aspect_ratio in sizing.hpp: 12 sqrt(3) area / perimeter^2) of a face
+/// any edit may create; edits below it are refused ("degenerate"). The Morley plate inverts a
+/// per-face 3 x 3 geometry matrix whose condition number grows as about 3.6 / aspect^2 (5e3 at
+/// aspect 0.026, 5e15 at 2.6e-8, where Eigen's FullPivLU calls it singular): at 1e-2 it is about
+/// 4e4, far from singular, while the floor stays well below the aspect_min (0.2) of collapses and
+/// of the metric, so ordinary splits of acceptable faces are never refused by it.
+constexpr double EDIT_ASPECT_MIN = 1e-2;
+
 /// Twice the signed area of the material triangle (a, b, c) [m^2]: > 0 counter-clockwise.
 double signed_area2(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c);
 

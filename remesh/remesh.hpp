@@ -85,7 +85,8 @@ using EditVeto = std::function<std::string(const EditProposal&)>;
 
 /// Edits applied and refused in one pass. Refusal reasons of the editor: "topology" (OpenMesh
 /// link condition), "boundary" (would move a boundary vertex off the boundary or remove a corner
-/// of the sheet), "inverted" (a new face with non-positive area in material space); of the remesh
+/// of the sheet), "inverted" (a new face with non-positive area in material space), "degenerate"
+/// (a new face with aspect ratio below EDIT_ASPECT_MIN = 0.01, mesh_editor.hpp); of the remesh
 /// loop: "crease" (a flip across, or making, a hinge sharper than flip_angle_max), "too long" (a
 /// collapse would make an edge longer than 0.9 under the metric), "too thin" (a collapse would
 /// make a face with aspect below aspect_min); of the caller: "veto: <reason>". Counts are per

@@ -277,3 +277,58 @@ TEST(TriangleOverlap, MatchesKnownAreas) {
   b << 2, 0, 3, 0, 2, 1;
   EXPECT_EQ(triangle_overlap(a, b), 0.0);
 }
+
+// Regression: remeshing a sheet draped on spheres split the edge opposite one vertex again and
+// again (the flips that would repair the fan were vetoed), halving the children's aspect each time
+// until a face was degenerate for the Morley plate (aspect 3e-10). The editor now refuses any edit
+// creating a face thinner than EDIT_ASPECT_MIN.
+TEST(MeshEditor, RepeatedSplitsTowardOneVertexStopAtTheAspectFloor) {
+  // One triangle: base a-b on y = 0 of length 1 m, apex c at height 1 m.
+  Eigen::MatrixX2d x(3, 2);
+  x << -0.5, 0.0, 0.5, 0.0, 0.0, 1.0;
+  Eigen::MatrixX3i f(1, 3);
+  f << 0, 1, 2;
+  SheetMesh mesh(x, f);
+  RemeshState state;
+  state.positions = Eigen::MatrixX3d::Zero(3, 3);
+  state.positions.leftCols(2) = x;
+  state.velocities = Eigen::MatrixX3d::Zero(3, 3);
+  MeshEditor ed(mesh, state);
+  // Split the base segment at the a end again and again: the child (a, m, c) with base L has
+  // aspect about 2.6 L, so it crosses 1e-2 near L = 2^-8; without the floor the splits went on
+  // to L = 2^-30, where twice the area still exceeds 1e-10 times the longest edge squared.
+  VertexHandle end(1);
+  int applied = 0;
+  for (int k = 0; k < 40; ++k) {
+    const VertexHandle m = ed.split(edge(ed, 0, end.idx()));
+    if (!m.is_valid()) break;
+    end = m;
+    ++applied;
+  }
+  EXPECT_GE(applied, 6) << "splits whose children are acceptable must not be refused";
+  EXPECT_LE(applied, 9);
+  EXPECT_GE(ed.stats().refusals.at("degenerate"), 1);
+  ed.finish();
+  EXPECT_GE(min_aspect(mesh), EDIT_ASPECT_MIN);
+}
+
+// A flip whose new face runs through three nearly collinear vertices (the middle one 1e-8 m off
+// the line: twice its area is 1e-8 times its longest edge squared, which the inversion test
+// accepts) is refused.
+TEST(MeshEditor, FlipThroughNearlyCollinearVerticesIsRefused) {
+  // a (0, 0), b (1, 0), m (0.5, 1e-8) just above a-b, x (0.5, -1) below; faces (a, x, m) and
+  // (x, b, m) share edge x-m, whose flip would make (a, b, m).
+  Eigen::MatrixX2d p(4, 2);
+  p << 0.0, 0.0, 1.0, 0.0, 0.5, 1e-8, 0.5, -1.0;
+  Eigen::MatrixX3i f(2, 3);
+  f << 0, 3, 2, 3, 1, 2;
+  SheetMesh mesh(p, f);
+  RemeshState state;
+  state.positions = Eigen::MatrixX3d::Zero(4, 3);
+  state.positions.leftCols(2) = p;
+  state.velocities = Eigen::MatrixX3d::Zero(4, 3);
+  MeshEditor ed(mesh, state);
+  EXPECT_FALSE(ed.flip(edge(ed, 3, 2)));
+  EXPECT_EQ(ed.stats().refusals.at("degenerate"), 1);
+  EXPECT_EQ(ed.stats().flips, 0);
+}

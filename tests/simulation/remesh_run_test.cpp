@@ -6,10 +6,13 @@
 #include <cmath>
 #include <limits>
 
+#include "collision/collider_factory.hpp"
 #include "collision/self_intersection.hpp"
 #include "collision/shapes.hpp"
 #include "remesh/mesh_editor.hpp"
 #include "remesh/sheet_generator.hpp"
+#include "remesh/sheet_io.hpp"
+#include "remesh/sizing.hpp"
 #include "simulation/errors.hpp"
 #include "simulation/remesh_veto.hpp"
 #include "simulation/run.hpp"
@@ -216,4 +219,60 @@ TEST(RemeshRun, LiftedSheetRemeshesAndKeepsEveryInvariant) {
               r.sheet.vertices_start, r.sheet.vertices, min_vertices, r.sheet.vertices_max,
               r.remesh->max_energy_jump, r.remesh->max_energy_jump_relative,
               r.remesh->seconds_remesh + r.remesh->seconds_rebuild, r.wall_seconds);
+}
+
+// Regression: a 1,000-vertex sheet (21 mm edges) draped over three spheres, remeshed with the
+// run's parameters and veto, got a face degenerate in material space (aspect 3e-10): splits
+// toward one vertex went on while the flips that would repair the fan were vetoed for stretch,
+// and the Morley plate refused the mesh. Every face must now keep aspect >= EDIT_ASPECT_MIN.
+TEST(RemeshRun, DrapedSheetRemeshesWithoutDegenerateFaces) {
+  rm::SheetData d = rm::read_sheet(std::string(PAPERSIM_TEST_DATA_DIR) + "/remesh/drape_spheres.ply");
+  // The obstacles of the scene the sheet was dumped from: ground z = 0 and three spheres.
+  std::vector<std::shared_ptr<const papersim::collision::Collider>> obstacles;
+  obstacles.push_back(std::make_shared<papersim::collision::PlaneCollider>());
+  const double spheres[3][4] = {  // centre [m], radius [m]
+      {-0.023425407531210907, -0.1324292685975573, 0.001841372534163395, 0.037591435630829506},
+      {-0.022029561573189006, 0.059936937022903064, -0.008778207936277541, 0.024468225210931623},
+      {0.04477783972070336, 0.03297520066067544, 0.022839026654256793, 0.024330462687645528}};
+  for (const auto& s : spheres) {
+    papersim::collision::ColliderSpec spec;
+    spec.kind = papersim::collision::ColliderKind::sphere;
+    spec.radius = s[3];
+    spec.keyframes.push_back({0.0, Eigen::Vector3d(s[0], s[1], s[2]), Eigen::Quaterniond::Identity()});
+    obstacles.push_back(papersim::collision::make_collider(spec));
+  }
+  const double t = 0.034;  // [s] scene time of the pass (the spheres are static)
+  const int n = static_cast<int>(d.positions.rows());
+  rm::RemeshState state;
+  state.positions = d.positions;
+  state.velocities = d.velocities;
+  state.obstacle_distance = Eigen::VectorXd::Constant(n, std::numeric_limits<double>::infinity());
+  for (const auto& o : obstacles) {
+    const Eigen::Isometry3d pose = o->motion.pose(t);
+    for (int v = 0; v < n; ++v)
+      state.obstacle_distance(v) = std::min(
+          state.obstacle_distance(v), o->distance_at_pose(d.positions.row(v).transpose(), pose));
+  }
+  rm::RemeshParams params;  // the run's: the defaults with the obstacle criterion at 2 cm
+  params.obstacle_distance = 0.02;
+  RemeshVetoParams vp;
+  vp.obstacle_gap = 3e-5;  // a tenth of the 0.3 mm contact thickness
+  vp.self_gap = 3e-5;
+  vp.time = t;
+  const RemeshVeto veto(obstacles, d.mesh, d.positions, vp);
+  rm::SheetMesh mesh = d.mesh;
+  const rm::RemeshStats st = rm::remesh(mesh, state, params, std::cref(veto));
+  EXPECT_GT(st.splits, 1000);
+  EXPECT_GE(st.refusals.count("degenerate"), 1u) << "the pass no longer meets the thin fans";
+  const Eigen::MatrixX2d X = mesh.material_coords();
+  const Eigen::MatrixX3i F = mesh.faces();
+  double lo = 1.0;
+  for (int f = 0; f < F.rows(); ++f)
+    lo = std::min(lo, rm::aspect_ratio(X.row(F(f, 0)).transpose(), X.row(F(f, 1)).transpose(),
+                                       X.row(F(f, 2)).transpose()));
+  EXPECT_GE(lo, rm::EDIT_ASPECT_MIN);
+  // The Morley plate (and every other term) can be built on the result.
+  PhysicsSetup setup;  // the default material bends by the Morley plate
+  setup.self_contact = false;
+  EXPECT_NO_THROW(build_terms(mesh, setup));
 }
