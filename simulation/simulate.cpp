@@ -17,6 +17,7 @@
 #include "simulation/energies/vertex_energies.hpp"
 #include "simulation/errors.hpp"
 #include "simulation/integrator.hpp"
+#include "simulation/output_files.hpp"
 
 #ifndef PAPERSIM_VERSION_STRING
 #define PAPERSIM_VERSION_STRING "unknown"
@@ -176,58 +177,6 @@ Energies energies(const Built& b, const Scene& scene, const SheetState& s) {
   e.bend = b.bending->value(s.positions);
   return e;
 }
-
-void write_outputs(const fs::path& dir, const Scene& scene, const remesh::SheetMesh& mesh,
-                   const SheetState& s) {
-  remesh::write_sheet_file((dir / "sheet.obj").string(), mesh, s.positions_matrix(),
-                           s.velocities_matrix(), scene.sheet.width, scene.sheet.height);
-  if (scene.output.write_ply)
-    remesh::write_sheet_file((dir / "sheet.ply").string(), mesh, s.positions_matrix(),
-                             s.velocities_matrix(), scene.sheet.width, scene.sheet.height);
-}
-
-void write_json(const fs::path& path, const json& j) {
-  const fs::path tmp = path.string() + ".tmp";
-  std::ofstream out(tmp);
-  out << std::setw(2) << j << '\n';
-  if (!out) throw remesh::IoError(path.string() + ": cannot write");
-  out.close();
-  fs::rename(tmp, path);
-}
-
-/// A staging folder inside out_dir; its files move into out_dir only when the run succeeded.
-class Staging {
- public:
-  explicit Staging(const std::string& out_dir) {
-    if (out_dir.empty()) return;
-    m_out = out_dir;
-    m_created = !fs::exists(m_out);
-    fs::create_directories(m_out);
-    m_dir = m_out / ".papersim-partial";
-    fs::remove_all(m_dir);
-    fs::create_directories(m_dir);
-  }
-  ~Staging() {
-    std::error_code ec;
-    if (!m_dir.empty()) fs::remove_all(m_dir, ec);
-    // A failed run leaves no trace: not even the folder, when this run made it.
-    if (!m_committed && m_created) fs::remove(m_out, ec);
-  }
-  bool active() const { return !m_dir.empty(); }
-  const fs::path& dir() const { return m_dir; }
-  void commit() {
-    for (const auto& e : fs::directory_iterator(m_dir)) {
-      const fs::path target = m_out / e.path().filename();
-      if (fs::is_directory(target)) fs::remove_all(target);
-      fs::rename(e.path(), target);
-    }
-    m_committed = true;
-  }
-
- private:
-  fs::path m_out, m_dir;
-  bool m_created = false, m_committed = false;
-};
 
 }  // namespace
 
