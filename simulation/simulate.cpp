@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "collision/errors.hpp"
+#include "common/atomic_file.hpp"
 #include "collision/self_intersection.hpp"
 #include "remesh/errors.hpp"
 #include "remesh/sheet_io.hpp"
@@ -113,7 +114,8 @@ Built build(const Scene& scene, const remesh::SheetMesh& mesh, const SheetState&
     try {
       b.obstacles.push_back(collision::make_collider(scene.obstacles[i]));
     } catch (const collision::ColliderError& e) {
-      throw SceneError("obstacles[" + std::to_string(i) + "]: " + e.what());
+      throw SceneError((scene.source.empty() ? std::string("scene") : scene.source) +
+                       ": key 'obstacles[" + std::to_string(i) + "]': " + e.what());
     }
   }
   ContactParams p = scene.contact;
@@ -184,7 +186,16 @@ void initial_sheet(const Scene& scene, remesh::SheetMesh& mesh, SheetState& stat
   const SheetSpec& sp = scene.sheet;
   Eigen::MatrixX3d x;
   if (!sp.mesh_path.empty()) {
-    remesh::SheetData d = remesh::read_sheet(sp.mesh_path);
+    const std::string key = (scene.source.empty() ? std::string("scene") : scene.source) +
+                            ": key 'sheet.mesh': ";
+    remesh::SheetData d;
+    try {
+      d = remesh::read_sheet(sp.mesh_path);
+    } catch (const std::runtime_error& e) {  // remesh::IoError, remesh::MeshError
+      throw SceneError(key + e.what());
+    }
+    if (d.positions.cwiseAbs().maxCoeff() > MAX_SCENE_COORDINATE)
+      throw SceneError(key + "a vertex coordinate beyond the limit of 1000 m");
     mesh = d.mesh;
     x = d.positions;
   } else {
@@ -249,6 +260,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
     total.seconds_assembly += s.seconds_assembly;
     total.seconds_solve += s.seconds_solve;
     total.seconds_line_search += s.seconds_line_search;
+    if (options.poll_stop) options.poll_stop();
     track.update(b, r.state);
     if (options.on_step) {
       StepReport report;
@@ -327,6 +339,8 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
   for (auto it = options.extra_meta.begin(); it != options.extra_meta.end(); ++it) m[it.key()] = it.value();
   if (staging.active()) {
     write_outputs(staging.dir(), scene, r.mesh, r.state);
+    for (const auto& [name, text] : options.extra_files)
+      common::write_text_atomically(staging.dir() / name, text);
     write_json(staging.dir() / "meta.json", m);
     staging.commit();
   }
