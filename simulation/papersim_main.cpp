@@ -146,7 +146,7 @@ int main(int argc, char** argv) {
   run->add_option("--out", out_dir, "Output folder: sheet.obj, sheet.ply, meta.json")
       ->required()->check(non_empty());
   run->add_option("--frames", frames, "Write every K-th step to OUT/frames/ (0: none)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(CLI::Range(0, 1 << 30));
   run->add_flag("--quiet", quiet, "No progress on stderr");
 
   std::string name;
@@ -160,7 +160,7 @@ int main(int argc, char** argv) {
       ->required()->check(CLI::Range(0LL, 2147483647LL));
   scen->add_option("--out", out_dir, "Output folder")->required()->check(non_empty());
   scen->add_option("--frames", frames, "Write every K-th step to OUT/frames/ (0: none)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(CLI::Range(0, 1 << 30));
   scen->add_flag("--quiet", quiet, "No progress on stderr");
   bool draw_only = false;
   scen->add_flag("--draw-only", draw_only, "Only write OUT/scene.json (edit it, then: papersim run)");

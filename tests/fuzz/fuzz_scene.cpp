@@ -5,6 +5,8 @@
 #include <sstream>
 #include <string>
 
+#include <nlohmann/json.hpp>
+
 #include "simulation/errors.hpp"
 #include "simulation/scene.hpp"
 

@@ -289,6 +289,11 @@ TEST(HostileInput, RangeErrorsPrintShortNumbers) {
   EXPECT_EQ(r.status, 2);
   EXPECT_TRUE(contains(r.err, "value 1e+300 out of range")) << r.err;
   EXPECT_LT(r.err.size(), 200u) << r.err;
+  // CLI11's NonNegativeNumber printed the largest double in full (309 digits).
+  const Outcome frames = run({PAPERSIM, "run", write_scene(dir, "t.json", small_scene(dir)), "--out",
+                              dir.str("out"), "--frames", "-1"});
+  EXPECT_EQ(frames.status, 2);
+  EXPECT_LT(frames.err.size(), 200u) << frames.err;
 }
 
 TEST(HostileInput, PovrayFailureDoesNotPointIntoADeletedFolder) {
