@@ -359,7 +359,7 @@ json parse_scene_text(std::istream& in, const std::string& source) {
   };
   try {
     return json::parse(in, check);
-  } catch (const json::parse_error& e) {
+  } catch (const json::exception& e) {  // parse_error, and out_of_range for a number like 1e999
     throw SceneError(source + ": not valid JSON: " + e.what());
   }
 }

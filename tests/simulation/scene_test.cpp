@@ -254,6 +254,14 @@ TEST(Scene, NullDuplicateKeysAndHugeValuesAreErrors) {
   } catch (const SceneError& e) {
     EXPECT_EQ(std::string(e.what()), "s.json: key 'width' appears twice in the same object");
   }
+  // Found by fuzz_scene: a number beyond double range threw json's out_of_range past the reader.
+  std::istringstream overflow(R"({"gravity": [0, 0, -121.27e674554907327]})");
+  try {
+    parse_scene_text(overflow, "s.json");
+    FAIL() << "an overflowing number was accepted";
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("s.json: not valid JSON"), std::string::npos) << e.what();
+  }
   std::istringstream apart(R"({"sheet": {"width": 0.1}, "contact": {"width": 2}})");
   EXPECT_NO_THROW(parse_scene_text(apart, "s.json")) << "the same key in two objects is fine";
 }
