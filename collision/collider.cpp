@@ -1,5 +1,7 @@
 #include "collision/collider.hpp"
 
+#include "common/format.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -31,8 +33,8 @@ RigidMotion::RigidMotion(std::vector<Keyframe> keyframes) : m_keyframes(std::mov
     if (!(m_keyframes[i].time > m_keyframes[i - 1].time))
       throw std::invalid_argument("RigidMotion: keyframe times must increase, but keyframe " +
                                   std::to_string(i) + " has time " +
-                                  std::to_string(m_keyframes[i].time) + " after " +
-                                  std::to_string(m_keyframes[i - 1].time));
+                                  common::format_number(m_keyframes[i].time) + " after " +
+                                  common::format_number(m_keyframes[i - 1].time));
   }
   for (Keyframe& k : m_keyframes) {
     if (!(k.rotation.norm() > 0.0))

@@ -1,5 +1,7 @@
 #include "collision/collider_factory.hpp"
 
+#include "common/format.hpp"
+
 #include "collision/errors.hpp"
 
 #include <cmath>
@@ -31,7 +33,7 @@ std::unique_ptr<Collider> make_plane(const ColliderSpec& spec) {
     throw ColliderError("collider plane: field 'level_set' is not available (unbounded)");
   if (!(std::isfinite(spec.plane_half_size) && spec.plane_half_size > 0.0))
     throw ColliderError("collider plane: plane_half_size must be > 0, got " +
-                        std::to_string(spec.plane_half_size));
+                        common::format_number(spec.plane_half_size));
   auto plane = std::make_unique<PlaneCollider>();
   plane->half_size = spec.plane_half_size;
   return plane;
@@ -75,7 +77,7 @@ Shape shape_of(const ColliderSpec& spec) {
 std::unique_ptr<Collider> make_collider(const ColliderSpec& spec) {
   if (!(std::isfinite(spec.friction) && spec.friction >= 0.0))
     throw ColliderError(std::string("collider ") + to_string(spec.kind) +
-                        ": friction must be >= 0, got " + std::to_string(spec.friction));
+                        ": friction must be >= 0, got " + common::format_number(spec.friction));
   RigidMotion motion = motion_of(spec.keyframes);
   std::unique_ptr<Collider> collider;
   if (spec.kind == ColliderKind::plane)

@@ -1,5 +1,7 @@
 #include "collision/level_set_collider.hpp"
 
+#include "common/format.hpp"
+
 #include "collision/errors.hpp"
 
 #include <openvdb/openvdb.h>
@@ -38,14 +40,14 @@ void require(bool ok, const std::string& what) {
 Resolution resolve(const LevelSetParams& p, double smallest_feature) {
   require(std::isfinite(p.voxel_size), "voxel_size must be finite");
   require(std::isfinite(p.contact_thickness) && p.contact_thickness > 0.0,
-          "contact_thickness must be > 0, got " + std::to_string(p.contact_thickness));
+          "contact_thickness must be > 0, got " + common::format_number(p.contact_thickness));
   require(std::isfinite(p.reach) && p.reach >= 0.0,
-          "reach must be >= 0, got " + std::to_string(p.reach));
+          "reach must be >= 0, got " + common::format_number(p.reach));
   require(p.min_band_voxels >= 2,
           "min_band_voxels must be >= 2, got " + std::to_string(p.min_band_voxels));
   Resolution r;
   r.h = p.voxel_size > 0.0 ? p.voxel_size : std::min(smallest_feature / 8.0, p.contact_thickness);
-  require(r.h > 0.0, "voxel size must be > 0, got " + std::to_string(r.h));
+  require(r.h > 0.0, "voxel size must be > 0, got " + common::format_number(r.h));
   const double needed = std::ceil((p.contact_thickness + p.reach) / r.h + SQRT3);
   r.n = std::max(p.min_band_voxels, static_cast<int>(needed));
   return r;
@@ -190,7 +192,7 @@ std::unique_ptr<LevelSetCollider> LevelSetCollider::from_obj(const std::string& 
                                                              const LevelSetParams& params,
                                                              double scale) {
   if (!(std::isfinite(scale) && scale > 0.0))
-    throw ColliderError("mesh '" + path + "': scale must be > 0, got " + std::to_string(scale));
+    throw ColliderError("mesh '" + path + "': scale must be > 0, got " + common::format_number(scale));
   TriangleMesh mesh = read_obj(path);
   for (Eigen::Vector3d& v : mesh.vertices) v *= scale;
   try {

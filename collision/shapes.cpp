@@ -1,5 +1,7 @@
 #include "collision/shapes.hpp"
 
+#include "common/format.hpp"
+
 #include "collision/errors.hpp"
 
 #include <Eigen/Geometry>
@@ -129,8 +131,8 @@ void validate(const Shape& s) {
       require_positive("length", s.length);
       if (s.length < 2.0 * s.radius)
         throw ColliderError("collider shape: capsule length (tip to tip) " +
-                            std::to_string(s.length) + " must be >= 2 radius = " +
-                            std::to_string(2.0 * s.radius));
+                            common::format_number(s.length) + " must be >= 2 radius = " +
+                            common::format_number(2.0 * s.radius));
       return;
     case ShapeKind::box:
       require_positive("half_extents.x", s.half_extents.x());

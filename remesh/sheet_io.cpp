@@ -2,6 +2,7 @@
 
 #include <Eigen/Cholesky>
 
+#include <cerrno>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -14,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "common/atomic_file.hpp"
 #include "remesh/errors.hpp"
 
 namespace papersim::remesh {
@@ -118,56 +120,86 @@ Eigen::Vector2d fit_uv_scale(const Eigen::MatrixX3d& x, const Eigen::MatrixX2d& 
   return s2.cwiseSqrt();
 }
 
-int parse_obj_index(const std::string& token, int count, const std::string& path) {
-  const int i = std::stoi(token);
-  const int idx = i > 0 ? i - 1 : count + i;
-  if (idx < 0 || idx >= count) parse_error(path, "face index " + token + " out of range");
-  return idx;
+/// A 1-based (or negative, relative) OBJ index into `count` elements, as a 0-based index.
+int parse_obj_index(const std::string& token, int count, const std::string& where) {
+  errno = 0;
+  char* end = nullptr;
+  const long i = std::strtol(token.c_str(), &end, 10);
+  if (token.empty() || *end != '\0' || errno == ERANGE)
+    parse_error(where, "bad face index '" + token + "'");
+  const long idx = i > 0 ? i - 1 : count + i;
+  if (i == 0 || idx < 0 || idx >= count) parse_error(where, "face index " + token + " out of range");
+  return static_cast<int>(idx);
 }
 
-SheetData read_obj(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw IoError(path + ": cannot open");
+/// A sheet size from a file header: positive, finite and within MAX_SHEET_COORDINATE.
+void check_size(double width, double height, const std::string& where) {
+  if (width == 0 && height == 0) return;  // none given
+  if (!(width > 0 && width <= MAX_SHEET_COORDINATE && height > 0 && height <= MAX_SHEET_COORDINATE))
+    parse_error(where, "sheet size must be in (0, " + std::to_string(int(MAX_SHEET_COORDINATE)) + "] m");
+}
+
+void check_positions(const Eigen::MatrixX3d& x, const std::string& path) {
+  if (!x.allFinite()) throw MeshError(path + ": vertex positions contain NaN or inf");
+  if (x.size() > 0 && x.cwiseAbs().maxCoeff() > MAX_SHEET_COORDINATE)
+    throw MeshError(path + ": a vertex coordinate exceeds the limit of 1e6 m");
+}
+
+SheetData read_obj(std::istream& in, const std::string& path) {
   std::vector<Eigen::Vector3d> v;
   std::vector<Eigen::Vector2d> vt;
   std::vector<Eigen::Vector3i> fv, ft;
   double width = 0, height = 0;
   std::string line;
+  int line_no = 0;
   while (std::getline(in, line)) {
+    ++line_no;
+    const std::string where = path + ":" + std::to_string(line_no);
     std::istringstream ls(line);
     std::string tag;
     ls >> tag;
     if (tag == "#") {
       std::string a, b;
       ls >> a >> b;
-      if (a == "papersim" && b == "sheet") ls >> width >> height;
+      if (a == "papersim" && b == "sheet") {
+        if (!(ls >> width >> height)) parse_error(where, "malformed '# papersim sheet WIDTH HEIGHT'");
+        check_size(width, height, where);
+      }
     } else if (tag == "v") {
+      if (static_cast<long>(v.size()) >= MAX_SHEET_VERTICES)
+        throw MeshError(path + ": more than " + std::to_string(MAX_SHEET_VERTICES) +
+                        " vertices (the limit of a sheet file)");
       // strtod, unlike operator>>, reads "nan" and "inf", which are then rejected as such.
       Eigen::Vector3d p;
       std::string tok[3];
-      if (!(ls >> tok[0] >> tok[1] >> tok[2])) parse_error(path, "bad vertex line: " + line);
+      if (!(ls >> tok[0] >> tok[1] >> tok[2])) parse_error(where, "bad vertex line: " + line);
       for (int k = 0; k < 3; ++k) {
         char* end = nullptr;
         p[k] = std::strtod(tok[k].c_str(), &end);
-        if (end == tok[k].c_str()) parse_error(path, "bad vertex line: " + line);
+        if (end == tok[k].c_str()) parse_error(where, "bad vertex line: " + line);
       }
       v.push_back(p);
     } else if (tag == "vt") {
+      if (static_cast<long>(vt.size()) >= MAX_SHEET_VERTICES)
+        throw MeshError(path + ": more than " + std::to_string(MAX_SHEET_VERTICES) + " vt lines");
       Eigen::Vector2d t;
-      if (!(ls >> t.x() >> t.y())) parse_error(path, "bad vt line: " + line);
+      if (!(ls >> t.x() >> t.y()) || !t.allFinite()) parse_error(where, "bad vt line: " + line);
       vt.push_back(t);
     } else if (tag == "f") {
+      if (static_cast<long>(fv.size()) >= MAX_SHEET_FACES)
+        throw MeshError(path + ": more than " + std::to_string(MAX_SHEET_FACES) +
+                        " faces (the limit of a sheet file)");
       std::string tok;
       std::vector<int> iv, it;
       while (ls >> tok) {
         const auto slash = tok.find('/');
-        iv.push_back(parse_obj_index(tok.substr(0, slash), static_cast<int>(v.size()), path));
-        if (slash == std::string::npos) parse_error(path, "face without vt index: " + line);
+        iv.push_back(parse_obj_index(tok.substr(0, slash), static_cast<int>(v.size()), where));
+        if (slash == std::string::npos) parse_error(where, "face without vt index: " + line);
         const auto slash2 = tok.find('/', slash + 1);
         it.push_back(parse_obj_index(tok.substr(slash + 1, slash2 - slash - 1),
-                                     static_cast<int>(vt.size()), path));
+                                     static_cast<int>(vt.size()), where));
       }
-      if (iv.size() != 3) parse_error(path, "only triangles are supported: " + line);
+      if (iv.size() != 3) parse_error(where, "only triangles are supported: " + line);
       fv.emplace_back(iv[0], iv[1], iv[2]);
       ft.emplace_back(it[0], it[1], it[2]);
     }
@@ -185,11 +217,14 @@ SheetData read_obj(const std::string& path) {
         throw MeshError(path + ": vertex " + std::to_string(fv[f][k] + 1) +
                         " has two different vt (a seam); a sheet needs one vt per vertex");
     }
-  if (!uv.allFinite()) throw MeshError(path + ": a vertex is used by no face or has NaN vt");
+  for (int i = 0; i < uv.rows(); ++i)
+    if (std::isnan(uv(i, 0)))
+      throw MeshError(path + ": vertex " + std::to_string(i + 1) +
+                      " is used by no face (a truncated file?)");
   SheetData data;
   data.positions.resize(v.size(), 3);
   for (size_t i = 0; i < v.size(); ++i) data.positions.row(i) = v[i].transpose();
-  if (!data.positions.allFinite()) throw MeshError(path + ": vertex positions contain NaN or inf");
+  check_positions(data.positions, path);
   Eigen::MatrixX3i faces(fv.size(), 3);
   for (size_t f = 0; f < fv.size(); ++f) faces.row(f) = fv[f].transpose();
   if (!(width > 0 && height > 0)) {
@@ -223,12 +258,12 @@ struct PlyElement {
 
 double read_value(std::istream& in, const std::string& type, bool binary) {
   if (!binary) {
-    double d;
+    double d = 0;
     in >> d;
     return d;
   }
   auto get = [&](auto tag) {
-    decltype(tag) x;
+    decltype(tag) x{};
     in.read(reinterpret_cast<char*>(&x), sizeof(x));
     return static_cast<double>(x);
   };
@@ -243,14 +278,13 @@ double read_value(std::istream& in, const std::string& type, bool binary) {
   throw IoError("ply: unsupported property type " + type);
 }
 
-SheetData read_ply(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw IoError(path + ": cannot open");
+SheetData read_ply(std::istream& in, const std::string& path) {
   std::string line, format;
   std::getline(in, line);
   if (line.rfind("ply", 0) != 0) parse_error(path, "not a PLY file");
   std::vector<PlyElement> elements;
   double width = 0, height = 0;
+  bool header_done = false;
   while (std::getline(in, line)) {
     std::istringstream ls(line);
     std::string tag;
@@ -259,20 +293,32 @@ SheetData read_ply(const std::string& path) {
     else if (tag == "comment") {
       std::string a, b;
       ls >> a >> b;
-      if (a == "papersim" && b == "sheet") ls >> width >> height;
+      if (a == "papersim" && b == "sheet") {
+        if (!(ls >> width >> height)) parse_error(path, "malformed 'comment papersim sheet WIDTH HEIGHT'");
+        check_size(width, height, path);
+      }
     } else if (tag == "element") {
       PlyElement e;
-      ls >> e.name >> e.count;
+      if (!(ls >> e.name >> e.count) || e.count < 0) parse_error(path, "malformed element line: " + line);
+      const long limit = e.name == "vertex" ? MAX_SHEET_VERTICES : MAX_SHEET_FACES;
+      if (e.count > limit)
+        throw MeshError(path + ": element " + e.name + " has " + std::to_string(e.count) +
+                        " entries, more than the limit of " + std::to_string(limit));
       elements.push_back(e);
     } else if (tag == "property") {
       if (elements.empty()) parse_error(path, "property before element");
       PlyProperty p;
       ls >> p.type;
       if (p.type == "list") ls >> p.count_type >> p.type;
-      ls >> p.name;
+      if (!(ls >> p.name)) parse_error(path, "malformed property line: " + line);
+      if (elements.back().props.size() >= 32) parse_error(path, "more than 32 properties in an element");
       elements.back().props.push_back(p);
-    } else if (tag == "end_header") break;
+    } else if (tag == "end_header") {
+      header_done = true;
+      break;
+    }
   }
+  if (!header_done) parse_error(path, "no end_header (not a PLY file or truncated)");
   const bool binary = format == "binary_little_endian";
   if (!binary && format != "ascii") parse_error(path, "unsupported PLY format '" + format + "'");
   SheetData data;
@@ -288,10 +334,16 @@ SheetData read_ply(const std::string& path) {
       for (size_t p = 0; p < e.props.size(); ++p) {
         const auto& pr = e.props[p];
         if (!pr.count_type.empty()) {
-          const int n = static_cast<int>(read_value(in, pr.count_type, binary));
+          const double n = read_value(in, pr.count_type, binary);
+          if (!in) parse_error(path, "truncated data in element " + e.name);
           if (n != 3) parse_error(path, "only triangles are supported");
           Eigen::Vector3i t;
-          for (int k = 0; k < 3; ++k) t[k] = static_cast<int>(read_value(in, pr.type, binary));
+          for (int k = 0; k < 3; ++k) {
+            const double index = read_value(in, pr.type, binary);
+            if (!(index >= 0 && index < MAX_SHEET_VERTICES) || index != std::floor(index))
+              parse_error(path, "bad vertex index in element " + e.name);
+            t[k] = static_cast<int>(index);
+          }
           lists.push_back(t);
         } else {
           cols[p][i] = read_value(in, pr.type, binary);
@@ -336,7 +388,10 @@ SheetData read_ply(const std::string& path) {
     }
   }
   if (!has_material) throw MeshError(path + ": PLY has no material coordinates (mx, my)");
-  if (!data.positions.allFinite()) throw MeshError(path + ": vertex positions contain NaN or inf");
+  check_positions(data.positions, path);
+  if (!data.velocities.allFinite()) throw MeshError(path + ": velocities contain NaN or inf");
+  if (material.size() > 0 && material.cwiseAbs().maxCoeff() > MAX_SHEET_COORDINATE)
+    throw MeshError(path + ": a material coordinate exceeds the limit of 1e6 m");
   try {
     data.mesh = SheetMesh(material, faces);
   } catch (const MeshError& e) {
@@ -352,30 +407,30 @@ SheetData read_ply(const std::string& path) {
 
 }  // namespace
 
+SheetData parse_sheet(std::istream& in, const std::string& source, SheetFormat format) {
+  return format == SheetFormat::obj ? read_obj(in, source) : read_ply(in, source);
+}
+
 SheetData read_sheet(const std::string& path) {
   if (!std::filesystem::exists(path)) throw IoError(path + ": no such file");
-  if (ends_with(path, ".obj")) return read_obj(path);
-  if (ends_with(path, ".ply")) return read_ply(path);
-  throw IoError(path + ": unknown mesh format (expected .obj or .ply)");
+  const bool obj = ends_with(path, ".obj");
+  if (!obj && !ends_with(path, ".ply"))
+    throw IoError(path + ": unknown mesh format (expected .obj or .ply)");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw IoError(path + ": cannot open");
+  return parse_sheet(in, path, obj ? SheetFormat::obj : SheetFormat::ply);
 }
 
 void write_sheet_file(const std::string& path, const SheetMesh& mesh,
                       const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& velocities,
                       double width, double height) {
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::binary);
-    if (!out) throw IoError(path + ": cannot write");
-    if (ends_with(path, ".obj")) write_obj(out, mesh, positions, width, height);
-    else if (ends_with(path, ".ply")) write_ply(out, mesh, positions, velocities, width, height);
-    else throw IoError(path + ": unknown mesh format (expected .obj or .ply)");
-    out.flush();
-    if (!out) {
-      std::remove(tmp.c_str());
-      throw IoError(path + ": write failed");
-    }
-  }
-  std::filesystem::rename(tmp, path);
+  const bool obj = ends_with(path, ".obj");
+  if (!obj && !ends_with(path, ".ply"))
+    throw IoError(path + ": unknown mesh format (expected .obj or .ply)");
+  common::write_file_atomically(path, [&](std::ostream& out) {
+    if (obj) write_obj(out, mesh, positions, width, height);
+    else write_ply(out, mesh, positions, velocities, width, height);
+  });
 }
 
 }  // namespace papersim::remesh

@@ -8,6 +8,11 @@
 
 namespace papersim::remesh {
 
+/// Limits of the sheet readers, checked while reading (before memory is committed).
+constexpr long MAX_SHEET_VERTICES = 500'000;   ///< vertices of a sheet file
+constexpr long MAX_SHEET_FACES = 1'000'000;    ///< faces of a sheet file
+constexpr double MAX_SHEET_COORDINATE = 1e6;   ///< |x|, |y|, |z|, width and height [m]
+
 /// A sheet as stored in a file: connectivity, material coordinates and world state.
 struct SheetData {
   SheetMesh mesh;
@@ -30,12 +35,21 @@ void write_ply(std::ostream& out, const SheetMesh& mesh, const Eigen::MatrixX3d&
 /// Read an OBJ (v, vt, f with v/vt; one vt per v) or a PLY written by write_ply (binary or
 /// ASCII, with mx my). Without the `# papersim sheet` header the OBJ's material scale is fitted
 /// to the world edge lengths (the sheet is assumed nearly isometric).
-/// @throw IoError when the file cannot be read or parsed, MeshError when the mesh is invalid
-///        (NaN, non-manifold edge, face degenerate in material space, missing vt).
+/// @throw IoError when the file cannot be read or parsed (the message names the file and, for
+///        an OBJ, the line), MeshError when the mesh is invalid (NaN, a coordinate beyond
+///        MAX_SHEET_COORDINATE, more than MAX_SHEET_VERTICES / MAX_SHEET_FACES, a vertex used by
+///        no face, non-manifold edge, face degenerate in material space, missing vt).
 SheetData read_sheet(const std::string& path);
 
+enum class SheetFormat { obj, ply };
+
+/// read_sheet from a stream (opened in binary mode for a PLY); `source` names it in messages.
+/// @throw IoError, MeshError as read_sheet
+SheetData parse_sheet(std::istream& in, const std::string& source, SheetFormat format);
+
 /// Write to `path` atomically: the content goes to a temporary file that is renamed into place.
-/// @throw IoError when the file cannot be written.
+/// @throw IoError for an unknown extension, common::OutputError when the file cannot be written
+///        (nothing is then left at `path` or beside it).
 void write_sheet_file(const std::string& path, const SheetMesh& mesh,
                       const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& velocities,
                       double width, double height);

@@ -15,6 +15,7 @@
 #include <ImfInputFile.h>
 #include <ImfOutputFile.h>
 
+#include "common/atomic_file.hpp"
 #include "scenegen/errors.hpp"
 
 namespace papersim::scenegen {
@@ -102,12 +103,12 @@ ImageF read_png(const std::string& path) {
 
 void write_png(const std::string& path, const ImageF& image, int bits) {
   std::unique_ptr<FILE, FileCloser> fp(std::fopen(path.c_str(), "wb"));
-  if (!fp) throw IoError("cannot write image '" + path + "'");
+  if (!fp) throw common::OutputError("cannot write image '" + path + "'");
   png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, png_error_quiet, png_warning_quiet);
   png_infop info = png_create_info_struct(png);
   if (setjmp(png_jmpbuf(png))) {
     png_destroy_write_struct(&png, &info);
-    throw IoError("cannot encode PNG '" + path + "'");
+    throw common::OutputError("cannot write PNG '" + path + "'");
   }
   png_init_io(png, fp.get());
   const int type = image.channels == 1 ? PNG_COLOR_TYPE_GRAY
@@ -133,7 +134,10 @@ void write_png(const std::string& path, const ImageF& image, int bits) {
   }
   png_write_end(png, nullptr);
   png_destroy_write_struct(&png, &info);
-  if (std::fflush(fp.get()) != 0) throw IoError("cannot write image '" + path + "'");
+  // fclose writes what the buffer still holds: a full disk shows there at the latest.
+  const bool flushed = std::fflush(fp.get()) == 0;
+  if (std::fclose(fp.release()) != 0 || !flushed)
+    throw common::OutputError("cannot write image '" + path + "'");
 }
 
 void write_exr(const std::string& path, const ImageF& image, const std::vector<std::string>& names) {
@@ -149,8 +153,16 @@ void write_exr(const std::string& path, const ImageF& image, const std::vector<s
     file.setFrameBuffer(fb);
     file.writePixels(image.height);
   } catch (const std::exception& e) {
-    throw IoError("cannot write EXR '" + path + "': " + e.what());
+    throw common::OutputError("cannot write EXR '" + path + "': " + e.what());
   }
+  // The line offset table is written when the file closes, where errors are not reported:
+  // read the file back.
+  bool complete = false;
+  try {
+    complete = Imf::InputFile(path.c_str()).isComplete();
+  } catch (const std::exception&) {
+  }
+  if (!complete) throw common::OutputError("cannot write EXR '" + path + "' (incomplete file; full disk?)");
 }
 
 ImageF read_exr(const std::string& path, const std::vector<std::string>& names) {
@@ -171,8 +183,6 @@ ImageF read_exr(const std::string& path, const std::vector<std::string>& names) 
 }
 
 void write_npy(const std::string& path, const ImageF& image) {
-  std::ofstream out(path, std::ios::binary);
-  if (!out) throw IoError("cannot write '" + path + "'");
   std::string header = "{'descr': '<f4', 'fortran_order': False, 'shape': (" +
                        std::to_string(image.height) + ", " + std::to_string(image.width) + ", " +
                        std::to_string(image.channels) + "), }";
@@ -180,13 +190,14 @@ void write_npy(const std::string& path, const ImageF& image) {
   header.append((64 - total % 64) % 64, ' ');
   header += '\n';
   const auto len = static_cast<std::uint16_t>(header.size());
-  out.write("\x93NUMPY\x01\x00", 8);
-  out.put(static_cast<char>(len & 0xFF));
-  out.put(static_cast<char>(len >> 8));
-  out << header;
-  out.write(reinterpret_cast<const char*>(image.data.data()),
-            static_cast<std::streamsize>(image.data.size() * sizeof(float)));
-  if (!out) throw IoError("cannot write '" + path + "'");
+  common::write_file_atomically(path, [&](std::ostream& out) {
+    out.write("\x93NUMPY\x01\x00", 8);
+    out.put(static_cast<char>(len & 0xFF));
+    out.put(static_cast<char>(len >> 8));
+    out << header;
+    out.write(reinterpret_cast<const char*>(image.data.data()),
+              static_cast<std::streamsize>(image.data.size() * sizeof(float)));
+  });
 }
 
 double srgb_to_linear(double v) {

@@ -23,14 +23,14 @@ ImageF read_png(const std::string& path);
 /// Raw 16-bit samples of a PNG (exact integers). @throw IoError
 std::vector<std::uint16_t> read_png16(const std::string& path, int& width, int& height, int& channels);
 /// Write a PNG with 1, 3 or 4 channels, values in [0, 1] quantised by rounding.
-/// @param bits 8 or 16. @throw IoError
+/// @param bits 8 or 16. @throw common::OutputError
 void write_png(const std::string& path, const ImageF& image, int bits);
 /// Write a float32 OpenEXR (ZIP compression) with the given channel names.
-/// @throw IoError
+/// @throw common::OutputError (also when the file reads back incomplete)
 void write_exr(const std::string& path, const ImageF& image, const std::vector<std::string>& names);
 /// Read the named channels of a float OpenEXR. @throw IoError
 ImageF read_exr(const std::string& path, const std::vector<std::string>& names);
-/// Write a float32 little-endian .npy of shape (height, width, channels). @throw IoError
+/// Write a float32 little-endian .npy of shape (height, width, channels). @throw common::OutputError
 void write_npy(const std::string& path, const ImageF& image);
 
 /// sRGB transfer functions.

@@ -1,6 +1,7 @@
 #include "scenegen/job.hpp"
 
 #include <fcntl.h>
+#include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -16,7 +17,10 @@
 
 #include <nlohmann/json.hpp>
 
+#include "common/atomic_file.hpp"
+#include "common/interrupt.hpp"
 #include "scenegen/errors.hpp"
+#include "scenegen/limits.hpp"
 #include "scenegen/geometry.hpp"
 #include "scenegen/image_io.hpp"
 #include "scenegen/meta.hpp"
@@ -38,17 +42,19 @@ namespace {
 thread_local std::string g_failed_meta;
 
 void write_text(const fs::path& path, const std::string& text) {
-  std::ofstream out(path, std::ios::binary);
-  out << text;
-  if (!out.flush()) throw IoError("cannot write '" + path.string() + "'");
+  common::write_text_atomically(path, text);
 }
 
 template <class Writer>
 void write_with(const fs::path& path, Writer&& writer) {
-  std::ofstream out(path, std::ios::binary);
-  if (!out) throw IoError("cannot write '" + path.string() + "'");
-  writer(out);
-  if (!out.flush()) throw IoError("cannot write '" + path.string() + "'");
+  common::write_file_atomically(path, [&](std::ostream& out) { writer(out); });
+}
+
+/// Copy a file, as an output. @throw common::OutputError
+void copy_output(const fs::path& from, const fs::path& to) {
+  std::error_code ec;
+  fs::copy_file(from, to, fs::copy_options::overwrite_existing, ec);
+  if (ec) throw common::OutputError("cannot copy '" + from.string() + "' to '" + to.string() + "': " + ec.message());
 }
 
 std::string lower_ext(const fs::path& p) {
@@ -126,15 +132,20 @@ std::pair<std::string, json> place_document(const SampleOptions& o, const SheetM
   if (!src.empty()) {
     check_image(src, "document");
     const std::string name = "document" + std::string(is_png_file(src.string()) ? ".png" : ".jpg");
-    fs::copy_file(src, job / name, fs::copy_options::overwrite_existing);
+    copy_output(src, job / name);
     return {name, {{"source", "file"}, {"file", src.filename().string()}, {"fnv1a64", hex(fnv1a_file(src.string()))}}};
   }
   DocumentParams dp;
   dp.page_width_mm = mesh.width * 1000.0;
   dp.page_height_mm = mesh.height * 1000.0;
   dp.dpi = o.document_dpi;
+  const double side_px = std::max(dp.page_width_mm, dp.page_height_mm) / 25.4 * dp.dpi;
+  if (!(side_px <= MAX_DOCUMENT_SIDE))
+    throw InputError("the built-in page would be " + std::to_string(std::lround(side_px)) +
+                     " pixels long, beyond the limit of " + std::to_string(MAX_DOCUMENT_SIDE) +
+                     " (lower --dpi or give --document)");
   const DocumentLayout doc = generate_document(o.seed, dp);
-  for (const auto& [name, path] : document_font_files()) fs::copy_file(path, job / name, fs::copy_options::overwrite_existing);
+  for (const auto& [name, path] : document_font_files()) copy_output(path, job / name);
   write_text(job / "document.inc", template_text("document.inc", tpl_dir));
   write_with(job / "document.pov", [&](std::ostream& out) { write_document_pov(out, doc); });
   write_with(job / "document.ini", [&](std::ostream& out) { write_document_ini(out, doc.width_px(), doc.height_px(), 0); });
@@ -207,7 +218,7 @@ void prepare_job(const SampleOptions& o, const std::string& job_dir) {
   remove_quietly(tmp);
   std::error_code ec;
   fs::create_directories(tmp, ec);
-  if (ec) throw IoError("cannot create job folder '" + tmp.string() + "': " + ec.message());
+  if (ec) throw common::OutputError("cannot create job folder '" + tmp.string() + "': " + ec.message());
   try {
     SceneDescription scene;
     scene.camera = choice.camera;
@@ -234,7 +245,7 @@ void prepare_job(const SampleOptions& o, const std::string& job_dir) {
       const fs::path src = scene.background.image;
       check_image(src, "background image");
       scene.background.image = "background" + std::string(is_png_file(src.string()) ? ".png" : ".jpg");
-      fs::copy_file(src, tmp / scene.background.image, fs::copy_options::overwrite_existing);
+      copy_output(src, tmp / scene.background.image);
     }
     scene.paper = draw_paper(paper_rng);
     set_coords_encoding(scene, surface);
@@ -257,7 +268,8 @@ void prepare_job(const SampleOptions& o, const std::string& job_dir) {
       run_sh += "povray " + ini + "\n";
     }
     write_text(tmp / "run.sh", run_sh);
-    fs::permissions(tmp / "run.sh", fs::perms::owner_exec | fs::perms::group_exec | fs::perms::others_exec, fs::perm_options::add);
+    fs::permissions(tmp / "run.sh", fs::perms::owner_exec | fs::perms::group_exec | fs::perms::others_exec, fs::perm_options::add, ec);
+    if (ec) throw common::OutputError("cannot make '" + (tmp / "run.sh").string() + "' executable: " + ec.message());
 
     meta["status"] = "ok";
     meta["image"] = {{"width", o.width}, {"height", o.height}};
@@ -284,7 +296,7 @@ void prepare_job(const SampleOptions& o, const std::string& job_dir) {
     write_text(tmp / "job.json", job.dump(2) + "\n");
     remove_quietly(final_dir);
     fs::rename(tmp, final_dir, ec);
-    if (ec) throw IoError("cannot rename job folder into '" + final_dir.string() + "': " + ec.message());
+    if (ec) throw common::OutputError("cannot rename job folder into '" + final_dir.string() + "': " + ec.message());
   } catch (...) {
     remove_quietly(tmp);
     throw;
@@ -297,9 +309,14 @@ namespace {
 pid_t start_povray(const fs::path& job_rel, const std::string& povray, const std::string& ini) {
   const fs::path job = fs::absolute(job_rel);
   const std::string log = (job / (fs::path(ini).stem().string() + ".log")).string();
+  const pid_t parent = getpid();
   const pid_t pid = fork();
   if (pid < 0) throw RenderError("cannot start POV-Ray (fork failed)");
   if (pid == 0) {
+    // POV-Ray dies with scenegen, even when scenegen is killed with SIGKILL.
+    prctl(PR_SET_PDEATHSIG, SIGKILL);
+    if (getppid() != parent) _exit(125);  // scenegen died before prctl
+    common::reset_signals_in_child();
     if (chdir(job.c_str()) != 0) _exit(126);
     const int fd = open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
     if (fd >= 0) { dup2(fd, 1); dup2(fd, 2); close(fd); }
@@ -314,13 +331,15 @@ void check_povray(const fs::path& job, const std::string& povray, const std::str
   if (WIFEXITED(status) && WEXITSTATUS(status) == 127)
     throw RenderError("cannot run POV-Ray '" + povray + "' (is povray 3.7 installed?)");
   if (WIFEXITED(status) && WEXITSTATUS(status) == 0) return;
-  const std::string log = (fs::absolute(job) / (fs::path(ini).stem().string() + ".log")).string();
-  std::ifstream in(log);
+  const std::string log_name = fs::path(ini).stem().string() + ".log";
+  std::ifstream in(fs::absolute(job) / log_name);
   std::string line, tail;
   std::vector<std::string> lines;
   while (std::getline(in, line)) lines.push_back(line);
   for (std::size_t i = lines.size() > 8 ? lines.size() - 8 : 0; i < lines.size(); ++i) tail += "\n  " + lines[i];
-  throw RenderError("POV-Ray failed on " + ini + " (log " + log + "):" + tail);
+  const std::string how = WIFEXITED(status) ? "exit status " + std::to_string(WEXITSTATUS(status))
+                                             : "signal " + std::to_string(WTERMSIG(status));
+  throw RenderError("POV-Ray failed on " + ini + " (" + how + "); the end of " + log_name + ":" + tail);
 }
 
 json read_job(const fs::path& job) {
@@ -355,7 +374,8 @@ RunReport run_job(const std::string& job_dir, const RunOptions& run) {
   std::size_t next = 0;
   int done = 0;
   const auto name_of = [&](std::size_t i) { return fs::path(inis[i]).stem().string(); };
-  const auto kill_all = [&] { for (auto& r : running) { kill(r.pid, SIGTERM); waitpid(r.pid, nullptr, 0); } };
+  // SIGKILL: POV-Ray may ignore SIGTERM while it renders.
+  const auto kill_all = [&] { for (auto& r : running) { kill(r.pid, SIGKILL); waitpid(r.pid, nullptr, 0); } };
   try {
     while (next < order.size() || !running.empty()) {
       const bool barrier = !running.empty() && inis[running.front().index] == "document.ini";
@@ -379,6 +399,7 @@ RunReport run_job(const std::string& job_dir, const RunOptions& run) {
         reaped = true;
         break;
       }
+      if (run.poll_stop) run.poll_stop();
       if (!reaped) std::this_thread::sleep_for(std::chrono::milliseconds(5));
     }
   } catch (...) {
@@ -524,30 +545,62 @@ void finish_into(const fs::path& job, const fs::path& stage) {
   }
 }
 
-/// Move every file of `stage` into `out` (rename), then remove `stage`.
-void publish(const fs::path& stage, const fs::path& out) {
-  std::vector<fs::path> files;
-  for (const auto& e : fs::directory_iterator(stage)) files.push_back(e.path());
-  std::sort(files.begin(), files.end());
-  for (const auto& f : files) {
+/// Remove the sample_output_names() of `out` that are not in `keep`. @throw common::OutputError
+void remove_stale_outputs(const fs::path& out, const std::vector<std::string>& keep) {
+  for (const std::string& name : sample_output_names()) {
+    if (std::find(keep.begin(), keep.end(), name) != keep.end()) continue;
     std::error_code ec;
-    fs::rename(f, out / f.filename(), ec);
-    if (ec) throw IoError("cannot move '" + f.string() + "' into '" + out.string() + "': " + ec.message());
+    fs::remove_all(out / name, ec);
+    if (ec) throw common::OutputError("cannot remove '" + (out / name).string() + "': " + ec.message());
+  }
+}
+
+/// Move every file of `stage` into `out` (rename; meta.json last, after the outputs of an
+/// earlier sample that this one does not replace are gone), then remove `stage`.
+void publish(const fs::path& stage, const fs::path& out) {
+  std::vector<std::string> names;
+  for (const auto& e : fs::directory_iterator(stage)) names.push_back(e.path().filename().string());
+  std::sort(names.begin(), names.end(), [](const std::string& a, const std::string& b) {
+    return (a == "meta.json") < (b == "meta.json") || ((a == "meta.json") == (b == "meta.json") && a < b);
+  });
+  std::vector<std::string> keep = names;
+  keep.erase(std::remove(keep.begin(), keep.end(), "meta.json"), keep.end());
+  remove_stale_outputs(out, keep);  // the old meta.json first of all
+  for (const auto& name : names) {
+    std::error_code ec;
+    fs::rename(stage / name, out / name, ec);
+    if (ec) throw common::OutputError("cannot move '" + (stage / name).string() + "' into '" + out.string() + "': " + ec.message());
   }
   remove_quietly(stage);
 }
 
+constexpr const char* JOB_NAME = ".scenegen-job";
+constexpr const char* STAGE_NAME = ".scenegen-stage";
+
 }  // namespace
+
+const std::vector<std::string>& sample_output_names() {
+  static const std::vector<std::string> NAMES = {
+      "image.png", "shading.png", "albedo.png", "uv.exr", "coords.exr", "normal.exr", "mask.png",
+      "backward.exr", "backward.npy", "document.png", "document.jpg", "job", "meta.json"};
+  return NAMES;
+}
+
+std::vector<std::string> render_staging_paths(const std::string& out_dir) {
+  const fs::path out(out_dir);
+  return {(out / JOB_NAME).string(), (out / JOB_NAME).string() + ".partial", (out / STAGE_NAME).string()};
+}
 
 void finish_job(const std::string& job_dir, const std::string& out_dir) {
   const fs::path out(out_dir);
   std::error_code ec;
   const bool created = !fs::exists(out);
   fs::create_directories(out, ec);
-  if (ec) throw IoError("cannot create '" + out_dir + "': " + ec.message());
-  const fs::path stage = out / ".scenegen-stage";
+  if (ec) throw common::OutputError("cannot create '" + out_dir + "': " + ec.message());
+  const fs::path stage = out / STAGE_NAME;
   remove_quietly(stage);
-  fs::create_directories(stage);
+  fs::create_directories(stage, ec);
+  if (ec) throw common::OutputError("cannot create '" + stage.string() + "': " + ec.message());
   try {
     finish_into(job_dir, stage);
     publish(stage, out);
@@ -564,12 +617,14 @@ RunReport render_sample(const SampleOptions& options, const std::string& out_dir
   const bool created = !fs::exists(out);
   std::error_code ec;
   fs::create_directories(out, ec);
-  if (ec) throw IoError("cannot create '" + out_dir + "': " + ec.message());
-  const fs::path job = out / ".scenegen-job";
+  if (ec) throw common::OutputError("cannot create '" + out_dir + "': " + ec.message());
+  for (const std::string& p : render_staging_paths(out_dir)) remove_quietly(p);  // left by SIGKILL
+  const fs::path job = out / JOB_NAME;
   try {
     try {
       prepare_job(options, job.string());
     } catch (const NoValidCameraError&) {
+      remove_stale_outputs(out, {});
       write_text(out / "meta.json", failed_meta());
       throw;
     }
@@ -577,7 +632,8 @@ RunReport render_sample(const SampleOptions& options, const std::string& out_dir
     finish_job(job.string(), out_dir);
     if (keep_job) {
       remove_quietly(out / "job");
-      fs::rename(job, out / "job");
+      fs::rename(job, out / "job", ec);
+      if (ec) throw common::OutputError("cannot move the job folder to '" + (out / "job").string() + "': " + ec.message());
     } else {
       remove_quietly(job);
     }

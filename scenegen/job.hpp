@@ -59,6 +59,9 @@ struct RunOptions {
   std::string povray = "povray";  ///< POV-Ray 3.7 executable
   ProgressCallback progress;      ///< may be empty
   int parallel = 0;               ///< POV-Ray processes at once (0: one per core)
+  /// Polled every few milliseconds while POV-Ray runs; may throw (e.g. common::Interrupted) to
+  /// stop: the POV-Ray processes are then killed and the exception passes on.
+  std::function<void()> poll_stop;
 };
 
 /// Timings of a run [s], per render in order (wall time of each POV-Ray process).
@@ -73,8 +76,10 @@ struct RunReport {
 ///        text in its what() context, see failed_meta) when no camera direction is valid.
 void prepare_job(const SampleOptions& options, const std::string& job_dir);
 
-/// Render every pass of a prepared job with POV-Ray (document page first).
-/// @throw RenderError when POV-Ray fails (its log is in the job folder).
+/// Render every pass of a prepared job with POV-Ray (document page first). POV-Ray processes
+/// die with the calling process (even on SIGKILL) and are killed when a render fails.
+/// @throw RenderError when POV-Ray fails (with the tail of its log), IoError when the folder is
+///        not a job, and whatever run.poll_stop throws.
 RunReport run_job(const std::string& job_dir, const RunOptions& run);
 
 /// Decode the raw renders of a job into the final files of `out_dir` (created if needed;
@@ -82,7 +87,9 @@ RunReport run_job(const std::string& job_dir, const RunOptions& run);
 void finish_job(const std::string& job_dir, const std::string& out_dir);
 
 /// prepare + run + finish. On failure nothing is left in `out_dir` except, when no camera is
-/// valid, a meta.json with status "failed" and the evaluation of every candidate.
+/// valid, a meta.json with status "failed" and the evaluation of every candidate (the files of
+/// an earlier sample in `out_dir` are then removed). On success `out_dir` holds this sample's
+/// files only (see sample_output_names()).
 /// @param keep_job  keep the job folder as out_dir/job
 RunReport render_sample(const SampleOptions& options, const std::string& out_dir,
                         const RunOptions& run, bool keep_job = false);
@@ -95,6 +102,13 @@ std::vector<std::string> layout_names();
 /// same document page. @throw as render_sample; views < 1 is an InputError
 RunReport render_views(const SampleOptions& options, int views, const std::string& out_dir,
                        const RunOptions& run, bool keep_job = false);
+/// Every name render_sample / finish_job may publish in a sample folder. Publishing removes
+/// those it did not write, so that a folder never mixes the files of two samples.
+const std::vector<std::string>& sample_output_names();
+
+/// The hidden folders render_sample and finish_job stage their work in, inside `out_dir`. A run
+/// killed with SIGKILL may leave them; the next render or finish into `out_dir` removes them.
+std::vector<std::string> render_staging_paths(const std::string& out_dir);
 
 /// meta.json text of the last NoValidCameraError thrown by prepare_job in this thread.
 const std::string& failed_meta();

@@ -10,6 +10,7 @@
 #include <Eigen/Dense>
 
 #include "scenegen/errors.hpp"
+#include "scenegen/limits.hpp"
 
 namespace papersim::scenegen {
 namespace {
@@ -66,11 +67,16 @@ void fit_size(SheetMesh& mesh, const std::string& source) {
                      "sheet WIDTH HEIGHT' header)");
   mesh.width = std::sqrt(sq.x());
   mesh.height = std::sqrt(sq.y());
+  if (!(mesh.width >= MIN_SHEET_SIZE && mesh.height >= MIN_SHEET_SIZE))
+    throw InputError(source + ": the fitted sheet size is below the limit of 1e-4 m");
 }
 
 void check_and_orient(SheetMesh& mesh, const std::string& source) {
   if (mesh.num_faces() == 0) throw InputError(source + ": mesh has no faces");
   if (!mesh.positions.allFinite()) throw InputError(source + ": non-finite vertex position");
+  if (mesh.positions.cwiseAbs().maxCoeff() > MAX_MESH_COORDINATE)
+    throw InputError(source + ": a vertex coordinate exceeds the limit of " +
+                     std::to_string(static_cast<int>(MAX_MESH_COORDINATE)) + " m");
   for (int i = 0; i < mesh.num_vertices(); ++i)
     for (int k = 0; k < 2; ++k) {
       const double t = mesh.uv(i, k);
@@ -110,15 +116,22 @@ SheetMesh parse_sheet_obj(std::istream& in, const std::string& source) {
       if (line == 1 && (ls >> w1 >> w2) && w1 == "papersim" && w2 == "sheet") {
         if (!(ls >> width >> height) || !(width > 0) || !(height > 0))
           fail(source, line, "malformed '# papersim sheet WIDTH HEIGHT' header");
+        if (width < MIN_SHEET_SIZE || height < MIN_SHEET_SIZE || width > MAX_MESH_COORDINATE ||
+            height > MAX_MESH_COORDINATE)
+          fail(source, line, "sheet size outside the limits [1e-4, 1000] m");
         mesh.width = width;
         mesh.height = height;
         mesh.size_from_header = true;
       }
     } else if (key == "v") {
+      if (static_cast<long>(v.size()) >= MAX_MESH_VERTICES)
+        fail(source, line, "more than " + std::to_string(MAX_MESH_VERTICES) + " vertices (the limit)");
       Eigen::Vector3d p;
       if (!(ls >> p.x() >> p.y() >> p.z())) fail(source, line, "malformed 'v' line");
       v.push_back(p);
     } else if (key == "vt") {
+      if (static_cast<long>(vt.size()) >= MAX_MESH_VERTICES)
+        fail(source, line, "more than " + std::to_string(MAX_MESH_VERTICES) + " vt lines (the limit)");
       Eigen::Vector2d t;
       if (!(ls >> t.x() >> t.y())) fail(source, line, "malformed 'vt' line");
       vt.push_back(t);
@@ -127,6 +140,8 @@ SheetMesh parse_sheet_obj(std::istream& in, const std::string& source) {
       std::string tok;
       while (ls >> tok) poly.push_back(parse_corner(tok, v.size(), vt.size(), source, line));
       if (poly.size() < 3) fail(source, line, "face with fewer than 3 corners");
+      if (static_cast<long>(tris.size() + poly.size() - 2) > MAX_MESH_FACES)
+        fail(source, line, "more than " + std::to_string(MAX_MESH_FACES) + " triangles (the limit)");
       for (std::size_t k = 1; k + 1 < poly.size(); ++k) tris.push_back({poly[0], poly[k], poly[k + 1]});
     } else if (key[0] == '#') {
       continue;
@@ -155,7 +170,9 @@ SheetMesh parse_sheet_obj(std::istream& in, const std::string& source) {
       mesh.faces(static_cast<long>(f), k) = c.v;
     }
   for (long i = 0; i < mesh.uv.rows(); ++i)
-    if (mesh.uv(i, 0) < -0.5) mesh.uv.row(i) = Eigen::RowVector2d(0.5, 0.5);  // unused vertex
+    if (mesh.uv(i, 0) < -0.5)
+      throw InputError(source + ": vertex " + std::to_string(i + 1) +
+                       " is used by no face (a truncated file?)");
   check_and_orient(mesh, source);
   if (!mesh.size_from_header) fit_size(mesh, source);
   return mesh;

@@ -8,12 +8,17 @@
 #include <iomanip>
 #include <iostream>
 #include <nlohmann/json.hpp>
+#include <sstream>
 
 #include "collision/errors.hpp"
+#include "common/atomic_file.hpp"
+#include "common/exit_status.hpp"
+#include "common/interrupt.hpp"
 #include "remesh/errors.hpp"
 #include "simulation/batch_command.hpp"
 #include "simulation/errors.hpp"
 #include "simulation/scenario.hpp"
+#include "simulation/output_files.hpp"
 #include "simulation/scene.hpp"
 #include "simulation/simulate.hpp"
 
@@ -25,6 +30,7 @@
 #endif
 
 namespace ps = papersim::simulation;
+namespace common = papersim::common;
 namespace fs = std::filesystem;
 
 namespace {
@@ -43,32 +49,96 @@ ps::ProgressFn progress_printer(const std::string& label) {
   };
 }
 
+/// Files a run publishes, for the closing message.
+std::string written_files(const ps::Scene& scene, int frames, bool with_scene_json) {
+  std::string files = "sheet.obj";
+  if (scene.output.write_ply) files += ", sheet.ply";
+  if ((frames >= 0 ? frames : scene.output.frames_every) > 0) files += ", frames/";
+  if (with_scene_json) files += ", scene.json";
+  return files + " and meta.json";
+}
+
+/// Remove what a run killed with SIGKILL left in `out`, and have the stop handler remove this
+/// run's staging folder (and `out`, when this run creates it) if it must end the process.
+void prepare_output(const std::string& out) {
+  std::error_code ec;
+  const fs::path staging = ps::Staging::path_for(out);
+  fs::remove_all(staging, ec);
+  common::add_cleanup_path(staging);
+  if (!fs::exists(out, ec)) common::add_cleanup_path(out);
+}
+
 int simulate(const ps::Scene& scene, const std::string& out, int frames, bool quiet,
-             const std::string& label) {
+             const std::string& label, const std::string& scene_json) {
   ps::RunOptions options;
   options.out_dir = out;
   options.frames_every = frames;
+  options.poll_stop = common::throw_if_stop_requested;
+  if (!scene_json.empty()) options.extra_files.emplace_back("scene.json", scene_json);
   if (!quiet) options.progress = progress_printer(label);
   const ps::RunResult r = ps::run_scene(scene, options);
-  std::cout << "wrote " << (fs::path(out) / "sheet.obj").string() << ", sheet.ply and meta.json ("
+  std::cout << "wrote " << out << ": " << written_files(scene, frames, !scene_json.empty()) << " ("
             << r.sheet.vertices << " vertices, " << r.steps << " steps, " << std::setprecision(3)
             << r.wall_seconds << " s; max stretch " << std::setprecision(6)
             << r.quality.max_principal_stretch << ")\n";
   return 0;
 }
 
-void write_scene_file(const fs::path& path, const ps::Scene& scene) {
-  fs::create_directories(path.parent_path());
-  const fs::path tmp = path.string() + ".tmp";
-  std::ofstream(tmp) << std::setw(2) << ps::scene_to_json(scene) << '\n';
-  fs::rename(tmp, path);
+/// Publish OUT/scene.json alone (the outputs of an earlier run in OUT are removed with it).
+void write_scene_only(const std::string& out, const std::string& scene_json) {
+  ps::Staging staging(out);
+  common::write_text_atomically(staging.dir() / "scene.json", scene_json);
+  staging.commit();
+}
+
+/// A non-empty option value.
+CLI::Validator non_empty() {
+  return CLI::Validator(
+      [](std::string& value) { return value.empty() ? std::string("must not be empty") : std::string(); },
+      "NONEMPTY");
+}
+
+/// The exit status for the exception being handled, after printing its message.
+int report(const std::exception_ptr& error) {
+  try {
+    std::rethrow_exception(error);
+  } catch (const common::Interrupted& e) {
+    std::cerr << "papersim: " << e.what() << "; no output written\n";
+    return common::exit_status_for_signal(e.signal);
+  } catch (const ps::SceneError& e) {
+    std::cerr << "papersim: bad scene: " << e.what() << '\n';
+  } catch (const ps::NumericError& e) {
+    std::cerr << "papersim: simulation failed: " << e.what() << '\n';
+    return common::EXIT_NUMERIC;
+  } catch (const common::OutputError& e) {
+    std::cerr << "papersim: cannot write output: " << e.what() << '\n';
+    return common::EXIT_OUTPUT;
+  } catch (const papersim::remesh::IoError& e) {
+    std::cerr << "papersim: " << e.what() << '\n';
+  } catch (const papersim::remesh::MeshError& e) {
+    std::cerr << "papersim: bad mesh: " << e.what() << '\n';
+  } catch (const papersim::collision::ColliderError& e) {
+    std::cerr << "papersim: bad obstacle: " << e.what() << '\n';
+  } catch (const std::filesystem::filesystem_error& e) {
+    std::cerr << "papersim: cannot write output: " << e.what() << '\n';
+    return common::EXIT_OUTPUT;
+  } catch (const std::bad_alloc&) {
+    std::cerr << "papersim: out of memory\n";
+    return common::EXIT_INTERNAL;
+  } catch (const std::exception& e) {
+    std::cerr << "papersim: internal error: " << e.what() << '\n';
+    return common::EXIT_INTERNAL;
+  }
+  return common::EXIT_BAD_INPUT;
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
+  common::install_interrupt_handling();
   CLI::App app{"papersim " + std::string(ps::version()) +
                ": simulate sheets of paper (bending, creasing, contact) and measure them."};
+  app.footer(common::exit_status_help());
   app.require_subcommand(1);
 
   std::string scene_path, out_dir;
@@ -76,9 +146,10 @@ int main(int argc, char** argv) {
   bool quiet = false;
   auto* run = app.add_subcommand("run", "Simulate a scene file (JSON; see docs/scene.md).");
   run->add_option("scene", scene_path, "Scene file (JSON)")->required();
-  run->add_option("--out", out_dir, "Output folder: sheet.obj, sheet.ply, meta.json")->required();
+  run->add_option("--out", out_dir, "Output folder: sheet.obj, sheet.ply, meta.json")
+      ->required()->check(non_empty());
   run->add_option("--frames", frames, "Write every K-th step to OUT/frames/ (0: none)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(CLI::Range(0, 1 << 30));
   run->add_flag("--quiet", quiet, "No progress on stderr");
 
   std::string name;
@@ -88,10 +159,11 @@ int main(int argc, char** argv) {
                   "simulate it. Same name and seed: same scene, same mesh.");
   scen->add_option("name", name, "Scenario name")->required()->check(
       CLI::IsMember(ps::scenario_names()));
-  scen->add_option("--seed", seed, "Random seed (>= 0)")->required()->check(CLI::NonNegativeNumber);
-  scen->add_option("--out", out_dir, "Output folder")->required();
+  scen->add_option("--seed", seed, "Random seed, 0 to 2147483647")
+      ->required()->check(CLI::Range(0LL, 2147483647LL));
+  scen->add_option("--out", out_dir, "Output folder")->required()->check(non_empty());
   scen->add_option("--frames", frames, "Write every K-th step to OUT/frames/ (0: none)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(CLI::Range(0, 1 << 30));
   scen->add_flag("--quiet", quiet, "No progress on stderr");
   bool draw_only = false;
   scen->add_flag("--draw-only", draw_only, "Only write OUT/scene.json (edit it, then: papersim run)");
@@ -104,37 +176,39 @@ int main(int argc, char** argv) {
   papersim::validation::add_metrics_subcommand(app, metrics_code, std::cout, std::cerr);
 #endif
 
-  CLI11_PARSE(app, argc, argv);
   try {
+    // The metrics subcommand runs inside parse (its callback).
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? common::EXIT_OK : common::EXIT_BAD_INPUT;
+  } catch (...) {
+    return report(std::current_exception());
+  }
+  try {
+    // What a run killed with SIGKILL left goes first, whatever happens to this run.
+    if (run->parsed() || scen->parsed()) prepare_output(out_dir);
     if (batch_command.batch->parsed() || batch_command.stats->parsed())
       return ps::run_batch_subcommand(batch_command, PAPERSIM_HAS_METRICS, std::cout, std::cerr);
     if (run->parsed()) {
       const ps::Scene scene = ps::load_scene(scene_path);
-      return simulate(scene, out_dir, frames, quiet, "run");
+      return simulate(scene, out_dir, frames, quiet, "run", "");
     }
     if (scen->parsed()) {
       const ps::Scene scene = ps::make_scenario(name, static_cast<std::uint64_t>(seed));
+      std::ostringstream text;
+      text << std::setw(2) << ps::scene_to_json(scene) << '\n';
       if (draw_only) {
-        write_scene_file(fs::path(out_dir) / "scene.json", scene);
+        write_scene_only(out_dir, text.str());
         std::cout << "wrote " << (fs::path(out_dir) / "scene.json").string() << '\n';
         return 0;
       }
-      const int code = simulate(scene, out_dir, frames, quiet, name + " seed " + std::to_string(seed));
-      write_scene_file(fs::path(out_dir) / "scene.json", scene);
-      return code;
+      return simulate(scene, out_dir, frames, quiet, name + " seed " + std::to_string(seed), text.str());
     }
 #ifdef PAPERSIM_WITH_METRICS
     return metrics_code;
 #endif
-  } catch (const ps::SceneError& e) {
-    std::cerr << "papersim: bad scene: " << e.what() << '\n';
-    return 2;
-  } catch (const ps::NumericError& e) {
-    std::cerr << "papersim: simulation failed: " << e.what() << '\n';
-    return 3;
-  } catch (const std::exception& e) {
-    std::cerr << "papersim: " << e.what() << '\n';
-    return 1;
+  } catch (...) {
+    return report(std::current_exception());
   }
   return 0;
 }

@@ -92,7 +92,16 @@ void initial_sheet(const Scene& scene, remesh::SheetMesh& mesh, SheetState& stat
   const SheetSpec& sp = scene.sheet;
   Eigen::MatrixX3d x;
   if (!sp.mesh_path.empty()) {
-    remesh::SheetData d = remesh::read_sheet(sp.mesh_path);
+    const std::string key = (scene.source.empty() ? std::string("scene") : scene.source) +
+                            ": key 'sheet.mesh': ";
+    remesh::SheetData d;
+    try {
+      d = remesh::read_sheet(sp.mesh_path);
+    } catch (const std::runtime_error& e) {  // remesh::IoError, remesh::MeshError
+      throw SceneError(key + e.what());
+    }
+    if (d.positions.cwiseAbs().maxCoeff() > MAX_SCENE_COORDINATE)
+      throw SceneError(key + "a vertex coordinate beyond the limit of 1000 m");
     mesh = d.mesh;
     x = d.positions;
   } else {
@@ -144,7 +153,8 @@ PhysicsSetup physics_setup(const Scene& scene, const remesh::SheetMesh& mesh, co
     try {
       s.obstacles.push_back(collision::make_collider(scene.obstacles[i]));
     } catch (const collision::ColliderError& e) {
-      throw SceneError("obstacles[" + std::to_string(i) + "]: " + e.what());
+      throw SceneError((scene.source.empty() ? std::string("scene") : scene.source) +
+                       ": key 'obstacles[" + std::to_string(i) + "]': " + e.what());
     }
   }
   s.contact = scene.contact;

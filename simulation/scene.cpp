@@ -8,6 +8,8 @@
 #include <sstream>
 
 #include "collision/errors.hpp"
+#include "common/format.hpp"
+#include "remesh/sheet_io.hpp"
 #include "simulation/errors.hpp"
 
 namespace papersim::simulation {
@@ -37,11 +39,9 @@ class Reader {
     if (!v) return fallback;
     if (!v->is_number()) fail(key, "expected a number");
     const double x = v->get<double>();
-    if (!std::isfinite(x) || x < lo || x > hi || (lo_open && x == lo)) {
-      std::ostringstream s;
-      s << "value " << x << " out of range " << (lo_open ? "(" : "[") << lo << ", " << hi << "]";
-      fail(key, s.str());
-    }
+    if (!std::isfinite(x) || x < lo || x > hi || (lo_open && x == lo))
+      fail(key, "value " + common::format_number(x) + " out of range " + (lo_open ? "(" : "[") +
+                    common::format_number(lo) + ", " + common::format_number(hi) + "]");
     return x;
   }
 
@@ -49,6 +49,9 @@ class Reader {
     const json* v = take(key);
     if (!v) return fallback;
     if (!v->is_number_integer()) fail(key, "expected an integer");
+    if (v->is_number_unsigned() && v->get<unsigned long long>() > static_cast<unsigned long long>(hi))
+      fail(key, "value " + std::to_string(v->get<unsigned long long>()) + " out of range [" +
+                    std::to_string(lo) + ", " + std::to_string(hi) + "]");
     const long long x = v->get<long long>();
     if (x < lo || x > hi)
       fail(key, "value " + std::to_string(x) + " out of range [" + std::to_string(lo) + ", " +
@@ -122,7 +125,9 @@ class Reader {
   const json* take(const std::string& key) {
     m_used.insert(key);
     auto it = m_j.find(key);
-    return it == m_j.end() || it->is_null() ? nullptr : &*it;
+    if (it == m_j.end()) return nullptr;
+    if (it->is_null()) fail(key, "null is not a value (leave the key out for its default)");
+    return &*it;
   }
   const json& m_j;
   std::string m_path;
@@ -182,10 +187,16 @@ SheetSpec read_sheet(Reader r) {
   if (s.edge_length > std::min(s.width, s.height)) r.fail("edge_length", "longer than the sheet");
   if (std::max(s.width, s.height) / s.edge_length > 4000)
     r.fail("edge_length", "too small for the sheet size (more than 4000 edges along a side)");
+  if ((s.width / s.edge_length + 1) * (s.height / s.edge_length + 1) > remesh::MAX_SHEET_VERTICES)
+    r.fail("edge_length", "too small for the sheet size (more than the limit of " +
+                              std::to_string(remesh::MAX_SHEET_VERTICES) + " vertices)");
   s.triangulation = triangulation_from(r, "triangulation", s.triangulation);
   s.mesh_path = r.string("mesh", "");
   s.material = read_material(r.child("material"));
   s.position = r.vector<3>("position", s.position);
+  if (s.position.cwiseAbs().maxCoeff() > MAX_SCENE_COORDINATE)
+    r.fail("position", "a coordinate beyond the limit of " +
+                           common::format_number(MAX_SCENE_COORDINATE) + " m");
   s.rotation_deg = r.vector<3>("rotation_deg", s.rotation_deg);
   r.finish();
   return s;
@@ -349,17 +360,36 @@ Scene scene_from_json(const json& j, const std::string& source) {
   return s;
 }
 
+json parse_scene_text(std::istream& in, const std::string& source) {
+  // Keys seen in each open object, innermost last: a repeated key is an error, not "last wins".
+  std::vector<std::set<std::string>> open;
+  std::vector<std::string> where;
+  const json::parser_callback_t check = [&](int, json::parse_event_t event, json& parsed) {
+    if (event == json::parse_event_t::object_start) {
+      open.emplace_back();
+    } else if (event == json::parse_event_t::object_end) {
+      if (!open.empty()) open.pop_back();
+    } else if (event == json::parse_event_t::key && !open.empty()) {
+      const std::string key = parsed.get<std::string>();
+      if (!open.back().insert(key).second)
+        throw SceneError(source + ": key '" + key + "' appears twice in the same object");
+    }
+    return true;
+  };
+  try {
+    return json::parse(in, check);
+  } catch (const json::exception& e) {  // parse_error, and out_of_range for a number like 1e999
+    throw SceneError(source + ": not valid JSON: " + e.what());
+  }
+}
+
 Scene load_scene(const std::string& path) {
   if (!std::filesystem::exists(path)) throw SceneError(path + ": no such file");
   std::ifstream in(path);
   if (!in) throw SceneError(path + ": cannot open");
-  json j;
-  try {
-    j = json::parse(in);
-  } catch (const json::parse_error& e) {
-    throw SceneError(path + ": not valid JSON: " + e.what());
-  }
-  return scene_from_json(j, path);
+  Scene scene = scene_from_json(parse_scene_text(in, path), path);
+  scene.source = path;
+  return scene;
 }
 
 namespace {

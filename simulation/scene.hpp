@@ -16,6 +16,9 @@
 
 namespace papersim::simulation {
 
+/// Largest |coordinate| of a sheet's initial position (and of a sheet read from sheet.mesh) [m].
+constexpr double MAX_SCENE_COORDINATE = 1e3;
+
 struct SheetSpec {
   double width = 0.210;        ///< [m] along material x
   double height = 0.297;       ///< [m] along material y
@@ -58,6 +61,7 @@ inline ContactParams automatic_contact() {
 
 struct Scene {
   std::string name = "scene";
+  std::string source;  ///< the file the scene was read from, for messages (not written back)
   SheetSpec sheet;
   Eigen::Vector3d gravity = Eigen::Vector3d(0, 0, -9.8);  ///< [m/s^2]
   double duration = 1.0;    ///< [s]
@@ -84,7 +88,11 @@ struct Scene {
 /// Parse a scene. `source` names the file in error messages.
 /// @throw SceneError naming the file and the key (unknown key, wrong type, out-of-range value).
 Scene scene_from_json(const nlohmann::json& j, const std::string& source);
-/// @throw SceneError when the file is missing or not valid JSON, or as scene_from_json.
+/// Parse the JSON text of a scene file; a key repeated in one object is an error.
+/// @throw SceneError naming `source` when the text is not valid JSON or repeats a key
+nlohmann::json parse_scene_text(std::istream& in, const std::string& source);
+/// @throw SceneError when the file is missing, not valid JSON or repeats a key, or as
+///        scene_from_json.
 Scene load_scene(const std::string& path);
 /// Every field of the scene, so that scene_from_json(scene_to_json(s)) == s.
 nlohmann::json scene_to_json(const Scene& scene);

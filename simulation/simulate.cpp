@@ -8,9 +8,11 @@
 #include <memory>
 #include <sstream>
 
+#include "common/atomic_file.hpp"
 #include "remesh/errors.hpp"
 #include "remesh/sheet_io.hpp"
 #include "simulation/errors.hpp"
+#include "simulation/output_files.hpp"
 #include "simulation/run.hpp"
 
 #ifndef PAPERSIM_VERSION_STRING
@@ -23,62 +25,6 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 
 const char* version() { return PAPERSIM_VERSION_STRING; }
-
-namespace {
-
-void write_outputs(const fs::path& dir, const Scene& scene, const remesh::SheetMesh& mesh,
-                   const SheetState& s) {
-  remesh::write_sheet_file((dir / "sheet.obj").string(), mesh, s.positions_matrix(),
-                           s.velocities_matrix(), scene.sheet.width, scene.sheet.height);
-  if (scene.output.write_ply)
-    remesh::write_sheet_file((dir / "sheet.ply").string(), mesh, s.positions_matrix(),
-                             s.velocities_matrix(), scene.sheet.width, scene.sheet.height);
-}
-
-void write_json(const fs::path& path, const json& j) {
-  const fs::path tmp = path.string() + ".tmp";
-  std::ofstream out(tmp);
-  out << std::setw(2) << j << '\n';
-  if (!out) throw remesh::IoError(path.string() + ": cannot write");
-  out.close();
-  fs::rename(tmp, path);
-}
-
-/// A staging folder inside out_dir; its files move into out_dir only when the run succeeded.
-class Staging {
- public:
-  explicit Staging(const std::string& out_dir) {
-    if (out_dir.empty()) return;
-    m_out = out_dir;
-    m_created = !fs::exists(m_out);
-    fs::create_directories(m_out);
-    m_dir = m_out / ".papersim-partial";
-    fs::remove_all(m_dir);
-    fs::create_directories(m_dir);
-  }
-  ~Staging() {
-    std::error_code ec;
-    if (!m_dir.empty()) fs::remove_all(m_dir, ec);
-    // A failed run leaves no trace: not even the folder, when this run made it.
-    if (!m_committed && m_created) fs::remove(m_out, ec);
-  }
-  bool active() const { return !m_dir.empty(); }
-  const fs::path& dir() const { return m_dir; }
-  void commit() {
-    for (const auto& e : fs::directory_iterator(m_dir)) {
-      const fs::path target = m_out / e.path().filename();
-      if (fs::is_directory(target)) fs::remove_all(target);
-      fs::rename(e.path(), target);
-    }
-    m_committed = true;
-  }
-
- private:
-  fs::path m_out, m_dir;
-  bool m_created = false, m_committed = false;
-};
-
-}  // namespace
 
 json meta_json(const Scene& scene, const RunResult& r, const json& extra) {
   json m;
@@ -156,6 +102,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
   int last_percent = -1;
   for (int k = 1; k <= steps; ++k) {
     run.step();
+    if (options.poll_stop) options.poll_stop();
     if (options.on_step) {
       StepReport report;
       report.step = k;
@@ -182,6 +129,8 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
   RunResult r = run.result(elapsed());
   if (staging.active()) {
     write_outputs(staging.dir(), scene, r.mesh, r.state);
+    for (const auto& [name, text] : options.extra_files)
+      common::write_text_atomically(staging.dir() / name, text);
     write_json(staging.dir() / "meta.json", meta_json(scene, r, options.extra_meta));
     staging.commit();
   }

@@ -38,6 +38,12 @@ struct RunOptions {
   nlohmann::json extra_meta = nlohmann::json::object();  ///< merged into meta.json
   /// Called after every step (costs one energy evaluation per step; none when unset).
   StepObserver on_step;
+  /// Called after every step; may throw (e.g. common::Interrupted) to stop the run, which then
+  /// leaves no output behind.
+  std::function<void()> poll_stop;
+  /// More files to publish with the run: name in out_dir -> content (e.g. the scene.json of a
+  /// scenario). Names should be among run_output_names().
+  std::vector<std::pair<std::string, std::string>> extra_files;
 };
 
 /// meta.json of a finished run: the scene, provenance, run statistics, quality and energies,
@@ -45,9 +51,11 @@ struct RunOptions {
 nlohmann::json meta_json(const Scene& scene, const RunResult& result,
                          const nlohmann::json& extra = nlohmann::json::object());
 
-/// Simulate `scene`; with a non-empty out_dir, write the outputs there.
-/// @throw SceneError for a scene that cannot be built, NumericError when a step fails, and
-///        remesh::IoError when outputs cannot be written. On failure nothing is left in out_dir.
+/// Simulate `scene`; with a non-empty out_dir, write the outputs there (published together:
+/// the folder then holds the files of this run only, see run_output_names()).
+/// @throw SceneError for a scene that cannot be built, NumericError when a step fails,
+///        common::OutputError when outputs cannot be written, and whatever poll_stop throws.
+///        On failure nothing is left in out_dir.
 RunResult run_scene(const Scene& scene, const RunOptions& options);
 
 /// Program version (the CMake project version).

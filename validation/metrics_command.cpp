@@ -17,6 +17,7 @@
 #include <ostream>
 #include <set>
 
+#include "common/atomic_file.hpp"
 #include "remesh/sheet_io.hpp"
 #include "validation/metrics.hpp"
 #include "validation/metrics_plots.hpp"
@@ -195,32 +196,25 @@ void write_json_report(std::ostream& out, const std::vector<MeshResult>& results
   out << report.dump(2) << '\n';
 }
 
-bool write_csv(const std::string& path, const std::vector<MeshResult>& results,
-               std::ostream& err) {
-  std::ofstream csv(path);
-  write_csv_header(csv);
-  for (const MeshResult& r : results)
-    if (r.ok) write_csv_row(csv, r.path, r.metrics);
-  if (csv) return true;
-  err << "metrics: cannot write " << path << '\n';
-  return false;
+/// @throw common::OutputError when the file cannot be written (nothing is left at `path`)
+void write_csv(const std::string& path, const std::vector<MeshResult>& results) {
+  common::write_file_atomically(path, [&](std::ostream& csv) {
+    write_csv_header(csv);
+    for (const MeshResult& r : results)
+      if (r.ok) write_csv_row(csv, r.path, r.metrics);
+  });
 }
 
-bool write_plots(const std::string& dir, const std::vector<MeshResult>& results,
+/// @throw PlotError, common::OutputError
+void write_plots(const std::string& dir, const std::vector<MeshResult>& results,
                  std::ostream& err) {
   MetricsSamples pooled;
   for (const MeshResult& r : results) pooled.append(r.samples);
   PlotOptions options;
   const std::size_t n = measured(results).size();
   options.title_suffix = "(" + std::to_string(n) + (n == 1 ? " mesh)" : " meshes)");
-  try {
-    for (const std::string& file : write_histogram_plots(dir, pooled, options))
-      err << "metrics: wrote " << file << '\n';
-    return true;
-  } catch (const PlotError& e) {
-    err << "metrics: " << e.what() << '\n';
-    return false;
-  }
+  for (const std::string& file : write_histogram_plots(dir, pooled, options))
+    err << "metrics: wrote " << file << '\n';
 }
 
 bool options_valid(const MetricsCommandOptions& opts, std::ostream& err) {
@@ -258,12 +252,13 @@ std::vector<std::string> find_mesh_files(const std::vector<std::string>& paths,
 int run_metrics_command(const std::vector<std::string>& paths, const MetricsCommandOptions& opts,
                         std::ostream& out, std::ostream& err) {
   if (!options_valid(opts, err)) return 2;
+
   std::vector<std::string> missing;
   const std::vector<std::string> files = find_mesh_files(paths, missing);
   for (const std::string& path : missing) err << "metrics: no such file or folder: " << path << '\n';
   if (files.empty()) {
     err << "metrics: no OBJ or PLY mesh found\n";
-    return 1;
+    return 2;
   }
   const auto start = std::chrono::steady_clock::now();
   const std::vector<MeshResult> results = measure_all(files, opts, !opts.plots_dir.empty());
@@ -279,11 +274,19 @@ int run_metrics_command(const std::vector<std::string>& paths, const MetricsComm
     write_json_report(out, results, opts);
   else
     write_tables(out, results);
-  if (!opts.csv_path.empty()) ok = write_csv(opts.csv_path, results, err) && ok;
-  if (!opts.plots_dir.empty()) ok = write_plots(opts.plots_dir, results, err) && ok;
   err << "metrics: measured " << measured(results).size() << " of " << results.size()
       << " meshes in " << std::setprecision(3) << seconds << " s\n";
-  return ok ? 0 : 1;
+  try {
+    if (!opts.csv_path.empty()) write_csv(opts.csv_path, results);
+    if (!opts.plots_dir.empty()) write_plots(opts.plots_dir, results, err);
+  } catch (const common::OutputError& e) {
+    err << "metrics: cannot write output: " << e.what() << '\n';
+    return 5;
+  } catch (const PlotError& e) {
+    err << "metrics: " << e.what() << '\n';
+    return 6;
+  }
+  return ok ? 0 : 2;
 }
 
 void configure_metrics_command(CLI::App& command, int& exit_code, std::ostream& out,
@@ -297,11 +300,16 @@ void configure_metrics_command(CLI::App& command, int& exit_code, std::ostream& 
   command.add_option("meshes", state->paths, "OBJ or PLY meshes, or folders searched for them")
       ->required();
   command.add_flag("--json", state->options.json, "print JSON instead of tables");
-  command.add_option("--csv", state->options.csv_path, "write one CSV row per mesh to FILE");
+  const CLI::Validator non_empty(
+      [](std::string& value) { return value.empty() ? std::string("must not be empty") : std::string(); },
+      "NONEMPTY");
+  command.add_option("--csv", state->options.csv_path, "write one CSV row per mesh to FILE")
+      ->check(non_empty);
   command.add_option("--crease-angle", state->options.crease_angle_deg,
                      "crease threshold on the dihedral angle [deg]")
       ->capture_default_str();
-  command.add_option("--plots", state->options.plots_dir, "write histogram SVGs to DIR");
+  command.add_option("--plots", state->options.plots_dir, "write histogram SVGs to DIR")
+      ->check(non_empty);
   command.add_option("--threads", state->options.threads, "worker threads (0 = all cores)")
       ->capture_default_str();
   command.add_flag("--no-self-intersections", state->no_self_intersections,

@@ -33,8 +33,10 @@ std::vector<std::string> find_mesh_files(const std::vector<std::string>& paths,
 /// meshes; every figure when there is a single mesh) or JSON ({"meshes": [...], "summary":
 /// {...}}) on `out`; the CSV file and plots when asked; errors and the timing on `err`.
 /// Meshes that cannot be read or measured are reported on `err` (and in the JSON) and skipped.
-/// @return 0 when every mesh was measured, 1 when a path was missing, a mesh failed or no mesh
-///         was found, 2 on bad options. Never throws for bad input files.
+/// @return the exit status (common/exit_status.hpp): 0 when every mesh was measured; 2 on bad
+///         options, a missing path, a mesh that failed or no mesh found; 5 when the CSV or a
+///         plot cannot be written (nothing partial is left); 6 when gnuplot fails.
+///         Never throws for bad input files.
 int run_metrics_command(const std::vector<std::string>& paths, const MetricsCommandOptions& opts,
                         std::ostream& out, std::ostream& err);
 

@@ -6,7 +6,10 @@
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
+#include <iterator>
 #include <sstream>
+
+#include "common/atomic_file.hpp"
 
 namespace papersim::validation {
 namespace {
@@ -54,15 +57,22 @@ Histogram make_histogram(const std::vector<const std::vector<double>*>& series, 
 }
 
 void write_dat(const fs::path& path, const Histogram& h) {
-  std::ofstream out(path);
-  if (!out) throw PlotError("plots: cannot write " + path.string());
-  out << std::setprecision(10) << "# lo hi count...\n";
-  for (std::size_t k = 0; k < h.lo.size(); ++k) {
-    out << h.lo[k] << ' ' << h.hi[k];
-    for (const auto& counts : h.counts) out << ' ' << counts[k];
-    out << '\n';
-  }
-  if (!out) throw PlotError("plots: cannot write " + path.string());
+  common::write_file_atomically(path, [&](std::ostream& out) {
+    out << std::setprecision(10) << "# lo hi count...\n";
+    for (std::size_t k = 0; k < h.lo.size(); ++k) {
+      out << h.lo[k] << ' ' << h.hi[k];
+      for (const auto& counts : h.counts) out << ' ' << counts[k];
+      out << '\n';
+    }
+  });
+}
+
+/// True when `path` holds a whole SVG document (gnuplot may exit 0 after a failed write).
+bool complete_svg(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const auto end = text.find_last_not_of(" \n\r\t");
+  return end != std::string::npos && end >= 5 && text.compare(end - 5, 6, "</svg>") == 0;
 }
 
 /// gnuplot single-quoted string ('' stands for ').
@@ -83,7 +93,7 @@ std::string shell_quoted(const std::string& text) {
 void write_plot(std::ostream& gp, const std::string& name, const std::string& title,
                 const std::string& xlabel, const std::vector<std::string>& series_titles,
                 bool logarithmic) {
-  gp << "set output " << quoted(name + ".svg") << "\n"
+  gp << "set output " << quoted(name + ".svg.tmp") << "\n"
      << "set title " << quoted(title) << "\nset xlabel " << quoted(xlabel) << "\n"
      << (logarithmic ? "set logscale x\n" : "unset logscale x\n") << "plot ";
   for (std::size_t s = 0; s < series_titles.size(); ++s)
@@ -119,7 +129,7 @@ std::vector<std::string> write_histogram_plots(const std::string& dir,
   if (options.bins < 1) throw PlotError("plots: bins must be >= 1");
   std::error_code ec;
   fs::create_directories(dir, ec);
-  if (ec) throw PlotError("plots: cannot create " + dir + ": " + ec.message());
+  if (ec) throw common::OutputError("plots: cannot create " + dir + ": " + ec.message());
   const fs::path folder(dir);
   std::ostringstream gp;
   gp << "set terminal svg size 800,500 dynamic\nset style fill solid 0.5 border -1\n"
@@ -133,12 +143,24 @@ std::vector<std::string> write_histogram_plots(const std::string& dir,
     written.push_back((folder / (spec.name + ".svg")).string());
   }
   const fs::path script = folder / "histograms.gp";
-  std::ofstream(script) << gp.str();
+  common::write_text_atomically(script, gp.str());
   // gnuplot resolves file names against its working directory: run it inside the folder.
   const std::string command = "cd " + shell_quoted(folder.string()) + " && " + options.gnuplot +
                               " histograms.gp 2> gnuplot.log";
-  if (std::system(command.c_str()) != 0)
-    throw PlotError("plots: gnuplot failed; see " + (folder / "gnuplot.log").string());
+  const int status = std::system(command.c_str());
+  // gnuplot writes NAME.svg.tmp; only whole files are renamed to NAME.svg.
+  std::string incomplete;
+  for (const std::string& svg : written)
+    if (incomplete.empty() && !complete_svg(svg + ".tmp")) incomplete = svg;
+  if (status != 0 || !incomplete.empty()) {
+    for (const std::string& svg : written) fs::remove(svg + ".tmp", ec);
+    if (status != 0) throw PlotError("plots: gnuplot failed; see " + (folder / "gnuplot.log").string());
+    throw common::OutputError("plots: cannot write '" + incomplete + "' (incomplete SVG; full disk?)");
+  }
+  for (const std::string& svg : written) {
+    fs::rename(svg + ".tmp", svg, ec);
+    if (ec) throw common::OutputError("plots: cannot rename '" + svg + ".tmp': " + ec.message());
+  }
   return written;
 }
 

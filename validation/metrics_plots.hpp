@@ -26,7 +26,8 @@ struct PlotOptions {
 /// K_i [rad]) and crease_length.svg (crease line lengths [m], logarithmic bins), together with
 /// their .dat tables and the gnuplot script histograms.gp, then run gnuplot once.
 /// @return the SVG files written
-/// @throw PlotError when the folder or a file cannot be written, or gnuplot fails.
+/// @throw PlotError when the folder cannot be created or gnuplot fails, common::OutputError when
+///        a file cannot be written (an SVG is renamed into place only when complete).
 std::vector<std::string> write_histogram_plots(const std::string& dir,
                                                const MetricsSamples& samples,
                                                const PlotOptions& options = {});

@@ -4,6 +4,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "common/errors.hpp"
 #include "remesh/errors.hpp"
 #include "remesh/sheet_generator.hpp"
 #include "remesh/sheet_io.hpp"
@@ -104,4 +105,64 @@ TEST(SheetIo, ReportsBadFiles) {
   } catch (const MeshError& e) {
     EXPECT_NE(std::string(e.what()).find("deg.obj"), std::string::npos) << "names the file";
   }
+}
+
+TEST(SheetIo, BadObjInputNamesFileLineAndLimit) {
+  const std::string head = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\n";
+  const auto error_of = [](const std::string& text) {
+    std::istringstream in(text);
+    try {
+      parse_sheet(in, "m.obj", SheetFormat::obj);
+    } catch (const std::exception& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_EQ(error_of(head + "f 1/1 x/2 3/3\n"), "m.obj:7: bad face index 'x'");
+  EXPECT_EQ(error_of(head + "f 1/1 99999999999999999999/2 3/3\n"),
+            "m.obj:7: bad face index '99999999999999999999'");
+  EXPECT_EQ(error_of(head + "f 1/1 0/2 3/3\n"), "m.obj:7: face index 0 out of range");
+  // Half the faces cut off: a vertex is then used by none.
+  EXPECT_EQ(error_of("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nvt 1 1\nf 1/1 2/2 3/3\n"),
+            "m.obj: vertex 4 is used by no face (a truncated file?)");
+  EXPECT_EQ(error_of("v 1e200 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nf 1/1 2/2 3/3\n"),
+            "m.obj: a vertex coordinate exceeds the limit of 1e6 m");
+  EXPECT_EQ(error_of("# papersim sheet 1e300 1\n" + head + "f 1/1 2/2 3/3\n"),
+            "m.obj:1: sheet size must be in (0, 1000000] m");
+}
+
+TEST(SheetIo, BadPlyHeadersAreErrorsNotAllocations) {
+  const auto error_of = [](const std::string& text) {
+    std::istringstream in(text, std::ios::binary);
+    try {
+      parse_sheet(in, "m.ply", SheetFormat::ply);
+    } catch (const IoError& e) {
+      return std::string(e.what());
+    } catch (const MeshError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_EQ(error_of("ply\nformat ascii 1.0\nelement vertex -5\nend_header\n"),
+            "m.ply: malformed element line: element vertex -5");
+  EXPECT_EQ(error_of("ply\nformat ascii 1.0\nelement vertex 99999999999\nend_header\n"),
+            "m.ply: element vertex has 99999999999 entries, more than the limit of 500000");
+  EXPECT_EQ(error_of("ply\nformat ascii 1.0\nelement vertex 3\n"),
+            "m.ply: no end_header (not a PLY file or truncated)");
+  EXPECT_EQ(error_of("ply\nformat ascii 1.0\nelement vertex 1\nproperty double x\nproperty double y\n"
+                     "property double z\nproperty double mx\nproperty double my\nelement face 1\n"
+                     "property list uchar int vertex_indices\nend_header\n0 0 0 0 0\n3 0 -1 7\n"),
+            "m.ply: bad vertex index in element face");
+}
+
+TEST(SheetIo, WriteSheetFileIsAtomic) {
+  TempDir dir;
+  const SheetData s = sample_sheet();
+  const std::string path = (dir.path / "s.obj").string();
+  write_sheet_file(path, s.mesh, s.positions, s.velocities, s.width, s.height);
+  EXPECT_TRUE(fs::exists(path));
+  EXPECT_FALSE(fs::exists(path + ".tmp"));
+  EXPECT_THROW(write_sheet_file((dir.path / "missing" / "s.obj").string(), s.mesh, s.positions,
+                                s.velocities, s.width, s.height),
+               papersim::common::OutputError);
 }

@@ -4,6 +4,7 @@
 
 #include "scenegen/errors.hpp"
 #include "scenegen/example_sheets.hpp"
+#include "scenegen/limits.hpp"
 #include "scenegen/sheet_obj.hpp"
 
 namespace papersim::scenegen {
@@ -63,6 +64,30 @@ TEST(SheetObj, WriteReadRoundTripIsExact) {
   EXPECT_EQ((a.positions - b.positions).cwiseAbs().maxCoeff(), 0.0);
   EXPECT_EQ((a.uv - b.uv).cwiseAbs().maxCoeff(), 0.0);
   EXPECT_EQ(a.width, b.width);
+}
+
+TEST(SheetObj, RejectsTruncatedFilesAndInputBeyondTheLimits) {
+  const auto error_of = [](const std::string& text) {
+    std::istringstream in(text);
+    try {
+      parse_sheet_obj(in, "m.obj");
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  // Half the faces cut off: vertex 4 is used by no face (it used to get UV (0.5, 0.5)).
+  EXPECT_EQ(error_of("# papersim sheet 0.2 0.3\nv 0 0 0\nv 0.2 0 0\nv 0 0.3 0\nv 0.2 0.3 0\n"
+                     "vt 0 0\nvt 1 0\nvt 0 1\nvt 1 1\nf 1/1 2/2 3/3\n"),
+            "m.obj: vertex 4 is used by no face (a truncated file?)");
+  // 1e200 crashed the camera search (issue 17).
+  EXPECT_EQ(error_of("# papersim sheet 0.2 0.3\nv 1e200 0 0\nv 0.2 0 0\nv 0 0.3 0\n"
+                     "vt 0 0\nvt 1 0\nvt 0 1\nf 1/1 2/2 3/3\n"),
+            "m.obj: a vertex coordinate exceeds the limit of 1000 m");
+  EXPECT_EQ(error_of("# papersim sheet 1e5 0.3\nv 0 0 0\n"), "m.obj:1: sheet size outside the limits [1e-4, 1000] m");
+  std::string many = "# papersim sheet 0.2 0.3\n";
+  for (long i = 0; i <= MAX_MESH_VERTICES; ++i) many += "v 0 0 0\n";
+  EXPECT_EQ(error_of(many), "m.obj:250002: more than 250000 vertices (the limit)");
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <sstream>
 #include <nlohmann/json.hpp>
 
 #include "simulation/errors.hpp"
@@ -235,4 +236,60 @@ TEST(Run, ExtrapolatedProjectedStepsSaveIterationsAndKeepTheResult) {
   // Each step stops within 1e-4 m/s x h = 1 micrometre of its minimiser; 10 micrometres allows
   // 40 steps of such differences to grow through the buckling (measured: 2e-8 m).
   EXPECT_LT(diff, 1e-5);
+}
+
+TEST(Scene, NullDuplicateKeysAndHugeValuesAreErrors) {
+  EXPECT_EQ(error_of(json{{"duration", nullptr}}),
+            "s.json: key 'duration': null is not a value (leave the key out for its default)");
+  EXPECT_EQ(error_of(json{{"duration", 1e300}}), "s.json: key 'duration': value 1e+300 out of range (0, 10000]");
+  EXPECT_EQ(error_of(json{{"seed", 2147483648LL}}),
+            "s.json: key 'seed': value 2147483648 out of range [0, 2147483647]");
+  EXPECT_EQ(error_of(json{{"seed", 18446744073709551615ULL}}),
+            "s.json: key 'seed': value 18446744073709551615 out of range [0, 2147483647]");
+  EXPECT_EQ(error_of(json{{"sheet", {{"position", {1e300, 0, 0}}}}}),
+            "s.json: key 'sheet.position': a coordinate beyond the limit of 1000 m");
+  std::istringstream twice(R"({"duration": 1, "sheet": {"width": 0.1, "width": 0.2}})");
+  try {
+    parse_scene_text(twice, "s.json");
+    FAIL() << "a repeated key was accepted";
+  } catch (const SceneError& e) {
+    EXPECT_EQ(std::string(e.what()), "s.json: key 'width' appears twice in the same object");
+  }
+  // Found by fuzz_scene: a number beyond double range threw json's out_of_range past the reader.
+  std::istringstream overflow(R"({"gravity": [0, 0, -121.27e674554907327]})");
+  try {
+    parse_scene_text(overflow, "s.json");
+    FAIL() << "an overflowing number was accepted";
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("s.json: not valid JSON"), std::string::npos) << e.what();
+  }
+  std::istringstream apart(R"({"sheet": {"width": 0.1}, "contact": {"width": 2}})");
+  EXPECT_NO_THROW(parse_scene_text(apart, "s.json")) << "the same key in two objects is fine";
+}
+
+TEST(Run, PublishesThisRunsFilesOnlyAndStopsWhenAsked) {
+  const fs::path dir = fs::temp_directory_path() / ("papersim_publish_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  Scene s = small_scene();
+  s.duration = 4 * s.time_step;
+  RunOptions o = options_for(dir.string());
+  o.frames_every = 1;
+  run_scene(s, o);
+  ASSERT_TRUE(fs::exists(dir / "sheet.ply") && fs::exists(dir / "frames"));
+  s.output.write_ply = false;
+  run_scene(s, options_for(dir.string()));
+  EXPECT_FALSE(fs::exists(dir / "sheet.ply")) << "an old sheet.ply beside the new meta.json";
+  EXPECT_FALSE(fs::exists(dir / "frames")) << "old frames beside the new meta.json";
+  EXPECT_TRUE(fs::exists(dir / "sheet.obj") && fs::exists(dir / "meta.json"));
+  // A run stopped by poll_stop leaves the earlier run as it was.
+  const auto before = fs::last_write_time(dir / "meta.json");
+  RunOptions stopping = options_for(dir.string());
+  int steps = 0;
+  stopping.poll_stop = [&steps] {
+    if (++steps == 2) throw std::runtime_error("stop");
+  };
+  EXPECT_THROW(run_scene(s, stopping), std::runtime_error);
+  EXPECT_EQ(fs::last_write_time(dir / "meta.json"), before);
+  EXPECT_FALSE(fs::exists(dir / ".papersim-partial"));
+  fs::remove_all(dir);
 }

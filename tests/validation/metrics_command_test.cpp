@@ -109,7 +109,7 @@ TEST_F(MetricsCommand, TableAndCsv) {
 TEST_F(MetricsCommand, ReportsBadFilesAndOptionsButMeasuresTheRest) {
   std::ofstream(path("a/broken.obj")) << "this is not a mesh\n";
   std::ostringstream out, err;
-  EXPECT_EQ(run_metrics_command({path("a"), path("missing")}, {}, out, err), 1);
+  EXPECT_EQ(run_metrics_command({path("a"), path("missing")}, {}, out, err), 2);
   EXPECT_NE(err.str().find("broken.obj"), std::string::npos);
   EXPECT_NE(err.str().find("missing"), std::string::npos);
   EXPECT_NE(out.str().find("summary over 2 of 3 meshes"), std::string::npos) << out.str();
@@ -117,7 +117,7 @@ TEST_F(MetricsCommand, ReportsBadFilesAndOptionsButMeasuresTheRest) {
   MetricsCommandOptions bad;
   bad.crease_angle_deg = 0.0;
   EXPECT_EQ(run_metrics_command({path("a")}, bad, out, err), 2);
-  EXPECT_EQ(run_metrics_command({path("missing")}, {}, out, err), 1);
+  EXPECT_EQ(run_metrics_command({path("missing")}, {}, out, err), 2);
 }
 
 TEST_F(MetricsCommand, SubcommandWiring) {
