@@ -85,8 +85,14 @@ void Staging::commit() {
   };
   // First the old meta.json goes: from here on the folder does not claim a complete run.
   remove_or_throw(m_out / "meta.json");
+  const auto is_protected = [&](const fs::path& p) {
+    std::error_code ec;
+    for (const fs::path& q : m_protected)
+      if (fs::equivalent(p, q, ec)) return true;
+    return false;
+  };
   for (const std::string& name : run_output_names())
-    if (!is_staged(name)) remove_or_throw(m_out / name);
+    if (!is_staged(name) && !is_protected(m_out / name)) remove_or_throw(m_out / name);
   std::sort(staged.begin(), staged.end(), [](const std::string& a, const std::string& b) {
     return (a == "meta.json") < (b == "meta.json") || ((a == "meta.json") == (b == "meta.json") && a < b);
   });

@@ -45,10 +45,14 @@ class Staging {
   /// file into OUT (meta.json last, so a folder with a meta.json is complete) and remove the
   /// staging folder. @throw common::OutputError when a file cannot be moved
   void commit();
+  /// A file that commit() never removes even when its name is a run output: the scene file the
+  /// run reads, when it lies in OUT (`papersim run OUT/scene.json --out OUT`).
+  void protect(const std::filesystem::path& path) { m_protected.push_back(path); }
 
  private:
   std::filesystem::path m_out, m_dir;
   bool m_created = false, m_committed = false;
+  std::vector<std::filesystem::path> m_protected;
 };
 
 }  // namespace papersim::simulation

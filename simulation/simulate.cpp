@@ -96,6 +96,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
   };
   Run run(scene);
   Staging staging(options.out_dir);
+  if (!scene.source.empty()) staging.protect(scene.source);
   const int frames_every = options.frames_every >= 0 ? options.frames_every : scene.output.frames_every;
   if (staging.active() && frames_every > 0) fs::create_directories(staging.dir() / "frames");
   const int steps = run.steps_total();

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <sstream>
 #include <nlohmann/json.hpp>
 
@@ -291,5 +292,25 @@ TEST(Run, PublishesThisRunsFilesOnlyAndStopsWhenAsked) {
   EXPECT_THROW(run_scene(s, stopping), std::runtime_error);
   EXPECT_EQ(fs::last_write_time(dir / "meta.json"), before);
   EXPECT_FALSE(fs::exists(dir / ".papersim-partial"));
+  fs::remove_all(dir);
+}
+
+// `papersim run OUT/scene.json --out OUT` (the batch's and the scenario workflow's way): the run
+// replaces an earlier run's outputs but never removes the scene file it reads.
+TEST(Run, KeepsTheSceneFileItReadsInItsOutputFolder) {
+  const fs::path dir = fs::temp_directory_path() / "papersim_scene_in_out";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  {
+    std::ofstream out(dir / "scene.json");
+    out << scene_to_json(small_scene()).dump(2);
+  }
+  std::ofstream(dir / "sheet.ply") << "an earlier run's file";
+  Scene s = load_scene((dir / "scene.json").string());
+  s.output.write_ply = false;
+  run_scene(s, options_for(dir.string()));
+  EXPECT_TRUE(fs::exists(dir / "scene.json"));
+  EXPECT_TRUE(fs::exists(dir / "meta.json"));
+  EXPECT_FALSE(fs::exists(dir / "sheet.ply")) << "an output this run did not write is removed";
   fs::remove_all(dir);
 }
