@@ -1,6 +1,7 @@
 #pragma once
 /// The options every batch command shares (--jobs, --time-limit, --shard, --retry-failed,
 /// --slurm ...), its progress line and the Slurm script it can write instead of running.
+#include <cstdint>
 #include <filesystem>
 #include <functional>
 #include <iosfwd>
@@ -15,6 +16,15 @@ class App;
 }
 
 namespace papersim::batch {
+
+/// splitmix64's finaliser (Steele et al. 2014): a well-mixed 64-bit hash of x, used to draw a
+/// sample's scenario and view seeds from its seed identically on every machine.
+inline std::uint64_t splitmix64(std::uint64_t x) {
+  x += 0x9e3779b97f4a7c15ULL;
+  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
+  return x ^ (x >> 31);
+}
 
 /// Parsed shared options.
 struct BatchCliOptions {

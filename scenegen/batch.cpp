@@ -4,6 +4,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "batch/cli.hpp"
 #include "scenegen/errors.hpp"
 
 namespace papersim::scenegen {
@@ -11,13 +12,6 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 
 namespace {
-
-std::uint64_t splitmix64(std::uint64_t x) {
-  x += 0x9e3779b97f4a7c15ULL;
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
-  return x ^ (x >> 31);
-}
 
 std::uint64_t fnv1a(const std::string& s) {
   std::uint64_t h = 0xcbf29ce484222325ULL;
@@ -77,7 +71,7 @@ SheetMesh flipped_sheet(const SheetMesh& mesh) {
 }
 
 std::uint64_t view_seed(const std::string& scenario, std::uint64_t seed, int view) {
-  return splitmix64(fnv1a(scenario) ^ splitmix64(seed * 64 + static_cast<std::uint64_t>(view))) >> 33;
+  return batch::splitmix64(fnv1a(scenario) ^ batch::splitmix64(seed * 64 + static_cast<std::uint64_t>(view))) >> 33;
 }
 
 std::vector<batch::Task> render_tasks(const fs::path& root, const RenderBatchOptions& o) {

@@ -8,6 +8,7 @@
 #include <set>
 #include <sstream>
 
+#include "batch/cli.hpp"
 #include "simulation/errors.hpp"
 #include "simulation/scenario.hpp"
 
@@ -16,13 +17,6 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 
 namespace {
-
-std::uint64_t splitmix64(std::uint64_t x) {
-  x += 0x9e3779b97f4a7c15ULL;
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
-  return x ^ (x >> 31);
-}
 
 void check_scenario(const std::string& name, const std::string& where) {
   const auto names = scenario_names();
@@ -123,7 +117,7 @@ Mix load_mix(const std::string& path) {
 std::size_t mix_pick(const Mix& mix, std::uint64_t seed) {
   double total = 0;
   for (double w : mix.weights) total += w;
-  const double u = static_cast<double>(splitmix64(seed ^ 0x6d69785f7069636bULL) >> 11) * 0x1.0p-53;
+  const double u = static_cast<double>(batch::splitmix64(seed ^ 0x6d69785f7069636bULL) >> 11) * 0x1.0p-53;
   double acc = 0;
   for (std::size_t i = 0; i < mix.weights.size(); ++i) {
     acc += mix.weights[i] / total;
