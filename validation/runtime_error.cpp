@@ -1,16 +1,21 @@
 // Run time against error (issue 5 item 2): scenario draws (seeds) simulated over a sweep of
-// mesh edge length and time step, each result compared with a fine reference run of the same
+// mesh edge length and time step (uniform meshes) and of remeshing settings (adaptive meshes from
+// a coarse start, --remesh), each result compared with a fine reference run of the same
 // draw (validation/compare.hpp: RMS and max position error at the same material points,
 // symmetric Hausdorff distance). Writes OUT/runtime_error.csv (every draw and setting),
-// OUT/runtime_error_summary.csv (per setting over the draws: median wall time, median and worst
-// RMS error, worst max error) and OUT/runtime_error.png (gnuplot: median wall time against the
-// worst RMS error, one series per time step), prints the tables, the settings no other setting
+// OUT/runtime_error_summary.csv (per setting over the draws: median wall and CPU time, median and
+// worst RMS error, worst max error) and OUT/runtime_error.png (gnuplot: median CPU time against the
+// worst RMS error, one series per mesh mode and time step), prints the tables, the settings no other setting
 // beats on both time and error (the Pareto front), and the cheapest setting whose RMS error is
 // below --target on every draw.
 //   papersim_runtime_error --out DIR [--scenario pull] [--seeds 0,1,2,3,4,5,6,7] [--edges 20,14,10,7]
 //       [--steps 20,10,5] [--reference-edge 5] [--reference-step 2.5] [--target 2]
-//       [--check-edge 3.5] [--replot]
-// Edges and the target are in mm, steps in ms. Each draw's reference is written to
+//       [--check-edge 3.5] [--remesh 3:100,6:100] [--remesh-start 21] [--replot]
+// Edges and the target are in mm, steps in ms. A --remesh setting MIN:MAX[:ANGLE] runs the draw with
+// remeshing on (remesh.size_min MIN mm, size_max MAX mm, refine_angle ANGLE rad, the scene's other
+// remesh keys), starting from a uniform mesh of --remesh-start mm, at every step of --steps. Cost
+// is measured as the CPU time of the run (this process is single-threaded; on a loaded machine
+// CPU time is the steadier figure), wall time is recorded too. Each draw's reference is written to
 // DIR/seed_N/reference and reused by later runs from the same scene (draw, resolution, material,
 // solver settings: the whole scene file). --check-edge runs each draw once more, finer (DIR/seed_N/reference_check), and
 // compares it with its reference: a draw whose end state changes under refinement (a draped
@@ -30,6 +35,8 @@
 #include <string>
 #include <vector>
 
+#include <sys/resource.h>
+
 #include "remesh/sheet_io.hpp"
 #include "simulation/scenario.hpp"
 #include "simulation/simulate.hpp"
@@ -42,11 +49,19 @@ namespace pv = papersim::validation;
 
 namespace {
 
+/// A remeshing setting of the sweep: sizes in mm, refine angle in rad (0: the scene's).
+struct RemeshSetting {
+  double size_min_mm = 0, size_max_mm = 0, angle = 0;
+  /// "off" for a uniform mesh, else "MIN:MAX" or "MIN:MAX:ANGLE".
+  std::string label() const;
+};
+
 struct Sample {
+  std::string remesh = "off";  ///< RemeshSetting::label()
   double edge_mm = 0, step_ms = 0;
-  int vertices = 0, steps = 0;
+  int vertices = 0, vertices_max = 0, steps = 0;
   long newton = 0;
-  double wall = 0;
+  double wall = 0, cpu = 0;
   pv::SheetDifference error;
 };
 
@@ -62,6 +77,37 @@ ps::Scene with_resolution(ps::Scene scene, double edge_mm, double step_ms) {
   scene.sheet.edge_length = 1e-3 * edge_mm;
   scene.time_step = 1e-3 * step_ms;
   return scene;
+}
+
+/// x with %g (shortest form: 2.5, not 2.500000).
+std::string format_number(double x) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g", x);
+  return text;
+}
+
+std::string RemeshSetting::label() const {
+  if (!(size_min_mm > 0)) return "off";
+  return format_number(size_min_mm) + ":" + format_number(size_max_mm) +
+         (angle > 0 ? ":" + format_number(angle) : "");
+}
+
+/// `scene` with remeshing on at `setting` (uniform start mesh of start_mm), or off.
+ps::Scene with_remesh(ps::Scene scene, const RemeshSetting& setting, double start_mm) {
+  scene.remesh.enabled = setting.size_min_mm > 0;
+  if (!scene.remesh.enabled) return scene;
+  scene.sheet.edge_length = 1e-3 * start_mm;
+  scene.remesh.params.size_min = 1e-3 * setting.size_min_mm;
+  scene.remesh.params.size_max = 1e-3 * setting.size_max_mm;
+  if (setting.angle > 0) scene.remesh.params.refine_angle = setting.angle;
+  return scene;
+}
+
+/// CPU time of this process [s].
+double cpu_seconds() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return u.ru_utime.tv_sec + u.ru_stime.tv_sec + 1e-6 * (u.ru_utime.tv_usec + u.ru_stime.tv_usec);
 }
 
 /// Progress on stderr: percent and ETA of one run.
@@ -100,13 +146,6 @@ pv::SheetGeometry reference_run(const ps::Scene& scene, const fs::path& dir, con
   return geometry_of(r.mesh, as_rows(r.state.positions));
 }
 
-/// x with %g (shortest form: 2.5, not 2.500000).
-std::string format_number(double x) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%g", x);
-  return text;
-}
-
 /// A comma-separated list of positive numbers, or with `seeds` of non-negative integers.
 std::vector<double> parse_list(const std::string& text, const char* what, bool seeds = false) {
   std::vector<double> v;
@@ -126,6 +165,30 @@ std::vector<double> parse_list(const std::string& text, const char* what, bool s
   return v;
 }
 
+/// --remesh: a comma-separated list of MIN:MAX[:ANGLE] (sizes in mm, MIN <= MAX; angle in rad).
+std::vector<RemeshSetting> parse_remesh(const std::string& text) {
+  std::vector<RemeshSetting> out;
+  if (text.empty()) return out;
+  size_t pos = 0;
+  while (pos <= text.size()) {
+    const size_t end = std::min(text.find(',', pos), text.size());
+    const std::string item = text.substr(pos, end - pos);
+    RemeshSetting r;
+    int used = 0;
+    const int n = std::sscanf(item.c_str(), "%lf:%lf%n:%lf%n", &r.size_min_mm, &r.size_max_mm, &used, &r.angle, &used);
+    const bool ok = n >= 2 && used == static_cast<int>(item.size()) && r.size_min_mm > 0 &&
+                    r.size_max_mm >= r.size_min_mm && std::isfinite(r.size_max_mm) &&
+                    (n == 2 || (r.angle > 0 && std::isfinite(r.angle)));
+    if (!ok)
+      throw std::runtime_error("--remesh: '" + item + "' is not MIN:MAX or MIN:MAX:ANGLE (sizes in mm, 0 < MIN <= MAX; "
+                               "angle in rad, > 0)");
+    if (n == 2) r.angle = 0;
+    out.push_back(r);
+    pos = end + 1;
+  }
+  return out;
+}
+
 /// One draw of the study: its reference, the optional check of that reference, and the sweep.
 struct SeedResult {
   long long seed = 0;
@@ -139,11 +202,18 @@ struct SeedResult {
 /// One setting over the draws whose reference holds: the median wall time, the median and the
 /// worst RMS error, and the worst max error.
 struct Aggregate {
+  std::string remesh = "off";
   double edge_mm = 0, step_ms = 0;
   int draws = 0;
   std::string seeds;  ///< the draws used, space separated
-  double median_wall = 0, median_rms = 0, worst_rms = 0, worst_max = 0;
+  double median_wall = 0, median_cpu = 0, median_vertices_max = 0, median_rms = 0, worst_rms = 0, worst_max = 0;
 };
+
+/// "edge 7 mm" for a uniform setting, "remesh 3:100 from 21 mm" for a remeshed one.
+std::string describe(const Aggregate& a) {
+  return a.remesh == "off" ? "edge " + format_number(a.edge_mm) + " mm"
+                           : "remesh " + a.remesh + " from " + format_number(a.edge_mm) + " mm";
+}
 
 using pv::median;
 
@@ -152,20 +222,25 @@ std::vector<Aggregate> aggregate(const std::vector<SeedResult>& draws) {
   if (draws.empty()) return out;
   for (size_t k = 0; k < draws.front().samples.size(); ++k) {
     Aggregate a;
+    a.remesh = draws.front().samples[k].remesh;
     a.edge_mm = draws.front().samples[k].edge_mm;
     a.step_ms = draws.front().samples[k].step_ms;
-    std::vector<double> walls, rms;
+    std::vector<double> walls, cpus, vertices, rms;
     for (const SeedResult& d : draws) {
       if (!d.converged) continue;
       const Sample& s = d.samples[k];
       a.seeds += (a.seeds.empty() ? "" : " ") + std::to_string(d.seed);
       walls.push_back(s.wall);
+      cpus.push_back(s.cpu);
+      vertices.push_back(s.vertices_max);
       rms.push_back(s.error.rms);
       a.worst_rms = std::max(a.worst_rms, s.error.rms);
       a.worst_max = std::max(a.worst_max, s.error.max);
     }
     a.draws = static_cast<int>(walls.size());
     a.median_wall = median(walls);
+    a.median_cpu = median(cpus);
+    a.median_vertices_max = median(vertices);
     a.median_rms = median(rms);
     if (a.draws > 0) out.push_back(a);
   }
@@ -185,28 +260,30 @@ void write_file(const fs::path& path, const std::string& text) {
 
 void write_csv(const fs::path& path, const std::vector<SeedResult>& draws) {
   std::ostringstream out;
-  out << "seed,reference_converged,edge_mm,step_ms,vertices,steps,newton_iterations,wall_seconds,rms_error_m,"
-         "max_error_m,hausdorff_m\n";
+  out << "seed,reference_converged,remesh,edge_mm,step_ms,vertices,vertices_max,steps,newton_iterations,wall_seconds,"
+         "cpu_seconds,rms_error_m,max_error_m,hausdorff_m\n";
   for (const SeedResult& d : draws)
     for (const Sample& s : d.samples)
-      out << d.seed << ',' << (d.checked ? (d.converged ? "yes" : "no") : "unchecked") << ',' << s.edge_mm << ','
-          << s.step_ms << ',' << s.vertices << ',' << s.steps << ',' << s.newton << ',' << s.wall << ','
-          << s.error.rms << ',' << s.error.max << ',' << s.error.hausdorff << '\n';
+      out << d.seed << ',' << (d.checked ? (d.converged ? "yes" : "no") : "unchecked") << ',' << s.remesh << ','
+          << s.edge_mm << ',' << s.step_ms << ',' << s.vertices << ',' << s.vertices_max << ',' << s.steps << ','
+          << s.newton << ',' << s.wall << ',' << s.cpu << ',' << s.error.rms << ',' << s.error.max << ',' << s.error.hausdorff << '\n';
   write_file(path, out.str());
 }
 
 void write_summary_csv(const fs::path& path, const std::vector<Aggregate>& settings) {
   std::ostringstream out;
-  out << "edge_mm,step_ms,draws,median_wall_seconds,median_rms_error_m,worst_rms_error_m,worst_max_error_m,seeds\n";
+  out << "remesh,edge_mm,step_ms,draws,median_wall_seconds,median_cpu_seconds,median_vertices_max,median_rms_error_m,"
+         "worst_rms_error_m,worst_max_error_m,seeds\n";
   for (const Aggregate& a : settings)
-    out << a.edge_mm << ',' << a.step_ms << ',' << a.draws << ',' << a.median_wall << ',' << a.median_rms << ','
+    out << a.remesh << ',' << a.edge_mm << ',' << a.step_ms << ',' << a.draws << ',' << a.median_wall << ','
+        << a.median_cpu << ',' << a.median_vertices_max << ',' << a.median_rms << ','
         << a.worst_rms << ',' << a.worst_max << ',' << a.seeds << '\n';
   write_file(path, out.str());
 }
 
-/// gnuplot, from OUT/runtime_error_summary.csv: median wall time against the worst (filled) and
-/// the median (open) RMS error over the draws, log-log, one colour per time step, points
-/// labelled by the edge length.
+/// gnuplot, from OUT/runtime_error_summary.csv: median CPU time against the worst (filled) and
+/// the median (open) RMS error over the draws, log-log, one colour per time step, circles for
+/// uniform meshes labelled by the edge length, triangles for remeshed runs labelled MIN:MAX.
 void write_plot(const fs::path& dir, const std::vector<double>& steps, const std::string& title) {
   std::ostringstream gp;
   gp << "set terminal pngcairo size 900,600 font 'DejaVu Sans,11'\n"
@@ -214,18 +291,24 @@ void write_plot(const fs::path& dir, const std::vector<double>& steps, const std
      << "set title '" << title << "'\n"
      << "set logscale xy\nset grid\n"
      << "set xlabel 'RMS position error against the reference of each draw: worst (filled), median (open) [mm]'\n"
-     << "set ylabel 'median wall time per run [s]'\n"
+     << "set ylabel 'median CPU time per run [s]'\n"
      << "set key top right\nset datafile separator ','\n";
   gp << "plot ";
-  for (size_t i = 0; i < steps.size(); ++i) {
-    if (i) gp << ", \\\n     ";
-    gp << "'runtime_error_summary.csv' every ::1 using ($2==" << steps[i] << " ? $6*1e3 : 1/0):4 with points pt 7 "
-       << "ps 1.3 lc " << i + 1 << " title 'step " << steps[i] << " ms', "
-       << "'' every ::1 using ($2==" << steps[i] << " ? $5*1e3 : 1/0):4 with points pt 6 ps 1.3 lc " << i + 1
-       << " notitle, "
-       << "'' every ::1 using ($2==" << steps[i] << " ? $6*1e3 : 1/0):4:(sprintf('%g mm', $1)) "
-       << "with labels offset 1.2,0.6 font ',9' notitle";
-  }
+  int series = 0;
+  for (const bool remeshed : {false, true})
+    for (size_t i = 0; i < steps.size(); ++i) {
+      const std::string pick = std::string("(strcol(1) ") + (remeshed ? "ne" : "eq") + " 'off' && $3==" +
+                               format_number(steps[i]) + " ? ";
+      const int filled = remeshed ? 9 : 7, open = remeshed ? 8 : 6;
+      if (series++) gp << ", \\\n     ";
+      gp << "'runtime_error_summary.csv' every ::1 using " << pick << "$9*1e3 : 1/0):6 with points pt " << filled
+         << " ps 1.3 lc " << i + 1 << " title '" << (remeshed ? "remeshed" : "uniform") << ", step "
+         << format_number(steps[i]) << " ms', "
+         << "'' every ::1 using " << pick << "$8*1e3 : 1/0):6 with points pt " << open << " ps 1.3 lc " << i + 1
+         << " notitle, "
+         << "'' every ::1 using " << pick << "$9*1e3 : 1/0):6:("
+         << (remeshed ? "strcol(1)" : "sprintf('%g mm', $2)") << ") with labels offset 1.2,0.6 font ',9' notitle";
+    }
   gp << "\n";
   write_file(dir / "runtime_error.gp", gp.str());
   const std::string cmd = "cd '" + dir.string() + "' && gnuplot runtime_error.gp 2> gnuplot.log";
@@ -237,7 +320,8 @@ void write_plot(const fs::path& dir, const std::vector<double>& steps, const std
 /// One draw: reference (cached), optional check of the reference at a finer edge, and the sweep.
 SeedResult study_draw(const std::string& scenario, long long seed, const fs::path& dir,
                       const std::vector<double>& edges, const std::vector<double>& steps, double ref_edge,
-                      double ref_step, double check_edge, double target) {
+                      double ref_step, double check_edge, double target,
+                      const std::vector<RemeshSetting>& remeshes, double remesh_start) {
   SeedResult d;
   d.seed = seed;
   const ps::Scene base = ps::make_scenario(scenario, seed);
@@ -259,24 +343,34 @@ SeedResult study_draw(const std::string& scenario, long long seed, const fs::pat
                 check_wall, 1e3 * d.check.rms, 1e3 * d.check.max, 1e3 * d.check.hausdorff,
                 d.converged ? "converged within the target" : "NOT converged within the target");
   }
-  std::printf("%6s %8s %8s %8s %7s %8s %9s %10s %10s %10s\n", "seed", "edge_mm", "step_ms", "vertices", "steps",
-              "newton", "wall_s", "rms_mm", "max_mm", "hausd_mm");
+  std::printf("%6s %10s %8s %8s %8s %8s %7s %8s %9s %9s %10s %10s %10s\n", "seed", "remesh", "edge_mm", "step_ms",
+              "vertices", "max_vert", "steps", "newton", "wall_s", "cpu_s", "rms_mm", "max_mm", "hausd_mm");
+  const auto run_one = [&](const ps::Scene& scene, const std::string& remesh, double edge, double step) {
+    const double cpu0 = cpu_seconds();
+    const ps::RunResult r = ps::run_scene(scene, progress_options("seed " + std::to_string(seed) + ", " +
+        (remesh == "off" ? "edge " + format_number(edge) + " mm" : "remesh " + remesh) + ", step " +
+        format_number(step) + " ms"));
+    Sample s;
+    s.remesh = remesh;
+    s.edge_mm = edge, s.step_ms = step;
+    s.cpu = cpu_seconds() - cpu0;
+    s.vertices = r.mesh.num_vertices();
+    s.vertices_max = r.sheet.vertices_max;
+    s.steps = r.steps;
+    s.newton = r.totals.newton_iterations;
+    s.wall = r.wall_seconds;
+    s.error = pv::compare_sheets(reference, geometry_of(r.mesh, as_rows(r.state.positions)));
+    d.samples.push_back(s);
+    std::printf("%6lld %10s %8g %8g %8d %8d %7d %8ld %9.2f %9.2f %10.3f %10.3f %10.3f\n", seed, remesh.c_str(), edge,
+                step, s.vertices, s.vertices_max, s.steps, s.newton, s.wall, s.cpu, 1e3 * s.error.rms,
+                1e3 * s.error.max, 1e3 * s.error.hausdorff);
+    std::fflush(stdout);
+  };
   for (double e : edges)
-    for (double h : steps) {
-      const ps::RunResult r = ps::run_scene(with_resolution(base, e, h), progress_options(
-          "seed " + std::to_string(seed) + ", edge " + format_number(e) + " mm, step " + format_number(h) + " ms"));
-      Sample s;
-      s.edge_mm = e, s.step_ms = h;
-      s.vertices = r.mesh.num_vertices();
-      s.steps = r.steps;
-      s.newton = r.totals.newton_iterations;
-      s.wall = r.wall_seconds;
-      s.error = pv::compare_sheets(reference, geometry_of(r.mesh, as_rows(r.state.positions)));
-      d.samples.push_back(s);
-      std::printf("%6lld %8g %8g %8d %7d %8ld %9.2f %10.3f %10.3f %10.3f\n", seed, e, h, s.vertices, s.steps,
-                  s.newton, s.wall, 1e3 * s.error.rms, 1e3 * s.error.max, 1e3 * s.error.hausdorff);
-      std::fflush(stdout);
-    }
+    for (double h : steps) run_one(with_resolution(base, e, h), "off", e, h);
+  for (const RemeshSetting& m : remeshes)
+    for (double h : steps)
+      run_one(with_remesh(with_resolution(base, remesh_start, h), m, remesh_start), m.label(), remesh_start, h);
   return d;
 }
 
@@ -300,11 +394,19 @@ int main(int argc, char** argv) {
                  "reference: a draw whose reference moves by more than the target is not converged and is left "
                  "out of the recommendation; when no draw is converged, no setting is recommended and the exit "
                  "status is 1");
+  std::string remesh_text;
+  double remesh_start = 21;
+  app.add_option("--remesh", remesh_text,
+                 "remeshing settings of the sweep, comma separated MIN:MAX[:ANGLE] (remesh.size_min and size_max "
+                 "in mm, refine_angle in rad; run at every --steps, from a uniform start mesh of --remesh-start)");
+  app.add_option("--remesh-start", remesh_start, "edge length of the remeshed runs' start mesh [mm]")
+      ->capture_default_str()->check(CLI::PositiveNumber);
   bool replot = false;
   app.add_flag("--replot", replot, "only redraw OUT/runtime_error.png from OUT/runtime_error_summary.csv");
   CLI11_PARSE(app, argc, argv);
   try {
     const std::vector<double> edges = parse_list(edges_text, "edges"), steps = parse_list(steps_text, "steps");
+    const std::vector<RemeshSetting> remeshes = parse_remesh(remesh_text);
     std::vector<long long> seeds;
     for (double x : parse_list(seeds_text, "seeds", true)) seeds.push_back(static_cast<long long>(x));
     // The plot's title names the draws it summarises (those whose reference holds).
@@ -332,7 +434,7 @@ int main(int argc, char** argv) {
     std::vector<SeedResult> draws;
     for (long long seed : seeds) {
       draws.push_back(study_draw(scenario, seed, fs::path(out) / ("seed_" + std::to_string(seed)), edges, steps,
-                                 ref_edge, ref_step, check_edge, target));
+                                 ref_edge, ref_step, check_edge, target, remeshes, remesh_start));
       write_csv(fs::path(out) / "runtime_error.csv", draws);  // partial results survive an interruption
     }
     const std::vector<Aggregate> settings = aggregate(draws);
@@ -350,32 +452,33 @@ int main(int argc, char** argv) {
     } else {
       write_summary_csv(fs::path(out) / "runtime_error_summary.csv", settings);
       write_plot(out, steps, title(settings.front().seeds));
-      std::printf("%8s %8s %6s %14s %14s %13s %13s\n", "edge_mm", "step_ms", "draws", "median_wall_s",
-                  "median_rms_mm", "worst_rms_mm", "worst_max_mm");
+      std::printf("%10s %8s %8s %6s %14s %13s %9s %14s %13s %13s\n", "remesh", "edge_mm", "step_ms", "draws",
+                  "median_wall_s", "median_cpu_s", "max_vert", "median_rms_mm", "worst_rms_mm", "worst_max_mm");
       for (const Aggregate& a : settings)
-        std::printf("%8g %8g %6d %14.2f %14.3f %13.3f %13.3f\n", a.edge_mm, a.step_ms, a.draws, a.median_wall,
-                    1e3 * a.median_rms, 1e3 * a.worst_rms, 1e3 * a.worst_max);
+        std::printf("%10s %8g %8g %6d %14.2f %13.2f %9.0f %14.3f %13.3f %13.3f\n", a.remesh.c_str(), a.edge_mm,
+                    a.step_ms, a.draws, a.median_wall, a.median_cpu, a.median_vertices_max, 1e3 * a.median_rms,
+                    1e3 * a.worst_rms, 1e3 * a.worst_max);
       std::printf("\nPareto front (no other setting is both faster and more accurate, worst RMS over the draws):\n");
       for (const Aggregate& a : settings) {
         const bool beaten = std::any_of(settings.begin(), settings.end(), [&](const Aggregate& o) {
-          return o.median_wall < a.median_wall && o.worst_rms < a.worst_rms;
+          return o.median_cpu < a.median_cpu && o.worst_rms < a.worst_rms;
         });
         if (!beaten)
-          std::printf("  edge %g mm, step %g ms: %.2f s, worst RMS %.3f mm, worst max %.3f mm\n", a.edge_mm,
-                      a.step_ms, a.median_wall, 1e3 * a.worst_rms, 1e3 * a.worst_max);
+          std::printf("  %s, step %g ms: CPU %.2f s, worst RMS %.3f mm, worst max %.3f mm\n", describe(a).c_str(),
+                      a.step_ms, a.median_cpu, 1e3 * a.worst_rms, 1e3 * a.worst_max);
       }
     }
     const Aggregate* best = nullptr;
     for (const Aggregate& a : settings)
-      if (1e3 * a.worst_rms <= target && (!best || a.median_wall < best->median_wall)) best = &a;
+      if (1e3 * a.worst_rms <= target && (!best || a.median_cpu < best->median_cpu)) best = &a;
     std::vector<double> ref_walls;
     for (const SeedResult& d : draws)
       if (d.converged) ref_walls.push_back(d.reference_wall);
     if (best)
-      std::printf("cheapest setting with RMS error <= %g mm on every draw: edge %g mm, step %g ms (median %.2f s, "
-                  "worst RMS %.3f mm, worst max %.3f mm; %.1fx faster than the references' median)\n", target,
-                  best->edge_mm, best->step_ms, best->median_wall, 1e3 * best->worst_rms, 1e3 * best->worst_max,
-                  median(ref_walls) / best->median_wall);
+      std::printf("cheapest setting with RMS error <= %g mm on every draw: %s, step %g ms (median CPU %.2f s, wall "
+                  "%.2f s, worst RMS %.3f mm, worst max %.3f mm; %.1fx less wall time than the references' median)\n",
+                  target, describe(*best).c_str(), best->step_ms, best->median_cpu, best->median_wall,
+                  1e3 * best->worst_rms, 1e3 * best->worst_max, median(ref_walls) / best->median_wall);
     else if (held > 0)
       std::printf("no setting of the sweep reaches RMS error <= %g mm on every draw\n", target);
     else
