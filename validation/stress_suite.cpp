@@ -39,6 +39,7 @@
 #include "remesh/sheet_generator.hpp"
 #include "remesh/sheet_io.hpp"
 #include "simulation/simulate.hpp"
+#include "validation/fold_scene.hpp"
 
 namespace fs = std::filesystem;
 namespace ps = papersim::simulation;
@@ -176,36 +177,9 @@ std::vector<Case> make_cases(const fs::path& work) {
   }
   // 6. Gravity 5000 m/s^2 onto the ground (impact at 10 m/s).
   cases.push_back({"gravity 5000", "drop 1 cm at 5000 m/s^2", drop_scene(0.01, 5000.0, 0.02, 1e-3), ""});
-  // 7. A 180 degree fold with self-contact: the left edge of a 12 x 4 cm thin sheet is clamped and its right edge carried over the sheet and brought down
-  //    3 mm above its left half,
-  //    then let go vertically (still held in x and y) so the top layer falls onto the bottom one.
-  {
-    ps::Scene s = drop_scene(1e-3, 9.8, 0.8, 5e-3);
-    s.sheet.width = 0.12;
-    s.sheet.height = 0.04;
-    s.sheet.edge_length = 0.008;
-    // Tissue-like (D = 2e-6 N m, bending length 1.4 cm): office paper (8 cm) would stand up in
-    // a loop over 12 cm instead of lying folded with its layers in contact.
-    s.sheet.material.bending_stiffness = 2e-6;
-    for (double y : {0.0, 0.04})
-      for (int vertical : {1, 0}) {
-        ps::HandleSpec h;
-        h.material_point = Eigen::Vector2d(0.12, y);
-        h.keyframes = {{0.0, Eigen::Vector3d::Zero()},
-                       {0.2, Eigen::Vector3d(-0.04, 0, 0.04)},
-                       {0.4, Eigen::Vector3d(-0.1, 0, 0.015)},
-                       {0.5, Eigen::Vector3d(-0.105, 0, 0.003)}};
-        if (vertical)
-          h.release_time = 0.5;
-        else
-          h.axes = Eigen::Vector3d(1, 1, 0);
-        s.handles.push_back(h);
-      }
-    ps::ClampSpec left;  // the left edge is held, so the sheet folds instead of sliding
-    left.region = Eigen::Vector4d(0, 0, 0.005, 0.04);
-    s.clamps.push_back(left);
-    cases.push_back({"fold 180 deg", "right edge carried over onto the left half, self-contact", s, "", 0.5});
-  }
+  // 7. A 180 degree fold with self-contact (validation/fold_scene.hpp).
+  cases.push_back({"fold 180 deg", "right edge carried over onto the left half, self-contact",
+                   papersim::validation::fold_180_scene(), "", 0.5});
   // 8. Waiting for capabilities.
   const auto not_run = [&](const char* name, const char* what, const char* reason) {
     Case c;
