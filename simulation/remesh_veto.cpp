@@ -172,4 +172,21 @@ std::string RemeshVeto::operator()(const remesh::EditProposal& edit) const {
   return {};
 }
 
+Eigen::VectorXd approach_distance(const std::vector<std::shared_ptr<const collision::Collider>>& obstacles,
+                                  const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& velocities,
+                                  double t, double lookahead) {
+  Eigen::VectorXd d = Eigen::VectorXd::Constant(positions.rows(), std::numeric_limits<double>::infinity());
+  for (const auto& o : obstacles) {
+    const Eigen::Isometry3d pose = o->motion.pose(t);
+    const Eigen::Vector3d obstacle_velocity = o->motion.linear_velocity(t);
+    for (Eigen::Index v = 0; v < positions.rows(); ++v) {
+      Eigen::Vector3d gradient;
+      const double distance = o->distance_at_pose(positions.row(v).transpose(), pose, &gradient);
+      const double closing = -(velocities.row(v).transpose() - obstacle_velocity).dot(gradient);
+      d(v) = std::min(d(v), distance - std::max(closing, 0.0) * lookahead);
+    }
+  }
+  return d;
+}
+
 }  // namespace papersim::simulation

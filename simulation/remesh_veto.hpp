@@ -62,4 +62,13 @@ class RemeshVeto {
 /// Smallest distance between two triangles (rows = corners) [m]: 0 when they intersect.
 double triangle_distance(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b);
 
+/// What the obstacle-proximity sizing refines by, per vertex (#V) [m]: the smallest signed
+/// distance to any obstacle at time t, less the distance the vertex closes towards that obstacle
+/// in `lookahead` seconds at its current velocity relative to the obstacle's (0 when it moves
+/// away), so a sheet falling onto an obstacle is refined before it arrives.
+/// @param positions, velocities #V x 3 [m], [m/s]
+Eigen::VectorXd approach_distance(const std::vector<std::shared_ptr<const collision::Collider>>& obstacles,
+                                  const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& velocities,
+                                  double t, double lookahead);
+
 }  // namespace papersim::simulation

@@ -284,13 +284,10 @@ const StepStats& Run::step() {
 }
 
 Eigen::VectorXd Run::vertex_obstacle_distance() const {
-  Eigen::VectorXd d = Eigen::VectorXd::Constant(m_state.num_vertices(), INF);
-  for (const auto& o : m_setup.obstacles) {
-    const Eigen::Isometry3d pose = o->motion.pose(m_state.time);
-    for (int v = 0; v < m_state.num_vertices(); ++v)
-      d[v] = std::min(d[v], o->distance_at_pose(m_state.positions.segment<3>(3 * v), pose));
-  }
-  return d;
+  // The mesh a pass makes must already resolve the contact the sheet reaches before the pass
+  // after next (a fall meets its obstacle at a few centimetres per step).
+  return approach_distance(m_setup.obstacles, m_state.positions_matrix(), m_state.velocities_matrix(), m_state.time,
+                           2.0 * m_scene.remesh.every * m_h);
 }
 
 std::string Run::check_remeshed(const remesh::SheetMesh& mesh, const SheetState& state, Terms& terms) {

@@ -197,7 +197,9 @@ class Run {
   void remesh_pass();
   /// Why a remeshed sheet cannot be used (empty when it can); builds its terms into `terms`.
   std::string check_remeshed(const remesh::SheetMesh& mesh, const SheetState& state, Terms& terms);
-  /// Smallest distance of each vertex to any obstacle at the current state [m] (#V).
+  /// Smallest distance of each vertex to any obstacle at the current state, less the distance it
+  /// closes in 2 `remesh.every` steps at its current speed towards the obstacle [m] (#V): what
+  /// the obstacle-proximity sizing refines by.
   Eigen::VectorXd vertex_obstacle_distance() const;
 
   Scene m_scene;

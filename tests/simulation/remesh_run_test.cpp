@@ -108,6 +108,41 @@ TEST(TriangleDistance, CrossingParallelAndApartTriangles) {
 // The veto of a run: a flip that would fold a triangle through a layer of the sheet lying just
 // above is refused as "self"; a split next to a sphere whose chord midpoint would sink into it is
 // refused as "obstacle"; and a flip that would stretch beyond the limit is refused as "stretch".
+// The obstacle-proximity sizing sees each vertex as close as it will be after the lookahead at
+// its speed towards the obstacle: a sphere of radius 1 cm at the origin, vertices 5 cm above
+// its surface, lookahead 2 ms.
+TEST(ApproachDistance, SubtractsTheDistanceClosedTowardsTheObstacle) {
+  papersim::collision::ColliderSpec spec;
+  spec.kind = papersim::collision::ColliderKind::sphere;
+  spec.radius = 0.01;
+  spec.keyframes.push_back({0.0, Eigen::Vector3d::Zero(), Eigen::Quaterniond::Identity()});
+  spec.keyframes.push_back({1.0, Eigen::Vector3d(0, 0, 10.0), Eigen::Quaterniond::Identity()});
+  const std::vector<std::shared_ptr<const papersim::collision::Collider>> moving = {
+      papersim::collision::make_collider(spec)};
+  spec.keyframes.pop_back();
+  const std::vector<std::shared_ptr<const papersim::collision::Collider>> resting = {
+      papersim::collision::make_collider(spec)};
+  Eigen::MatrixX3d x(4, 3), v(4, 3);
+  x << 0, 0, 0.06, 0, 0, 0.06, 0, 0, 0.06, 0, 0, 0.06;
+  v << 0, 0, -10,  // falling onto it at 10 m/s: 2 cm closer
+      0, 0, 10,    // moving away: no change
+      10, 0, 0,    // sideways (perpendicular to the gradient): no change
+      0, 0, 0;     // at rest
+  const Eigen::VectorXd still = approach_distance(resting, x, v, 0.0, 2e-3);
+  EXPECT_NEAR(still(0), 0.03, 1e-12);
+  EXPECT_NEAR(still(1), 0.05, 1e-12);
+  EXPECT_NEAR(still(2), 0.05, 1e-12);
+  EXPECT_NEAR(still(3), 0.05, 1e-12);
+  // The sphere rising at 10 m/s closes on the vertex at rest by 2 cm, and not on the one moving
+  // up with it.
+  const Eigen::VectorXd rising = approach_distance(moving, x, v, 0.0, 2e-3);
+  EXPECT_NEAR(rising(3), 0.03, 1e-9);
+  EXPECT_NEAR(rising(1), 0.05, 1e-9);
+  EXPECT_NEAR(rising(0), 0.01, 1e-9);
+  // Without lookahead it is the signed distance.
+  EXPECT_NEAR(approach_distance(resting, x, v, 0.0, 0.0)(0), 0.05, 1e-12);
+}
+
 TEST(RemeshVeto, RefusesEditsThatBreakTheSolversInvariants) {
   // Two triangles (0, 1, 2) and (1, 3, 2) forming a unit square in material space, whose world
   // square is creased along the diagonal 1-2 by lifting corner 3.
