@@ -30,6 +30,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <set>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -293,10 +294,24 @@ void write_plot(const fs::path& dir, const std::vector<double>& steps, const std
      << "set xlabel 'RMS position error against the reference of each draw: worst (filled), median (open) [mm]'\n"
      << "set ylabel 'median CPU time per run [s]'\n"
      << "set key top right\nset datafile separator ','\n";
+  // Only the series the summary has rows for (gnuplot fails on a labels series with no point).
+  std::set<std::pair<bool, double>> present;
+  {
+    std::ifstream in(dir / "runtime_error_summary.csv");
+    std::string line;
+    std::getline(in, line);
+    while (std::getline(in, line)) {
+      std::stringstream row(line);
+      std::string remesh, edge, step;
+      if (std::getline(row, remesh, ',') && std::getline(row, edge, ',') && std::getline(row, step, ','))
+        present.insert({remesh != "off", std::strtod(step.c_str(), nullptr)});
+    }
+  }
   gp << "plot ";
   int series = 0;
   for (const bool remeshed : {false, true})
     for (size_t i = 0; i < steps.size(); ++i) {
+      if (!present.count({remeshed, steps[i]})) continue;
       const std::string pick = std::string("(strcol(1) ") + (remeshed ? "ne" : "eq") + " 'off' && $3==" +
                                format_number(steps[i]) + " ? ";
       const int filled = remeshed ? 9 : 7, open = remeshed ? 8 : 6;
@@ -383,7 +398,9 @@ int main(int argc, char** argv) {
   app.add_option("--out", out, "output folder (CSV, plot, reference runs)")->required();
   app.add_option("--scenario", scenario, "scenario name")->capture_default_str();
   app.add_option("--seeds", seeds_text, "scenario seeds (draws), comma separated")->capture_default_str();
-  app.add_option("--edges", edges_text, "edge lengths of the sweep [mm], comma separated")->capture_default_str();
+  app.add_option("--edges", edges_text,
+                 "edge lengths of the uniform sweep [mm], comma separated (may be empty with --remesh)")
+      ->capture_default_str();
   app.add_option("--steps", steps_text, "time steps of the sweep [ms], comma separated")->capture_default_str();
   app.add_option("--reference-edge", ref_edge, "edge length of the references [mm]")->capture_default_str();
   app.add_option("--reference-step", ref_step, "time step of the references [ms]")->capture_default_str();
@@ -405,8 +422,11 @@ int main(int argc, char** argv) {
   app.add_flag("--replot", replot, "only redraw OUT/runtime_error.png from OUT/runtime_error_summary.csv");
   CLI11_PARSE(app, argc, argv);
   try {
-    const std::vector<double> edges = parse_list(edges_text, "edges"), steps = parse_list(steps_text, "steps");
     const std::vector<RemeshSetting> remeshes = parse_remesh(remesh_text);
+    // With remeshing settings the uniform sweep may be empty (--edges "").
+    const std::vector<double> edges = edges_text.empty() && !remeshes.empty() ? std::vector<double>{}
+                                                                                : parse_list(edges_text, "edges");
+    const std::vector<double> steps = parse_list(steps_text, "steps");
     std::vector<long long> seeds;
     for (double x : parse_list(seeds_text, "seeds", true)) seeds.push_back(static_cast<long long>(x));
     // The plot's title names the draws it summarises (those whose reference holds).
