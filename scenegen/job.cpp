@@ -533,6 +533,8 @@ void finish_into(const fs::path& job, const fs::path& stage) {
     }
     return out;
   };
+  const Camera camera = camera_from_json(meta.at("camera"));
+  meta["camera"]["vignetting"] = "cos^4 (natural, applied to the photo and the shading pass)";
   json files = json::object();
   // Independent outputs are decoded and written side by side (each task writes its own files;
   // meta.json is filled here), in two waves: the UV render first gives the mask the others use.
@@ -554,11 +556,22 @@ void finish_into(const fs::path& job, const fs::path& stage) {
     files["albedo.png"] = "16-bit sRGB document colour times paper colour, unlit, background 0";
   }
   if (has("shading")) {
-    spawn([&] { write_png((stage / "shading.png").string(), to_srgb(lit(RawPass::shading, decode_linear)), 16); });
+    spawn([&] {
+      ImageF shading = lit(RawPass::shading, decode_linear);
+      apply_vignetting(shading, camera);
+      write_png((stage / "shading.png").string(), to_srgb(shading), 16);
+    });
     files["shading.png"] = "16-bit sRGB photo lighting on white paper (relief kept), background 0";
   }
   if (has("image")) {
-    spawn([&] { write_png((stage / "image.png").string(), lit(RawPass::image, read_png), 8); });
+    spawn([&] {
+      // The photo is rendered as 16-bit sRGB so that the camera's vignetting is applied before
+      // the one quantisation to 8 bits.
+      ImageF photo = lit(RawPass::image, read_png);
+      for (float& v : photo.data) v = static_cast<float>(srgb_to_linear(v));
+      apply_vignetting(photo, camera);
+      write_png((stage / "image.png").string(), to_srgb(photo), 8);
+    });
     files["image.png"] = "8-bit sRGB photo";
   }
   wait_all();
@@ -589,8 +602,7 @@ void finish_into(const fs::path& job, const fs::path& stage) {
     bp.grid_width = j["backward"]["grid_width"];
     bp.grid_height = j["backward"]["grid_height"];
     bp.tolerance_pixels = j["backward"]["tolerance_pixels"];
-    const Camera camera = camera_from_json(meta.at("camera"));
-    spawn([&, bp, camera] {
+    spawn([&, bp] {
       const SheetMesh mesh = read_sheet_obj((job / "sheet.obj").string());
       const ImageF map = backward_map(mesh, camera, uv, bp);
       write_exr((stage / "backward.exr").string(), map, {"R", "G", "B"});

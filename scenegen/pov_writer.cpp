@@ -208,8 +208,8 @@ void write_pass_ini(std::ostream& out, RawPass pass, int width, int height,
   if (band.count > 1)
     out << "Start_Row=" << band.first_row(height) + 1 << "\nEnd_Row=" << band.end_row(height) << "\n";
   out << "Declare=SG_PASS=" << static_cast<int>(pass) << "\n"
-      // Ground truth: linear 16-bit. Photo: 8-bit sRGB.
-      << "Bits_Per_Color=" << (photo ? 8 : 16) << "\n"
+      // Ground truth: linear 16-bit. Photo: 16-bit sRGB (quantised to 8 bits after vignetting).
+      << "Bits_Per_Color=16\n"
       << "File_Gamma=" << (photo ? "sRGB" : "1.0") << "\n"
       << "Output_Alpha=Off\n"
       << "Jitter=Off\n";

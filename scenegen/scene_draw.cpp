@@ -77,7 +77,10 @@ LightingDraw draw_lighting(Rng& rng, const Stage& stage, const Eigen::Vector3d& 
   const char* temps[] = {"warm", "cool", "neutral"};
   d.temperature = temps[rng.randint(0, 2)];
   d.colour = temperature_colour(rng, d.temperature);
-  d.exposure = rng.uniform(1.0, 1.3);
+  // Paper white (0.76-0.84) x diffuse 0.85 x (exposure + ~0.3 of sky light) puts a flat sheet
+  // at linear 0.5-0.75 (sRGB 0.73-0.88), as an auto-exposed photo of a page does, and leaves
+  // headroom for the parts turned towards a light (U[1.0, 1.3] clipped them to white).
+  d.exposure = rng.uniform(0.6, 0.85);
   d.sky = rng.uniform(0.25, 0.4);
   const double c = std::cos(d.rotation_deg * DEG), s = std::sin(d.rotation_deg * DEG);
   double norm = 0.0;
