@@ -2,7 +2,8 @@
 // (dense radiosity, 5 x 5 area-light samples, fine antialiasing) and candidate presets of one
 // sample; for each: wall time of the photo render (one single-threaded POV-Ray process) and
 // PSNR / SSIM against the reference. Writes a CSV.
-//   scenegen_quality_study [--size WxH] [--seed N] [--mesh fold|cylinder|bump|flat] [--csv FILE]
+//   scenegen_quality_study [--size WxH] [--seed N] [--mesh fold|cylinder|bump|flat] [--subdivision L]
+//                          [--csv FILE]
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -88,11 +89,13 @@ int main(int argc, char** argv) {
   int width = 256, height = 360;
   std::uint64_t seed = 1;
   std::string kind = "fold", csv = "scenegen_quality.csv";
+  int level = 2;
   for (int i = 1; i + 1 < argc; i += 2) {
     if (!std::strcmp(argv[i], "--size")) std::sscanf(argv[i + 1], "%dx%d", &width, &height);
     else if (!std::strcmp(argv[i], "--seed")) seed = std::stoull(argv[i + 1]);
     else if (!std::strcmp(argv[i], "--mesh")) kind = argv[i + 1];
     else if (!std::strcmp(argv[i], "--csv")) csv = argv[i + 1];
+    else if (!std::strcmp(argv[i], "--subdivision")) level = std::atoi(argv[i + 1]);
     else {
       std::fprintf(stderr, "scenegen_quality_study: unknown option '%s'\n", argv[i]);
       return 2;
@@ -109,6 +112,7 @@ int main(int argc, char** argv) {
     o.width = width;
     o.height = height;
     o.passes = {sg::Pass::image};
+    o.surface.level = level;
     sg::ImageF ref;
     const double ref_time = render(o, sg::bench::reference_quality(), dir / "reference", ref);
     std::printf("reference: %.2f s\n", ref_time);
