@@ -10,7 +10,9 @@
 // on all of them alike). Reported per configuration: median wall time and median CPU time of
 // scenegen and its POV-Ray children (wait4), their ratios to the baseline, whether the runs of
 // this build gave identical files, and PSNR / SSIM of the final photo against a converged
-// reference of the same surface. Then the exactness figures of this build's sample.
+// reference of the same surface, rendered with this program's library (so --scenegen must be
+// the same build, as the default is; the baseline's figure then also measures every change of
+// the scene since it, e.g. exposure). Then the exactness figures of this build's sample.
 #include <fcntl.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
@@ -270,7 +272,10 @@ int main(int argc, char** argv) {
       std::fflush(stdout);
     }
     if (a.reference) {
-      std::printf("final photo against a converged reference of the same surface (%s):\n",
+      // The reference is rendered by this program's own library (the same build as the default
+      // --scenegen): the baseline's figure also holds every change of the scene since it
+      // (draws, exposure, vignetting), not only its render settings.
+      std::printf("final photo against a converged reference of the same surface (%s), rendered by this build:\n",
                   sg::bench::describe(sg::bench::reference_quality()).c_str());
       const sg::ImageF ref2 = reference_photo(a, mesh, 2, dir), ref0 = reference_photo(a, mesh, 0, dir);
       for (const Config& c : configs)
