@@ -85,6 +85,16 @@ ImageF decode_normal(const std::string& path, const ImageF& mask) {
   return n;
 }
 
+void apply_vignetting(ImageF& linear, const Camera& camera) {
+  for (int y = 0; y < linear.height; ++y)
+    for (int x = 0; x < linear.width; ++x) {
+      const double dx = (x + 0.5 - 0.5 * camera.width) / camera.focal_px;
+      const double dy = (y + 0.5 - 0.5 * camera.height) / camera.focal_px;
+      const double cos2 = 1.0 / (1.0 + dx * dx + dy * dy);
+      for (int c = 0; c < linear.channels; ++c) linear.at(x, y, c) *= static_cast<float>(cos2 * cos2);
+    }
+}
+
 ImageF decode_linear(const std::string& path) {
   int w, h, c;
   const auto raw = load(path, w, h, c);

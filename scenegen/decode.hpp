@@ -29,6 +29,11 @@ ImageF decode_normal(const std::string& path, const ImageF& mask);
 /// A linear 16-bit render as an image of linear values (3 channels).
 ImageF decode_linear(const std::string& path);
 
+/// Natural vignetting of the camera (an ideal lens): linear radiance falls off as cos^4 of the
+/// angle between a pixel's ray and the optical axis (0.70 in the corners of a 50 mm lens on a
+/// 36 mm sensor). Multiplies the linear channels of `linear` in place.
+void apply_vignetting(ImageF& linear, const Camera& camera);
+
 /// Backward-map parameters.
 struct BackwardParams {
   int grid_width = 121;   ///< points across the page (u), 0: the render width

@@ -13,6 +13,8 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <functional>
+#include <future>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
@@ -106,13 +108,12 @@ std::string hex(std::uint64_t v) {
   return s.str();
 }
 
-json options_json(const SampleOptions& o, const std::vector<RawPass>& raw, int doc_w, int doc_h) {
-  json passes = json::array(), raws = json::array();
+json options_json(const SampleOptions& o, const std::vector<std::string>& renders, int doc_w, int doc_h) {
+  json passes = json::array();
   for (Pass p : o.passes) passes.push_back(pass_name(p));
-  for (RawPass r : raw) raws.push_back(raw_pass_name(r));
   const int gw = o.backward.grid_width > 0 ? o.backward.grid_width : o.width;
   const int gh = o.backward.grid_height > 0 ? o.backward.grid_height : o.height;
-  return {{"passes", passes}, {"raw_renders", raws}, {"width", o.width}, {"height", o.height},
+  return {{"passes", passes}, {"raw_renders", renders}, {"width", o.width}, {"height", o.height},
           {"quality", quality_name(o.quality)}, {"fine_passes", o.fine_passes},
           {"backward", {{"grid_width", gw}, {"grid_height", gh},
                         {"tolerance_pixels", o.backward.tolerance_pixels}}},
@@ -155,6 +156,13 @@ std::pair<std::string, json> place_document(const SampleOptions& o, const SheetM
   return {"document.png", j};
 }
 
+/// Row bands of a raw render: the lit renders (photo, shading) are split into quality.bands
+/// bands (at most one per row), the exact passes are rendered whole.
+int band_count(RawPass r, const QualitySettings& q, int height) {
+  const bool lit = r == RawPass::image || r == RawPass::shading;
+  return lit ? std::clamp(q.bands, 1, height) : 1;
+}
+
 /// Random stream of a component for a view: view 0 uses the sample's own streams.
 std::string view_stream(const std::string& component, int view) {
   return view == 0 ? component : component + "/view" + std::to_string(view);
@@ -182,6 +190,8 @@ void prepare_job(const SampleOptions& o, const std::string& job_dir) {
   const std::vector<std::string> layouts = layout_names();
   if (std::find(layouts.begin(), layouts.end(), o.layout) == layouts.end())
     throw InputError("unknown layout '" + o.layout + "' (scenegen, syntheticdoc)");
+  const int bands = (o.quality_override ? *o.quality_override : quality_settings(o.quality)).bands;
+  if (bands < 1 || bands > 64) throw InputError("quality bands must be in [1, 64], got " + std::to_string(bands));
   if (o.view < 0) throw InputError("view index " + std::to_string(o.view) + " is negative");
   const SheetMesh read_mesh = read_sheet_obj(o.mesh_path);
   const SheetMesh mesh = o.flip ? flip_sheet(read_mesh) : read_mesh;
@@ -260,12 +270,20 @@ void prepare_job(const SampleOptions& o, const std::string& job_dir) {
     write_with(tmp / "scene.inc", [&](std::ostream& out) { write_scene_inc(out, scene); });
     write_with(tmp / "sheet.obj", [&](std::ostream& out) { write_sheet_obj(out, surface); });
     const auto raw = raw_passes_for(o.passes, o.fine_passes);
+    std::vector<std::string> renders;
     std::string run_sh = "#!/bin/sh\n# Renders this job with POV-Ray 3.7 alone; then: scenegen finish THIS_DIR --out DIR\nset -e\ncd \"$(dirname \"$0\")\"\n";
     if (fs::exists(tmp / "document.ini")) run_sh += "povray document.ini\n";
     for (RawPass r : raw) {
-      const std::string ini = raw_pass_name(r) + ".ini";
-      write_with(tmp / ini, [&](std::ostream& out) { write_pass_ini(out, r, o.width, o.height, scene.quality, o.threads); });
-      run_sh += "povray " + ini + "\n";
+      const int count = band_count(r, scene.quality, o.height);
+      for (int b = 0; b < count; ++b) {
+        const RowBand band{b, count};
+        const std::string name = raw_render_name(r, band);
+        write_with(tmp / (name + ".ini"), [&](std::ostream& out) {
+          write_pass_ini(out, r, o.width, o.height, scene.quality, o.threads, band);
+        });
+        run_sh += "povray " + name + ".ini\n";
+        renders.push_back(name);
+      }
     }
     write_text(tmp / "run.sh", run_sh);
     fs::permissions(tmp / "run.sh", fs::perms::owner_exec | fs::perms::group_exec | fs::perms::others_exec, fs::perm_options::add, ec);
@@ -281,6 +299,7 @@ void prepare_job(const SampleOptions& o, const std::string& job_dir) {
                                 {"area_adaptive", scene.quality.area_adaptive},
                                 {"antialias_threshold", scene.quality.antialias_threshold},
                                 {"antialias_depth", scene.quality.antialias_depth},
+                                {"bands", scene.quality.bands},
                                 {"custom", o.quality_override.has_value()}};
     meta["lighting"] = to_json(scene.lighting);
     meta["background"] = to_json(scene.background);
@@ -289,10 +308,11 @@ void prepare_job(const SampleOptions& o, const std::string& job_dir) {
     meta["document"] = doc_meta;
     meta["encoding"] = {{"coords_min", to_json(scene.coords_min)}, {"coords_span", scene.coords_span},
                         {"uv_encoding", UV_ENCODING}, {"fine_factor", FINE_FACTOR}};
-    json job = options_json(o, raw, doc_meta.value("width_px", 0), doc_meta.value("height_px", 0));
+    json job = options_json(o, renders, doc_meta.value("width_px", 0), doc_meta.value("height_px", 0));
     job["meta"] = meta;
     job["document_file"] = doc_file;
     job["layout"] = o.layout;
+    job["lit_bands"] = std::clamp(scene.quality.bands, 1, o.height);
     write_text(tmp / "job.json", job.dump(2) + "\n");
     remove_quietly(final_dir);
     fs::rename(tmp, final_dir, ec);
@@ -361,29 +381,45 @@ RunReport run_job(const std::string& job_dir, const RunOptions& run) {
   if (fs::exists(job / "document.ini")) inis.push_back("document.ini");
   for (const auto& r : j.at("raw_renders")) inis.push_back(r.get<std::string>() + ".ini");
   // Renders are single-threaded POV-Ray processes run side by side: multi-threaded radiosity
-  // is not reproducible, one thread is. The document page comes first (the others read it);
-  // the longest renders (photo, shading) start first.
+  // is not reproducible, one thread is. The document page comes first; the renders that read it
+  // (photo, albedo: render_templates/paper.inc) wait for it while the others run beside it; the
+  // longest renders (photo, shading) start first.
   std::vector<std::size_t> order;
   for (std::size_t i = inis.size(); i-- > 0;) order.push_back(i);
-  if (!inis.empty() && inis[0] == "document.ini") std::rotate(order.begin(), order.end() - 1, order.end());
+  const bool has_document = !inis.empty() && inis[0] == "document.ini";
+  if (has_document) std::rotate(order.begin(), order.end() - 1, order.end());
+  const auto reads_document = [&](std::size_t i) {
+    for (const char* p : {"image", "albedo"})
+      if (inis[i].rfind(p, 0) == 0) return true;
+    return false;
+  };
   const int slots = std::max(1, run.parallel > 0 ? run.parallel : static_cast<int>(std::thread::hardware_concurrency()));
   RunReport report;
   report.seconds.resize(inis.size());
   struct Running { pid_t pid; std::size_t index; std::chrono::steady_clock::time_point t0; };
   std::vector<Running> running;
+  std::vector<bool> started(inis.size(), false);
   std::size_t next = 0;
   int done = 0;
+  bool document_done = !has_document;
   const auto name_of = [&](std::size_t i) { return fs::path(inis[i]).stem().string(); };
+  // The first render in `order` not started that may start now; inis.size() when none.
+  const auto pick = [&]() -> std::size_t {
+    for (std::size_t i : order)
+      if (!started[i] && (document_done || !reads_document(i))) return i;
+    return inis.size();
+  };
   // SIGKILL: POV-Ray may ignore SIGTERM while it renders.
   const auto kill_all = [&] { for (auto& r : running) { kill(r.pid, SIGKILL); waitpid(r.pid, nullptr, 0); } };
   try {
     while (next < order.size() || !running.empty()) {
-      const bool barrier = !running.empty() && inis[running.front().index] == "document.ini";
-      while (next < order.size() && static_cast<int>(running.size()) < slots && !barrier) {
-        const std::size_t i = order[next++];
+      while (next < order.size() && static_cast<int>(running.size()) < slots) {
+        const std::size_t i = pick();
+        if (i == inis.size()) break;
+        started[i] = true;
+        ++next;
         if (run.progress) run.progress({name_of(i), static_cast<int>(next), static_cast<int>(inis.size()), -1.0});
         running.push_back({start_povray(job, run.povray, inis[i]), i, std::chrono::steady_clock::now()});
-        if (inis[i] == "document.ini") break;
       }
       bool reaped = false;
       for (std::size_t k = 0; k < running.size(); ++k) {
@@ -394,6 +430,7 @@ RunReport run_job(const std::string& job_dir, const RunOptions& run) {
         check_povray(job, run.povray, inis[r.index], status);
         const double sec = std::chrono::duration<double>(std::chrono::steady_clock::now() - r.t0).count();
         report.seconds[r.index] = {name_of(r.index), sec};
+        if (inis[r.index] == "document.ini") document_done = true;
         ++done;
         if (run.progress) run.progress({name_of(r.index), done, static_cast<int>(inis.size()), sec});
         reaped = true;
@@ -462,6 +499,13 @@ void apply_syntheticdoc_layout(const fs::path& stage, json& meta) {
   files["metadata.json"] = "this file";
 }
 
+/// Path of a raw render in a job folder. @throw IoError when it is missing
+std::string raw_path(const fs::path& job, const std::string& render) {
+  const fs::path p = job / ("raw_" + render + ".png");
+  if (!fs::exists(p)) throw IoError("raw render '" + p.string() + "' missing: run the job first");
+  return p.string();
+}
+
 void finish_into(const fs::path& job, const fs::path& stage) {
   const json j = read_job(job);
   json meta = j.at("meta");
@@ -469,62 +513,106 @@ void finish_into(const fs::path& job, const fs::path& stage) {
   for (const auto& p : j.at("passes")) passes.push_back(p.get<std::string>());
   const auto has = [&](const std::string& p) { return std::find(passes.begin(), passes.end(), p) != passes.end(); };
   const bool fine = j.at("fine_passes").get<bool>();
-  const auto raw = [&](RawPass r) {
-    const fs::path p = job / raw_file(r);
-    if (!fs::exists(p)) throw IoError("raw render '" + p.string() + "' missing: run the job first");
-    return p.string();
+  const auto raw = [&](RawPass r) { return raw_path(job, raw_pass_name(r)); };
+  const int bands = j.value("lit_bands", 1);
+  const int height = j.at("height").get<int>();
+  // A lit render from its row bands: band b's rows are taken from its own file.
+  const auto lit = [&](RawPass r, ImageF (*reader)(const std::string&)) {
+    if (bands <= 1) return reader(raw_path(job, raw_render_name(r, {})));
+    ImageF out;
+    for (int b = 0; b < bands; ++b) {
+      const RowBand band{b, bands};
+      const ImageF part = reader(raw_path(job, raw_render_name(r, band)));
+      if (b == 0) out = ImageF(part.width, part.height, part.channels);
+      if (part.width != out.width || part.height != height || part.channels != out.channels)
+        throw IoError("raw render '" + raw_render_name(r, band) + "' does not match its other bands");
+      const std::size_t row = std::size_t(part.width) * part.channels;
+      std::copy(part.data.begin() + static_cast<long>(row * band.first_row(height)),
+                part.data.begin() + static_cast<long>(row * band.end_row(height)),
+                out.data.begin() + static_cast<long>(row * band.first_row(height)));
+    }
+    return out;
   };
+  const Camera camera = camera_from_json(meta.at("camera"));
+  meta["camera"]["vignetting"] = "cos^4 (natural, applied to the photo and the shading pass)";
   json files = json::object();
+  // Independent outputs are decoded and written side by side (each task writes its own files;
+  // meta.json is filled here), in two waves: the UV render first gives the mask the others use.
+  std::vector<std::future<void>> tasks;
+  const auto spawn = [&](std::function<void()> task) { tasks.push_back(std::async(std::launch::async, std::move(task))); };
+  const auto wait_all = [&] {
+    for (auto& t : tasks) t.wait();
+    for (auto& t : tasks) t.get();  // rethrows the first failure, once every task has ended
+    tasks.clear();
+  };
   ImageF uv, mask;
-  if (has("uv") || has("mask") || has("backward") || has("coords") || has("normal")) {
-    uv = decode_uv(raw(RawPass::uv), fine && has("uv") ? raw(RawPass::uv_fine) : "");
-    mask = channel(uv, 2);
+  if (has("uv") || has("mask") || has("backward") || has("coords") || has("normal"))
+    spawn([&] {
+      uv = decode_uv(raw(RawPass::uv), fine && has("uv") ? raw(RawPass::uv_fine) : "");
+      mask = channel(uv, 2);
+    });
+  if (has("albedo")) {
+    spawn([&] { write_png((stage / "albedo.png").string(), to_srgb(decode_linear(raw(RawPass::albedo))), 16); });
+    files["albedo.png"] = "16-bit sRGB document colour times paper colour, unlit, background 0";
   }
+  if (has("shading")) {
+    spawn([&] {
+      ImageF shading = lit(RawPass::shading, decode_linear);
+      apply_vignetting(shading, camera);
+      write_png((stage / "shading.png").string(), to_srgb(shading), 16);
+    });
+    files["shading.png"] = "16-bit sRGB photo lighting on white paper (relief kept), background 0";
+  }
+  if (has("image")) {
+    spawn([&] {
+      // The photo is rendered as 16-bit sRGB so that the camera's vignetting is applied before
+      // the one quantisation to 8 bits.
+      ImageF photo = lit(RawPass::image, read_png);
+      for (float& v : photo.data) v = static_cast<float>(srgb_to_linear(v));
+      apply_vignetting(photo, camera);
+      write_png((stage / "image.png").string(), to_srgb(photo), 8);
+    });
+    files["image.png"] = "8-bit sRGB photo";
+  }
+  wait_all();
   if (has("uv")) {
-    write_exr((stage / "uv.exr").string(), uv, {"R", "G", "B"});
+    spawn([&] { write_exr((stage / "uv.exr").string(), uv, {"R", "G", "B"}); });
     files["uv.exr"] = "float32 R = u, G = v (material x / width, y / height), B = mask";
   }
   if (has("mask")) {
-    write_png((stage / "mask.png").string(), mask, 8);
+    spawn([&] { write_png((stage / "mask.png").string(), mask, 8); });
     files["mask.png"] = "8-bit grey, 255 where the sheet is seen";
   }
   if (has("coords")) {
     const json& e = meta.at("encoding");
     const Eigen::Vector3d lo(e["coords_min"][0], e["coords_min"][1], e["coords_min"][2]);
-    const ImageF xyz = decode_coords(raw(RawPass::coords), fine ? raw(RawPass::coords_fine) : "",
-                                     lo, e.at("coords_span").get<double>(), mask);
-    write_exr((stage / "coords.exr").string(), xyz, {"R", "G", "B"});
+    const double span = e.at("coords_span").get<double>();
+    spawn([&, lo, span] {
+      const ImageF xyz = decode_coords(raw(RawPass::coords), fine ? raw(RawPass::coords_fine) : "", lo, span, mask);
+      write_exr((stage / "coords.exr").string(), xyz, {"R", "G", "B"});
+    });
     files["coords.exr"] = "float32 R, G, B = world x, y, z [m], 0 outside the sheet";
   }
   if (has("normal")) {
-    write_exr((stage / "normal.exr").string(), decode_normal(raw(RawPass::normal), mask), {"R", "G", "B"});
+    spawn([&] { write_exr((stage / "normal.exr").string(), decode_normal(raw(RawPass::normal), mask), {"R", "G", "B"}); });
     files["normal.exr"] = "float32 unit world normal turned towards the camera, 0 outside the sheet";
   }
-  if (has("albedo")) {
-    write_png((stage / "albedo.png").string(), to_srgb(decode_linear(raw(RawPass::albedo))), 16);
-    files["albedo.png"] = "16-bit sRGB document colour times paper colour, unlit, background 0";
-  }
-  if (has("shading")) {
-    write_png((stage / "shading.png").string(), to_srgb(decode_linear(raw(RawPass::shading))), 16);
-    files["shading.png"] = "16-bit sRGB photo lighting on white paper (relief kept), background 0";
-  }
-  if (has("image")) {
-    write_png((stage / "image.png").string(), read_png(raw(RawPass::image)), 8);
-    files["image.png"] = "8-bit sRGB photo";
-  }
   if (has("backward")) {
-    const SheetMesh mesh = read_sheet_obj((job / "sheet.obj").string());
     BackwardParams bp;
     bp.grid_width = j["backward"]["grid_width"];
     bp.grid_height = j["backward"]["grid_height"];
     bp.tolerance_pixels = j["backward"]["tolerance_pixels"];
-    const ImageF map = backward_map(mesh, camera_from_json(meta.at("camera")), uv, bp);
-    write_exr((stage / "backward.exr").string(), map, {"R", "G", "B"});
-    write_npy((stage / "backward.npy").string(), map);
+    spawn([&, bp] {
+      const SheetMesh mesh = read_sheet_obj((job / "sheet.obj").string());
+      const ImageF map = backward_map(mesh, camera, uv, bp);
+      write_exr((stage / "backward.exr").string(), map, {"R", "G", "B"});
+      write_npy((stage / "backward.npy").string(), map);
+    });
     files["backward.exr"] = "float32 grid over the flat page (row 0 = top): R, G = pixel x, y, B = visible";
     files["backward.npy"] = "float32 (grid_height, grid_width, 3): pixel x, y, visible";
     meta["backward"] = j["backward"];
   }
+  wait_all();
   const std::string doc = j.at("document_file").get<std::string>();
   if (fs::exists(job / doc)) {
     // Re-encoded: POV-Ray's PNG carries a creation time, which would break reproducibility.

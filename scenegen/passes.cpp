@@ -40,8 +40,6 @@ std::string raw_pass_name(RawPass p) {
   return "?";
 }
 
-std::string raw_file(RawPass p) { return "raw_" + raw_pass_name(p) + ".png"; }
-
 std::vector<Pass> parse_passes(const std::string& list) {
   if (list == "all") return all_passes();
   std::vector<Pass> out;

@@ -14,8 +14,6 @@ enum class RawPass { image = 1, shading = 2, albedo = 3, uv = 4, uv_fine = 5, co
 
 std::string pass_name(Pass p);
 std::string raw_pass_name(RawPass p);
-/// Raw file name in the job folder (POV-Ray may only write to its working directory).
-std::string raw_file(RawPass p);
 /// All passes in output order.
 std::vector<Pass> all_passes();
 /// Parse "image,uv,..." (or "all"). @throw InputError naming an unknown pass.

@@ -111,10 +111,15 @@ void write_paper(std::ostream& out, const SceneDescription& s) {
 QualitySettings quality_settings(Quality q) {
   QualitySettings s;
   if (q == Quality::final) {
+    // Chosen on scenegen_quality_study's front (docs/scenegen.md, "Render time against image
+    // error"): the photo's error is mostly antialiasing, so a second antialiasing level where
+    // neighbours differ by more than 0.9 buys more than 3 x 3 area-light samples cost.
     s.radiosity = true;
-    s.area_samples = 3;
+    s.area_samples = 2;
     s.area_adaptive = 1;
     s.antialias = true;
+    s.antialias_threshold = 0.9;
+    s.antialias_depth = 2;
     s.ambient = 0.0;
   } else {
     s.area_samples = 2;
@@ -185,17 +190,26 @@ void write_scene_inc(std::ostream& out, const SceneDescription& s) {
   write_paper(out, s);
 }
 
+std::string raw_render_name(RawPass pass, RowBand band) {
+  return band.count <= 1 ? raw_pass_name(pass) : raw_pass_name(pass) + "_b" + std::to_string(band.index);
+}
+
 void write_pass_ini(std::ostream& out, RawPass pass, int width, int height,
-                    const QualitySettings& quality, int threads) {
+                    const QualitySettings& quality, int threads, RowBand band) {
   const bool photo = pass == RawPass::image;
-  out << "; papersim scenegen: " << raw_pass_name(pass) << " pass\n"
-      << "Input_File_Name=main.pov\n"
-      << "Output_File_Name=" << raw_file(pass) << "\n"
+  const std::string name = raw_render_name(pass, band);
+  out << "; papersim scenegen: " << raw_pass_name(pass) << " pass";
+  if (band.count > 1) out << ", rows band " << band.index + 1 << " of " << band.count;
+  out << "\nInput_File_Name=main.pov\n"
+      << "Output_File_Name=raw_" << name << ".png\n"
       << "Output_File_Type=N\n"
-      << "Width=" << width << "\nHeight=" << height << "\n"
-      << "Declare=SG_PASS=" << static_cast<int>(pass) << "\n"
-      // Ground truth: linear 16-bit. Photo: 8-bit sRGB.
-      << "Bits_Per_Color=" << (photo ? 8 : 16) << "\n"
+      << "Width=" << width << "\nHeight=" << height << "\n";
+  // POV-Ray rows are 1-based and inclusive; rows outside the band are written black.
+  if (band.count > 1)
+    out << "Start_Row=" << band.first_row(height) + 1 << "\nEnd_Row=" << band.end_row(height) << "\n";
+  out << "Declare=SG_PASS=" << static_cast<int>(pass) << "\n"
+      // Ground truth: linear 16-bit. Photo: 16-bit sRGB (quantised to 8 bits after vignetting).
+      << "Bits_Per_Color=16\n"
       << "File_Gamma=" << (photo ? "sRGB" : "1.0") << "\n"
       << "Output_Alpha=Off\n"
       << "Jitter=Off\n";

@@ -28,6 +28,10 @@ struct QualitySettings {
   double antialias_threshold = 0.1;
   int antialias_depth = 1;        ///< 1: corner samples shared by neighbouring pixels (cheap)
   double ambient = 0.12;           ///< ambient fill when radiosity is off
+  /// Row bands of each lit render (photo, shading): one POV-Ray process per band, so one
+  /// single-threaded (reproducible) render uses several cores. Radiosity is sampled per band
+  /// (the pretrace covers the band's rows), so the count is part of the sample.
+  int bands = 2;
 };
 /// Settings used for a quality level.
 QualitySettings quality_settings(Quality q);
@@ -68,10 +72,22 @@ void write_shadow_inc(std::ostream& out, const SheetMesh& mesh, const Eigen::Mat
 /// scene.inc: every per-sample declaration used by render_templates/main.pov.
 void write_scene_inc(std::ostream& out, const SceneDescription& scene);
 
-/// One pass's .ini: size, output file, antialiasing, gamma, bit depth, threads.
+/// Rows of a render: band `index` of `count` covers rows [index * H / count,
+/// (index + 1) * H / count) (integer division); count 1 is the whole image.
+struct RowBand {
+  int index = 0;
+  int count = 1;
+  int first_row(int height) const { return static_cast<int>(static_cast<long>(index) * height / count); }
+  int end_row(int height) const { return static_cast<int>(static_cast<long>(index + 1) * height / count); }
+};
+/// Name of a render in the job folder: "image" for a whole image, "image_b0", ... for bands.
+/// Its .ini is NAME.ini, its output raw_NAME.png.
+std::string raw_render_name(RawPass pass, RowBand band);
+
+/// One render's .ini: size, rows, output file, antialiasing, gamma, bit depth, threads.
 /// @param threads  POV-Ray worker threads (0: POV-Ray's default)
 void write_pass_ini(std::ostream& out, RawPass pass, int width, int height,
-                    const QualitySettings& quality, int threads);
+                    const QualitySettings& quality, int threads, RowBand band = {});
 
 /// The built-in document's .ini (antialiased, 8-bit sRGB PNG).
 void write_document_ini(std::ostream& out, int width_px, int height_px, int threads);

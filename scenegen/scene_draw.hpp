@@ -28,7 +28,7 @@ struct LightingDraw {
   double rotation_deg = 0.0;     ///< rig rotated about the stage normal, U[0, 360)
   std::string temperature;       ///< warm | cool | neutral
   Eigen::Vector3d colour = Eigen::Vector3d::Ones();  ///< linear RGB of every light
-  double exposure = 1.0;         ///< irradiance at the sheet centre, U[1.0, 1.3]
+  double exposure = 1.0;         ///< direct irradiance at the sheet centre, U[0.6, 0.85]
   double sky = 0.3;              ///< environment (background colour) brightness for radiosity
   std::vector<Light> lights;
 };

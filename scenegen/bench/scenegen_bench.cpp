@@ -1,17 +1,33 @@
-// scenegen_bench: render cost at full resolution (default 1024 x 1440) on this machine, plus
-// the exactness and backward-map figures on the full-resolution sample with the built-in page.
-//   scenegen_bench [--size WxH] [--seed N] [--mesh cylinder|fold|bump|flat] [--keep DIR]
-// 1. each pass timed alone (one POV-Ray process with all threads, draft and final photo);
-// 2. a whole final-quality sample as `scenegen render` runs it (one single-threaded POV-Ray
-//    process per core, reproducible), wall time.
+// scenegen_bench: cost of a whole sample at full resolution (default 1024 x 1440) against a
+// baseline scenegen executable (an older build), in the same run, interleaved, and the error
+// of each one's photo against a converged reference.
+//   scenegen_bench --baseline EXE [--scenegen EXE] [--runs N] [--size WxH] [--seed N]
+//                  [--mesh fold|cylinder|bump|flat] [--no-reference] [--keep DIR]
+// For each mode (final: every pass; draft: every pass at draft quality; ground truth: every
+// pass but the photo and the shading) and round, `scenegen render` runs as a child process for
+// the baseline and for this build on the refined surface (--subdivision 2) and on the raw mesh
+// (--subdivision 0), one after the other (interleaved, so the load of a shared machine falls
+// on all of them alike). Reported per configuration: median wall time and median CPU time of
+// scenegen and its POV-Ray children (wait4), their ratios to the baseline, whether the runs of
+// this build gave identical files, and PSNR / SSIM of the final photo against a converged
+// reference of the same surface, rendered with this program's library (so --scenegen must be
+// the same build, as the default is; the baseline's figure then also measures every change of
+// the scene since it, e.g. exposure). Then the exactness figures of this build's sample.
+#include <fcntl.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <string>
-#include <thread>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -23,14 +39,66 @@
 #include "scenegen/meta.hpp"
 #include "scenegen/random.hpp"
 #include "scenegen/smooth_surface.hpp"
+#include "image_error.hpp"
 
 namespace fs = std::filesystem;
 namespace sg = papersim::scenegen;
 
 namespace {
 
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+struct Timing {
+  double wall = 0, cpu = 0;  ///< [s]
+};
+
+/// Run a command (argv) to completion; wall time and CPU time (user + system) of it and its
+/// waited-for descendants. @throw std::runtime_error when it fails
+Timing run_command(const std::vector<std::string>& argv) {
+  std::vector<char*> args;
+  for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
+  args.push_back(nullptr);
+  const auto t0 = std::chrono::steady_clock::now();
+  const pid_t pid = fork();
+  if (pid < 0) throw std::runtime_error("fork failed");
+  if (pid == 0) {
+    const int null = open("/dev/null", O_WRONLY);
+    if (null >= 0) dup2(null, 1);
+    execv(args[0], args.data());
+    _exit(127);
+  }
+  int status = 0;
+  rusage ru{};
+  if (wait4(pid, &status, 0, &ru) != pid || !WIFEXITED(status) || WEXITSTATUS(status) != 0)
+    throw std::runtime_error("'" + argv[0] + " " + argv[1] + "' failed (status " + std::to_string(status) + ")");
+  Timing t;
+  t.wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  t.cpu = ru.ru_utime.tv_sec + ru.ru_stime.tv_sec + 1e-6 * (ru.ru_utime.tv_usec + ru.ru_stime.tv_usec);
+  return t;
+}
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  const std::size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+struct Config {
+  std::string name, exe;
+  int level = -1;  ///< --subdivision; -1: not passed (the baseline has no such option)
+};
+
+struct Mode {
+  std::string name, quality, passes;
+};
+
+/// Every file of a sample folder and its bytes.
+std::map<std::string, std::string> sample_bytes(const fs::path& dir) {
+  std::map<std::string, std::string> out;
+  for (const auto& e : fs::directory_iterator(dir)) {
+    if (!e.is_regular_file()) continue;
+    std::ifstream in(e.path(), std::ios::binary);
+    out[e.path().filename().string()] = std::string(std::istreambuf_iterator<char>(in), {});
+  }
+  return out;
 }
 
 void exactness(const fs::path& dir, const std::string& mesh_path) {
@@ -94,63 +162,129 @@ void exactness(const fs::path& dir, const std::string& mesh_path) {
               back.width, back.height, visible, 10 * std::log10(1.0 / (se / n)));
 }
 
+struct Args {
+  int width = 1024, height = 1440, runs = 5;
+  std::uint64_t seed = 1;
+  std::string kind = "fold", keep, baseline, scenegen;
+  bool reference = true;
+};
+
+Args parse(int argc, char** argv) {
+  Args a;
+  a.scenegen = (fs::absolute(fs::path(argv[0])).parent_path() / "scenegen").string();
+  for (int i = 1; i < argc; ++i) {
+    const std::string k = argv[i];
+    if (k == "--no-reference") { a.reference = false; continue; }
+    if (i + 1 >= argc) throw std::runtime_error("option '" + k + "' needs a value");
+    const char* v = argv[++i];
+    if (k == "--size") { if (std::sscanf(v, "%dx%d", &a.width, &a.height) != 2) throw std::runtime_error("bad --size '" + std::string(v) + "'"); }
+    else if (k == "--seed") a.seed = std::stoull(v);
+    else if (k == "--runs") a.runs = std::stoi(v);
+    else if (k == "--mesh") a.kind = v;
+    else if (k == "--keep") a.keep = v;
+    else if (k == "--baseline") a.baseline = fs::absolute(v).string();
+    else if (k == "--scenegen") a.scenegen = fs::absolute(v).string();
+    else throw std::runtime_error("unknown option '" + k + "'");
+  }
+  if (a.baseline.empty()) throw std::runtime_error("--baseline EXE is required (a scenegen built from the baseline commit)");
+  if (a.runs < 1) throw std::runtime_error("--runs must be at least 1");
+  return a;
+}
+
+/// The converged reference photo of a surface level (bench_reference_quality), rendered once.
+sg::ImageF reference_photo(const Args& a, const std::string& mesh, int level, const fs::path& dir) {
+  sg::SampleOptions o;
+  o.mesh_path = mesh;
+  o.seed = a.seed;
+  o.width = a.width;
+  o.height = a.height;
+  o.passes = {sg::Pass::image};
+  o.surface.level = level;
+  o.quality_override = sg::bench::reference_quality();
+  o.threads = 0;  // all threads: the reference need not be reproducible
+  sg::RunOptions run;
+  run.parallel = 1;
+  const auto t0 = std::chrono::steady_clock::now();
+  sg::render_sample(o, (dir / ("reference_L" + std::to_string(level))).string(), run);
+  std::printf("  reference photo, level %d: %.1f s wall\n", level,
+              std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  std::fflush(stdout);
+  return sg::read_png((dir / ("reference_L" + std::to_string(level)) / "image.png").string());
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  int width = 1024, height = 1440;
-  std::uint64_t seed = 1;
-  std::string kind = "cylinder", keep;
-  for (int i = 1; i + 1 < argc; i += 2) {
-    if (!std::strcmp(argv[i], "--size")) std::sscanf(argv[i + 1], "%dx%d", &width, &height);
-    else if (!std::strcmp(argv[i], "--seed")) seed = std::stoull(argv[i + 1]);
-    else if (!std::strcmp(argv[i], "--mesh")) kind = argv[i + 1];
-    else if (!std::strcmp(argv[i], "--keep")) keep = argv[i + 1];
-  }
   try {
-    const fs::path dir = fs::temp_directory_path() / ("scenegen_bench_" + std::to_string(seed));
+    const Args a = parse(argc, argv);
+    const fs::path dir = fs::temp_directory_path() / ("scenegen_bench_" + std::to_string(getpid()));
     fs::remove_all(dir);
     fs::create_directories(dir);
     const std::string mesh = (dir / "sheet.obj").string();
-    { std::ofstream out(mesh); sg::write_sheet_obj(out, sg::make_example_sheet(kind)); }
-    std::printf("scenegen_bench: %s sheet, %dx%d, seed %llu, %u cores\n", kind.c_str(), width, height,
-                static_cast<unsigned long long>(seed), std::thread::hardware_concurrency());
-    sg::SampleOptions o;
-    o.mesh_path = mesh;
-    o.seed = seed;
-    o.width = width;
-    o.height = height;
-    // 1. Each pass alone, one POV-Ray process with all threads.
-    sg::RunOptions one;
-    one.parallel = 1;
-    for (sg::Quality q : {sg::Quality::draft, sg::Quality::final}) {
-      o.quality = q;
-      o.threads = 0;
-      o.passes = q == sg::Quality::draft ? sg::all_passes() : std::vector<sg::Pass>{sg::Pass::image, sg::Pass::shading};
-      const fs::path job = dir / ("job_" + sg::quality_name(q));
-      sg::prepare_job(o, job.string());
-      const auto report = sg::run_job(job.string(), one);
-      double exact = 0;
-      for (const auto& [name, sec] : report.seconds) {
-        const bool gt = name != "image" && name != "shading" && name != "document";
-        if (gt) exact += sec;
-        std::printf("  %-6s %-12s %6.2f s%s\n", sg::quality_name(q).c_str(), name.c_str(), sec,
-                    gt ? "  (ground truth)" : "");
+    { std::ofstream out(mesh); sg::write_sheet_obj(out, sg::make_example_sheet(a.kind)); }
+    std::printf("scenegen_bench: %s sheet, %dx%d, seed %llu, %d runs per configuration\n  baseline %s\n  new      %s\n",
+                a.kind.c_str(), a.width, a.height, static_cast<unsigned long long>(a.seed), a.runs,
+                a.baseline.c_str(), a.scenegen.c_str());
+    const std::vector<Config> configs = {{"baseline", a.baseline, -1}, {"new, level 2", a.scenegen, 2},
+                                         {"new, level 0", a.scenegen, 0}};
+    const std::vector<Mode> modes = {{"final", "final", "all"}, {"draft", "draft", "all"},
+                                     {"ground truth", "final", "albedo,uv,coords,normal,mask,backward"}};
+    const std::string size = std::to_string(a.width) + "x" + std::to_string(a.height);
+    std::map<std::string, sg::ImageF> photos;  // first final photo of each configuration
+    for (const Mode& m : modes) {
+      std::vector<std::vector<Timing>> t(configs.size());
+      std::vector<bool> identical(configs.size(), true);
+      std::vector<std::map<std::string, std::string>> first(configs.size());
+      for (int r = 0; r < a.runs; ++r)
+        for (std::size_t c = 0; c < configs.size(); ++c) {
+          const fs::path out = dir / ("run_" + std::to_string(c));
+          fs::remove_all(out);
+          std::vector<std::string> cmd = {configs[c].exe, "render", mesh, "--out", out.string(), "--seed",
+                                          std::to_string(a.seed), "--size", size, "--quality", m.quality,
+                                          "--passes", m.passes, "--quiet"};
+          if (configs[c].level >= 0) { cmd.push_back("--subdivision"); cmd.push_back(std::to_string(configs[c].level)); }
+          t[c].push_back(run_command(cmd));
+          std::printf("  %-12s %-13s run %d: %6.2f s wall, %6.2f CPU-s\n", m.name.c_str(), configs[c].name.c_str(),
+                      r + 1, t[c].back().wall, t[c].back().cpu);
+          std::fflush(stdout);
+          auto bytes = sample_bytes(out);
+          if (r == 0) {
+            first[c] = std::move(bytes);
+            if (m.name == "final") photos[configs[c].name] = sg::read_png((out / "image.png").string());
+            if (m.name == "final" && c == 1) {
+              exactness(out, mesh);
+              if (!a.keep.empty()) { fs::remove_all(a.keep); fs::copy(out, a.keep, fs::copy_options::recursive); }
+            }
+          } else if (bytes != first[c]) {
+            identical[c] = false;
+          }
+        }
+      std::vector<double> w0, c0;
+      for (const Timing& x : t[0]) { w0.push_back(x.wall); c0.push_back(x.cpu); }
+      std::printf("%s sample, median of %d runs:\n", m.name.c_str(), a.runs);
+      for (std::size_t c = 0; c < configs.size(); ++c) {
+        std::vector<double> w, cpu;
+        for (const Timing& x : t[c]) { w.push_back(x.wall); cpu.push_back(x.cpu); }
+        std::printf("  %-13s wall %6.2f s (%.2fx baseline)  CPU %6.2f s (%.2fx)  runs identical: %s\n",
+                    configs[c].name.c_str(), median(w), median(w) / median(w0), median(cpu),
+                    median(cpu) / median(c0), a.runs > 1 ? (identical[c] ? "yes" : "NO") : "n/a");
       }
-      if (q == sg::Quality::draft) std::printf("  all ground-truth renders together: %.2f s\n", exact);
+      std::fflush(stdout);
     }
-    // 2. A whole final sample as `scenegen render` runs it.
-    o.quality = sg::Quality::final;
-    o.threads = 1;
-    o.passes = sg::all_passes();
-    const auto t0 = std::chrono::steady_clock::now();
-    const auto report = sg::render_sample(o, (dir / "sample").string(), sg::RunOptions{});
-    const double wall = seconds_since(t0);
-    std::printf("whole final sample (render = prepare + POV-Ray + finish), wall: %.2f s\n", wall);
-    for (const auto& [name, sec] : report.seconds) std::printf("    %-12s %6.2f s (1 thread)\n", name.c_str(), sec);
-    exactness(dir / "sample", mesh);
-    if (!keep.empty()) {
-      fs::remove_all(keep);
-      fs::rename(dir / "sample", keep);
+    if (a.reference) {
+      // The reference is rendered by this program's own library (the same build as the default
+      // --scenegen): the baseline's figure also holds every change of the scene since it
+      // (draws, exposure, vignetting), not only its render settings.
+      std::printf("final photo against a converged reference of the same surface (%s), rendered by this build:\n",
+                  sg::bench::describe(sg::bench::reference_quality()).c_str());
+      const sg::ImageF ref2 = reference_photo(a, mesh, 2, dir), ref0 = reference_photo(a, mesh, 0, dir);
+      for (const Config& c : configs)
+        for (int level : {2, 0}) {
+          if (c.level >= 0 && c.level != level) continue;
+          const sg::ImageF& ref = level == 2 ? ref2 : ref0;
+          std::printf("  %-13s vs reference level %d: PSNR %.2f dB, SSIM %.4f\n", c.name.c_str(), level,
+                      sg::bench::psnr(photos[c.name], ref), sg::bench::ssim(photos[c.name], ref));
+        }
     }
     fs::remove_all(dir);
   } catch (const std::exception& e) {

@@ -1,13 +1,15 @@
 # Plot of scenegen_quality_study's CSV: photo render time against PSNR to the converged
-# reference, today's final preset marked.
+# reference; the final preset of 180441f circled red, the new final preset circled green.
 #   gnuplot -e "csv='docs/data/scenegen_quality.csv'; out='docs/images/scenegen_quality.png'" scenegen/bench/scenegen_quality_plot.gp
 set datafile separator ","
 set terminal pngcairo size 900,600
 set output out
-set xlabel "photo render time [s] (one single-threaded POV-Ray process)"
+set xlabel "photo render time [s] (single-threaded POV-Ray, wall, summed over row bands)"
 set ylabel "PSNR to the converged reference [dB]"
 set grid
 set key off
+set xrange [0:60]
 plot csv every ::1 using 2:($3 < 1000 ? $3 : 1/0) with points pt 7 ps 1.5 lc rgb "#1f77b4", \
      csv every ::1 using 2:($3 < 1000 ? $3 : 1/0):1 with labels offset 0,1 font ",9", \
-     csv every ::1 using 2:(strcol(1) eq "final (today)" ? $3 : 1/0) with points pt 6 ps 3 lw 2 lc rgb "red"
+     csv every ::1 using 2:(strcol(1) eq "final (180441f)" ? $3 : 1/0) with points pt 6 ps 3 lw 2 lc rgb "red", \
+     csv every ::1 using 2:(strcol(1) eq "final (new)" ? $3 : 1/0) with points pt 6 ps 3 lw 2 lc rgb "#2ca02c"

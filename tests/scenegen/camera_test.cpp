@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "scenegen/camera.hpp"
+#include "scenegen/decode.hpp"
 #include "scenegen/example_sheets.hpp"
 #include "scenegen/resting_pose.hpp"
 
@@ -64,6 +65,27 @@ TEST(Camera, RaisedFlapHidesPartOfTheSheetFromSomeDirections) {
   int occluding = 0;
   for (const auto& k : c.candidates) occluding += k.occluded_points > 0;
   EXPECT_GT(occluding, 0);
+}
+
+TEST(Camera, VignettingIsTheFourthPowerOfTheCosineToTheAxis) {
+  // Against the angle of each pixel's ray to the optical axis, computed from the ray itself.
+  Camera cam;
+  cam.width = 64;
+  cam.height = 90;
+  cam.focal_px = 80.0;
+  cam.forward = Eigen::Vector3d(0, 0, -1);
+  cam.right = Eigen::Vector3d(1, 0, 0);
+  cam.up = Eigen::Vector3d(0, 1, 0);
+  ImageF img(cam.width, cam.height, 3);
+  std::fill(img.data.begin(), img.data.end(), 0.5f);
+  apply_vignetting(img, cam);
+  for (int y = 0; y < cam.height; y += 7)
+    for (int x = 0; x < cam.width; x += 5) {
+      const Eigen::Vector3d ray = cam.ray(x + 0.5, y + 0.5).normalized();
+      const double c = ray.dot(cam.forward);
+      EXPECT_NEAR(img.at(x, y, 1), 0.5 * c * c * c * c, 1e-6) << x << " " << y;
+    }
+  EXPECT_LT(img.at(0, 0, 0), 0.5f * 0.7f);  // corner of a wide lens: 0.47 of the centre
 }
 
 }  // namespace

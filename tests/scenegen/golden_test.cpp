@@ -70,6 +70,7 @@ TEST(Golden, PassInis) {
   std::ostringstream out;
   write_pass_ini(out, RawPass::uv, 1024, 1440, quality_settings(Quality::final), 2);
   write_pass_ini(out, RawPass::image, 1024, 1440, quality_settings(Quality::final), 0);
+  write_pass_ini(out, RawPass::image, 1024, 1440, quality_settings(Quality::final), 1, RowBand{1, 3});
   write_pass_ini(out, RawPass::shading, 1024, 1440, quality_settings(Quality::draft), 0);
   write_document_ini(out, 1240, 1754, 0);
   expect_golden("passes.ini", out.str());
