@@ -66,8 +66,14 @@ class MorleyBendingEnergy : public BendingEnergy {
   /// their plastic curvature).
   Eigen::MatrixX3d face_curvatures(const Eigen::VectorXd& x) const override;
 
-  /// Replace the plastic state (#F by 3 curvature [1/m], #F damage).
+  /// Replace the plastic state (#F by 3 curvature [1/m], #F damage). A change of plastic
+  /// curvature alone updates the right-hand side of the slope system; a change of damage (so of
+  /// stiffness) re-factors it numerically, reusing the symbolic analysis.
+  /// @throw NumericError when the slope system cannot be factored
   void set_plastic_state(const Eigen::MatrixX3d& plastic_curvature, const Eigen::VectorXd& damage) override;
+
+  /// Numeric factorisations of the slope system so far (one at construction) [-].
+  long factorizations() const { return m_factorizations; }
 
  private:
   /// A quadratic element: r = L (theta_ids, psi_ids) - c, energy r^T W r / 2.
@@ -101,8 +107,10 @@ class MorleyBendingEnergy : public BendingEnergy {
   /// Renumbers the slopes so that each 3x3 block holds slopes of one face where possible.
   void pack_slopes();
   void build_elements();
-  /// Element weights and offsets from the faces' stiffness and plastic curvature; factors C.
-  void refresh();
+  /// Element weights from the faces' stiffness; assembles and factors C, A_psi_theta.
+  void update_weights();
+  /// Element offsets from the plastic curvature and the right-hand side b_psi.
+  void update_offsets();
   /// theta and psi*(theta) at x.
   void unknowns(const Eigen::VectorXd& x, Eigen::VectorXd& theta, Eigen::VectorXd& psi) const;
   Eigen::VectorXd element_residual(const Element& e, const Eigen::VectorXd& theta,
@@ -120,6 +128,7 @@ class MorleyBendingEnergy : public BendingEnergy {
   std::unique_ptr<Factor> m_C;
   int m_num_psi = 0;
   int m_first_block = -1;
+  long m_factorizations = 0;
 };
 
 }  // namespace papersim::simulation
