@@ -8,6 +8,10 @@
 
 namespace papersim::simulation {
 
+namespace {
+constexpr double YIELD_SLACK = 1e-9;  // [-] relative
+}  // namespace
+
 double curvature_norm(const Eigen::Vector3d& k) {
   // The off-diagonal entry k_xy appears twice in the 2x2 tensor.
   return std::sqrt(k[0] * k[0] + k[1] * k[1] + 2 * k[2] * k[2]);
@@ -27,7 +31,9 @@ PlasticUpdate return_mapping(const Eigen::MatrixX3d& curvature, double yield_cur
     const double norm = curvature_norm(elastic);
     if (!std::isfinite(norm))
       throw NumericError("plasticity: the curvature of face " + std::to_string(f) + " is not finite");
-    if (norm <= yield_curvature) continue;
+    // A face left on the yield surface by the last update measures k_y up to rounding; the
+    // relative slack keeps it from yielding again by 1e-16 (and re-factoring Morley's slopes).
+    if (norm <= yield_curvature * (1 + YIELD_SLACK)) continue;
     const Eigen::Vector3d increment = (1 - yield_curvature / norm) * elastic;
     const double size = curvature_norm(increment);
     plastic_curvature.row(f) += increment.transpose();
@@ -47,7 +53,7 @@ PlasticUpdate apply_plasticity(BendingEnergy& bending, const Eigen::VectorXd& x,
                                remesh::SheetMesh& mesh) {
   Eigen::MatrixX3d plastic = mesh.plastic_curvature();
   Eigen::VectorXd damage = mesh.damage();
-  const PlasticUpdate u = return_mapping(bending.face_curvatures(x), yield_curvature, plastic, damage);
+  const PlasticUpdate u = return_mapping(bending.yield_curvatures(x), yield_curvature, plastic, damage);
   if (u.yielded_faces == 0) return u;
   bending.set_plastic_state(plastic, damage);
   mesh.set_plastic_curvature(plastic);

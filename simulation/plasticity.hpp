@@ -2,13 +2,14 @@
 /// Bending plasticity and damage (Narain, Pfaff, O'Brien 2013, "Folding and crumpling adaptive
 /// sheets", section 4): a return mapping applied per face after every accepted time step.
 ///
-/// Per face f, with K_f the face's curvature tensor as the bending model measures it and Kp_f
+/// Per face f, with K_f the face's curvature tensor (BendingEnergy::yield_curvatures: a measure
+/// of the shape alone, under Morley the least-squares fit of the hinge angles) and Kp_f
 /// its plastic curvature (both 2x2 symmetric in material coordinates, Voigt (k_xx, k_yy, k_xy)
 /// [1/m]), the elastic curvature is Ke_f = K_f - Kp_f. Its norm is the Frobenius norm of the
 /// tensor, |Ke| = sqrt(k_xx^2 + k_yy^2 + 2 k_xy^2) [1/m]. Where |Ke| > k_y (the yield
 /// curvature), perfect plasticity moves the plastic curvature by the excess along Ke:
 ///   dKp = (1 - k_y / |Ke|) Ke,   so that afterwards |K - Kp| = k_y exactly;
-/// below yield nothing changes. Damage (dimensionless) accumulates the plastic curvature
+/// below yield (|Ke| <= k_y (1 + 1e-9), the slack absorbing rounding) nothing changes. Damage (dimensionless) accumulates the plastic curvature
 /// increment measured in yield curvatures:
 ///   damage += |dKp| / k_y,
 /// and the bending energies divide the face's stiffness by (1 + weakening damage).
@@ -45,7 +46,7 @@ PlasticUpdate return_mapping(const Eigen::MatrixX3d& curvature, double yield_cur
 /// Morley bending model.
 bool plasticity_enabled(const Material& material);
 
-/// One plastic update of a sheet: measures the face curvatures of `bending` at the world
+/// One plastic update of a sheet: measures the yield curvatures of `bending` at the world
 /// positions x (3N) [m], applies the return mapping to the plastic state of `mesh`, and hands
 /// the new state to `bending` when a face yielded (the state is left untouched otherwise).
 /// @throw NumericError as return_mapping, or when `bending` cannot take the new state

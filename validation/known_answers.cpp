@@ -7,6 +7,8 @@
 //      angle defect, over mesh patterns and axis angles;
 //   4. numerical damping of backward Euler on the first bending mode of a clamped strip;
 //   5. Coulomb friction on an incline with tan = 0.5: mu = 0.49 slides, mu = 0.51 sticks.
+//   6. plasticity (issue 16): a strip bent by handles below the yield curvature and released
+//      returns flat; bent above it, it keeps the return mapping's moment-free curvature.
 // Prints one row per case (expected, measured, relative error, tolerance, verdict), optionally
 // writes the same rows as CSV, and exits with status 1 when a case fails.
 #include <CLI/CLI.hpp>
@@ -720,6 +722,137 @@ void run_friction(Report& report, bool) {
                std::abs(stick.travel), true);
 }
 
+// ---------------------------------------------------------------------------------------------
+// 6. Plasticity: a strip bent by handles and released (return mapping of simulation/plasticity).
+
+/// Curvature of the circular arc through the strip's ends and its middle [1/m]: the mean world
+/// positions of the vertices at material x = 0, L / 2 and L give the chord c and the sagitta s,
+/// and k = 2 s / (c^2 / 4 + s^2) (exact for an arc of any angle below 2 pi; 0 when flat).
+double arc_curvature(const rm::SheetMesh& mesh, const Eigen::VectorXd& x, double length) {
+  const Eigen::MatrixX2d X = mesh.material_coords();
+  auto mean_at = [&](double mx) {
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    int n = 0;
+    for (int v = 0; v < X.rows(); ++v)
+      if (std::abs(X(v, 0) - mx) < 1e-9) sum += x.segment<3>(3 * v), ++n;
+    if (n == 0) throw std::runtime_error("plasticity: no vertex column at material x = " + std::to_string(mx));
+    return Eigen::Vector3d(sum / n);
+  };
+  const Eigen::Vector3d a = mean_at(0), m = mean_at(0.5 * length), b = mean_at(length);
+  const double c = (b - a).norm();
+  const double sag = (m - a).cross(b - a).norm() / c;
+  return 2 * sag / (0.25 * c * c + sag * sag);
+}
+
+/// Handles on every vertex of a flat strip (material x along its length, centred at the origin)
+/// that wrap it onto a cylinder about y whose curvature grows linearly to k over [0, t_bend],
+/// held until t_release, then released.
+std::vector<ps::HandleSpec> bending_handles(const rm::SheetMesh& mesh, double length, double k, double t_bend,
+                                            double t_release) {
+  constexpr int KEYFRAMES = 20;
+  std::vector<ps::HandleSpec> handles;
+  const Eigen::MatrixX2d X = mesh.material_coords();
+  for (int v = 0; v < X.rows(); ++v) {
+    ps::HandleSpec h;
+    h.material_point = X.row(v).transpose();
+    h.release_time = t_release;
+    h.stiffness = 1e4;  // [N/m] stiff against the strip's bending forces (~1e-3 N per vertex)
+    const double s = X(v, 0) - 0.5 * length;
+    for (int j = 0; j <= KEYFRAMES; ++j) {
+      const double kj = k * j / KEYFRAMES;
+      ps::HandleKeyframe f;
+      f.time = t_bend * j / KEYFRAMES;
+      f.displacement = kj > 0 ? Eigen::Vector3d(std::sin(kj * s) / kj - s, 0, (1 - std::cos(kj * s)) / kj)
+                              : Eigen::Vector3d::Zero();
+      h.keyframes.push_back(f);
+    }
+    handles.push_back(h);
+  }
+  return handles;
+}
+
+struct PlasticBendResult {
+  double held = 0;      ///< fitted curvature just before the release [1/m]
+  double residual = 0;  ///< fitted curvature at rest after the release [1/m]
+  double model_residual = 0;  ///< mean k_xx of the bending model's faces at the end [1/m]
+  double max_damage = 0;
+  double max_speed = 0;  ///< at the end [m/s]
+  double seconds = 0;
+};
+
+/// A 4 x 1 cm strip (2 mm edges) of paper with yield curvature ky bent by handles to k, held,
+/// released and relaxed with mass damping and no gravity.
+PlasticBendResult bend_and_release(double k, double ky, bool quick) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const double length = 0.04, width = 0.01;
+  const double t_bend = 0.2, t_release = 0.4;
+  ps::Scene scene;
+  scene.sheet.width = length;
+  scene.sheet.height = width;
+  scene.sheet.edge_length = quick ? 4e-3 : 2e-3;
+  scene.sheet.position = Eigen::Vector3d::Zero();
+  scene.sheet.material.yield_curvature = ky;
+  scene.sheet.material.weakening = 1.0;
+  scene.sheet.material.damping = 20.0;  // [1/s] to rest within the relaxation
+  scene.sheet.material.bending_model = ps::BendingModel::morley;
+  scene.gravity = Eigen::Vector3d::Zero();
+  scene.ground = false;
+  scene.time_step = 5e-3;
+  scene.duration = t_release + 1.0;
+  // The last 1 1/m of the return flat moves the strip's ends by 0.2 mm: a Newton stop at the
+  // default 1e-4 m/s (0.5 um per step) leaves it there; 1e-6 m/s follows it to rest.
+  scene.newton.tolerance = 1e-6;
+  rm::SheetMesh mesh;
+  ps::SheetState start;
+  ps::initial_sheet(scene, mesh, start);
+  scene.handles = bending_handles(mesh, length, k, t_bend, t_release);
+  ps::Run run(scene);
+  PlasticBendResult r;
+  while (!run.finished()) {
+    run.step();
+    if (std::abs(run.state().time - 0.5 * (t_bend + t_release)) < 0.5 * run.time_step()) {
+      r.held = arc_curvature(run.mesh(), run.state().positions, length);
+    }
+  }
+  r.residual = arc_curvature(run.mesh(), run.state().positions, length);
+  r.model_residual = run.terms().bending->face_curvatures(run.state().positions).col(0).mean();
+  r.max_damage = run.mesh().damage().maxCoeff();
+  for (int v = 0; v < run.state().num_vertices(); ++v)
+    r.max_speed = std::max(r.max_speed, run.state().velocities.segment<3>(3 * v).norm());
+  r.seconds = seconds_since(t0);
+  return r;
+}
+
+void run_plasticity(Report& report, bool quick) {
+  constexpr double KY = 50;  // [1/m] yield curvature of the cases
+  report.section(fmt("6. Plasticity (issue 16): strip 4 x 1 cm wrapped by handles onto a cylinder of curvature k "
+                     "over 0.2 s, held to 0.4 s, released, relaxed 1 s (damping 20/s, no gravity), Morley "
+                     "model, yield k_y = %g 1/m; curvature of the arc through ends and middle. Below yield it returns flat "
+                     "(|k_res| < 2%% of k); above, the moment-free state keeps k - k_y within 5%%",
+                     KY));
+  if (g_bending_model != ps::BendingModel::morley) {
+    report.note("plasticity: skipped under --bending fit (the fit model carries no plasticity)");
+    return;
+  }
+  const PlasticBendResult below = bend_and_release(0.8 * KY, KY, quick);
+  report.info("plasticity", fmt("plastic k=%g held curvature [1/m]", 0.8 * KY), 0.8 * KY, below.held);
+  report.bound("plasticity", fmt("plastic k=%g (below yield) residual |k| [1/m] (%.1fs)", 0.8 * KY, below.seconds),
+               0.02 * 0.8 * KY, std::abs(below.residual), true);
+  report.bound("plasticity", fmt("plastic k=%g damage", 0.8 * KY), 1e-12, below.max_damage, true);
+  for (double k : {2 * KY, 3 * KY}) {
+    const PlasticBendResult r = bend_and_release(k, KY, quick);
+    report.info("plasticity", fmt("plastic k=%g held curvature [1/m]", k), k, r.held);
+    // Moment-free state of the return mapping: the plastic curvature k_held - k_y.
+    report.relative("plasticity", fmt("plastic k=%g residual curvature [1/m] (%.1fs)", k, r.seconds), r.held - KY,
+                    r.residual, 0.05);
+    report.info("plasticity", fmt("plastic k=%g residual mean face k_xx (model) [1/m]", k), r.held - KY,
+                r.model_residual);
+    report.info("plasticity", fmt("plastic k=%g largest damage (expected (k - k_y) / k_y)", k), (k - KY) / KY,
+                r.max_damage);
+    report.bound("plasticity", fmt("plastic k=%g largest speed at the end [m/s]", k), 1e-3, r.max_speed, true);
+  }
+}
+
 }  // namespace
 
 // ---------------------------------------------------------------------------------------------
@@ -727,15 +860,17 @@ void run_friction(Report& report, bool) {
 int main(int argc, char** argv) {
   CLI::App app{"papersim_known_answers: the simulator against the known answers of VALIDATION.md "
                "(heavy elastica, self-buckling, cylinder wrap, backward-Euler damping, friction on "
-               "an incline). Exit status 1 when a case fails."};
+               "an incline, bending plasticity). Exit status 1 when a case fails."};
   bool quick = false;
   std::string csv;
   std::vector<std::string> only;
   app.add_flag("--quick", quick, "coarser meshes and fewer cases (a smoke run, about a minute)");
   app.add_option("--csv", csv, "also write the rows as CSV to this file");
   app.add_option("--only", only,
-                 "run only these families: elastica, convergence, greenhill, cylinder, damping, friction")
-      ->check(CLI::IsMember({"elastica", "convergence", "greenhill", "cylinder", "damping", "friction"}));
+                 "run only these families: elastica, convergence, greenhill, cylinder, damping, friction, "
+                 "plasticity")
+      ->check(CLI::IsMember({"elastica", "convergence", "greenhill", "cylinder", "damping", "friction",
+                             "plasticity"}));
   std::string bending = "morley";
   app.add_option("--bending", bending,
                  "bending discretisation under test: morley (the simulator's default) or fit")
@@ -749,6 +884,7 @@ int main(int argc, char** argv) {
       {"elastica", run_elastica},   {"convergence", run_elastica_convergence},
       {"greenhill", run_greenhill}, {"cylinder", run_cylinder},
       {"damping", run_damping},     {"friction", run_friction},
+      {"plasticity", run_plasticity},
   };
   const auto t0 = std::chrono::steady_clock::now();
   Report report;

@@ -9,6 +9,7 @@
 #include <string>
 
 #include "simulation/energies/dihedral_angle.hpp"
+#include "simulation/energies/fit_bending_energy.hpp"
 #include "simulation/energies/psd.hpp"
 #include "remesh/errors.hpp"
 #include "simulation/errors.hpp"
@@ -98,6 +99,12 @@ MorleyBendingEnergy::MorleyBendingEnergy(const remesh::SheetMesh& mesh, const Ma
   pack_slopes();
   build_elements();
   set_plastic_state(mesh.plastic_curvature(), mesh.damage());
+  try {
+    m_measure = std::make_unique<FitBendingEnergy>(mesh, material, hessian_kind);
+  } catch (const NumericError&) {
+    // A mesh too small for the fit's stencils (fewer than three interior edges): the plastic
+    // update measures the condensed curvature instead.
+  }
 }
 
 MorleyBendingEnergy::~MorleyBendingEnergy() = default;
@@ -314,6 +321,14 @@ double MorleyBendingEnergy::value(const Eigen::VectorXd& x) const {
     energy += 0.5 * r.dot(e.W * r);
   }
   return energy;
+}
+
+Eigen::MatrixX3d MorleyBendingEnergy::yield_curvatures(const Eigen::VectorXd& x) const {
+  if (!m_measure) return face_curvatures(x);
+  Eigen::MatrixX3d K = m_measure->face_curvatures(x);
+  for (size_t f = 0; f < m_faces.size(); ++f)
+    if (m_face_element[f] < 0) K.row(f) = m_plastic[f].transpose();
+  return K;
 }
 
 Eigen::MatrixX3d MorleyBendingEnergy::face_curvatures(const Eigen::VectorXd& x) const {

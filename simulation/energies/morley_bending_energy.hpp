@@ -66,6 +66,15 @@ class MorleyBendingEnergy : public BendingEnergy {
   /// their plastic curvature).
   Eigen::MatrixX3d face_curvatures(const Eigen::VectorXd& x) const override;
 
+  /// Curvature for the plastic return mapping, #F by 3 [1/m]: the least-squares fit of the hinge
+  /// angles of the fit model (FitBendingEnergy::face_curvatures: exact for every constant
+  /// curvature, a function of the shape alone); clamped faces report their plastic curvature.
+  /// The condensed K_f of face_curvatures is not used: the slopes psi* move with the plastic
+  /// state, so at a held shape a face that yielded draws the curvature of its neighbours and
+  /// plastic flow localises face by face (measured: a 4 x 1 cm strip held at 2 k_y ended with
+  /// plastic curvature 0 to 3x the expected value on alternate faces).
+  Eigen::MatrixX3d yield_curvatures(const Eigen::VectorXd& x) const override;
+
   /// Replace the plastic state (#F by 3 curvature [1/m], #F damage). A change of plastic
   /// curvature alone updates the right-hand side of the slope system; a change of damage (so of
   /// stiffness) re-factors it numerically, reusing the symbolic analysis.
@@ -126,6 +135,7 @@ class MorleyBendingEnergy : public BendingEnergy {
   Eigen::SparseMatrix<double> m_A_psi_theta;  // d2E / dpsi dtheta
   Eigen::VectorXd m_b_psi;                     // C psi* = b_psi - A_psi_theta theta
   std::unique_ptr<Factor> m_C;
+  std::unique_ptr<BendingEnergy> m_measure;  // the fit model's curvature, for yield_curvatures
   int m_num_psi = 0;
   int m_first_block = -1;
   long m_factorizations = 0;
