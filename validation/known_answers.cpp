@@ -823,13 +823,94 @@ PlasticBendResult bend_and_release(double k, double ky, bool quick) {
   return r;
 }
 
+/// World position (x, z) of material abscissa s of a strip folded at s = 0 to angle phi [rad]
+/// with bend radius r [m]: flat for s < 0, an arc of radius r over [0, r phi], straight beyond.
+Eigen::Vector2d folded_point(double s, double phi, double r) {
+  if (s <= 0) return {s, 0.0};
+  const double a = std::min(s, r * phi);
+  Eigen::Vector2d p(r * std::sin(a / r), r * (1 - std::cos(a / r)));
+  if (s > r * phi) p += (s - r * phi) * Eigen::Vector2d(std::cos(phi), std::sin(phi));
+  return p;
+}
+
+struct FoldResult {
+  double rest_angle = 0;     ///< fold angle at rest after the release [rad]
+  double press_force = 0;    ///< vertical force of the handles on the upper leg at the end of the press [N]
+  double seconds = 0;
+};
+
+/// A 4 cm x 3 mm strip (0.5 mm edges) folded by handles on every vertex about material x = 1 cm,
+/// to 180 degrees over 0.2 s with bend radius r, held to 0.3 s, released, relaxed 1 s (damping
+/// 20/s, no gravity, no self-contact: the legs open on release).
+FoldResult fold_and_release(double r, double ky, bool quick) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const double length = 0.04, width = 0.003, x_fold = 0.01, t_fold = 0.2, t_release = 0.3;
+  ps::Scene scene;
+  scene.sheet.width = length;
+  scene.sheet.height = width;
+  scene.sheet.edge_length = quick ? 1e-3 : 5e-4;
+  scene.sheet.position = Eigen::Vector3d(0.5 * length - x_fold, 0, 0);
+  scene.sheet.material.yield_curvature = ky;
+  scene.sheet.material.damping = 20.0;
+  scene.sheet.material.bending_model = ps::BendingModel::morley;
+  scene.gravity = Eigen::Vector3d::Zero();
+  scene.ground = false;
+  scene.time_step = 5e-3;
+  scene.duration = t_release + 1.0;
+  scene.newton.tolerance = 1e-6;
+  rm::SheetMesh mesh;
+  ps::SheetState start;
+  ps::initial_sheet(scene, mesh, start);
+  const Eigen::MatrixX2d X = mesh.material_coords();
+  constexpr int KEYFRAMES = 20;
+  for (int v = 0; v < X.rows(); ++v) {
+    ps::HandleSpec h;
+    h.material_point = X.row(v).transpose();
+    h.release_time = t_release;
+    h.stiffness = 1e4;
+    const double s = X(v, 0) - x_fold;
+    for (int j = 0; j <= KEYFRAMES; ++j) {
+      const Eigen::Vector2d p = folded_point(s, PI * j / KEYFRAMES, r);
+      h.keyframes.push_back({t_fold * j / KEYFRAMES, Eigen::Vector3d(p.x() - s, 0, p.y())});
+    }
+    scene.handles.push_back(h);
+  }
+  ps::Run run(scene);
+  FoldResult out;
+  while (!run.finished()) {
+    run.step();
+    if (std::abs(run.state().time - 0.5 * (t_fold + t_release)) < 0.5 * run.time_step()) {
+      // Force of the handles on the upper leg (beyond the arc), vertical component.
+      for (int v = 0; v < X.rows(); ++v) {
+        if (X(v, 0) - x_fold <= PI * r) continue;
+        const Eigen::Vector3d target = start.positions.segment<3>(3 * v) +
+                                       ps::handle_displacement(scene.handles[v], run.state().time);
+        out.press_force += scene.handles[v].stiffness * (target - run.state().positions.segment<3>(3 * v)).z();
+      }
+    }
+  }
+  // Leg directions away from the fold: lower leg from x = 5 mm to 0, upper from 3 cm to 4 cm.
+  const Eigen::VectorXd& x = run.state().positions;
+  auto mean_at = [&](double mx) {
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    int n = 0;
+    for (int v = 0; v < X.rows(); ++v)
+      if (std::abs(X(v, 0) - mx) < 1e-9) sum += x.segment<3>(3 * v), ++n;
+    return Eigen::Vector3d(sum / n);
+  };
+  const Eigen::Vector3d lower = (mean_at(0.0) - mean_at(0.005)).normalized();
+  const Eigen::Vector3d upper = (mean_at(0.04) - mean_at(0.03)).normalized();
+  out.rest_angle = PI - std::acos(std::clamp(lower.dot(upper), -1.0, 1.0));
+  out.seconds = seconds_since(t0);
+  return out;
+}
+
 void run_plasticity(Report& report, bool quick) {
   constexpr double KY = 50;  // [1/m] yield curvature of the cases
-  report.section(fmt("6. Plasticity (issue 16): strip 4 x 1 cm wrapped by handles onto a cylinder of curvature k "
-                     "over 0.2 s, held to 0.4 s, released, relaxed 1 s (damping 20/s, no gravity), Morley "
-                     "model, yield k_y = %g 1/m; curvature of the arc through ends and middle. Below yield it returns flat "
-                     "(|k_res| < 2%% of k); above, the moment-free state keeps k - k_y within 5%%",
-                     KY));
+  report.section("6. Plasticity (issue 16): 4 x 1 cm strip wrapped by handles onto a cylinder of curvature k, "
+                 "held, released, relaxed (k_y = 50 1/m); below yield flat (|k| < 2% of k), above k - k_y within "
+                 "5%. Then a 4 cm x 3 mm strip folded 180 deg at radius r (k_y = 200 1/m), released: rest "
+                 "angle against pi (1 - k_y r)");
   if (g_bending_model != ps::BendingModel::morley) {
     report.note("plasticity: skipped under --bending fit (the fit model carries no plasticity)");
     return;
@@ -850,6 +931,21 @@ void run_plasticity(Report& report, bool quick) {
     report.info("plasticity", fmt("plastic k=%g largest damage (expected (k - k_y) / k_y)", k), (k - KY) / KY,
                 r.max_damage);
     report.bound("plasticity", fmt("plastic k=%g largest speed at the end [m/s]", k), 1e-3, r.max_speed, true);
+  }
+  // A strip folded 180 degrees about a bend of radius r and released keeps, moment-free, the
+  // plastic curvature 1/r - k_y over the arc of length pi r: a fold of pi (1 - k_y r) (none
+  // from r = 1 / k_y up). The press is the handles holding the upper leg at distance 2 r.
+  constexpr double FOLD_KY = 200;  // [1/m] paper
+  for (double r : {4e-3, 2e-3, 1e-3}) {
+    const FoldResult f = fold_and_release(r, FOLD_KY, quick);
+    const double expected = PI * (1 - FOLD_KY * r) * 180 / PI;
+    // Reported, not judged: the arc spans only 3 to 12 edges (2 to 6 with --quick), and the
+    // curvature jump at its ends is smeared over the yield measure's stencil (measured with
+    // --quick: -5%, -11%, -12% at r = 4, 2, 1 mm).
+    report.info("plasticity", fmt("fold 180deg r=%gmm rest angle [deg] (%.1fs)", 1e3 * r, f.seconds), expected,
+                f.rest_angle * 180 / PI);
+    report.info("plasticity", fmt("fold 180deg r=%gmm press: handle force on the upper leg [N/m]", 1e3 * r),
+                NOT_APPLICABLE, f.press_force / 0.003);
   }
 }
 
