@@ -12,6 +12,7 @@
 #include "remesh/sheet_io.hpp"
 #include "simulation/energies/vertex_energies.hpp"
 #include "simulation/errors.hpp"
+#include "simulation/plasticity.hpp"
 #include "simulation/remesh_veto.hpp"
 
 namespace papersim::simulation {
@@ -276,6 +277,9 @@ const StepStats& Run::step() {
   const RemeshSpec& r = m_scene.remesh;
   if (r.enabled && m_step == 0) remesh_pass();
   m_last = m_integrator->step(m_state, m_h);
+  // Plastic return mapping on the accepted step (simulation/plasticity.hpp).
+  if (plasticity_enabled(m_setup.material))
+    apply_plasticity(*m_terms.bending, m_state.positions, m_setup.material.yield_curvature, m_mesh);
   m_totals += m_last;
   ++m_step;
   track();

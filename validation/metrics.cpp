@@ -268,10 +268,42 @@ void fill_length_distribution(CreaseMetrics& c) {
   c.length_max = *std::max_element(lengths.begin(), lengths.end());
   c.length_mean = std::accumulate(lengths.begin(), lengths.end(), 0.0) / n;
   c.length_median = quantile(lengths, 0.5);
-  c.log_length_mean = std::accumulate(logs.begin(), logs.end(), 0.0) / n;
-  double variance = 0.0;
-  for (double l : logs) variance += (l - c.log_length_mean) * (l - c.log_length_mean);
-  c.log_length_std = std::sqrt(variance / n);
+  const LogNormalFit fit = fit_log_normal(lengths);
+  c.log_length_mean = fit.mean;
+  c.log_length_std = fit.std;
+  c.log_normal_ks = fit.ks;
+}
+
+/// The plastic crease network (CreaseMetrics::plastic_network_*): edges whose rest dihedral
+/// exceeds the threshold [rad], walked into lines; lengths in material space.
+void fill_plastic_network(const Eigen::MatrixX2d& material_coords, const Eigen::MatrixX3i& faces,
+                          const MeshTopology& topology, const Eigen::MatrixX3d& plastic_curvature,
+                          double threshold, CreaseMetrics& c) {
+  std::vector<int> edges;
+  for (Eigen::Index e = 0; e < topology.edges.rows(); ++e)
+    if (topology.edge_faces(e, 1) >= 0 &&
+        std::abs(rest_dihedral(material_coords, faces, topology, plastic_curvature, static_cast<int>(e))) > threshold)
+      edges.push_back(static_cast<int>(e));
+  c.plastic_network_edges = static_cast<int>(edges.size());
+  const CreaseAdjacency adjacency = crease_adjacency(topology, edges, material_coords.rows());
+  for (Eigen::Index v = 0; v < material_coords.rows(); ++v)
+    c.plastic_network_junctions += adjacency.valence(static_cast<int>(v)) >= 3 ? 1 : 0;
+  std::vector<char> visited(topology.edges.rows(), 0);
+  for (int seed : edges) {
+    if (visited[seed]) continue;
+    bool closed = false;
+    double length = 0.0;
+    for (int e : walk_line(topology, adjacency, seed, visited, closed))
+      length += (material(material_coords, topology.edges(e, 1)) - material(material_coords, topology.edges(e, 0))).norm();
+    c.plastic_network_line_lengths.push_back(length);
+    c.plastic_network_length += length;
+  }
+  std::sort(c.plastic_network_line_lengths.rbegin(), c.plastic_network_line_lengths.rend());
+  c.plastic_network_lines = static_cast<int>(c.plastic_network_line_lengths.size());
+  const LogNormalFit fit = fit_log_normal(c.plastic_network_line_lengths);
+  c.plastic_network_log_length_mean = fit.mean;
+  c.plastic_network_log_length_std = fit.std;
+  c.plastic_network_log_normal_ks = fit.ks;
 }
 
 }  // namespace
@@ -458,6 +490,24 @@ DevelopabilityMetrics developability_metrics(const Eigen::MatrixX3d& positions,
   return m;
 }
 
+LogNormalFit fit_log_normal(std::vector<double> lengths) {
+  LogNormalFit fit;
+  if (lengths.empty()) return fit;
+  const double n = static_cast<double>(lengths.size());
+  for (double l : lengths) fit.mean += std::log(std::max(l, 1e-300)) / n;
+  for (double l : lengths) fit.std += std::pow(std::log(std::max(l, 1e-300)) - fit.mean, 2) / n;
+  fit.std = std::sqrt(fit.std);
+  if (lengths.size() < 3 || !(fit.std > 0)) return fit;
+  std::sort(lengths.begin(), lengths.end());
+  for (std::size_t i = 0; i < lengths.size(); ++i) {
+    const double z = (std::log(std::max(lengths[i], 1e-300)) - fit.mean) / (fit.std * std::sqrt(2.0));
+    const double cdf = 0.5 * std::erfc(-z);
+    fit.ks = std::max({fit.ks, std::abs(cdf - static_cast<double>(i) / n),
+                       std::abs(static_cast<double>(i + 1) / n - cdf)});
+  }
+  return fit;
+}
+
 CreaseMetrics crease_metrics(const Eigen::MatrixX2d& material_coords,
                              const Eigen::MatrixX3d& positions, const Eigen::MatrixX3i& faces,
                              const MeshTopology& topology,
@@ -473,8 +523,12 @@ CreaseMetrics crease_metrics(const Eigen::MatrixX2d& material_coords,
   c.sharpest_angle_deg = dihedral.size() > 0 ? dihedral.cwiseAbs().maxCoeff() / DEG : 0.0;
   c.edges = static_cast<int>(creases.size());
   const CreaseAdjacency adjacency = crease_adjacency(topology, creases, positions.rows());
-  for (Eigen::Index v = 0; v < positions.rows(); ++v)
-    c.junctions += adjacency.valence(static_cast<int>(v)) >= 3 ? 1 : 0;
+  for (Eigen::Index v = 0; v < positions.rows(); ++v) {
+    const int valence = adjacency.valence(static_cast<int>(v));
+    if (valence < 3) continue;
+    ++c.junctions;
+    ++c.junction_degrees[std::min(valence, 5) - 3];
+  }
 
   std::vector<char> visited(dihedral.size(), 0);
   for (int seed : creases) {
@@ -501,6 +555,7 @@ CreaseMetrics crease_metrics(const Eigen::MatrixX2d& material_coords,
   c.lines = static_cast<int>(c.crease_lines.size());
   c.elastic_length = c.total_length - c.plastic_length;
   fill_length_distribution(c);
+  if (c.has_plastic_data) fill_plastic_network(material_coords, faces, topology, plastic_curvature, threshold, c);
   return c;
 }
 

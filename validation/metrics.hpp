@@ -11,6 +11,7 @@
 ///                      when the mesh carries no plastic data
 /// Vertices used by no face are ignored. Angles are in radians unless a name says `_deg`.
 #include <Eigen/Core>
+#include <array>
 #include <cstddef>
 #include <iosfwd>
 #include <nlohmann/json_fwd.hpp>
@@ -110,10 +111,29 @@ struct CreaseMetrics {
   double log_length_mean = 0.0;    ///< mean of ln(length / 1 m), for a log-normal fit
   double log_length_std = 0.0;     ///< standard deviation of ln(length / 1 m)
   double sharpest_angle_deg = 0.0; ///< max |dihedral| over all interior edges [deg]
+  /// Kolmogorov-Smirnov distance between the line lengths and the log-normal of parameters
+  /// (log_length_mean, log_length_std): the largest gap between the two cumulative
+  /// distributions [-] (0 with fewer than three lines or a zero spread). Ridge lengths of
+  /// crumpled paper are log-normal (Andresen et al., PRE 2007); for n lines a distance above
+  /// about 0.89 / sqrt(n) rejects the fit at 5% (Lilliefors, parameters estimated).
+  double log_normal_ks = 0.0;
+  /// Junctions by crease valence: [0] valence 3, [1] valence 4, [2] valence 5 or more.
+  std::array<int, 3> junction_degrees = {0, 0, 0};
   bool has_plastic_data = false;   ///< plastic_curvature was given
   int plastic_lines = 0;           ///< lines with CreaseLine::plastic()
   double plastic_length = 0.0;     ///< world length of plastic crease edges [m]
   double elastic_length = 0.0;     ///< total_length - plastic_length [m]
+  /// The plastic crease network, from the plastic state alone (whatever the current shape):
+  /// interior edges whose rest dihedral exceeds the threshold, walked into lines between
+  /// junctions as above. Lengths in material space [m] (what a flattened sheet would show).
+  int plastic_network_edges = 0;
+  int plastic_network_lines = 0;
+  int plastic_network_junctions = 0;
+  double plastic_network_length = 0.0;            ///< [m]
+  double plastic_network_log_length_mean = 0.0;   ///< mean of ln(line length / 1 m)
+  double plastic_network_log_length_std = 0.0;
+  double plastic_network_log_normal_ks = 0.0;     ///< as log_normal_ks [-]
+  std::vector<double> plastic_network_line_lengths;  ///< [m], longest first
   std::vector<CreaseLine> crease_lines;  ///< every line, longest first
 };
 
@@ -208,6 +228,14 @@ IsometryMetrics isometry_metrics(const Eigen::MatrixX2d& material_coords,
 DevelopabilityMetrics developability_metrics(const Eigen::MatrixX3d& positions,
                                              const Eigen::MatrixX3i& faces,
                                              const MeshTopology& topology);
+
+/// Log-normal fit of positive lengths [m]: mean and standard deviation of ln(length / 1 m),
+/// and the Kolmogorov-Smirnov distance of the lengths to that log-normal [-] (0 with fewer
+/// than three lengths or a zero spread).
+struct LogNormalFit {
+  double mean = 0.0, std = 0.0, ks = 0.0;
+};
+LogNormalFit fit_log_normal(std::vector<double> lengths);
 
 /// Crease figures (see CreaseMetrics).
 /// @param plastic_curvature #F by 3 [1/m], or 0 rows when there is no plastic data

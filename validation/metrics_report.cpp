@@ -56,7 +56,18 @@ void add_creases(Fields& f, const CreaseMetrics& m) {
                      {"creases.has_plastic_data", m.has_plastic_data ? 1.0 : 0.0},
                      {"creases.plastic_lines", m.plastic_lines},
                      {"creases.plastic_length", m.plastic_length},
-                     {"creases.elastic_length", m.elastic_length}});
+                     {"creases.elastic_length", m.elastic_length},
+                     {"creases.log_normal_ks", m.log_normal_ks},
+                     {"creases.junctions_valence_3", m.junction_degrees[0]},
+                     {"creases.junctions_valence_4", m.junction_degrees[1]},
+                     {"creases.junctions_valence_5_or_more", m.junction_degrees[2]},
+                     {"creases.plastic_network_edges", m.plastic_network_edges},
+                     {"creases.plastic_network_lines", m.plastic_network_lines},
+                     {"creases.plastic_network_junctions", m.plastic_network_junctions},
+                     {"creases.plastic_network_length", m.plastic_network_length},
+                     {"creases.plastic_network_log_length_mean", m.plastic_network_log_length_mean},
+                     {"creases.plastic_network_log_length_std", m.plastic_network_log_length_std},
+                     {"creases.plastic_network_log_normal_ks", m.plastic_network_log_normal_ks}});
 }
 
 void add_quality(Fields& f, const QualityMetrics& m) {
@@ -74,6 +85,7 @@ void add_quality(Fields& f, const QualityMetrics& m) {
 bool is_count(const std::string& name) {
   static const char* const COUNTS[] = {"mesh.",           "euler_characteristic",
                                        "creases.edges",   "creases.lines",
+                                       "network_edges",   "network_lines",
                                        "junctions",       "plastic_lines",
                                        "has_plastic",     "self_intersection"};
   return std::any_of(std::begin(COUNTS), std::end(COUNTS),
@@ -140,6 +152,7 @@ nlohmann::json to_json(const MeshMetrics& metrics) {
   nlohmann::json lengths = nlohmann::json::array();
   for (const CreaseLine& line : metrics.creases.crease_lines) lengths.push_back(line.length);
   out["creases"]["line_lengths"] = lengths;
+  out["creases"]["plastic_network_line_lengths"] = metrics.creases.plastic_network_line_lengths;
   return out;
 }
 

@@ -27,6 +27,10 @@ class BendingEnergy : public EnergyTerm {
   std::string name() const override { return "bend"; }
   /// Curvature tensor of every face at x, #F by 3 (K_xx, K_yy, K_xy) [1/m].
   virtual Eigen::MatrixX3d face_curvatures(const Eigen::VectorXd& x) const = 0;
+  /// Curvature tensor of every face at x as the plastic return mapping measures it, #F by 3
+  /// [1/m]: a function of the shape alone, never of the plastic state (a measure that moves
+  /// with the plastic state lets plastic flow feed on itself). Default: face_curvatures.
+  virtual Eigen::MatrixX3d yield_curvatures(const Eigen::VectorXd& x) const { return face_curvatures(x); }
   /// Replace the plastic state (#F by 3 curvature [1/m], #F damage).
   virtual void set_plastic_state(const Eigen::MatrixX3d& plastic_curvature,
                                  const Eigen::VectorXd& damage) = 0;

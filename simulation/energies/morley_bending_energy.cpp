@@ -9,13 +9,16 @@
 #include <string>
 
 #include "simulation/energies/dihedral_angle.hpp"
+#include "simulation/energies/fit_bending_energy.hpp"
 #include "simulation/energies/psd.hpp"
+#include "remesh/errors.hpp"
 #include "simulation/errors.hpp"
 
 namespace papersim::simulation {
 
 struct MorleyBendingEnergy::Factor {
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt;
+  bool analyzed = false;  // the symbolic analysis is made once: the pattern never changes
 };
 
 namespace {
@@ -96,6 +99,12 @@ MorleyBendingEnergy::MorleyBendingEnergy(const remesh::SheetMesh& mesh, const Ma
   pack_slopes();
   build_elements();
   set_plastic_state(mesh.plastic_curvature(), mesh.damage());
+  try {
+    m_measure = std::make_unique<FitBendingEnergy>(mesh, material, hessian_kind);
+  } catch (const NumericError&) {
+    // A mesh too small for the fit's stencils (fewer than three interior edges): the plastic
+    // update measures the condensed curvature instead.
+  }
 }
 
 MorleyBendingEnergy::~MorleyBendingEnergy() = default;
@@ -206,41 +215,39 @@ void MorleyBendingEnergy::build_elements() {
 
 void MorleyBendingEnergy::set_plastic_state(const Eigen::MatrixX3d& k, const Eigen::VectorXd& damage) {
   const int nf = static_cast<int>(m_faces.size());
+  PAPERSIM_ASSERT(k.rows() == nf && damage.size() == nf, "MorleyBendingEnergy::set_plastic_state: sizes");
+  const bool first = m_stiffness.empty();
   m_plastic.resize(nf);
-  m_stiffness.resize(nf);
+  m_stiffness.resize(nf, 0.0);
+  bool stiffness_changed = first;
   for (int f = 0; f < nf; ++f) {
     m_plastic[f] = k.row(f).transpose();
-    m_stiffness[f] = m_faces[f].area * m_D / (1 + m_weakening * damage[f]);
+    const double stiffness = m_faces[f].area * m_D / (1 + m_weakening * damage[f]);
+    stiffness_changed = stiffness_changed || stiffness != m_stiffness[f];
+    m_stiffness[f] = stiffness;
   }
-  refresh();
+  // Plastic curvature enters only the offsets c (the right-hand side of the slope system);
+  // damage changes the weights and so the matrix, which is then re-factored numerically on the
+  // symbolic analysis made once.
+  if (stiffness_changed) update_weights();
+  update_offsets();
 }
 
-void MorleyBendingEnergy::refresh() {
+void MorleyBendingEnergy::update_weights() {
   const int nf = static_cast<int>(m_faces.size());
-  for (int f = 0; f < nf; ++f) {
-    if (m_face_element[f] < 0) continue;
-    Element& e = m_elements[m_face_element[f]];
-    e.c = m_plastic[f];
-    e.W = m_stiffness[f] * m_Q;
-  }
+  for (int f = 0; f < nf; ++f)
+    if (m_face_element[f] >= 0) m_elements[m_face_element[f]].W = m_stiffness[f] * m_Q;
   for (size_t i = 0; i < m_penalties.size(); ++i) {
     const Penalty& pen = m_penalties[i];
-    Element& e = m_elements[m_num_face_elements + i];
-    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-    for (int g : pen.neighbours) mean += m_plastic[g];
-    mean /= static_cast<double>(pen.neighbours.size());
-    e.c = Eigen::VectorXd::Constant(1, m_faces[pen.face].R.row(pen.edge).dot(m_plastic[pen.face] - mean));
-    e.W = Eigen::MatrixXd::Constant(1, 1, BOUNDARY_PENALTY * m_stiffness[pen.face] / m_faces[pen.face].area);
+    m_elements[m_num_face_elements + i].W =
+        Eigen::MatrixXd::Constant(1, 1, BOUNDARY_PENALTY * m_stiffness[pen.face] / m_faces[pen.face].area);
   }
-  // C = d2E/dpsi2, A_psi_theta, b_psi = sum L_psi^T W c.
+  // C = d2E/dpsi2 and A_psi_theta = d2E/dpsi dtheta.
   std::vector<Eigen::Triplet<double>> c_entries, a_entries;
-  m_b_psi = Eigen::VectorXd::Zero(m_num_psi);
   for (Element& e : m_elements) {
     e.M = e.L.transpose() * e.W * e.L;
     const int nt = static_cast<int>(e.theta.size());
-    const Eigen::VectorXd Wc = e.L.transpose() * (e.W * e.c);
     for (size_t i = 0; i < e.psi.size(); ++i) {
-      m_b_psi[e.psi[i]] += Wc[nt + i];
       for (size_t j = 0; j < e.psi.size(); ++j) c_entries.emplace_back(e.psi[i], e.psi[j], e.M(nt + i, nt + j));
       for (int j = 0; j < nt; ++j) a_entries.emplace_back(e.psi[i], e.theta[j], e.M(nt + i, j));
     }
@@ -250,9 +257,35 @@ void MorleyBendingEnergy::refresh() {
   if (m_num_psi == 0) return;
   Eigen::SparseMatrix<double> C(m_num_psi, m_num_psi);
   C.setFromTriplets(c_entries.begin(), c_entries.end());
-  m_C->ldlt.compute(C);
+  if (!m_C->analyzed) {
+    m_C->ldlt.analyzePattern(C);
+    m_C->analyzed = true;
+  }
+  m_C->ldlt.factorize(C);
+  ++m_factorizations;
   if (m_C->ldlt.info() != Eigen::Success)
     throw NumericError("bending: the edge slope system cannot be factored");
+}
+
+void MorleyBendingEnergy::update_offsets() {
+  const int nf = static_cast<int>(m_faces.size());
+  for (int f = 0; f < nf; ++f)
+    if (m_face_element[f] >= 0) m_elements[m_face_element[f]].c = m_plastic[f];
+  for (size_t i = 0; i < m_penalties.size(); ++i) {
+    const Penalty& pen = m_penalties[i];
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+    for (int g : pen.neighbours) mean += m_plastic[g];
+    mean /= static_cast<double>(pen.neighbours.size());
+    m_elements[m_num_face_elements + i].c =
+        Eigen::VectorXd::Constant(1, m_faces[pen.face].R.row(pen.edge).dot(m_plastic[pen.face] - mean));
+  }
+  // b_psi = sum L_psi^T W c: C psi* = b_psi - A_psi_theta theta.
+  m_b_psi = Eigen::VectorXd::Zero(m_num_psi);
+  for (const Element& e : m_elements) {
+    const int nt = static_cast<int>(e.theta.size());
+    const Eigen::VectorXd Wc = e.L.transpose() * (e.W * e.c);
+    for (size_t i = 0; i < e.psi.size(); ++i) m_b_psi[e.psi[i]] += Wc[nt + i];
+  }
 }
 
 void MorleyBendingEnergy::add_pattern(SparsityBuilder& pattern) const {
@@ -288,6 +321,14 @@ double MorleyBendingEnergy::value(const Eigen::VectorXd& x) const {
     energy += 0.5 * r.dot(e.W * r);
   }
   return energy;
+}
+
+Eigen::MatrixX3d MorleyBendingEnergy::yield_curvatures(const Eigen::VectorXd& x) const {
+  if (!m_measure) return face_curvatures(x);
+  Eigen::MatrixX3d K = m_measure->face_curvatures(x);
+  for (size_t f = 0; f < m_faces.size(); ++f)
+    if (m_face_element[f] < 0) K.row(f) = m_plastic[f].transpose();
+  return K;
 }
 
 Eigen::MatrixX3d MorleyBendingEnergy::face_curvatures(const Eigen::VectorXd& x) const {

@@ -66,8 +66,23 @@ class MorleyBendingEnergy : public BendingEnergy {
   /// their plastic curvature).
   Eigen::MatrixX3d face_curvatures(const Eigen::VectorXd& x) const override;
 
-  /// Replace the plastic state (#F by 3 curvature [1/m], #F damage).
+  /// Curvature for the plastic return mapping, #F by 3 [1/m]: the least-squares fit of the hinge
+  /// angles of the fit model (FitBendingEnergy::face_curvatures: exact for every constant
+  /// curvature, a function of the shape alone); clamped faces report their plastic curvature.
+  /// The condensed K_f of face_curvatures is not used: the slopes psi* move with the plastic
+  /// state, so at a held shape a face that yielded draws the curvature of its neighbours and
+  /// plastic flow localises face by face (measured: a 4 x 1 cm strip held at 2 k_y ended with
+  /// plastic curvature 0 to 3x the expected value on alternate faces).
+  Eigen::MatrixX3d yield_curvatures(const Eigen::VectorXd& x) const override;
+
+  /// Replace the plastic state (#F by 3 curvature [1/m], #F damage). A change of plastic
+  /// curvature alone updates the right-hand side of the slope system; a change of damage (so of
+  /// stiffness) re-factors it numerically, reusing the symbolic analysis.
+  /// @throw NumericError when the slope system cannot be factored
   void set_plastic_state(const Eigen::MatrixX3d& plastic_curvature, const Eigen::VectorXd& damage) override;
+
+  /// Numeric factorisations of the slope system so far (one at construction) [-].
+  long factorizations() const { return m_factorizations; }
 
  private:
   /// A quadratic element: r = L (theta_ids, psi_ids) - c, energy r^T W r / 2.
@@ -101,8 +116,10 @@ class MorleyBendingEnergy : public BendingEnergy {
   /// Renumbers the slopes so that each 3x3 block holds slopes of one face where possible.
   void pack_slopes();
   void build_elements();
-  /// Element weights and offsets from the faces' stiffness and plastic curvature; factors C.
-  void refresh();
+  /// Element weights from the faces' stiffness; assembles and factors C, A_psi_theta.
+  void update_weights();
+  /// Element offsets from the plastic curvature and the right-hand side b_psi.
+  void update_offsets();
   /// theta and psi*(theta) at x.
   void unknowns(const Eigen::VectorXd& x, Eigen::VectorXd& theta, Eigen::VectorXd& psi) const;
   Eigen::VectorXd element_residual(const Element& e, const Eigen::VectorXd& theta,
@@ -118,8 +135,10 @@ class MorleyBendingEnergy : public BendingEnergy {
   Eigen::SparseMatrix<double> m_A_psi_theta;  // d2E / dpsi dtheta
   Eigen::VectorXd m_b_psi;                     // C psi* = b_psi - A_psi_theta theta
   std::unique_ptr<Factor> m_C;
+  std::unique_ptr<BendingEnergy> m_measure;  // the fit model's curvature, for yield_curvatures
   int m_num_psi = 0;
   int m_first_block = -1;
+  long m_factorizations = 0;
 };
 
 }  // namespace papersim::simulation

@@ -143,6 +143,26 @@ TEST_P(BendingDerivatives, ExactHessian) {
   check_derivatives(*e, mesh.num_vertices(), f.x);
 }
 
+TEST_P(BendingDerivatives, ExactHessianWithAVaryingPlasticStateSetAfterConstruction) {
+  // Plastic curvature and damage that differ from face to face, handed to the term after it
+  // was built (as the plastic update of a run does).
+  Fixture f = make_fixture();
+  Material m;
+  m.bending_model = GetParam();
+  m.weakening = 2.0;
+  const std::unique_ptr<BendingEnergy> e = make_bending_energy(f.mesh, m, BendingHessian::exact);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1, 1);
+  Eigen::MatrixX3d k(f.mesh.num_faces(), 3);
+  Eigen::VectorXd damage(f.mesh.num_faces());
+  for (int i = 0; i < k.rows(); ++i) {
+    k.row(i) << 10 * u(rng), 10 * u(rng), 5 * u(rng);  // [1/m], as large as the shape's 8 1/m
+    damage[i] = 1.5 + u(rng);
+  }
+  e->set_plastic_state(k, damage);
+  check_derivatives(*e, f.mesh.num_vertices(), f.x);
+}
+
 TEST_P(BendingDerivatives, GaussNewtonIsTheExactHessianAtRest) {
   // At the rest shape (flat, no plastic curvature) dE/dtheta = 0, so Gauss-Newton is exact.
   Fixture f = make_fixture(1.0, 1e-9);

@@ -77,6 +77,53 @@ TEST_F(FoldedSheet, PlasticWhenTheRestAngleExceedsTheThreshold) {
 // A tent z = -c (|x - a| + |y - b|): planar on each quadrant, creases along x = a and y = b
 // crossing at one vertex. Normals (c sx, c sy, 1) / sqrt(2 c^2 + 1) with signs sx, sy of the
 // quadrant, so across either line cos(angle) = 1 / (2 c^2 + 1).
+TEST_F(FoldedSheet, PlasticNetworkComesFromThePlasticStateAloneFlatOrFolded) {
+  // The fold's plastic state on a flat sheet: no crease in the shape, one plastic line of
+  // material length 0.1 in the network; the same on the folded sheet. A rest angle of 50 deg
+  // on the fold edges: the plastic faces (two columns) give the next columns of edges 25 deg
+  // and the diagonals between them 50 / (2 sqrt 2) = 17.7 deg, below the 30 deg threshold.
+  const Eigen::MatrixX3d k = plastic_curvature(50 * PI / 180);
+  const MeshMetrics flat = compute_metrics(g.material, test::flat_positions(g.material), g.faces, k);
+  EXPECT_EQ(flat.creases.edges, 0);
+  EXPECT_EQ(flat.creases.plastic_network_lines, 1);
+  EXPECT_EQ(flat.creases.plastic_network_edges, g.ny - 1);
+  EXPECT_NEAR(flat.creases.plastic_network_length, 0.1, ROUNDING);
+  EXPECT_EQ(flat.creases.plastic_network_junctions, 0);
+  const MeshMetrics folded = compute_metrics(g.material, p, g.faces, k);
+  EXPECT_NEAR(folded.creases.plastic_network_length, 0.1, ROUNDING);
+  // Below the threshold (a rest angle of 20 degrees): no plastic network.
+  const MeshMetrics weak = compute_metrics(g.material, p, g.faces, plastic_curvature(20 * PI / 180));
+  EXPECT_EQ(weak.creases.plastic_network_lines, 0);
+  EXPECT_EQ(weak.creases.plastic_network_length, 0.0);
+}
+
+TEST(Creases, LogNormalGoodnessOfFit) {
+  // Lengths at the midpoint quantiles of a log-normal fit it closely: the Kolmogorov-Smirnov
+  // distance of n midpoint quantiles to their own distribution is 1 / (2n) when the fitted
+  // parameters equal the true ones; estimating them moves it by O(1/n).
+  const int n = 200;
+  std::vector<double> lognormal, bimodal;
+  for (int i = 0; i < n; ++i) {
+    const double u = (i + 0.5) / n;
+    // Inverse normal CDF by bisection on erfc.
+    double lo = -10, hi = 10;
+    for (int it = 0; it < 200; ++it) {
+      const double mid = 0.5 * (lo + hi);
+      (0.5 * std::erfc(-mid / std::sqrt(2.0)) < u ? lo : hi) = mid;
+    }
+    lognormal.push_back(std::exp(std::log(0.02) + 0.7 * lo));
+    bimodal.push_back(i % 2 ? 0.01 : 0.1);
+  }
+  const LogNormalFit good = fit_log_normal(lognormal);
+  EXPECT_NEAR(good.mean, std::log(0.02), 1e-3);
+  EXPECT_NEAR(good.std, 0.7, 0.01);
+  EXPECT_LT(good.ks, 3.0 / n);
+  // Two spikes: the CDF jumps by 1/2 where the log-normal rises smoothly.
+  const LogNormalFit bad = fit_log_normal(bimodal);
+  EXPECT_GT(bad.ks, 0.89 / std::sqrt(n)) << "rejected at 5%";
+  EXPECT_EQ(fit_log_normal({0.1, 0.2}).ks, 0.0) << "too few lengths to judge";
+}
+
 TEST(Creases, TwoCrossingFoldsMeetAtOneJunction) {
   const test::Grid g = test::make_grid(21, 11, 0.2, 0.1);
   const double a = 0.12, b = 0.04, c = 1.0;
@@ -95,6 +142,8 @@ TEST(Creases, TwoCrossingFoldsMeetAtOneJunction) {
   EXPECT_NEAR(m.creases.sharpest_angle_deg, angle, 1e-9);
   EXPECT_LT(std::abs(m.developability.gauss_bonnet_residual), 1e-9);
   EXPECT_EQ(m.self_intersections, 0);
+  EXPECT_EQ(m.creases.junction_degrees[1], 1) << "the junction has crease valence 4";
+  EXPECT_EQ(m.creases.junction_degrees[0] + m.creases.junction_degrees[2], 0);
 }
 
 // A lamp shade: a steep cone (half-angle 30 deg, 12 sides) standing on a flat annulus. The
