@@ -13,6 +13,7 @@ PACKAGES=(
   libgtest-dev libgmock-dev libbenchmark-dev
   povray gnuplot-nox fonts-dejavu-core fonts-liberation
   slurm-wlm munge  # the one-node Slurm test of the batch job arrays (scripts/slurm_cluster.sh)
+  clang libclang-rt-14-dev  # the libFuzzer targets (scripts/fuzz.sh)
 )
 
 missing=()
