@@ -1,5 +1,7 @@
 #include "remesh/sheet_mesh.hpp"
 
+#include <OpenMesh/Core/System/omstream.hh>
+
 #include <cmath>
 #include <string>
 #include <vector>
@@ -56,6 +58,11 @@ void check_faces(const Eigen::MatrixX2d& material_coords, const Eigen::MatrixX3i
 SheetMesh::SheetMesh(const Eigen::MatrixX2d& material_coords, const Eigen::MatrixX3i& faces)
     : SheetMesh() {
   check_faces(material_coords, faces);
+  // OpenMesh prints "PolyMeshT::add_face: complex edge" to its error stream for a face it
+  // refuses; the library never prints (a refused face is a MeshError below), so that stream is
+  // switched off once, for the whole process, before the first face is added.
+  static const bool openmesh_quiet = (omerr().disable(), true);
+  (void)openmesh_quiet;
   std::vector<TriMesh::VertexHandle> vh(material_coords.rows());
   for (int v = 0; v < material_coords.rows(); ++v)
     vh[v] = m_mesh.add_vertex(TriMesh::Point(material_coords(v, 0), material_coords(v, 1), 0.0));

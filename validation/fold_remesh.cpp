@@ -51,6 +51,7 @@ std::vector<double> numbers(const std::string& text, const char* option) {
 
 struct Row {
   std::string mesh;
+  std::string failure;  ///< why the run failed (empty when it finished)
   int vertices = 0, vertices_max = 0, self = -1, rollbacks = 0;
   double cpu = 0, bend = 0, radius = 0, continuum = 0, stretch = 0, limit = 0, ground = 0;
 };
@@ -58,9 +59,17 @@ struct Row {
 Row run(const std::string& label, const ps::Scene& scene) {
   std::fprintf(stderr, "%s ...\n", label.c_str());
   const double c0 = cpu_seconds();
-  const ps::RunResult r = ps::run_scene(scene, {});
   Row row;
   row.mesh = label;
+  ps::RunResult r;
+  try {
+    r = ps::run_scene(scene, {});
+  } catch (const std::exception& e) {  // reported in the table; the other meshes still run
+    row.failure = e.what();
+    row.cpu = cpu_seconds() - c0;
+    std::fprintf(stderr, "%s failed: %s\n", label.c_str(), e.what());
+    return row;
+  }
   row.cpu = cpu_seconds() - c0;
   row.vertices = r.sheet.vertices;
   row.vertices_max = r.sheet.vertices_max;
@@ -120,17 +129,23 @@ int main(int argc, char** argv) {
     if (!csv.empty()) {
       out.open(csv);
       out << "mesh,vertices,vertices_max,cpu_seconds,bending_energy_J,radius_m,continuum_J,ratio,self_intersections,"
-             "max_stretch,min_ground_m,remesh_rollbacks\n";
+             "max_stretch,min_ground_m,remesh_rollbacks,failure\n";
     }
     bool safe = true;
     for (const Row& r : rows) {
+      if (!r.failure.empty()) {
+        std::printf("%-16s FAILED after %.1f s of CPU: %s\n", r.mesh.c_str(), r.cpu, r.failure.c_str());
+        if (out) out << r.mesh << ",,," << r.cpu << ",,,,,,,,,\"" << r.failure << "\"\n";
+        safe = false;
+        continue;
+      }
       std::printf("%-16s %8d %8d %8.1f %12.4g %9.2f %12.4g %7.3f %5d %10.6f %10.4f %6d\n", r.mesh.c_str(), r.vertices,
                   r.vertices_max, r.cpu, r.bend, 1e3 * r.radius, r.continuum, r.bend / r.continuum, r.self, r.stretch,
                   1e3 * r.ground, r.rollbacks);
       if (out)
         out << r.mesh << ',' << r.vertices << ',' << r.vertices_max << ',' << r.cpu << ',' << r.bend << ','
             << r.radius << ',' << r.continuum << ',' << r.bend / r.continuum << ',' << r.self << ',' << r.stretch
-            << ',' << r.ground << ',' << r.rollbacks << '\n';
+            << ',' << r.ground << ',' << r.rollbacks << ",\n";
       safe = safe && r.self == 0 && r.ground > 0 && r.stretch <= 1 + r.limit;
     }
     if (out && !out.flush()) throw std::runtime_error("cannot write " + csv);
