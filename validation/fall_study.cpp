@@ -15,9 +15,11 @@
 
 #include "simulation/scenario.hpp"
 #include "simulation/simulate.hpp"
+#include "validation/safety.hpp"
 #include "validation/statistics.hpp"
 
 namespace ps = papersim::simulation;
+namespace pv = papersim::validation;
 
 namespace {
 
@@ -90,23 +92,12 @@ int main(int argc, char** argv) {
       }
       s1 = q.max_principal_stretch;
       self = q.self_intersections;
-      const std::vector<double>& d = q.min_obstacle_distance;
-      for (size_t o = 0; o < d.size(); ++o) {
-        if (o == 0 && scene.ground)
-          ground = d[o];
-        else
-          obstacle = std::min(obstacle, d[o]);
-      }
+      const pv::ObstacleGaps gaps = pv::obstacle_gaps(scene, r);
+      ground = gaps.ground;
+      obstacle = gaps.obstacles;
       if (r.contact) share = r.contact->seconds / wall;
       if (r.self_contact) self_share = r.self_contact->seconds / wall;
-      if (!r.state.positions.allFinite())
-        verdict = "FAIL nan";
-      else if (!(obstacle > 0) || !(ground > 0))
-        verdict = "FAIL penetration";
-      else if (self != 0)
-        verdict = "FAIL self-intersection";
-      else if (s1 > 1 + scene.sheet.material.strain_limit)
-        verdict = "FAIL stretch";
+      verdict = pv::safety_verdict(scene, r);
     } catch (const std::exception& e) {
       verdict = std::string("FAIL ") + e.what();
     }

@@ -16,6 +16,7 @@
 #include "simulation/scenario.hpp"
 #include "simulation/simulate.hpp"
 #include "validation/metrics.hpp"
+#include "validation/safety.hpp"
 #include "validation/statistics.hpp"
 
 namespace ps = papersim::simulation;
@@ -114,16 +115,8 @@ int main(int argc, char** argv) {
       lines = m.creases.plastic_network_lines;
       longest = lines > 0 ? m.creases.plastic_network_line_lengths.front() : 0.0;
       rest = fold_rest_angle(r.mesh, line) * 180 / M_PI;
-      if (!r.state.positions.allFinite())
-        verdict = "FAIL nan";
-      else if (!(roller > 0) || !(ground > 0))
-        verdict = "FAIL penetration";
-      else if (self != 0)
-        verdict = "FAIL self-intersection";
-      else if (s1 > 1 + scene.sheet.material.strain_limit)
-        verdict = "FAIL stretch";
-      else if (longest < 0.5 * line.chord)
-        verdict = "FAIL no plastic crease along the fold";
+      verdict = pv::safety_verdict(scene, r);
+      if (verdict == "PASS" && longest < 0.5 * line.chord) verdict = "FAIL no plastic crease along the fold";
     } catch (const std::exception& e) {
       verdict = std::string("FAIL ") + e.what();
     }

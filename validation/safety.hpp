@@ -1,0 +1,47 @@
+#pragma once
+/// The safety verdict of a finished run, shared by the scenario studies: no NaN, no
+/// penetration of the ground or an obstacle, no self-intersection, stretch within the limit.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include "simulation/run.hpp"
+#include "simulation/scene.hpp"
+
+namespace papersim::validation {
+
+/// Smallest distances of a run's sheet to the ground and to the other obstacles [m] (+inf when
+/// there is none), over the whole run.
+struct ObstacleGaps {
+  double ground = std::numeric_limits<double>::infinity();
+  double obstacles = std::numeric_limits<double>::infinity();
+};
+
+/// Splits RunQuality::min_obstacle_distance into the ground (obstacle 0 when the scene has one)
+/// and the rest.
+inline ObstacleGaps obstacle_gaps(const simulation::Scene& scene, const simulation::RunResult& r) {
+  ObstacleGaps g;
+  const auto& d = r.quality.min_obstacle_distance;
+  for (std::size_t o = 0; o < d.size(); ++o) {
+    if (o == 0 && scene.ground)
+      g.ground = d[o];
+    else
+      g.obstacles = std::min(g.obstacles, d[o]);
+  }
+  return g;
+}
+
+/// "PASS", or "FAIL" and the first check that failed: NaN in the positions, a gap to the ground
+/// or an obstacle that is not positive, a self-intersection, a principal stretch above
+/// 1 + strain_limit.
+inline std::string safety_verdict(const simulation::Scene& scene, const simulation::RunResult& r) {
+  const ObstacleGaps g = obstacle_gaps(scene, r);
+  if (!r.state.positions.allFinite()) return "FAIL nan";
+  if (!(g.obstacles > 0) || !(g.ground > 0)) return "FAIL penetration";
+  if (r.quality.self_intersections != 0) return "FAIL self-intersection";
+  if (r.quality.max_principal_stretch > 1 + scene.sheet.material.strain_limit) return "FAIL stretch";
+  return "PASS";
+}
+
+}  // namespace papersim::validation
