@@ -62,6 +62,11 @@ struct LinearSolver::Impl {
     limit_blas_threads();
     limit_openmp_threads();
     common.supernodal = CHOLMOD_AUTO;
+    // A simplicial factorisation (CHOLMOD's choice for small systems, such as a coarsely
+    // remeshed sheet) is LDL' by default, which succeeds on an indefinite matrix: factorize()
+    // must fail there, so that Newton projects the Hessian instead of stepping uphill. LL'
+    // stops at the first non-positive pivot in both the simplicial and supernodal methods.
+    common.final_ll = true;
   }
   ~Impl() {
     if (factor) cholmod_free_factor(&factor, &common);
