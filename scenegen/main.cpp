@@ -165,7 +165,7 @@ int main(int argc, char** argv) {
   auto* prepare = app.add_subcommand("prepare", "write a self-contained POV-Ray job folder (run it with its run.sh)");
   add_sample_options(prepare, c);
   prepare->add_option("--out", c.out, "job folder")->required()->check(non_empty());
-  auto* finish = app.add_subcommand("finish", "decode a rendered job folder into the sample files");
+  auto* finish = app.add_subcommand("finish", "decode a rendered job folder into the sample files (and cast the ground-truth rays)");
   finish->add_option("job", c.job, "job folder (rendered)")->required();
   finish->add_option("--out", c.out, "sample folder")->required()->check(non_empty());
   auto* run = app.add_subcommand("run", "render a prepared job folder with POV-Ray");
