@@ -65,7 +65,7 @@ std::string ground_truth_name(GroundTruth g) { return g == GroundTruth::povray ?
 GroundTruth parse_ground_truth(const std::string& name) {
   if (name == "raycast") return GroundTruth::raycast;
   if (name == "povray") return GroundTruth::povray;
-  throw InputError("unknown ground truth '" + name + "' (raycast, povray)");
+  throw InputError("unknown --ground-truth '" + name + "' (raycast, povray)");
 }
 
 std::vector<RawPass> raw_passes_for(const std::vector<Pass>& passes, bool fine, GroundTruth ground_truth) {

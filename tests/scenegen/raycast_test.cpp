@@ -152,6 +152,23 @@ TEST(Raycast, VertexNormalsReadBackExactlyAndBadFilesNameTheProblem) {
   EXPECT_THROW(read_vertex_normals(dir.str("missing.txt"), 1), IoError);
 }
 
+TEST(Raycast, GroundTruthNamesParseAndABadOneNamesTheOption) {
+  EXPECT_EQ(parse_ground_truth("raycast"), GroundTruth::raycast);
+  EXPECT_EQ(parse_ground_truth("povray"), GroundTruth::povray);
+  EXPECT_EQ(ground_truth_name(GroundTruth::povray), "povray");
+  try {
+    parse_ground_truth("blender");
+    FAIL() << "an unknown ground truth was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("--ground-truth 'blender'"), std::string::npos) << e.what();
+  }
+  // The POV-Ray renders of the exact passes are asked for only with povray ground truth.
+  const auto raw = raw_passes_for(all_passes(), true, GroundTruth::raycast);
+  EXPECT_EQ(raw, (std::vector<RawPass>{RawPass::albedo, RawPass::shading, RawPass::image}));
+  EXPECT_EQ(raw_passes_for({Pass::coords}, false, GroundTruth::povray),
+            (std::vector<RawPass>{RawPass::uv, RawPass::coords}));
+}
+
 /// The pixels whose 3 x 3 neighbourhood holds both sheet and background in `mask`.
 std::vector<bool> silhouette(const ImageF& mask) {
   std::vector<bool> s(std::size_t(mask.width) * mask.height, false);
