@@ -115,6 +115,9 @@ void write_png(const std::string& path, const ImageF& image, int bits) {
                    : image.channels == 3 ? PNG_COLOR_TYPE_RGB : PNG_COLOR_TYPE_RGBA;
   png_set_IHDR(png, info, image.width, image.height, bits, type, PNG_INTERLACE_NONE,
                PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+  // zlib's fastest level: a whole sample writes four full-size PNGs, and the default level
+  // costs about three times the CPU for files ~10% smaller.
+  png_set_compression_level(png, 1);
   png_write_info(png, info);
   const int bytes = bits / 8;
   const double maxv = bits == 16 ? 65535.0 : 255.0;

@@ -26,6 +26,7 @@
 #include "scenegen/geometry.hpp"
 #include "scenegen/image_io.hpp"
 #include "scenegen/meta.hpp"
+#include "scenegen/raycast.hpp"
 #include "scenegen/resting_pose.hpp"
 #include "scenegen/scene_draw.hpp"
 #include "scenegen/sheet_obj.hpp"
@@ -115,6 +116,7 @@ json options_json(const SampleOptions& o, const std::vector<std::string>& render
   const int gh = o.backward.grid_height > 0 ? o.backward.grid_height : o.height;
   return {{"passes", passes}, {"raw_renders", renders}, {"width", o.width}, {"height", o.height},
           {"quality", quality_name(o.quality)}, {"fine_passes", o.fine_passes},
+          {"ground_truth", ground_truth_name(o.ground_truth)},
           {"backward", {{"grid_width", gw}, {"grid_height", gh},
                         {"tolerance_pixels", o.backward.tolerance_pixels}}},
           {"document_render", doc_w > 0 ? json{{"width_px", doc_w}, {"height_px", doc_h}} : json()}};
@@ -269,7 +271,8 @@ void prepare_job(const SampleOptions& o, const std::string& job_dir) {
     write_with(tmp / "shadow.inc", [&](std::ostream& out) { write_shadow_inc(out, surface, normals, o.shadow_offset); });
     write_with(tmp / "scene.inc", [&](std::ostream& out) { write_scene_inc(out, scene); });
     write_with(tmp / "sheet.obj", [&](std::ostream& out) { write_sheet_obj(out, surface); });
-    const auto raw = raw_passes_for(o.passes, o.fine_passes);
+    if (o.ground_truth == GroundTruth::raycast) write_vertex_normals((tmp / "sheet_normals.txt").string(), normals);
+    const auto raw = raw_passes_for(o.passes, o.fine_passes, o.ground_truth);
     std::vector<std::string> renders;
     std::string run_sh = "#!/bin/sh\n# Renders this job with POV-Ray 3.7 alone; then: scenegen finish THIS_DIR --out DIR\nset -e\ncd \"$(dirname \"$0\")\"\n";
     if (fs::exists(tmp / "document.ini")) run_sh += "povray document.ini\n";
@@ -499,6 +502,20 @@ void apply_syntheticdoc_layout(const fs::path& stage, json& meta) {
   files["metadata.json"] = "this file";
 }
 
+/// The exact passes by ray casting (raycast ground truth): the pixel rays of `camera` on the
+/// job's sheet.obj with its sheet_normals.txt, at the precision POV-Ray holds them for the
+/// photo. `uv` gets u, v, mask; `xyz` and `normal` are filled when asked for. @throw IoError
+void cast_ground_truth(const fs::path& job, const Camera& camera, bool want_coords, bool want_normal,
+                       ImageF& uv, ImageF& xyz, ImageF& normal) {
+  const SheetMesh surface = read_sheet_obj((job / "sheet.obj").string());
+  Eigen::MatrixX3d normals = read_vertex_normals((job / "sheet_normals.txt").string(), surface.num_vertices());
+  const SheetMesh rendered = povray_precision(surface, normals);
+  const PixelHits hits = cast_pixel_rays(rendered, camera);
+  uv = uv_from_hits(hits, rendered);
+  if (want_coords) xyz = coords_from_hits(hits, rendered);
+  if (want_normal) normal = normals_from_hits(hits, rendered, normals, camera);
+}
+
 /// Path of a raw render in a job folder. @throw IoError when it is missing
 std::string raw_path(const fs::path& job, const std::string& render) {
   const fs::path p = job / ("raw_" + render + ".png");
@@ -545,10 +562,16 @@ void finish_into(const fs::path& job, const fs::path& stage) {
     for (auto& t : tasks) t.get();  // rethrows the first failure, once every task has ended
     tasks.clear();
   };
-  ImageF uv, mask;
+  const bool cast = j.value("ground_truth", "povray") == "raycast";
+  meta["ground_truth"] = cast ? "raycast" : "povray";
+  ImageF uv, mask, xyz, normal;
   if (has("uv") || has("mask") || has("backward") || has("coords") || has("normal"))
     spawn([&] {
-      uv = decode_uv(raw(RawPass::uv), fine && has("uv") ? raw(RawPass::uv_fine) : "");
+      if (cast) {
+        cast_ground_truth(job, camera, has("coords"), has("normal"), uv, xyz, normal);
+      } else {
+        uv = decode_uv(raw(RawPass::uv), fine && has("uv") ? raw(RawPass::uv_fine) : "");
+      }
       mask = channel(uv, 2);
     });
   if (has("albedo")) {
@@ -588,13 +611,16 @@ void finish_into(const fs::path& job, const fs::path& stage) {
     const Eigen::Vector3d lo(e["coords_min"][0], e["coords_min"][1], e["coords_min"][2]);
     const double span = e.at("coords_span").get<double>();
     spawn([&, lo, span] {
-      const ImageF xyz = decode_coords(raw(RawPass::coords), fine ? raw(RawPass::coords_fine) : "", lo, span, mask);
+      if (!cast) xyz = decode_coords(raw(RawPass::coords), fine ? raw(RawPass::coords_fine) : "", lo, span, mask);
       write_exr((stage / "coords.exr").string(), xyz, {"R", "G", "B"});
     });
     files["coords.exr"] = "float32 R, G, B = world x, y, z [m], 0 outside the sheet";
   }
   if (has("normal")) {
-    spawn([&] { write_exr((stage / "normal.exr").string(), decode_normal(raw(RawPass::normal), mask), {"R", "G", "B"}); });
+    spawn([&] {
+      if (!cast) normal = decode_normal(raw(RawPass::normal), mask);
+      write_exr((stage / "normal.exr").string(), normal, {"R", "G", "B"});
+    });
     files["normal.exr"] = "float32 unit world normal turned towards the camera, 0 outside the sheet";
   }
   if (has("backward")) {

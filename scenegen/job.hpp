@@ -29,7 +29,10 @@ struct SampleOptions {
   std::vector<Pass> passes = all_passes();
   Quality quality = Quality::final;
   std::optional<QualitySettings> quality_override;  ///< replaces quality_settings(quality) (studies)
-  bool fine_passes = true;         ///< float32-exact uv / coords (two renders each)
+  GroundTruth ground_truth = GroundTruth::raycast;  ///< uv, coords, normal, mask: cast by
+                                                    ///< scenegen or rendered by POV-Ray
+  bool fine_passes = true;         ///< povray ground truth: float32-exact uv / coords (two
+                                   ///< renders each); ray casting is float32-exact anyway
   std::string rig;                 ///< light rig; empty: drawn
   CameraParams camera;
   BackwardParams backward;

@@ -25,7 +25,7 @@ namespace {
 struct Cli {
   sg::SampleOptions sample;
   std::string out, passes = "all", quality = "final", size = "1024x1440", backward_grid = "121x177";
-  std::string job, povray = "povray";
+  std::string job, povray = "povray", ground_truth = "raycast";
   bool exact16 = false, keep_job = false, quiet = false;
   int parallel = 0, views = 1;
 };
@@ -78,7 +78,8 @@ void add_sample_options(CLI::App* app, Cli& c) {
   app->add_option("--quality", c.quality, "draft | final (photo and shading pass only)")->capture_default_str();
   app->add_option("--rig", c.sample.rig, "light rig three-point|rim|softbox|natural (default: drawn)");
   app->add_option("--backward-grid", c.backward_grid, "backward map grid WIDTHxHEIGHT over the page, or 'full' (image size)")->capture_default_str();
-  app->add_flag("--exact16", c.exact16, "skip the fine uv/coords renders (16-bit precision instead of float32)");
+  app->add_option("--ground-truth", c.ground_truth, "uv, coords, normal, mask: raycast (scenegen casts the pixel rays on the rendered triangles) | povray (emissive POV-Ray renders)")->capture_default_str();
+  app->add_flag("--exact16", c.exact16, "with --ground-truth povray: skip the fine uv/coords renders (16-bit precision instead of float32)");
   app->add_option("--dpi", c.sample.document_dpi, "built-in page resolution [dpi], up to 1200")->capture_default_str()
       ->check(CLI::Range(1.0, sg::MAX_DPI));
   app->add_option("--threads", c.sample.threads, "threads per POV-Ray process (1 keeps radiosity reproducible; 0: all cores)")->capture_default_str()
@@ -95,6 +96,7 @@ void finalise(Cli& c) {
   c.sample.passes = sg::parse_passes(c.passes);
   c.sample.quality = sg::parse_quality(c.quality);
   c.sample.fine_passes = !c.exact16;
+  c.sample.ground_truth = sg::parse_ground_truth(c.ground_truth);
 }
 
 sg::RunOptions run_options(const Cli& c) {
@@ -163,7 +165,7 @@ int main(int argc, char** argv) {
   auto* prepare = app.add_subcommand("prepare", "write a self-contained POV-Ray job folder (run it with its run.sh)");
   add_sample_options(prepare, c);
   prepare->add_option("--out", c.out, "job folder")->required()->check(non_empty());
-  auto* finish = app.add_subcommand("finish", "decode a rendered job folder into the sample files");
+  auto* finish = app.add_subcommand("finish", "decode a rendered job folder into the sample files (and cast the ground-truth rays)");
   finish->add_option("job", c.job, "job folder (rendered)")->required();
   finish->add_option("--out", c.out, "sample folder")->required()->check(non_empty());
   auto* run = app.add_subcommand("run", "render a prepared job folder with POV-Ray");

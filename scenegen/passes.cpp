@@ -60,11 +60,24 @@ std::vector<Pass> parse_passes(const std::string& list) {
   return out;
 }
 
-std::vector<RawPass> raw_passes_for(const std::vector<Pass>& passes, bool fine) {
-  const auto has = [&](Pass p) { return std::find(passes.begin(), passes.end(), p) != passes.end(); };
+std::string ground_truth_name(GroundTruth g) { return g == GroundTruth::povray ? "povray" : "raycast"; }
+
+GroundTruth parse_ground_truth(const std::string& name) {
+  if (name == "raycast") return GroundTruth::raycast;
+  if (name == "povray") return GroundTruth::povray;
+  throw InputError("unknown --ground-truth '" + name + "' (raycast, povray)");
+}
+
+std::vector<RawPass> raw_passes_for(const std::vector<Pass>& passes, bool fine, GroundTruth ground_truth) {
+  const auto has = [&](Pass p) {
+    const bool cast = p == Pass::uv || p == Pass::mask || p == Pass::backward || p == Pass::coords || p == Pass::normal;
+    if (cast && ground_truth == GroundTruth::raycast) return false;
+    return std::find(passes.begin(), passes.end(), p) != passes.end();
+  };
   std::vector<RawPass> raw;
-  // The UV render gives the mask and the occlusion test of the backward map.
-  if (has(Pass::uv) || has(Pass::mask) || has(Pass::backward)) {
+  // The UV render gives the mask (also of the coords and normal passes) and the occlusion test
+  // of the backward map.
+  if (has(Pass::uv) || has(Pass::mask) || has(Pass::backward) || has(Pass::coords) || has(Pass::normal)) {
     raw.push_back(RawPass::uv);
     if (fine && has(Pass::uv)) raw.push_back(RawPass::uv_fine);
   }
