@@ -106,7 +106,8 @@ bool LinearSolver::factorize(const BlockSymmetricMatrix& A, long pattern_id) {
     m_impl->n = A.size();
     ++m_analyses;
     if (std::getenv("PAPERSIM_DEBUG_SOLVER"))
-      std::fprintf(stderr, "analyse n %d nnz(A) %zu lnz %.0f ordering %d\n", A.size(), A.values().size(), c.lnz, c.selected);
+      std::fprintf(stderr, "analyse n %d nnz(A) %zu lnz %.0f ordering %d %s\n", A.size(), A.values().size(), c.lnz,
+                   c.selected, m_impl->factor->is_super ? "supernodal" : "simplicial");
   }
   const int ok = cholmod_factorize(&s, m_impl->factor, &c);
   if (!ok && c.status != CHOLMOD_NOT_POSDEF)
