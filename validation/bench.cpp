@@ -243,6 +243,7 @@ struct BenchOptions {
   std::vector<long> seeds;
   fs::path work, references, make_references;
   double duration = 0;  ///< override of every scene's duration [s] (0: the scenario's)
+  std::vector<std::pair<json::json_pointer, json>> sets;  ///< --set: keys of the test binary's scenes
   double target_mm = 2;
   ReferenceSettings reference_override;  ///< fields > 0 replace reference_settings()
   std::string csv;
@@ -250,6 +251,33 @@ struct BenchOptions {
 
 json with_duration(json scene, double duration) {
   if (duration > 0) scene["duration"] = duration;
+  return scene;
+}
+
+/// --set KEY=VALUE: a dotted scene key (solver.max_factor_reuse) and a JSON value.
+/// @throw BenchError for an item without '=' or a value that is not JSON.
+std::vector<std::pair<json::json_pointer, json>> parse_sets(const std::vector<std::string>& items) {
+  std::vector<std::pair<json::json_pointer, json>> out;
+  for (const std::string& item : items) {
+    const std::size_t eq = item.find('=');
+    if (eq == std::string::npos || eq == 0) throw BenchError("--set: '" + item + "' is not KEY=VALUE");
+    std::string pointer = "/" + item.substr(0, eq);
+    std::replace(pointer.begin(), pointer.end(), '.', '/');
+    const json value = json::parse(item.substr(eq + 1), nullptr, false);
+    if (value.is_discarded()) throw BenchError("--set: the value of '" + item + "' is not JSON (a number, true, \"text\")");
+    out.emplace_back(json::json_pointer(pointer), value);
+  }
+  return out;
+}
+
+/// The test binary's scene: the drawn one with the duration override and the --set keys.
+/// @throw BenchError when a --set key is not a key of the drawn scene.
+json test_scene(const BenchOptions& o, const json& drawn) {
+  json scene = with_duration(drawn, o.duration);
+  for (const auto& [key, value] : o.sets) {
+    if (!scene.contains(key)) throw BenchError("--set: '" + key.to_string() + "' is not a key of the drawn scene");
+    scene[key] = value;
+  }
   return scene;
 }
 
@@ -385,7 +413,7 @@ void bench_scenario(const BenchOptions& o, const std::string& scenario, std::vec
     if (!o.references.empty() && !ref.present)
       throw BenchError("--references: no reference for " + scenario + " seed " + std::to_string(seed) + " in " +
                        o.references.string() + " (make it with --make-references)");
-    std::vector<std::pair<std::string, json>> runs = {{"test", with_duration(drawn, o.duration)}};
+    std::vector<std::pair<std::string, json>> runs = {{"test", test_scene(o, drawn)}};
     if (!o.baseline.empty()) {
       const json own = draw_scene(o.baseline, scenario, seed, dir / "baseline_draw");
       runs.emplace_back("baseline", with_duration(with_settings_of(drawn, own), o.duration));
@@ -498,6 +526,10 @@ int main(int argc, char** argv) {
   app.add_option("--duration", o.duration, "override every scene's duration [s] (short runs for tests)")
       ->check(CLI::PositiveNumber);
   app.add_option("--csv", o.csv, "also write every run as CSV");
+  std::vector<std::string> sets;
+  app.add_option("--set", sets, "KEY=VALUE: set a key of the measured binary's scenes (dotted, e.g. "
+                 "solver.max_factor_reuse=4; the value is JSON), repeatable; not applied to the baseline or the "
+                 "references");
   app.footer("Exit status: 0 every run succeeded and passed the safety checks; 1 a run failed or is unsafe; 2 bad "
              "option or input.");
   CLI11_PARSE(app, argc, argv);
@@ -506,6 +538,7 @@ int main(int argc, char** argv) {
     o.papersim = executable(papersim, "--papersim");
     if (!o.baseline.empty()) o.baseline = executable(o.baseline, "--baseline");
     o.seeds = parse_seeds(seeds);
+    o.sets = parse_sets(sets);
     o.scenarios = parse_scenarios(scenarios);
     if (!references.empty() && !make_references.empty())
       throw BenchError("--references and --make-references cannot be given together");
