@@ -156,10 +156,12 @@ NewtonResult Integrator::solve(const StepContext& ctx, Eigen::VectorXd& x, StepS
     r.failure = "the start of the step is infeasible";
     return r;
   }
-  // Modified Newton (NewtonParams::max_factor_reuse): the factorisation of the last time step's
-  // final iteration may serve this step's first one; within the step, an iteration may reuse the
-  // last one while Newton converges fast (a full step, the residual falling tenfold or more).
-  bool may_reuse = m_reuse_next && m_factor_h == ctx.h;
+  // Modified Newton (NewtonParams::max_factor_reuse), in quiet phases only: when the last step
+  // converged within 2 iterations on an exact-Hessian factorisation with the same h, this step
+  // starts from that factorisation, and its iterations reuse it while Newton converges fast (a
+  // full step, the residual falling tenfold or more).
+  const bool quiet = m_reuse_next && m_factor_h == ctx.h;  // the last step needed at most 2 iterations
+  bool may_reuse = quiet;
   double residual_before = INF;  // residual of the iteration before the last
   bool factor_projected = false;  // the factorisation in use is of the projected Hessian
   for (r.iterations = 1; r.iterations <= m_params.max_iterations; ++r.iterations) {
@@ -196,7 +198,8 @@ NewtonResult Integrator::solve(const StepContext& ctx, Eigen::VectorXd& x, StepS
     }
     if (r.residual < m_params.tolerance) {
       r.converged = true;
-      m_reuse_next = !factor_projected;  // the next step may start from this factorisation
+      // A quiet step (flight, rest) lets the next one start from this factorisation.
+      m_reuse_next = !factor_projected && r.iterations <= 2;
       return r;
     }
     t0 = std::chrono::steady_clock::now();
@@ -259,7 +262,7 @@ NewtonResult Integrator::solve(const StepContext& ctx, Eigen::VectorXd& x, StepS
         if (m == 2) ++r.extrapolations;
       }
     }
-    may_reuse = alpha == 1.0 && !factor_projected && (r.iterations == 1 || r.residual < 0.1 * residual_before);
+    may_reuse = quiet && alpha == 1.0 && !factor_projected && (r.iterations == 1 || r.residual < 0.1 * residual_before);
     residual_before = r.residual;
     x = x_new;
     e = e_new;

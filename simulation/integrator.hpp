@@ -29,11 +29,12 @@ struct NewtonParams {
   /// of a sheet escaping a saddle by inertia alone, so the projected step is too short there and
   /// Newton crawls for tens of iterations (see docs/performance.md, "Bending model").
   int max_extrapolation = 1;
-  /// Modified Newton: up to this many consecutive iterations reuse the last factorisation (and
-  /// assemble only the gradient) instead of assembling and factoring the Hessian again, while
-  /// Newton converges: the last factorisation was of the exact (not projected) Hessian, the last
-  /// step was a full one and its residual at most a tenth of the one before (the first iteration of a
-  /// step: the last step converged, with the same h). 0: refactor every iteration.
+  /// Modified Newton in quiet phases (flight, rest): when the last time step converged within 2
+  /// iterations on a factorisation of the exact (not projected) Hessian with the same h, up to
+  /// this many consecutive iterations reuse that factorisation (and assemble only the gradient)
+  /// instead of assembling and factoring again: the step's first iteration, and each following
+  /// one whose predecessor took a full step with the residual falling tenfold or more.
+  /// 0: refactor every iteration.
   /// Factoring is most of an iteration's cost (docs/performance.md, "Where a fall's time goes").
   int max_factor_reuse = 0;
 };
@@ -108,7 +109,7 @@ class Integrator {
   long m_factor_pattern = -1;  // pattern of the factorisation in m_solver (-1: none yet)
   double m_factor_h = 0;       // time step of the factorisation in m_solver [s]
   int m_reused = 0;            // consecutive iterations that reused it
-  bool m_reuse_next = false;   // the last solve converged on an exact-Hessian factorisation
+  bool m_reuse_next = false;   // the last solve converged within 2 iterations, exact Hessian
 };
 
 }  // namespace papersim::simulation

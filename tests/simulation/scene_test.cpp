@@ -319,9 +319,9 @@ TEST(Run, ReusedFactorisationsOfAnUnchangedMatrixSaveFactoringAndKeepTheResult) 
   // fall-gable seed 0 at 20 mm edges over its first 25 ms: free fall, whose Newton matrix
   // (inertia and the flat sheet's stiffness) is the same at every iteration and step. Reusing
   // the last factorisation (solver.max_factor_reuse) must then factor fewer times and give the
-  // same motion to round-off. (Where the matrix changes, reuse costs iterations: measured on
-  // pull seed 3 at 14 mm over 0.4 s, 507 iterations and 414 factorisations against 222, and the
-  // end states 0.33 mm apart; docs/performance.md.)
+  // same motion to round-off. (Reuse is limited to quiet phases because where the matrix
+  // changes it costs iterations: reusing whenever Newton converged took pull seed 3 at 14 mm
+  // over 0.4 s from 222 iterations to 507, 414 of them factored; docs/performance.md.)
   Scene scene = make_scenario("fall-gable", 0);
   scene.sheet.edge_length = 0.02;
   scene.duration = 0.025;
