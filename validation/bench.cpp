@@ -275,7 +275,11 @@ std::vector<std::pair<json::json_pointer, json>> parse_sets(const std::vector<st
 json test_scene(const BenchOptions& o, const json& drawn) {
   json scene = with_duration(drawn, o.duration);
   for (const auto& [key, value] : o.sets) {
-    if (!scene.contains(key)) throw BenchError("--set: '" + key.to_string() + "' is not a key of the drawn scene");
+    if (!scene.contains(key)) {
+      std::string dotted = key.to_string().substr(1);
+      std::replace(dotted.begin(), dotted.end(), '/', '.');
+      throw BenchError("--set: '" + dotted + "' is not a key of the drawn scene");
+    }
     scene[key] = value;
   }
   return scene;
