@@ -46,6 +46,7 @@ StepStats& StepStats::operator+=(const StepStats& o) {
   newton_iterations += o.newton_iterations;
   line_search_evaluations += o.line_search_evaluations;
   extrapolations += o.extrapolations;
+  reused_factorizations += o.reused_factorizations;
   seconds_assembly += o.seconds_assembly;
   seconds_solve += o.seconds_solve;
   seconds_line_search += o.seconds_line_search;
@@ -103,6 +104,49 @@ double Integrator::start_energy(const SheetState& state, double h) {
   return energy(state.positions);
 }
 
+void Integrator::assemble_gradient(const Eigen::VectorXd& x, Eigen::VectorXd& g) const {
+  g.setZero();
+  for (const auto& t : m_terms) t->add_derivatives(x, g, nullptr);
+}
+
+void Integrator::assemble(const Eigen::VectorXd& x, Eigen::VectorXd& g, bool project) {
+  g.setZero();
+  m_hessian.set_zero();
+  for (const auto& t : m_terms) {
+    t->set_hessian_projection(project);
+    t->add_derivatives(x, g, &m_hessian);
+  }
+}
+
+bool Integrator::factor_newton_matrix(const Eigen::VectorXd& x, Eigen::VectorXd& g, StepStats& stats) {
+  auto t0 = std::chrono::steady_clock::now();
+  bool project = !m_params.exact_hessian_first;
+  assemble(x, g, project);
+  stats.seconds_assembly += seconds_since(t0);
+  t0 = std::chrono::steady_clock::now();
+  if (!project && !m_solver.factorize(m_hessian, m_pattern_id)) {
+    // The exact Hessian is indefinite here: fall back to the projected one.
+    ++stats.projected_hessians;
+    project = true;
+    const auto t1 = std::chrono::steady_clock::now();
+    assemble(x, g, true);
+    stats.seconds_assembly += seconds_since(t1);
+  }
+  // Projected element Hessians are PSD and inertia makes the sum definite; a tiny shift
+  // covers round-off in the static limit (no inertia, e.g. huge h).
+  double shift = 0;
+  if (project)
+    while (!m_solver.factorize(m_hessian, m_pattern_id)) {
+      const double next = shift == 0 ? 1e-10 : 10 * shift;
+      m_hessian.add_diagonal(Eigen::VectorXd::Constant(m_hessian.size(), next - shift));
+      shift = next;
+      if (shift > 1e3) throw NumericError("newton: the Hessian cannot be factored");
+    }
+  m_factor_pattern = m_pattern_id;
+  stats.seconds_solve += seconds_since(t0);
+  return project;
+}
+
 NewtonResult Integrator::solve(const StepContext& ctx, Eigen::VectorXd& x, StepStats& stats) {
   NewtonResult r;
   Eigen::VectorXd g(x.size());
@@ -112,38 +156,31 @@ NewtonResult Integrator::solve(const StepContext& ctx, Eigen::VectorXd& x, StepS
     r.failure = "the start of the step is infeasible";
     return r;
   }
+  // Modified Newton (NewtonParams::max_factor_reuse), in quiet phases only: when the last step
+  // converged within 2 iterations on an exact-Hessian factorisation with the same h, this step
+  // starts from that factorisation, and its iterations reuse it while Newton converges fast (a
+  // full step, the residual falling tenfold or more).
+  const bool quiet = m_reuse_next && m_factor_h == ctx.h;  // the last step needed at most 2 iterations
+  bool may_reuse = quiet;
+  double residual_before = INF;  // residual of the iteration before the last
+  bool factor_projected = false;  // the factorisation in use is of the projected Hessian
   for (r.iterations = 1; r.iterations <= m_params.max_iterations; ++r.iterations) {
     auto t0 = std::chrono::steady_clock::now();
     update_pattern(x);
-    const auto assemble = [&](bool project) {
-      g.setZero();
-      m_hessian.set_zero();
-      for (const auto& t : m_terms) {
-        t->set_hessian_projection(project);
-        t->add_derivatives(x, g, &m_hessian);
-      }
-    };
-    bool project = !m_params.exact_hessian_first;
-    assemble(project);
-    stats.seconds_assembly += seconds_since(t0);
-    t0 = std::chrono::steady_clock::now();
-    if (!project && !m_solver.factorize(m_hessian, m_pattern_id)) {
-      // The exact Hessian is indefinite here: fall back to the projected one.
-      ++stats.projected_hessians;
-      project = true;
-      const auto t1 = std::chrono::steady_clock::now();
-      assemble(true);
-      stats.seconds_assembly += seconds_since(t1);
-    }
-    // Projected element Hessians are PSD and inertia makes the sum definite; a tiny shift
-    // covers round-off in the static limit (no inertia, e.g. huge h).
-    double shift = 0;
-    if (project)
-    while (!m_solver.factorize(m_hessian, m_pattern_id)) {
-      const double next = shift == 0 ? 1e-10 : 10 * shift;
-      m_hessian.add_diagonal(Eigen::VectorXd::Constant(m_hessian.size(), next - shift));
-      shift = next;
-      if (shift > 1e3) throw NumericError("newton: the Hessian cannot be factored");
+    const bool reuse = may_reuse && m_reused < m_params.max_factor_reuse && m_factor_pattern == m_pattern_id;
+    m_reuse_next = false;
+    bool project = factor_projected;
+    if (reuse) {
+      ++m_reused;
+      ++stats.reused_factorizations;
+      assemble_gradient(x, g);
+      stats.seconds_assembly += seconds_since(t0);
+      t0 = std::chrono::steady_clock::now();
+    } else {
+      m_reused = 0;
+      project = factor_projected = factor_newton_matrix(x, g, stats);
+      m_factor_h = ctx.h;
+      t0 = std::chrono::steady_clock::now();
     }
     // Auxiliary unknowns (EnergyTerm::auxiliary_blocks) sit at their optimum, so their part of
     // the right-hand side is zero; their part of the solution is dropped.
@@ -161,6 +198,8 @@ NewtonResult Integrator::solve(const StepContext& ctx, Eigen::VectorXd& x, StepS
     }
     if (r.residual < m_params.tolerance) {
       r.converged = true;
+      // A quiet step (flight, rest) lets the next one start from this factorisation.
+      m_reuse_next = !factor_projected && r.iterations <= 2;
       return r;
     }
     t0 = std::chrono::steady_clock::now();
@@ -223,6 +262,8 @@ NewtonResult Integrator::solve(const StepContext& ctx, Eigen::VectorXd& x, StepS
         if (m == 2) ++r.extrapolations;
       }
     }
+    may_reuse = quiet && alpha == 1.0 && !factor_projected && (r.iterations == 1 || r.residual < 0.1 * residual_before);
+    residual_before = r.residual;
     x = x_new;
     e = e_new;
   }

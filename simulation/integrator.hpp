@@ -29,6 +29,14 @@ struct NewtonParams {
   /// of a sheet escaping a saddle by inertia alone, so the projected step is too short there and
   /// Newton crawls for tens of iterations (see docs/performance.md, "Bending model").
   int max_extrapolation = 1;
+  /// Modified Newton in quiet phases (flight, rest): when the last time step converged within 2
+  /// iterations on a factorisation of the exact (not projected) Hessian with the same h, up to
+  /// this many consecutive iterations reuse that factorisation (and assemble only the gradient)
+  /// instead of assembling and factoring again: the step's first iteration, and each following
+  /// one whose predecessor took a full step with the residual falling tenfold or more.
+  /// 0: refactor every iteration.
+  /// Factoring is most of an iteration's cost (docs/performance.md, "Where a fall's time goes").
+  int max_factor_reuse = 0;
 };
 
 /// What one Newton solve did.
@@ -49,6 +57,7 @@ struct StepStats {
   int newton_iterations = 0;
   int line_search_evaluations = 0;
   int extrapolations = 0;  ///< Newton steps lengthened beyond the full step
+  int reused_factorizations = 0;  ///< iterations that reused the previous factorisation
   double seconds_assembly = 0, seconds_solve = 0, seconds_line_search = 0;
   double residual = 0;  ///< largest final residual [m/s]
   /// Sums the counts and times; keeps the larger residual.
@@ -80,6 +89,15 @@ class Integrator {
  private:
   NewtonResult solve(const StepContext& ctx, Eigen::VectorXd& x, StepStats& stats);
   bool advance(SheetState& state, double h, int depth, StepStats& stats);
+  /// The gradient of the incremental potential at x into g (no Hessian).
+  void assemble_gradient(const Eigen::VectorXd& x, Eigen::VectorXd& g) const;
+  /// Gradient and Hessian at x (element Hessians projected to PSD when `project`).
+  void assemble(const Eigen::VectorXd& x, Eigen::VectorXd& g, bool project);
+  /// Assembles at x and factors the Newton matrix: the exact Hessian first (when
+  /// NewtonParams::exact_hessian_first), the projected one when that is not positive definite.
+  /// @return true when the factored matrix is the projected Hessian
+  /// @throw NumericError when even a shifted projected Hessian cannot be factored
+  bool factor_newton_matrix(const Eigen::VectorXd& x, Eigen::VectorXd& g, StepStats& stats);
   /// Asks every term whether its dynamic pattern changed at x and rebuilds the matrix if so.
   void update_pattern(const Eigen::VectorXd& x);
   std::vector<std::unique_ptr<EnergyTerm>> m_terms;
@@ -88,6 +106,10 @@ class Integrator {
   BlockSymmetricMatrix m_hessian;
   LinearSolver m_solver;
   long m_pattern_id = 0;
+  long m_factor_pattern = -1;  // pattern of the factorisation in m_solver (-1: none yet)
+  double m_factor_h = 0;       // time step of the factorisation in m_solver [s]
+  int m_reused = 0;            // consecutive iterations that reused it
+  bool m_reuse_next = false;   // the last solve converged within 2 iterations, exact Hessian
 };
 
 }  // namespace papersim::simulation

@@ -48,6 +48,7 @@ json meta_json(const Scene& scene, const RunResult& r, const json& extra) {
               {"projected_hessians", t.projected_hessians},
               {"line_search_evaluations", t.line_search_evaluations},
               {"extrapolations", t.extrapolations},
+              {"reused_factorizations", t.reused_factorizations},
               {"seconds_assembly", t.seconds_assembly},
               {"seconds_solve", t.seconds_solve},
               {"seconds_line_search", t.seconds_line_search},
