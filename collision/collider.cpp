@@ -37,6 +37,9 @@ RigidMotion::RigidMotion(std::vector<Keyframe> keyframes) : m_keyframes(std::mov
                                   common::format_number(m_keyframes[i - 1].time));
   }
   for (Keyframe& k : m_keyframes) {
+    if (!(std::isfinite(k.scale) && k.scale > 0.0))
+      throw std::invalid_argument("RigidMotion: keyframe scale must be finite and > 0, got " +
+                                  common::format_number(k.scale));
     if (!(k.rotation.norm() > 0.0))
       throw std::invalid_argument("RigidMotion: keyframe rotation quaternion has zero norm");
     k.rotation.normalize();
@@ -51,23 +54,39 @@ int RigidMotion::segment(double t) const {
   return static_cast<int>(it - m_keyframes.begin()) - 1;
 }
 
-Eigen::Isometry3d RigidMotion::pose(double t) const {
-  Eigen::Isometry3d x = Eigen::Isometry3d::Identity();
+Eigen::Affine3d RigidMotion::pose(double t) const {
+  Eigen::Affine3d x = Eigen::Affine3d::Identity();
   if (m_keyframes.empty()) return x;
   const Keyframe* k = &m_keyframes.front();
   if (t >= m_keyframes.back().time) k = &m_keyframes.back();
   const int i = segment(t);
   if (i < 0) {
-    x.linear() = k->rotation.toRotationMatrix();
+    x.linear() = k->scale * k->rotation.toRotationMatrix();
     x.translation() = k->translation;
     return x;
   }
   const Keyframe& a = m_keyframes[i];
   const Keyframe& b = m_keyframes[i + 1];
   const double s = (t - a.time) / (b.time - a.time);
-  x.linear() = a.rotation.slerp(s, b.rotation).toRotationMatrix();
+  x.linear() = ((1.0 - s) * a.scale + s * b.scale) * a.rotation.slerp(s, b.rotation).toRotationMatrix();
   x.translation() = (1.0 - s) * a.translation + s * b.translation;
   return x;
+}
+
+double RigidMotion::scale(double t) const {
+  if (m_keyframes.empty()) return 1.0;
+  const int i = segment(t);
+  if (i < 0) return t >= m_keyframes.back().time ? m_keyframes.back().scale : m_keyframes.front().scale;
+  const Keyframe& a = m_keyframes[i];
+  const Keyframe& b = m_keyframes[i + 1];
+  const double s = (t - a.time) / (b.time - a.time);
+  return (1.0 - s) * a.scale + s * b.scale;
+}
+
+double RigidMotion::scale_rate(double t) const {
+  const int i = segment(t);
+  if (i < 0) return 0.0;
+  return (m_keyframes[i + 1].scale - m_keyframes[i].scale) / (m_keyframes[i + 1].time - m_keyframes[i].time);
 }
 
 Eigen::Vector3d RigidMotion::linear_velocity(double t) const {
@@ -94,6 +113,7 @@ Eigen::Vector3d RigidMotion::angular_velocity(double t) const {
 bool RigidMotion::is_static() const {
   for (size_t i = 1; i < m_keyframes.size(); ++i) {
     if (m_keyframes[i].translation != m_keyframes[0].translation) return false;
+    if (m_keyframes[i].scale != m_keyframes[0].scale) return false;
     if (std::abs(m_keyframes[i].rotation.dot(m_keyframes[0].rotation)) < 1.0) return false;
   }
   return true;
@@ -106,18 +126,23 @@ double Collider::distance(const Eigen::Vector3d& p, double t, Eigen::Vector3d* g
   return distance_at_pose(p, motion.pose(t), gradient);
 }
 
-double Collider::distance_at_pose(const Eigen::Vector3d& p, const Eigen::Isometry3d& pose,
+// pose.linear() = s R with R a rotation, so s^2 = |first column|^2, the local point is
+// X = (s R)^T (p - c) / s^2 and the field of the scaled shape is s phi_local(X) (distances scale
+// with the shape); its gradient is R g_local = (s R) g_local / s.
+double Collider::distance_at_pose(const Eigen::Vector3d& p, const Eigen::Affine3d& pose,
                                   Eigen::Vector3d* gradient) const {
-  const Eigen::Vector3d local = pose.linear().transpose() * (p - pose.translation());
-  if (!gradient) return local_distance(local, nullptr);
+  const double s2 = pose.linear().col(0).squaredNorm();
+  const Eigen::Vector3d local = pose.linear().transpose() * (p - pose.translation()) / s2;
+  const double s = s2 == 1.0 ? 1.0 : std::sqrt(s2);
+  if (!gradient) return s * local_distance(local, nullptr);
   Eigen::Vector3d g_local;
   const double d = local_distance(local, &g_local);
-  *gradient = pose.linear() * g_local;
-  return d;
+  *gradient = pose.linear() * g_local / s;
+  return s * d;
 }
 
 namespace {
-Aabb transformed_box(const Aabb& local, const Eigen::Isometry3d& pose) {
+Aabb transformed_box(const Aabb& local, const Eigen::Affine3d& pose) {
   Aabb out;
   if (local.is_empty()) return out;
   for (int c = 0; c < 8; ++c) {
@@ -140,29 +165,55 @@ Aabb Collider::swept_bounds(double t0, double t1) const {
   Aabb out = transformed_box(local, motion.pose(t0));
   out.extend(transformed_box(local, motion.pose(t1)));
   if (local.is_empty() || motion.is_static() || !(t1 > t0)) return out;
-  const double radius = local.lo.cwiseAbs().cwiseMax(local.hi.cwiseAbs()).norm();
+  double radius = local.lo.cwiseAbs().cwiseMax(local.hi.cwiseAbs()).norm();
   constexpr int SAMPLES = 32;
-  double max_angle = 0.0;
+  double max_angle = 0.0, max_scale = 0.0;
   for (int k = 0; k <= SAMPLES; ++k) {
     const double t = t0 + (t1 - t0) * k / SAMPLES;
     out.extend(transformed_box(local, motion.pose(t)));
+    max_scale = std::max(max_scale, motion.scale(t));
     max_angle = std::max(max_angle, motion.angular_velocity(t).norm() * (t1 - t0) / SAMPLES);
   }
   // Keyframe times inside the interval are corners of the path: include them exactly.
   for (const Keyframe& k : motion.keyframes()) {
     if (!(k.time > t0 && k.time < t1)) continue;
     out.extend(transformed_box(local, motion.pose(k.time)));
+    max_scale = std::max(max_scale, k.scale);
     max_angle = std::max(max_angle, motion.angular_velocity(k.time).norm() * (t1 - t0) / SAMPLES);
   }
-  out.inflate(radius * (1.0 - std::cos(0.5 * max_angle)));
+  out.inflate(max_scale * radius * (1.0 - std::cos(0.5 * max_angle)));
   return out;
 }
 
-// x(t) = R(t) X + c(t)  =>  dx/dt = omega x (x - c(t)) + dc/dt, analytic from the keyframes.
+// x(t) = s(t) R(t) X + c(t)  =>  dx/dt = omega x (x - c) + (s'/s) (x - c) + dc/dt, analytic
+// from the keyframes (x - c = s R X, so d(s R)/dt X = (s'/s + omega x) (x - c)).
 Eigen::Vector3d Collider::velocity(const Eigen::Vector3d& p, double t) const {
   const Eigen::Vector3d c = motion.pose(t).translation();
-  return motion.linear_velocity(t) + motion.angular_velocity(t).cross(p - c);
+  return motion.linear_velocity(t) + motion.angular_velocity(t).cross(p - c) +
+         motion.scale_rate(t) / motion.scale(t) * (p - c);
 }
+
+// Sphere tracing: phi is 1-Lipschitz, so advancing by (phi - stop) / |d| keeps every point
+// passed over at phi >= stop.
+double Collider::segment_step(const Eigen::Vector3d& p, const Eigen::Vector3d& d, double t, double limit,
+                              double keep) const {
+  const double len = d.norm();
+  if (len == 0) return limit;
+  const Eigen::Affine3d pose = motion.pose(t);
+  double dist = distance_at_pose(p, pose);
+  const double stop = keep * dist;
+  double a = 0;
+  for (int it = 0; it < 256; ++it) {
+    const double advance = (dist - stop) / len;
+    if (advance <= 0) break;
+    a += advance;
+    if (a >= limit) return limit;
+    dist = distance_at_pose(p + a * d, pose);
+  }
+  return a;
+}
+
+bool Collider::distance_hessian(const Eigen::Vector3d&, double, Eigen::Matrix3d&) const { return false; }
 
 // ---------------------------------------------------------------------------------------------
 // PlaneCollider

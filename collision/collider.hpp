@@ -1,9 +1,11 @@
 #pragma once
-/// Obstacles as signed distance fields with a rigid, possibly keyframed, transform.
+/// Obstacles as signed distance fields with a possibly keyframed placement: a rotation, a
+/// translation and a uniform scale of the shape about its local origin.
 ///
 /// phi(p) < 0 inside the obstacle, > 0 outside, |grad phi| = 1 near the surface. Because the
 /// field is 1-Lipschitz, a point at distance d cannot reach the surface by moving less than d:
-/// the solver uses that as conservative continuous collision detection.
+/// the solver uses that as conservative continuous collision detection. Scaling keeps that
+/// property: the field of the scaled shape is s phi_local(X / s), again 1-Lipschitz.
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <memory>
@@ -37,29 +39,38 @@ struct Aabb {
   }
 };
 
-/// A rigid pose at a time: world point = rotation * local point + translation.
+/// A placement at a time: world point = rotation * (scale * local point) + translation.
 struct Keyframe {
   double time = 0.0;                                        ///< [s]
   Eigen::Vector3d translation = Eigen::Vector3d::Zero();   ///< [m]
   Eigen::Quaterniond rotation = Eigen::Quaterniond::Identity();
+  double scale = 1.0;  ///< uniform scale of the shape about its local origin, finite and > 0 [-]
 };
 
-/// Piecewise-linear rigid motion: translation interpolated linearly, rotation by slerp; held
-/// constant before the first and after the last keyframe. One keyframe = a fixed pose.
+/// Piecewise-linear motion: translation and scale interpolated linearly, rotation by slerp;
+/// held constant before the first and after the last keyframe. One keyframe = a fixed pose.
+/// (The name predates the scale: with every scale 1 the motion is rigid.)
 class RigidMotion {
  public:
   RigidMotion() = default;
-  /// @throw std::invalid_argument when keyframe times are not increasing.
+  /// @throw std::invalid_argument when keyframe times are not increasing or a scale is not
+  ///        finite and > 0.
   explicit RigidMotion(std::vector<Keyframe> keyframes);
-  /// Pose at time t [s]: identity when there is no keyframe.
-  Eigen::Isometry3d pose(double t) const;
+  /// Placement at time t [s]: linear part rotation * scale, translation [m]; identity when
+  /// there is no keyframe.
+  Eigen::Affine3d pose(double t) const;
+  /// Uniform scale at time t [-] (1 when there is no keyframe).
+  double scale(double t) const;
+  /// d scale / dt at time t [1/s] (0 outside the keyframe range; at a keyframe time the
+  /// segment that starts there is used).
+  double scale_rate(double t) const;
   const std::vector<Keyframe>& keyframes() const { return m_keyframes; }
   /// Velocity of the local origin at time t [m/s] (0 outside the keyframe range; at a keyframe
   /// time the segment that starts there is used).
   Eigen::Vector3d linear_velocity(double t) const;
   /// World angular velocity at time t [rad/s] (constant over a slerp segment).
   Eigen::Vector3d angular_velocity(double t) const;
-  /// True when the pose does not change with time (at most one keyframe, or all equal).
+  /// True when the placement does not change with time (at most one keyframe, or all equal).
   bool is_static() const;
 
  private:
@@ -79,28 +90,48 @@ class Collider {
   /// `gradient` is not null. Thread-safe.
   double distance(const Eigen::Vector3d& p, double t, Eigen::Vector3d* gradient = nullptr) const;
 
-  /// Same as distance(p, t, gradient) with the pose already evaluated (pose = motion.pose(t)):
-  /// saves the keyframe search and slerp when many points are queried at one time. Thread-safe.
-  double distance_at_pose(const Eigen::Vector3d& p, const Eigen::Isometry3d& pose,
+  /// Same as distance(p, t, gradient) with the placement already evaluated (pose =
+  /// motion.pose(t), linear part rotation * scale): saves the keyframe search and slerp when
+  /// many points are queried at one time. The field is s phi_local(X / s), X the point in the
+  /// rotated frame. Thread-safe.
+  double distance_at_pose(const Eigen::Vector3d& p, const Eigen::Affine3d& pose,
                           Eigen::Vector3d* gradient = nullptr) const;
 
   /// World bounding box of the obstacle's surface at time t.
   Aabb bounds(double t) const;
 
   /// A world box holding the obstacle's surface at every time in [t0, t1] [s] (conservative:
-  /// rotating segments are sampled and padded by the chord-to-arc deviation).
+  /// rotating segments are sampled and padded by the chord-to-arc deviation at the largest
+  /// scale; translation and scale are linear between keyframes, so boxes at the samples and
+  /// keyframe times hold them exactly).
   Aabb swept_bounds(double t0, double t1) const;
 
   /// Bounding box of the surface in the collider's own frame [m].
   Aabb bounds_local() const { return local_bounds(); }
 
-  /// Velocity of the obstacle's material point that is at world point p at time t [m/s].
+  /// Velocity of the obstacle's material point that is at world point p at time t [m/s]:
+  /// c' + omega x (p - c) + (s' / s) (p - c), c the origin of the local frame in the world and
+  /// s the scale (a growing or shrinking surface moves along its radius from c).
   Eigen::Vector3d velocity(const Eigen::Vector3d& p, double t) const;
 
   /// True when the obstacle is a convex solid with an exact field. Then the field is a convex
   /// function and the tangent plane at any surface point bounds the solid (it lies behind the
   /// plane): continuous collision detection can use that plane instead of sphere tracing.
   virtual bool is_convex() const { return false; }
+
+  /// Continuous collision detection of a point moving on the segment p -> p + a d at time t:
+  /// a step a in [0, limit] such that every point p + b d, b in [0, a], keeps
+  /// phi >= keep phi(p) (keep in [0, 1), e.g. 0.1: the point closes at most 90% of its gap).
+  /// Conservative (may return less than the largest such a); 0 when phi(p) <= 0. The default
+  /// is sphere tracing on the 1-Lipschitz field. Thread-safe.
+  virtual double segment_step(const Eigen::Vector3d& p, const Eigen::Vector3d& d, double t, double limit,
+                              double keep) const;
+
+  /// Hessian of the field at world point p at time t [1/m], written to `hessian`; false (and
+  /// nothing written) when the collider does not provide it. Contact adds its curvature term
+  /// where provided (the inverted sphere: there the term is positive semi-definite and keeps
+  /// Newton from sliding a vertex straight through the curved wall).
+  virtual bool distance_hessian(const Eigen::Vector3d& p, double t, Eigen::Matrix3d& hessian) const;
 
   double friction = 0.3;  ///< Coulomb coefficient sheet-obstacle [-]
   RigidMotion motion;     ///< world pose over time

@@ -13,7 +13,7 @@ namespace {
 
 const ColliderKind ALL_KINDS[] = {ColliderKind::plane,   ColliderKind::sphere, ColliderKind::cylinder,
                                   ColliderKind::capsule, ColliderKind::box,    ColliderKind::gable,
-                                  ColliderKind::mesh};
+                                  ColliderKind::mesh,    ColliderKind::inverted_sphere};
 const FieldKind ALL_FIELDS[] = {FieldKind::automatic, FieldKind::analytic, FieldKind::level_set};
 
 RigidMotion motion_of(const std::vector<Keyframe>& keyframes) {
@@ -21,6 +21,10 @@ RigidMotion motion_of(const std::vector<Keyframe>& keyframes) {
     if (!keyframes[i].translation.allFinite() || !keyframes[i].rotation.coeffs().allFinite() ||
         !std::isfinite(keyframes[i].time))
       throw ColliderError("collider keyframe " + std::to_string(i) + " is not finite");
+  for (size_t i = 0; i < keyframes.size(); ++i)
+    if (!(std::isfinite(keyframes[i].scale) && keyframes[i].scale > 0.0))
+      throw ColliderError("collider keyframe " + std::to_string(i) + ": scale must be finite and > 0, got " +
+                          common::format_number(keyframes[i].scale));
   try {
     return RigidMotion(keyframes);
   } catch (const std::invalid_argument& e) {
@@ -48,6 +52,8 @@ std::unique_ptr<Collider> make_mesh(const ColliderSpec& spec) {
 
 std::unique_ptr<Collider> make_primitive(const ColliderSpec& spec) {
   const Shape shape = shape_of(spec);
+  if (shape.kind == ShapeKind::inverted_sphere && spec.field == FieldKind::level_set)
+    throw ColliderError("collider inverted_sphere: field 'level_set' is not available (unbounded solid)");
   if (spec.field == FieldKind::level_set) return LevelSetCollider::from_shape(shape, spec.level_set);
   return std::make_unique<AnalyticCollider>(shape);
 }
@@ -62,6 +68,7 @@ Shape shape_of(const ColliderSpec& spec) {
     case ColliderKind::capsule: s.kind = ShapeKind::capsule; break;
     case ColliderKind::box: s.kind = ShapeKind::box; break;
     case ColliderKind::gable: s.kind = ShapeKind::gable; break;
+    case ColliderKind::inverted_sphere: s.kind = ShapeKind::inverted_sphere; break;
     default:
       throw ColliderError(std::string("collider ") + to_string(spec.kind) +
                           " is not an analytic primitive");
@@ -100,6 +107,7 @@ const char* to_string(ColliderKind kind) {
     case ColliderKind::box: return "box";
     case ColliderKind::gable: return "gable";
     case ColliderKind::mesh: return "mesh";
+    case ColliderKind::inverted_sphere: return "inverted_sphere";
   }
   return "unknown";
 }
@@ -108,7 +116,7 @@ ColliderKind collider_kind_from_string(const std::string& name) {
   for (ColliderKind k : ALL_KINDS)
     if (name == to_string(k)) return k;
   throw ColliderError("unknown collider kind '" + name +
-                      "' (expected plane, sphere, cylinder, capsule, box, gable or mesh)");
+                      "' (expected plane, sphere, cylinder, capsule, box, gable, mesh or inverted_sphere)");
 }
 
 const char* to_string(FieldKind field) {

@@ -13,7 +13,7 @@
 namespace papersim::collision {
 
 /// Obstacle kinds; local frames as in shapes.hpp (plane: z = 0, solid below).
-enum class ColliderKind { plane, sphere, cylinder, capsule, box, gable, mesh };
+enum class ColliderKind { plane, sphere, cylinder, capsule, box, gable, mesh, inverted_sphere };
 
 /// How the field is evaluated.
 enum class FieldKind {
@@ -22,7 +22,8 @@ enum class FieldKind {
   automatic,
   /// Exact analytic field; not available for meshes.
   analytic,
-  /// OpenVDB narrow-band level set; not available for the (unbounded) plane.
+  /// OpenVDB narrow-band level set; not available for the (unbounded) plane and inverted
+  /// sphere.
   level_set,
 };
 
@@ -30,7 +31,7 @@ enum class FieldKind {
 struct ColliderSpec {
   ColliderKind kind = ColliderKind::plane;
   FieldKind field = FieldKind::automatic;
-  double radius = 0.05;      ///< sphere, cylinder, capsule [m]
+  double radius = 0.05;      ///< sphere, inverted sphere, cylinder, capsule [m]
   double length = 0.1;       ///< cylinder, capsule (tip to tip), gable: along local x [m]
   Eigen::Vector3d half_extents = Eigen::Vector3d::Constant(0.05);  ///< box [m]
   double half_width = 0.05;  ///< gable: half base width along local y [m]
@@ -40,11 +41,12 @@ struct ColliderSpec {
   double obj_scale = 1.0;    ///< mesh: factor applied to the OBJ coordinates to get metres [-]
   LevelSetParams level_set;  ///< resolution of level-set fields (voxel size, band)
   double friction = 0.3;     ///< Coulomb coefficient sheet-obstacle [-]
-  std::vector<Keyframe> keyframes;  ///< rigid pose over time; empty = identity pose
+  /// Placement over time (rotation, translation, uniform scale of the shape); empty = identity.
+  std::vector<Keyframe> keyframes;
 };
 
 /// Builds the collider a spec describes.
-/// @throw ColliderError naming the bad value (dimension, friction, keyframe time, kind/field
+/// @throw ColliderError naming the bad value (dimension, friction, keyframe time or scale, kind/field
 ///        combination, grid too large); ColliderIoError naming the OBJ file when it cannot be
 ///        read or is not closed.
 std::unique_ptr<Collider> make_collider(const ColliderSpec& spec);
@@ -52,7 +54,8 @@ std::unique_ptr<Collider> make_collider(const ColliderSpec& spec);
 /// The Shape of a primitive spec. @throw ColliderError for plane and mesh.
 Shape shape_of(const ColliderSpec& spec);
 
-/// Lower-case name of a kind ("plane", "sphere", "cylinder", "capsule", "box", "gable", "mesh").
+/// Lower-case name of a kind ("plane", "sphere", "cylinder", "capsule", "box", "gable", "mesh",
+/// "inverted_sphere").
 const char* to_string(ColliderKind kind);
 /// Inverse of to_string. @throw ColliderError naming the unknown name.
 ColliderKind collider_kind_from_string(const std::string& name);

@@ -154,6 +154,8 @@ LevelSetCollider::~LevelSetCollider() = default;
 std::unique_ptr<LevelSetCollider> LevelSetCollider::from_shape(const Shape& shape,
                                                                const LevelSetParams& params) {
   validate(shape);
+  if (shape.kind == ShapeKind::inverted_sphere)
+    throw ColliderError("level set: an inverted sphere has an unbounded solid; use its analytic field");
   const Resolution r = resolve(params, shape_smallest_feature(shape));
   check_budget(shape_surface_area(shape), r, params.max_active_voxels);
   auto grid = std::make_unique<Grid>();

@@ -49,7 +49,8 @@ class LevelSetCollider : public Collider {
  public:
   /// Samples the exact signed distance of `shape` at every voxel of the narrow band (analytic
   /// fill, see the .cpp for why).
-  /// @throw ColliderError for an invalid shape or parameter, or a grid above max_active_voxels.
+  /// @throw ColliderError for an invalid shape or parameter, an inverted sphere (unbounded
+  ///        solid), or a grid above max_active_voxels.
   static std::unique_ptr<LevelSetCollider> from_shape(const Shape& shape,
                                                       const LevelSetParams& params = {});
   /// Builds the level set of a closed triangle mesh with openvdb::tools::meshToLevelSet.

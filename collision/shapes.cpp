@@ -82,6 +82,13 @@ double sphere_distance(double r, const Eigen::Vector3d& p, Eigen::Vector3d* g) {
   return n - r;
 }
 
+/// r - |p|: the cavity's free space inside, the solid outside; gradient towards the centre.
+double inverted_sphere_distance(double r, const Eigen::Vector3d& p, Eigen::Vector3d* g) {
+  const double n = p.norm();
+  if (g) *g = n > 0.0 ? Eigen::Vector3d(-p / n) : Eigen::Vector3d::UnitZ();
+  return r - n;
+}
+
 double cylinder_distance(const Shape& s, const Eigen::Vector3d& p, Eigen::Vector3d* g) {
   Eigen::Vector2d g2;
   const double d2 = disc_2d(p.tail<2>(), s.radius, g2);
@@ -121,7 +128,8 @@ double gable_distance(const Shape& s, const Eigen::Vector3d& p, Eigen::Vector3d*
 
 void validate(const Shape& s) {
   switch (s.kind) {
-    case ShapeKind::sphere: require_positive("radius", s.radius); return;
+    case ShapeKind::sphere:
+    case ShapeKind::inverted_sphere: require_positive("radius", s.radius); return;
     case ShapeKind::cylinder:
       require_positive("radius", s.radius);
       require_positive("length", s.length);
@@ -151,6 +159,7 @@ void validate(const Shape& s) {
 double shape_distance(const Shape& s, const Eigen::Vector3d& p, Eigen::Vector3d* g) {
   switch (s.kind) {
     case ShapeKind::sphere: return sphere_distance(s.radius, p, g);
+    case ShapeKind::inverted_sphere: return inverted_sphere_distance(s.radius, p, g);
     case ShapeKind::cylinder: return cylinder_distance(s, p, g);
     case ShapeKind::capsule: return capsule_distance(s, p, g);
     case ShapeKind::box: return box_distance(s.half_extents, p, g);
@@ -162,7 +171,8 @@ double shape_distance(const Shape& s, const Eigen::Vector3d& p, Eigen::Vector3d*
 Aabb shape_bounds(const Shape& s) {
   Aabb b;
   switch (s.kind) {
-    case ShapeKind::sphere: b.hi = Eigen::Vector3d::Constant(s.radius); break;
+    case ShapeKind::sphere:
+    case ShapeKind::inverted_sphere: b.hi = Eigen::Vector3d::Constant(s.radius); break;
     case ShapeKind::cylinder:
     case ShapeKind::capsule: b.hi = Eigen::Vector3d(0.5 * s.length, s.radius, s.radius); break;
     case ShapeKind::box: b.hi = s.half_extents; break;
@@ -177,7 +187,8 @@ Aabb shape_bounds(const Shape& s) {
 
 double shape_smallest_feature(const Shape& s) {
   switch (s.kind) {
-    case ShapeKind::sphere: return s.radius;
+    case ShapeKind::sphere:
+    case ShapeKind::inverted_sphere: return s.radius;
     case ShapeKind::cylinder: return std::min(s.radius, 0.5 * s.length);
     case ShapeKind::capsule: return s.radius;
     case ShapeKind::box: return s.half_extents.minCoeff();
@@ -190,7 +201,8 @@ double shape_surface_area(const Shape& s) {
   const double r = s.radius, l = s.length;
   const Eigen::Vector3d& e = s.half_extents;
   switch (s.kind) {
-    case ShapeKind::sphere: return 4.0 * M_PI * r * r;
+    case ShapeKind::sphere:
+    case ShapeKind::inverted_sphere: return 4.0 * M_PI * r * r;
     case ShapeKind::cylinder: return 2.0 * M_PI * r * (r + l);
     case ShapeKind::capsule: return 4.0 * M_PI * r * r + 2.0 * M_PI * r * (l - 2.0 * r);
     case ShapeKind::box: return 8.0 * (e.x() * e.y() + e.y() * e.z() + e.z() * e.x());
@@ -209,6 +221,38 @@ double AnalyticCollider::local_distance(const Eigen::Vector3d& p, Eigen::Vector3
 }
 
 Aabb AnalyticCollider::local_bounds() const { return shape_bounds(m_shape); }
+
+bool AnalyticCollider::distance_hessian(const Eigen::Vector3d& p, double t, Eigen::Matrix3d& hessian) const {
+  if (m_shape.kind != ShapeKind::inverted_sphere) return false;
+  const Eigen::Vector3d q = p - motion.pose(t).translation();
+  const double n = q.norm();
+  if (!(n > 0)) return false;
+  const Eigen::Vector3d u = q / n;
+  hessian = -(Eigen::Matrix3d::Identity() - u * u.transpose()) / n;
+  return true;
+}
+
+// Inverted sphere (centre c, radius R at time t): phi(p + a d) >= keep phi(p) exactly when
+// |q + a d| <= R' = R - keep phi(p), q = p - c. |q + a d|^2 is a convex quadratic in a that is
+// <= R'^2 at a = 0, so the set is an interval [a_-, a_+] holding 0: a_+ is the exact answer.
+double AnalyticCollider::segment_step(const Eigen::Vector3d& p, const Eigen::Vector3d& d, double t,
+                                      double limit, double keep) const {
+  if (m_shape.kind != ShapeKind::inverted_sphere) return Collider::segment_step(p, d, t, limit, keep);
+  const double dd = d.squaredNorm();
+  if (dd == 0) return limit;
+  const Eigen::Affine3d pose = motion.pose(t);
+  const double radius = m_shape.radius * pose.linear().col(0).norm();
+  const Eigen::Vector3d q = p - pose.translation();
+  const double gap = radius - q.norm();
+  if (!(gap > 0)) return 0.0;
+  const double inner = radius - keep * gap;
+  const double qd = q.dot(d);
+  const double c = q.squaredNorm() - inner * inner;  // < 0: q is inside the inner sphere
+  // Larger root of dd a^2 + 2 qd a + c = 0, written to avoid cancellation.
+  const double disc = std::sqrt(std::max(0.0, qd * qd - dd * c));
+  const double root = qd <= 0 ? (-qd + disc) / dd : -c / (qd + disc);
+  return std::clamp(root, 0.0, limit);
+}
 
 PolytopeFeatures polytope_features(const Shape& s) {
   PolytopeFeatures f;

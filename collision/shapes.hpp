@@ -4,6 +4,10 @@
 ///
 /// Local frames (place the shape in the world with the collider's keyframes):
 /// - sphere:   centred at the origin.
+/// - inverted sphere: a spherical cavity centred at the origin: the solid is everything outside
+///             the sphere, the free space inside it (phi = r - |p|, gradient towards the
+///             centre). Not convex; its bounding box is the sphere's, though the solid is
+///             unbounded (what lies outside the box is inside the solid).
 /// - cylinder: axis along local x, centred at the origin, flat caps at x = +-length/2.
 /// - capsule:  axis along local x, centred at the origin, tip to tip `length` (>= 2 radius).
 /// - box:      centred at the origin, faces at +-half_extents.
@@ -20,12 +24,12 @@
 namespace papersim::collision {
 
 /// Which analytic primitive a Shape describes.
-enum class ShapeKind { sphere, cylinder, capsule, box, gable };
+enum class ShapeKind { sphere, cylinder, capsule, box, gable, inverted_sphere };
 
 /// An analytic primitive with its dimensions [m]; only the fields of its kind are read.
 struct Shape {
   ShapeKind kind = ShapeKind::sphere;
-  double radius = 0.05;      ///< sphere, cylinder, capsule [m]
+  double radius = 0.05;      ///< sphere, inverted sphere, cylinder, capsule [m]
   double length = 0.1;       ///< cylinder, capsule (tip to tip), gable: extent along x [m]
   Eigen::Vector3d half_extents = Eigen::Vector3d::Constant(0.05);  ///< box [m]
   double half_width = 0.05;  ///< gable: half the base width (along y) [m]
@@ -44,8 +48,8 @@ double shape_distance(const Shape& shape, const Eigen::Vector3d& p, Eigen::Vecto
 /// Local bounding box of the shape's surface [m].
 Aabb shape_bounds(const Shape& shape);
 
-/// Smallest feature size used to choose a grid resolution [m]: sphere, cylinder and capsule
-/// radius, box smallest half extent, gable min(half_width, height), never above length/2.
+/// Smallest feature size used to choose a grid resolution [m]: sphere, inverted sphere, cylinder
+/// and capsule radius, box smallest half extent, gable min(half_width, height), never above length/2.
 double shape_smallest_feature(const Shape& shape);
 
 /// Surface area [m^2] (to estimate a level set's voxel count before building it).
@@ -69,8 +73,15 @@ class AnalyticCollider : public Collider {
   /// @throw ColliderError when a dimension is invalid (see validate).
   explicit AnalyticCollider(const Shape& shape);
   const Shape& shape() const { return m_shape; }
-  /// Every primitive (sphere, cylinder, capsule, box, gable prism) is convex.
-  bool is_convex() const override { return true; }
+  /// Every primitive but the inverted sphere (sphere, cylinder, capsule, box, gable prism) is
+  /// convex.
+  bool is_convex() const override { return m_shape.kind != ShapeKind::inverted_sphere; }
+  /// Exact for the inverted sphere (see the .cpp); sphere tracing otherwise.
+  double segment_step(const Eigen::Vector3d& p, const Eigen::Vector3d& d, double t, double limit,
+                      double keep) const override;
+  /// The inverted sphere's Hessian -(I - q q^T / |q|^2) / |q|, q = p - centre (negative
+  /// semi-definite); false for the other primitives.
+  bool distance_hessian(const Eigen::Vector3d& p, double t, Eigen::Matrix3d& hessian) const override;
 
  protected:
   double local_distance(const Eigen::Vector3d& p, Eigen::Vector3d* gradient) const override;

@@ -22,7 +22,7 @@ struct Node {
 /// Evaluates the field at barycentric w and keeps the best value in `best`.
 class Search {
  public:
-  Search(const Collider& collider, const Eigen::Matrix3d& vertices, const Eigen::Isometry3d& pose,
+  Search(const Collider& collider, const Eigen::Matrix3d& vertices, const Eigen::Affine3d& pose,
          const TriangleSdfParams& params)
       : m_collider(collider), m_vertices(vertices), m_pose(pose), m_params(params) {}
 
@@ -60,7 +60,7 @@ class Search {
  private:
   const Collider& m_collider;
   const Eigen::Matrix3d& m_vertices;
-  const Eigen::Isometry3d& m_pose;
+  const Eigen::Affine3d& m_pose;
   const TriangleSdfParams& m_params;
   double m_radius = 0.0;
 };
@@ -117,7 +117,7 @@ void polish(Search& s, const Eigen::Matrix3d& v, double step, int iterations) {
 
 TriangleSdfResult triangle_min_distance(const Collider& collider, const Eigen::Vector3d& a,
                                         const Eigen::Vector3d& b, const Eigen::Vector3d& c,
-                                        const Eigen::Isometry3d& pose,
+                                        const Eigen::Affine3d& pose,
                                         const TriangleSdfParams& params) {
   Eigen::Matrix3d vertices;
   vertices << a, b, c;
@@ -153,7 +153,7 @@ TriangleSdfResult triangle_min_distance(const Collider& collider, const Eigen::V
 std::vector<FaceSdfContact> mesh_edges_faces_vs_sdf(const Collider& collider,
                                                     const std::vector<Eigen::Vector3d>& positions,
                                                     const std::vector<Eigen::Vector3i>& faces,
-                                                    const Eigen::Isometry3d& pose,
+                                                    const Eigen::Affine3d& pose,
                                                     const TriangleSdfParams& params) {
   std::vector<TriangleSdfResult> results(faces.size());
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, faces.size(), 64),

@@ -53,7 +53,7 @@ struct TriangleSdfResult {
 /// respect to vertex i is w_i * gradient.
 TriangleSdfResult triangle_min_distance(const Collider& collider, const Eigen::Vector3d& a,
                                         const Eigen::Vector3d& b, const Eigen::Vector3d& c,
-                                        const Eigen::Isometry3d& pose,
+                                        const Eigen::Affine3d& pose,
                                         const TriangleSdfParams& params = {});
 
 /// One face of a mesh in contact range.
@@ -68,7 +68,7 @@ struct FaceSdfContact {
 std::vector<FaceSdfContact> mesh_edges_faces_vs_sdf(const Collider& collider,
                                                     const std::vector<Eigen::Vector3d>& positions,
                                                     const std::vector<Eigen::Vector3i>& faces,
-                                                    const Eigen::Isometry3d& pose,
+                                                    const Eigen::Affine3d& pose,
                                                     const TriangleSdfParams& params = {});
 
 }  // namespace papersim::collision

@@ -177,7 +177,7 @@ Eigen::VectorXd approach_distance(const std::vector<std::shared_ptr<const collis
                                   double t, double lookahead) {
   Eigen::VectorXd d = Eigen::VectorXd::Constant(positions.rows(), std::numeric_limits<double>::infinity());
   for (const auto& o : obstacles) {
-    const Eigen::Isometry3d pose = o->motion.pose(t);
+    const Eigen::Affine3d pose = o->motion.pose(t);
     const Eigen::Vector3d obstacle_velocity = o->motion.linear_velocity(t);
     for (Eigen::Index v = 0; v < positions.rows(); ++v) {
       Eigen::Vector3d gradient;

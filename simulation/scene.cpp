@@ -280,6 +280,7 @@ collision::ColliderSpec read_obstacle(Reader r) {
   c.friction = r.number("friction", c.friction, 0, 10);
   const Eigen::Vector3d t = r.vector<3>("position", Eigen::Vector3d::Zero());
   const Eigen::Vector3d rot = r.vector<3>("rotation_deg", Eigen::Vector3d::Zero());
+  const double scale = r.number("scale", 1.0, 0, 1e6, true);
   auto to_q = [](const Eigen::Vector3d& deg) {
     const Eigen::Vector3d a = deg * M_PI / 180;
     return Eigen::Quaterniond(Eigen::AngleAxisd(a.z(), Eigen::Vector3d::UnitZ()) *
@@ -291,6 +292,7 @@ collision::ColliderSpec read_obstacle(Reader r) {
     f.time = k.number("time", 0.0, 0, 1e6);
     f.translation = k.vector<3>("position", t);
     f.rotation = to_q(k.vector<3>("rotation_deg", rot));
+    f.scale = k.number("scale", scale, 0, 1e6, true);
     if (!c.keyframes.empty() && f.time <= c.keyframes.back().time)
       k.fail("time", "keyframe times must increase");
     k.finish();
@@ -300,6 +302,7 @@ collision::ColliderSpec read_obstacle(Reader r) {
     collision::Keyframe f;
     f.translation = t;
     f.rotation = to_q(rot);
+    f.scale = scale;
     c.keyframes.push_back(f);
   }
   r.finish();
@@ -418,7 +421,7 @@ json obstacle_json(const collision::ColliderSpec& c) {
   for (const auto& k : c.keyframes) {
     const Eigen::Vector3d e = k.rotation.toRotationMatrix().eulerAngles(2, 1, 0) * 180 / M_PI;
     keys.push_back({{"time", k.time}, {"position", vec(k.translation)},
-                    {"rotation_deg", vec(Eigen::Vector3d(e[2], e[1], e[0]))}});
+                    {"rotation_deg", vec(Eigen::Vector3d(e[2], e[1], e[0]))}, {"scale", k.scale}});
   }
   o["keyframes"] = keys;
   return o;

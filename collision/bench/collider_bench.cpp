@@ -115,7 +115,7 @@ Fixture& fixture(Case c) {
 void query_single(benchmark::State& state) {
   Fixture& f = fixture(static_cast<Case>(state.range(0)));
   state.SetLabel(CASE_NAMES[state.range(0)]);
-  const Eigen::Isometry3d pose = f.collider->motion.pose(0.0);
+  const Eigen::Affine3d pose = f.collider->motion.pose(0.0);
   std::size_t i = 0;
   Eigen::Vector3d g;
   for (auto _ : state) {
@@ -143,7 +143,7 @@ void query_single_with_time(benchmark::State& state) {
 void query_parallel(benchmark::State& state) {
   Fixture& f = fixture(static_cast<Case>(state.range(0)));
   state.SetLabel(CASE_NAMES[state.range(0)]);
-  const Eigen::Isometry3d pose = f.collider->motion.pose(0.0);
+  const Eigen::Affine3d pose = f.collider->motion.pose(0.0);
   std::vector<double> out(f.points.size());
   for (auto _ : state) {
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, f.points.size(), 1024),

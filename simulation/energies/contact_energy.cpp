@@ -57,8 +57,11 @@ void ObstacleContactEnergy::set_faces(const Eigen::MatrixX3i& faces, const Eigen
   for (size_t o = 0; o < m_obstacles.size(); ++o) {
     const auto* obs = m_obstacles[o].get();
     if (dynamic_cast<const collision::PlaneCollider*>(obs)) continue;
-    m_mode[o] = Mode::search;
     const auto* analytic = dynamic_cast<const collision::AnalyticCollider*>(obs);
+    // Inverted sphere: r - |p - c| is concave, so its minimum over a triangle is at a vertex
+    // (the farthest point from c): the vertex terms are the exact face contact.
+    if (analytic && analytic->shape().kind == collision::ShapeKind::inverted_sphere) continue;
+    m_mode[o] = Mode::search;
     if (!analytic) continue;
     if (analytic->shape().kind == collision::ShapeKind::sphere) {
       m_mode[o] = Mode::sphere;
@@ -81,7 +84,7 @@ ObstacleContactEnergy::WorldFeatures ObstacleContactEnergy::world_features(int o
   if (m_mode[o] != Mode::polytope) return w;
   const auto& analytic = static_cast<const collision::AnalyticCollider&>(*m_obstacles[o]);
   const collision::PolytopeFeatures local = collision::polytope_features(analytic.shape());
-  const Eigen::Isometry3d pose = analytic.motion.pose(t);
+  const Eigen::Affine3d pose = analytic.motion.pose(t);
   for (const auto& c : local.corners) w.corners.push_back(pose * c);
   w.edges = local.edges;
   for (const auto& e : w.edges) w.edge_length.push_back((w.corners[e[1]] - w.corners[e[0]]).norm());
@@ -152,7 +155,7 @@ double ObstacleContactEnergy::pair_mollifier_eps(const FeaturePair& p, const std
 }
 
 collision::PairPoints ObstacleContactEnergy::sphere_points(const Eigen::VectorXd& x, int f,
-                                                           const Eigen::Isometry3d& pose) const {
+                                                           const Eigen::Affine3d& pose) const {
   return {pose.translation(), x.segment<3>(3 * m_faces(f, 0)), x.segment<3>(3 * m_faces(f, 1)),
           x.segment<3>(3 * m_faces(f, 2))};
 }
@@ -182,7 +185,7 @@ namespace {
 /// minimum and the barrier becomes a smooth function of the vertex positions.
 collision::TriangleSdfResult polish_minimum(const collision::Collider& obs, const Eigen::Vector3d& a,
                                             const Eigen::Vector3d& b, const Eigen::Vector3d& c,
-                                            const Eigen::Isometry3d& pose, collision::TriangleSdfResult r) {
+                                            const Eigen::Affine3d& pose, collision::TriangleSdfResult r) {
   const Eigen::Vector3d e1 = b - a, e2 = c - a;
   const auto project = [](Eigen::Vector2d w) {  // onto w1, w2 >= 0, w1 + w2 <= 1
     w = w.cwiseMax(0.0);
@@ -230,7 +233,7 @@ collision::TriangleSdfResult polish_minimum(const collision::Collider& obs, cons
 /// Minimum of the field over a triangle: subdivision search, then polish_minimum near contact.
 collision::TriangleSdfResult face_minimum(const collision::Collider& obs, const Eigen::Vector3d& a,
                                           const Eigen::Vector3d& b, const Eigen::Vector3d& c,
-                                          const Eigen::Isometry3d& pose, const collision::TriangleSdfParams& params) {
+                                          const Eigen::Affine3d& pose, const collision::TriangleSdfParams& params) {
   collision::TriangleSdfResult r = collision::triangle_min_distance(obs, a, b, c, pose, params);
   if (r.distance < params.cutoff + params.lipschitz * params.resolution) r = polish_minimum(obs, a, b, c, pose, r);
   return r;
@@ -238,15 +241,15 @@ collision::TriangleSdfResult face_minimum(const collision::Collider& obs, const 
 
 }  // namespace
 
-double ObstacleContactEnergy::sphere_face_distance(int o, const Eigen::VectorXd& x, int f, const Eigen::Isometry3d& pose,
+double ObstacleContactEnergy::sphere_face_distance(int o, const Eigen::VectorXd& x, int f, const Eigen::Affine3d& pose,
                                                    collision::PairPoints& pts, collision::DistanceStencil& s) const {
   pts = sphere_points(x, f, pose);
   s = collision::point_triangle_stencil(pts);
-  return std::sqrt(collision::distance_squared(s, pts)) - m_sphere_radius[o];
+  return std::sqrt(collision::distance_squared(s, pts)) - sphere_radius(o, pose);
 }
 
 collision::TriangleSdfResult ObstacleContactEnergy::face_contact(int o, const Eigen::VectorXd& x, int f,
-                                                                 const Eigen::Isometry3d& pose) const {
+                                                                 const Eigen::Affine3d& pose) const {
   if (!face_near_bounds(o, x, f, 0.0)) return {};  // distance +inf: out of contact
   if (m_mode[o] == Mode::sphere) {
     // Exact: the closest point of the triangle to the centre.
@@ -322,7 +325,7 @@ void ObstacleContactEnergy::begin_step(const StepContext& ctx, const Eigen::Vect
   for (int o = 0; o < num_obstacles(); ++o) {
     const auto& obs = *m_obstacles[o];
     if (m_mode[o] == Mode::sphere || m_mode[o] == Mode::search) {
-      const Eigen::Isometry3d pose = obs.motion.pose(ctx.time_t0);
+      const Eigen::Affine3d pose = obs.motion.pose(ctx.time_t0);
       for (int f = 0; f < m_faces.rows(); ++f) {
         const auto r = face_contact(o, x_t0, f, pose);
         if (r.distance >= m_params.dhat || r.distance <= 0) continue;
@@ -407,7 +410,7 @@ double ObstacleContactEnergy::value(const Eigen::VectorXd& x) const {
   const double dhat = m_params.dhat;
   for (int o = 0; o < num_obstacles(); ++o) {
     if (m_mode[o] == Mode::sphere || m_mode[o] == Mode::search) {
-      const Eigen::Isometry3d pose = m_obstacles[o]->motion.pose(m_t1);
+      const Eigen::Affine3d pose = m_obstacles[o]->motion.pose(m_t1);
       collision::PairPoints pts;
       collision::DistanceStencil s;
       for (int f = 0; f < m_faces.rows(); ++f) {
@@ -480,7 +483,7 @@ void ObstacleContactEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::Vec
   collision::Matrix12d hess;
   for (int o = 0; o < num_obstacles(); ++o) {
     if (m_mode[o] == Mode::sphere || m_mode[o] == Mode::search) {
-      const Eigen::Isometry3d pose = m_obstacles[o]->motion.pose(m_t1);
+      const Eigen::Affine3d pose = m_obstacles[o]->motion.pose(m_t1);
       collision::PairPoints pts;
       collision::DistanceStencil s;
       for (int f = 0; f < m_faces.rows(); ++f) {
@@ -490,7 +493,7 @@ void ObstacleContactEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::Vec
         if (m_mode[o] == Mode::sphere) {
           const double d = sphere_face_distance(o, x, f, pose, pts, s);
           if (d >= dhat || d <= 0) continue;
-          collision::pair_barrier_derivatives(s, pts, dhat, 0.0, grad, H ? &hess : nullptr, m_sphere_radius[o]);
+          collision::pair_barrier_derivatives(s, pts, dhat, 0.0, grad, H ? &hess : nullptr, sphere_radius(o, pose));
           add_exact(vs, 1, 3, k, grad, &hess);
           continue;
         }
@@ -507,9 +510,16 @@ void ObstacleContactEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::Vec
       Eigen::Vector3d n;
       const double d = m_obstacles[o]->distance(p, m_t1, &n);
       if (d >= dhat || d <= 0) continue;
-      g.segment<3>(3 * v) += kappa(v) * barrier_first_derivative(d, dhat) * n;
+      const double b1 = barrier_first_derivative(d, dhat);
+      g.segment<3>(3 * v) += kappa(v) * b1 * n;
       if (H) {
-        const Eigen::Matrix3d local = kappa(v) * barrier_second_derivative(d, dhat) * n * n.transpose();
+        Eigen::Matrix3d local = kappa(v) * barrier_second_derivative(d, dhat) * n * n.transpose();
+        // The curvature term b' Hess phi where the collider provides Hess phi (see the header).
+        Eigen::Matrix3d curvature;
+        if (m_obstacles[o]->distance_hessian(p, m_t1, curvature)) {
+          local += kappa(v) * b1 * curvature;
+          if (m_project) local = project_psd(local);
+        }
         H->add_element<1>({v}, local);
       }
     }
@@ -566,22 +576,13 @@ double ObstacleContactEnergy::max_step(const Eigen::VectorXd& x, const Eigen::Ve
         if (rate > 0) alpha = std::min(alpha, 0.9 * dist / rate);
         continue;
       }
-      // Sphere tracing: phi is 1-Lipschitz, so advancing by (phi - stop) / len keeps every
-      // point passed over at phi >= stop. The vertex may close at most 90% of its gap.
-      const double stop = 0.1 * dist;
-      double t = 0;
-      for (int it = 0; it < 256; ++it) {
-        const double advance = (dist - stop) / len;
-        if (advance <= 0) break;
-        t += advance;
-        if (t >= alpha) break;
-        dist = obs.distance(p + t * d, m_t1);
-      }
-      alpha = std::min(alpha, t);
+      // Sphere tracing (exact for an inverted sphere): the vertex may close at most 90% of
+      // its gap.
+      alpha = std::min(alpha, obs.segment_step(p, d, m_t1, alpha, 0.1));
     }
     if (m_mode[o] != Mode::sphere && m_mode[o] != Mode::search) continue;
     // Faces: conservative advancement on a lower bound of the field over the moving triangle.
-    const Eigen::Isometry3d pose = obs.motion.pose(m_t1);
+    const Eigen::Affine3d pose = obs.motion.pose(m_t1);
     for (int f = 0; f < m_faces.rows(); ++f) {
       double speed = 0;
       for (int k = 0; k < 3; ++k) speed = std::max(speed, dx.segment<3>(3 * m_faces(f, k)).norm());
@@ -622,7 +623,7 @@ double ObstacleContactEnergy::max_step(const Eigen::VectorXd& x, const Eigen::Ve
               d[0].setZero();
               for (int k = 0; k < 3; ++k) d[k + 1] = dx.segment<3>(3 * m_faces(f, k));
               plane = std::max(plane, collision::point_triangle_ccd(sphere_points(x, f, pose), d, alpha, 0.1,
-                                                                    m_sphere_radius[o]));
+                                                                    sphere_radius(o, pose)));
             }
             alpha = std::min(alpha, plane);
             continue;
@@ -690,7 +691,7 @@ double ObstacleContactEnergy::surface_distance(int o, const Eigen::VectorXd& x, 
   double m = INF;
   for (int v = 0; v < m_area.size(); ++v) m = std::min(m, obs.distance(x.segment<3>(3 * v), t));
   if (m_mode[o] == Mode::vertices || !(m > 0)) return m;
-  const Eigen::Isometry3d pose = obs.motion.pose(t);
+  const Eigen::Affine3d pose = obs.motion.pose(t);
   const auto face_box = [&](int f) {
     collision::Aabb b;
     for (int k = 0; k < 3; ++k) b.extend(Eigen::Vector3d(x.segment<3>(3 * m_faces(f, k))));

@@ -5,7 +5,11 @@
 /// (Li et al. 2020, eq. 6); kappa = stiffness / dhat, so that the contact pressure at gap d is
 /// stiffness |b'(d)| / dhat: `stiffness` is the pressure at about half the thickness [Pa]. A
 /// sheet resting under its weight rho_A g with stiffness = rho_A g sits at about 0.55 dhat. The Hessian keeps b'' grad phi grad phi^T and drops b' Hess phi (exact for planes; for
-/// curved obstacles the dropped term is the obstacle curvature times the contact force).
+/// curved obstacles the dropped term is the obstacle curvature times the contact force), except
+/// where the collider provides Hess phi (Collider::distance_hessian: the inverted sphere). Inside
+/// a spherical cavity that term is positive semi-definite and must be kept: without it Newton's
+/// model lets a vertex slide tangentially for free, which on a concave wall drives it into the
+/// wall, and continuous collision detection then cuts every step short.
 /// Friction (lagged per time step, IPC eqs. 14-16): normal force magnitudes and tangent bases
 /// are frozen at the step start; the tangential slip u = T^T (x - x_t0 - h v_obstacle) pays
 /// mu lambda f0(|u|), with f0 the C1 smoothing of |u| below eps_v h.
@@ -149,13 +153,17 @@ class ObstacleContactEnergy : public EnergyTerm {
   /// Minimum of obstacle o's field (at `pose`) over face f at x: exact for a sphere, searched
   /// otherwise; +inf distance when the face's box is outside the obstacle's bounds.
   collision::TriangleSdfResult face_contact(int o, const Eigen::VectorXd& x, int f,
-                                            const Eigen::Isometry3d& pose) const;
+                                            const Eigen::Affine3d& pose) const;
   /// Sphere obstacle o (at `pose`) against face f: the four points (centre, face corners).
-  collision::PairPoints sphere_points(const Eigen::VectorXd& x, int f, const Eigen::Isometry3d& pose) const;
+  collision::PairPoints sphere_points(const Eigen::VectorXd& x, int f, const Eigen::Affine3d& pose) const;
   /// Sphere obstacle o against face f: its surface distance |centre - triangle| - radius [m],
   /// with the points and the closest-feature stencil it was measured on.
-  double sphere_face_distance(int o, const Eigen::VectorXd& x, int f, const Eigen::Isometry3d& pose,
+  double sphere_face_distance(int o, const Eigen::VectorXd& x, int f, const Eigen::Affine3d& pose,
                               collision::PairPoints& pts, collision::DistanceStencil& s) const;
+  /// Radius of sphere obstacle o at placement `pose` (its radius times the pose's scale) [m].
+  double sphere_radius(int o, const Eigen::Affine3d& pose) const {
+    return m_sphere_radius[o] * pose.linear().col(0).norm();
+  }
   double face_kappa(int f) const { return m_stiffness / m_params.dhat * m_face_area[f] / 3; }
   /// Corners and edges of polyhedral obstacle o at time t.
   WorldFeatures world_features(int o, double t) const;
@@ -178,7 +186,7 @@ class ObstacleContactEnergy : public EnergyTerm {
   std::vector<collision::Aabb> m_bounds;  // at the step end, inflated by dhat
   std::vector<FrictionPoint> m_friction;
   std::vector<Mode> m_mode;               // per obstacle
-  std::vector<double> m_sphere_radius;    // per obstacle (sphere mode) [m]
+  std::vector<double> m_sphere_radius;    // per obstacle (sphere mode), at scale 1 [m]
   std::vector<WorldFeatures> m_features;  // per obstacle at the step end (polytope mode)
   Eigen::MatrixX3i m_faces;
   Eigen::MatrixX2i m_edges;               // sheet edges (polytope mode)

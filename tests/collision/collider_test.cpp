@@ -77,7 +77,7 @@ TEST(RigidMotion, InterpolatesTranslationAndSlerp) {
   EXPECT_TRUE(m.pose(0.0).isApprox(Eigen::Isometry3d::Identity()));
   EXPECT_NEAR((m.pose(9.0).translation() - Eigen::Vector3d(2, 4, 1)).norm(), 0.0, 1e-14);
   // Halfway through the first segment: half the translation, half the angle.
-  const Eigen::Isometry3d x = m.pose(2.0);
+  const Eigen::Affine3d x = m.pose(2.0);
   EXPECT_NEAR((x.translation() - Eigen::Vector3d(1, 2, 0)).norm(), 0.0, 1e-14);
   EXPECT_NEAR((x.linear() - rot_z(M_PI / 4).toRotationMatrix()).norm(), 0.0, 1e-14);
   EXPECT_NEAR((m.linear_velocity(2.0) - Eigen::Vector3d(1, 2, 0)).norm(), 0.0, 1e-14);
@@ -107,7 +107,7 @@ TEST(Collider, KeyframedPlaneRotatesGradientAndMatchesVelocity) {
        keyframe(2.0, {0.5, 0, 0.2},
                 Eigen::Quaterniond(Eigen::AngleAxisd(0.6, Eigen::Vector3d(0, 1, 0))))});
   const double t = 0.7;
-  const Eigen::Isometry3d x = plane.motion.pose(t);
+  const Eigen::Affine3d x = plane.motion.pose(t);
   Eigen::Vector3d g;
   const Eigen::Vector3d p(0.3, 0.1, 0.4);
   const double d = plane.distance(p, t, &g);
@@ -140,7 +140,7 @@ TEST(Collider, BoundsFollowPose) {
   EXPECT_GE(s.hi.x(), std::sqrt(2.0) - 1e-12);
   // Every corner at every intermediate time is inside the swept box.
   for (int k = 0; k <= 100; ++k) {
-    const Eigen::Isometry3d x = plane.motion.pose(k / 100.0);
+    const Eigen::Affine3d x = plane.motion.pose(k / 100.0);
     for (int c = 0; c < 4; ++c) {
       const Eigen::Vector3d q = x * Eigen::Vector3d((c & 1) ? 1 : -1, (c & 2) ? 1 : -1, 0);
       EXPECT_TRUE((q.array() >= s.lo.array() - 1e-12).all() &&

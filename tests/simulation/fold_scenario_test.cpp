@@ -69,11 +69,11 @@ TEST(FoldScenario, RollerRollsAcrossPerpendicularToTheFoldDirection) {
     // The sheet's centre is at the world origin (x, y).
     const Eigen::Vector3d centre(s.sheet.position.x(), s.sheet.position.y(), 0.0);
     for (double t : {0.0, 2.9, 3.0}) {
-      const Eigen::Isometry3d pose = roller->motion.pose(t);
+      const Eigen::Affine3d pose = roller->motion.pose(t);
       EXPECT_NEAR((horizontal(pose.translation()) - (centre + 0.35 * d)).norm(), 0.0, 1e-12) << t;
       EXPECT_NEAR(pose.translation().z(), 0.057, 1e-12);
     }
-    const Eigen::Isometry3d end = roller->motion.pose(6.0);
+    const Eigen::Affine3d end = roller->motion.pose(6.0);
     EXPECT_NEAR((horizontal(end.translation()) - (centre - 0.35 * d)).norm(), 0.0, 1e-12);
     EXPECT_NEAR(end.translation().z(), 0.057, 1e-12);
     for (double t : {0.0, 4.5, 6.0}) {

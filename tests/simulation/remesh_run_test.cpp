@@ -283,7 +283,7 @@ TEST(RemeshRun, DrapedSheetRemeshesWithoutDegenerateFaces) {
   state.velocities = d.velocities;
   state.obstacle_distance = Eigen::VectorXd::Constant(n, std::numeric_limits<double>::infinity());
   for (const auto& o : obstacles) {
-    const Eigen::Isometry3d pose = o->motion.pose(t);
+    const Eigen::Affine3d pose = o->motion.pose(t);
     for (int v = 0; v < n; ++v)
       state.obstacle_distance(v) = std::min(
           state.obstacle_distance(v), o->distance_at_pose(d.positions.row(v).transpose(), pose));

@@ -10,6 +10,7 @@
 #include <sstream>
 #include <nlohmann/json.hpp>
 
+#include "collision/collider_factory.hpp"
 #include "simulation/errors.hpp"
 #include "simulation/scenario.hpp"
 #include "simulation/scene.hpp"
@@ -89,6 +90,66 @@ TEST(Scene, JsonRoundTripIsExact) {
   const json once = scene_to_json(s);
   const json twice = scene_to_json(scene_from_json(once, "round trip"));
   EXPECT_EQ(once, twice);
+}
+
+// Obstacle `scale` (uniform scale of the shape, per keyframe or for the whole obstacle): read,
+// range-checked with the key named, written back exactly.
+TEST(Scene, ObstacleScaleIsReadCheckedAndRoundTrips) {
+  const json keys = {{{"time", 0.0}}, {{"time", 1.0}, {"scale", 0.25}}};
+  const Scene s = scene_from_json(
+      {{"obstacles", {{{"kind", "inverted_sphere"}, {"radius", 0.2}, {"scale", 2.0}, {"keyframes", keys}}}}},
+      "s.json");
+  ASSERT_EQ(s.obstacles.size(), 1u);
+  EXPECT_EQ(s.obstacles[0].kind, papersim::collision::ColliderKind::inverted_sphere);
+  ASSERT_EQ(s.obstacles[0].keyframes.size(), 2u);
+  EXPECT_EQ(s.obstacles[0].keyframes[0].scale, 2.0);  // the obstacle's scale is the default
+  EXPECT_EQ(s.obstacles[0].keyframes[1].scale, 0.25);
+  EXPECT_EQ(scene_to_json(scene_from_json(scene_to_json(s), "again")), scene_to_json(s));
+  for (const json& bad : {json(0.0), json(-1.0), json("big")}) {
+    const json k = {{{"time", 0.0}}, {{"time", 1.0}, {"scale", bad}}};
+    EXPECT_NE(error_of({{"obstacles", {{{"kind", "sphere"}, {"keyframes", k}}}}}).find("'obstacles[0].keyframes[1].scale'"),
+              std::string::npos)
+        << bad;
+    EXPECT_NE(error_of({{"obstacles", {{{"kind", "sphere"}, {"scale", bad}}}}}).find("'obstacles[0].scale'"),
+              std::string::npos)
+        << bad;
+  }
+}
+
+// crumple: the same seed draws the same scene, the cavity holds at 0.2 m until 1 s and shrinks
+// to 0.05 m at 5 s, the material is SCENARIOS.md's, and every draw starts with the whole sheet
+// inside the cavity (every corner at least 5 mm from its wall).
+TEST(Scenario, CrumpleDrawsTheSheetInsideTheShrinkingCavity) {
+  using papersim::collision::ColliderKind;
+  EXPECT_EQ(scene_to_json(make_scenario("crumple", 5)), scene_to_json(make_scenario("crumple", 5)));
+  EXPECT_NE(scene_to_json(make_scenario("crumple", 5)), scene_to_json(make_scenario("crumple", 6)));
+  for (int seed = 0; seed < 40; ++seed) {
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    const Scene s = make_scenario("crumple", seed);
+    EXPECT_DOUBLE_EQ(s.duration, 5.0);
+    EXPECT_FALSE(s.ground);
+    EXPECT_TRUE(s.self_contact.enabled);
+    EXPECT_DOUBLE_EQ(s.sheet.material.yield_curvature, 200.0);
+    EXPECT_DOUBLE_EQ(s.sheet.material.weakening, 2.0);
+    EXPECT_DOUBLE_EQ(s.sheet.material.damping, 1e-3);
+    ASSERT_EQ(s.obstacles.size(), 1u);
+    ASSERT_EQ(s.obstacles[0].kind, ColliderKind::inverted_sphere);
+    const auto cavity = papersim::collision::make_collider(s.obstacles[0]);
+    EXPECT_DOUBLE_EQ(0.2 * cavity->motion.scale(0.0), 0.2);
+    EXPECT_DOUBLE_EQ(0.2 * cavity->motion.scale(1.0), 0.2);
+    EXPECT_NEAR(0.2 * cavity->motion.scale(3.0), 0.125, 1e-15);
+    EXPECT_NEAR(0.2 * cavity->motion.scale(5.0), 0.05, 1e-15);
+    // Corners of the flat sheet: centre + Rz Ry Rx (+-w/2, +-h/2, 0).
+    const Eigen::Vector3d a = s.sheet.rotation_deg * M_PI / 180;
+    const Eigen::Matrix3d R = (Eigen::AngleAxisd(a.z(), Eigen::Vector3d::UnitZ()) *
+                               Eigen::AngleAxisd(a.y(), Eigen::Vector3d::UnitY()) *
+                               Eigen::AngleAxisd(a.x(), Eigen::Vector3d::UnitX())).toRotationMatrix();
+    EXPECT_GT(std::abs(a.x()) * 180 / M_PI, 81.9);  // nearly upright, as the reference starts it
+    for (int c = 0; c < 4; ++c) {
+      const Eigen::Vector3d corner((c & 1 ? 0.5 : -0.5) * s.sheet.width, (c & 2 ? 0.5 : -0.5) * s.sheet.height, 0);
+      EXPECT_GT(cavity->distance(s.sheet.position + R * corner, 0.0), 5e-3);
+    }
+  }
 }
 
 TEST(Scenario, SameSeedSameSceneDifferentSeedDifferentScene) {
