@@ -81,6 +81,22 @@ Shape shape_of(const ColliderSpec& spec) {
   return s;
 }
 
+ColliderSpec shrinking_cavity(const Eigen::Vector3d& centre, double radius, double t_hold, double t_end,
+                              double end_scale, double friction) {
+  ColliderSpec cavity;
+  cavity.kind = ColliderKind::inverted_sphere;
+  cavity.radius = radius;
+  cavity.friction = friction;
+  Keyframe k;
+  k.translation = centre;
+  k.time = t_hold;
+  cavity.keyframes.push_back(k);
+  k.time = t_end;
+  k.scale = end_scale;
+  cavity.keyframes.push_back(k);
+  return cavity;
+}
+
 std::unique_ptr<Collider> make_collider(const ColliderSpec& spec) {
   if (!(std::isfinite(spec.friction) && spec.friction >= 0.0))
     throw ColliderError(std::string("collider ") + to_string(spec.kind) +

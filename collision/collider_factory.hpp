@@ -45,6 +45,12 @@ struct ColliderSpec {
   std::vector<Keyframe> keyframes;
 };
 
+/// A spherical cavity (inverted sphere) of `radius` [m] centred at `centre` [m] that holds its
+/// size until `t_hold` [s] and shrinks linearly to `end_scale` times it at `t_end` [s] (held
+/// after); friction `friction` [-]. Used by the crumple scenario and the stress suite.
+ColliderSpec shrinking_cavity(const Eigen::Vector3d& centre, double radius, double t_hold, double t_end,
+                              double end_scale, double friction = 0.3);
+
 /// Builds the collider a spec describes.
 /// @throw ColliderError naming the bad value (dimension, friction, keyframe time or scale, kind/field
 ///        combination, grid too large); ColliderIoError naming the OBJ file when it cannot be

@@ -374,19 +374,8 @@ Scene crumple(std::uint64_t seed) {
   const double tilt_x = pose.uniform(-3, 3), tilt_y = pose.uniform(-3, 3), turn = pose.uniform(0, 360);
   s.sheet.rotation_deg = Eigen::Vector3d(85 + tilt_x, tilt_y, turn);
   s.sheet.position = centre + Eigen::Vector3d(pose.uniform(-5e-3, 5e-3), pose.uniform(-5e-3, 5e-3), 0);
-  collision::ColliderSpec sphere;
-  sphere.kind = collision::ColliderKind::inverted_sphere;
-  sphere.radius = 0.2;
-  sphere.friction = 0.3;
-  collision::Keyframe k;
-  k.translation = centre;
-  k.time = 0.0;
-  sphere.keyframes.push_back(k);
-  k.time = 1.0;
-  sphere.keyframes.push_back(k);
-  k.time = 5.0;
-  k.scale = 0.25;
-  sphere.keyframes.push_back(k);
+  // Held until 1 s (a keyframe before it is not needed: the placement is held before the first).
+  const collision::ColliderSpec sphere = collision::shrinking_cavity(centre, 0.2, 1.0, 5.0, 0.25);
   s.obstacles.push_back(sphere);
   return s;
 }

@@ -116,16 +116,7 @@ ps::Scene shrinking_sphere_scene() {
   s.ground = false;
   s.self_contact.enabled = true;
   s.contact.stiffness = 400.0;  // as the crumple scenario (simulation/scenario.cpp says why)
-  pc::ColliderSpec cavity;
-  cavity.kind = pc::ColliderKind::inverted_sphere;
-  cavity.radius = 0.06;
-  pc::Keyframe k;
-  k.translation = s.sheet.position;
-  k.time = 0.15;
-  cavity.keyframes.push_back(k);
-  k.time = 0.85;
-  k.scale = 0.5;
-  cavity.keyframes.push_back(k);
+  const pc::ColliderSpec cavity = pc::shrinking_cavity(s.sheet.position, 0.06, 0.15, 0.85, 0.5);
   s.obstacles.push_back(cavity);
   return s;
 }
