@@ -119,6 +119,20 @@ bool RigidMotion::is_static() const {
   return true;
 }
 
+double RigidMotion::next_keyframe_time(double t) const {
+  for (const Keyframe& k : m_keyframes)
+    if (k.time > t) return k.time;
+  return std::numeric_limits<double>::infinity();
+}
+
+bool RigidMotion::moves_during(double t0, double t1) const {
+  if (is_static()) return false;
+  for (double t = t0; t < t1; t = next_keyframe_time(t))
+    if (linear_velocity(t).squaredNorm() > 0 || angular_velocity(t).squaredNorm() > 0 || scale_rate(t) != 0)
+      return true;
+  return false;
+}
+
 // ---------------------------------------------------------------------------------------------
 // Collider
 
@@ -214,6 +228,14 @@ double Collider::segment_step(const Eigen::Vector3d& p, const Eigen::Vector3d& d
 }
 
 bool Collider::distance_hessian(const Eigen::Vector3d&, double, Eigen::Matrix3d&) const { return false; }
+
+bool Collider::moves_affinely(double t0, double t1) const { return !motion.moves_during(t0, t1); }
+
+double Collider::moving_segment_step(const Eigen::Vector3d& p, const Eigen::Vector3d& d, double t, double dt,
+                                     double limit, double keep) const {
+  if (!moves_affinely(t, t + limit * dt)) return -1.0;
+  return segment_step(p, d, t, limit, keep);
+}
 
 // ---------------------------------------------------------------------------------------------
 // PlaneCollider

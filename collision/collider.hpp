@@ -72,6 +72,11 @@ class RigidMotion {
   Eigen::Vector3d angular_velocity(double t) const;
   /// True when the placement does not change with time (at most one keyframe, or all equal).
   bool is_static() const;
+  /// Time of the first keyframe after t [s] (+infinity when there is none): translation and
+  /// scale move linearly, and rotation turns at a constant rate, between t and that time.
+  double next_keyframe_time(double t) const;
+  /// True when the placement changes at some time in [t0, t1) [s].
+  bool moves_during(double t0, double t1) const;
 
  private:
   /// Index i of the segment [t_i, t_i+1) holding t, or -1 outside the keyframe range.
@@ -132,6 +137,21 @@ class Collider {
   /// where provided (the inverted sphere: there the term is positive semi-definite and keeps
   /// Newton from sliding a vertex straight through the curved wall).
   virtual bool distance_hessian(const Eigen::Vector3d& p, double t, Eigen::Matrix3d& hessian) const;
+
+  /// True when over [t0, t1] the field moves so that a point on a straight line stays on a
+  /// straight line in the obstacle's frame: translation (and, for a shape that allows it, a
+  /// uniform scale), rotations that leave the field unchanged aside (a sphere's, a cylinder's or
+  /// capsule's spin about its axis). moving_segment_step then bounds the joint motion exactly.
+  /// Default: only an obstacle that does not move over [t0, t1].
+  virtual bool moves_affinely(double t0, double t1) const;
+
+  /// Continuous collision detection of a point moving on p -> p + a d while the obstacle moves
+  /// from time t to t + a dt, a in [0, limit]: a step a such that every point passed keeps
+  /// phi >= keep phi(p, t). Needs moves_affinely(t, t + limit dt) and dt >= 0; returns a
+  /// negative value when the collider cannot bound the motion. The default handles an obstacle
+  /// that does not move over the interval (segment_step).
+  virtual double moving_segment_step(const Eigen::Vector3d& p, const Eigen::Vector3d& d, double t, double dt,
+                                     double limit, double keep) const;
 
   double friction = 0.3;  ///< Coulomb coefficient sheet-obstacle [-]
   RigidMotion motion;     ///< world pose over time

@@ -254,6 +254,67 @@ double AnalyticCollider::segment_step(const Eigen::Vector3d& p, const Eigen::Vec
   return std::clamp(root, 0.0, limit);
 }
 
+bool AnalyticCollider::moves_affinely(double t0, double t1) const {
+  const bool any_rotation = m_shape.kind == ShapeKind::sphere || m_shape.kind == ShapeKind::inverted_sphere;
+  const bool spin = m_shape.kind == ShapeKind::cylinder || m_shape.kind == ShapeKind::capsule;
+  for (double t = t0; t < t1; t = motion.next_keyframe_time(t)) {
+    if (motion.scale_rate(t) != 0 && m_shape.kind != ShapeKind::inverted_sphere) return false;
+    const Eigen::Vector3d omega = motion.angular_velocity(t);
+    if (any_rotation || omega.squaredNorm() == 0) continue;
+    if (!spin) return false;
+    // A spin about the axis keeps the axis where it is: omega along it.
+    const Eigen::Vector3d axis = motion.pose(t).linear().col(0).normalized();
+    if ((omega - omega.dot(axis) * axis).norm() > 1e-9 * omega.norm()) return false;
+  }
+  return true;
+}
+
+// The motion is taken piece by piece between keyframes, within which translation and scale are
+// linear in time.
+double AnalyticCollider::moving_segment_step(const Eigen::Vector3d& p, const Eigen::Vector3d& d, double t,
+                                             double dt, double limit, double keep) const {
+  if (dt == 0) return segment_step(p, d, t, limit, keep);
+  if (dt < 0 || !moves_affinely(t, t + limit * dt)) return -1.0;
+  const double phi0 = distance(p, t);
+  if (!(phi0 > 0)) return 0.0;
+  const double stop = keep * phi0;
+  double a = 0;
+  for (double tk = motion.next_keyframe_time(t); a < limit; tk = motion.next_keyframe_time(tk)) {
+    const double end = std::min(limit, (tk - t) / dt);
+    if (end <= a) continue;
+    const double b = piece_step(p + a * d, d, t + a * dt, dt, end - a, stop, t + 0.5 * (a + end) * dt);
+    if (b < end - a) return a + b;
+    a = end;
+  }
+  return limit;
+}
+
+double AnalyticCollider::piece_step(const Eigen::Vector3d& p, const Eigen::Vector3d& d, double t, double dt,
+                                    double length, double stop, double t_inside) const {
+  const Eigen::Affine3d pose = motion.pose(t);
+  Eigen::Vector3d n;
+  const double phi = distance_at_pose(p, pose, &n);
+  if (!(phi > stop)) return 0.0;
+  // The point's motion relative to the frame's origin, per unit a.
+  const Eigen::Vector3d r = d - dt * motion.linear_velocity(t_inside);
+  if (m_shape.kind != ShapeKind::inverted_sphere) {
+    const double rate = -n.dot(r);  // phi(a) >= phi + a n.r (convex along the relative segment)
+    return rate > 0 ? std::min(length, (phi - stop) / rate) : length;
+  }
+  // phi(a) = s(a) R - |q + a r| with s linear in a: concave, so f(a) = |q + a r| - (s(a) R -
+  // stop) is convex, negative at 0, and the admissible steps are [0, root].
+  const double s0 = pose.linear().col(0).norm(), rate_s = motion.scale_rate(t_inside) * dt;
+  const Eigen::Vector3d q = p - pose.translation();
+  const auto f = [&](double a) { return (q + a * r).norm() - ((s0 + a * rate_s) * m_shape.radius - stop); };
+  if (f(length) < 0) return length;
+  double lo = 0, hi = length;
+  for (int it = 0; it < 60; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    (f(mid) < 0 ? lo : hi) = mid;
+  }
+  return lo;
+}
+
 PolytopeFeatures polytope_features(const Shape& s) {
   PolytopeFeatures f;
   if (s.kind == ShapeKind::box) {

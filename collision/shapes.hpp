@@ -82,12 +82,26 @@ class AnalyticCollider : public Collider {
   /// The inverted sphere's Hessian -(I - q q^T / |q|^2) / |q|, q = p - centre (negative
   /// semi-definite); false for the other primitives.
   bool distance_hessian(const Eigen::Vector3d& p, double t, Eigen::Matrix3d& hessian) const override;
+  /// Translation, plus any rotation of a sphere or inverted sphere, spin of a cylinder or
+  /// capsule about its axis, and a uniform scale of the inverted sphere.
+  bool moves_affinely(double t0, double t1) const override;
+  /// Exact for these motions: the point's path in the obstacle's (non-spinning) frame is a
+  /// segment, along which a convex field is convex (it stays above its tangent at the start)
+  /// and the inverted sphere's field, with its radius linear in time, is concave (the bound is
+  /// the root of a quadratic).
+  double moving_segment_step(const Eigen::Vector3d& p, const Eigen::Vector3d& d, double t, double dt,
+                             double limit, double keep) const override;
 
  protected:
   double local_distance(const Eigen::Vector3d& p, Eigen::Vector3d* gradient) const override;
   Aabb local_bounds() const override;
 
  private:
+  /// moving_segment_step within one keyframe segment: the largest a in [0, length] keeping
+  /// phi >= stop [m] from time t; t_inside is a time inside the segment (its velocities).
+  double piece_step(const Eigen::Vector3d& p, const Eigen::Vector3d& d, double t, double dt, double length,
+                    double stop, double t_inside) const;
+
   Shape m_shape;
 };
 

@@ -47,6 +47,7 @@ StepStats& StepStats::operator+=(const StepStats& o) {
   line_search_evaluations += o.line_search_evaluations;
   extrapolations += o.extrapolations;
   reused_factorizations += o.reused_factorizations;
+  following_iterations += o.following_iterations;
   seconds_assembly += o.seconds_assembly;
   seconds_solve += o.seconds_solve;
   seconds_line_search += o.seconds_line_search;
@@ -275,6 +276,82 @@ NewtonResult Integrator::solve(const StepContext& ctx, Eigen::VectorXd& x, StepS
   return r;
 }
 
+// Following moving obstacles. A step must start where every term is finite, and the barrier
+// holds a pressed vertex closer to an obstacle than the obstacle moves in a step (the fold's
+// roller moves 2.3 mm per 10 ms step and presses the sheet to gaps of micrometres), so x_t0 is
+// often inside the obstacle as it is at the step's end, and halving the step cannot catch up.
+// Instead the obstacles start where they are at the step start, tau = t0, and move with the
+// sheet: each iteration solves H dx = -(g + (dg/dtau) dtau) with dtau = t1 - tau, the Newton
+// step of the incremental potential together with the sheet's linear response to the
+// obstacles' motion (a pressed vertex is carried along the obstacle's normal velocity), takes
+// the largest joint step a (x + a dx, tau + a dtau) that continuous collision detection on the
+// joint motion allows and where the potential is finite, and ends when tau reaches t1. Newton
+// (solve) then converges with the obstacles at t1: the step solves the same backward Euler
+// problem as without following, from a start that the obstacles' motion does not make
+// infeasible.
+bool Integrator::follow_obstacles(const StepContext& ctx, Eigen::VectorXd& x, double tau, StepStats& stats,
+                                  NewtonResult& r) {
+  const double t1 = ctx.time_t1();
+  const auto set_time = [&](double t) {
+    for (EnergyTerm* term : m_following) term->set_obstacle_time(t);
+  };
+  Eigen::VectorXd g(x.size());
+  m_reuse_next = false;
+  while (tau < t1) {
+    if (r.iterations >= m_params.max_iterations) {
+      std::ostringstream s;
+      s << "the obstacles could not be moved with the sheet to the step's end (stopped at t = " << tau << " s)";
+      r.failure = s.str();
+      set_time(t1);
+      return false;
+    }
+    ++r.iterations;
+    ++stats.following_iterations;
+    auto t0 = std::chrono::steady_clock::now();
+    update_pattern(x);
+    factor_newton_matrix(x, g, stats);
+    m_reused = 0;
+    m_factor_h = ctx.h;
+    const double dt = t1 - tau;
+    t0 = std::chrono::steady_clock::now();
+    Eigen::VectorXd rhs = Eigen::VectorXd::Zero(m_hessian.size());
+    Eigen::VectorXd moving = g;
+    for (EnergyTerm* term : m_following) term->add_obstacle_motion_gradient(x, dt, moving);
+    rhs.head(g.size()) = -moving;
+    const Eigen::VectorXd dx = m_solver.solve(rhs).head(g.size());
+    stats.seconds_solve += seconds_since(t0);
+    if (!dx.allFinite()) {
+      r.failure = "NaN in the Newton direction while following the obstacles";
+      set_time(t1);
+      return false;
+    }
+    t0 = std::chrono::steady_clock::now();
+    double alpha = 1.0;
+    for (const auto& term : m_terms) {
+      alpha = std::min(alpha, term->max_step_with_obstacles(x, dx, dt));
+      if (std::getenv("PAPERSIM_DEBUG_FOLLOW")) std::fprintf(stderr, "   %s alpha %.3e |dx| %.3e\n", term->name().c_str(), alpha, max_vertex_norm(dx));
+    }
+    for (; alpha > 1e-12; alpha *= 0.5) {
+      set_time(alpha == 1.0 ? t1 : tau + alpha * dt);
+      ++r.line_search_evaluations;
+      if (std::isfinite(energy(x + alpha * dx))) break;
+    }
+    stats.seconds_line_search += seconds_since(t0);
+    if (!(alpha > 1e-12)) {
+      std::ostringstream s;
+      s << "the obstacles cannot move on with the sheet at t = " << tau << " s";
+      r.failure = s.str();
+      set_time(t1);
+      return false;
+    }
+    if (std::getenv("PAPERSIM_DEBUG_NEWTON"))
+      std::fprintf(stderr, "t %.4f following: obstacles at %.6f, step %.3e\n", ctx.time_t0, tau, alpha);
+    x += alpha * dx;
+    tau = alpha == 1.0 ? t1 : tau + alpha * dt;
+  }
+  return true;
+}
+
 bool Integrator::advance(SheetState& state, double h, int depth, StepStats& stats) {
   StepContext ctx;
   ctx.time_t0 = state.time;
@@ -283,6 +360,18 @@ bool Integrator::advance(SheetState& state, double h, int depth, StepStats& stat
   ctx.x_t0 = &x_t0;
   ctx.v_t0 = &v_t0;
   for (const auto& t : m_terms) t->begin_step(ctx, x_t0);
+  // Following moving obstacles: where an obstacle closes in on the sheet during the step, the
+  // step starts with the obstacles where they are at its start (where x_t0 is feasible) and
+  // moves them to its end inside the Newton solve (follow_obstacles).
+  m_following.clear();
+  bool can_follow = true;
+  for (const auto& t : m_terms) {
+    const auto motion = t->obstacle_motion();
+    if (motion == EnergyTerm::ObstacleMotion::unsupported) can_follow = false;
+    if (motion == EnergyTerm::ObstacleMotion::follow && t->obstacles_close_in(x_t0)) m_following.push_back(t.get());
+  }
+  if (!can_follow || !m_params.follow_obstacles) m_following.clear();
+  for (EnergyTerm* t : m_following) t->set_obstacle_time(ctx.time_t0);
   // Start from the explicit prediction x_t0 + h v_t0 when it is feasible (CCD-safe from x_t0
   // and finite energy): Newton then only corrects it, instead of producing the whole motion of
   // the step from rest (measured: about half the iterations on a falling sheet).
@@ -295,12 +384,22 @@ bool Integrator::advance(SheetState& state, double h, int depth, StepStats& stat
     if (std::isfinite(energy(x_pred)) && energy(x_pred) <= energy(x_t0) + 1e-12 * std::abs(energy(x_t0)))
       x = x_pred;
   }
-  const NewtonResult r = solve(ctx, x, stats);
+  NewtonResult r;
+  if (std::getenv("PAPERSIM_DEBUG_NEWTON"))
+    std::fprintf(stderr, "step t %.6f h %.3e: %zu terms follow obstacles\n", ctx.time_t0, h, m_following.size());
+  if (m_following.empty() || follow_obstacles(ctx, x, ctx.time_t0, stats, r)) {
+    const int following = r.iterations, evaluations = r.line_search_evaluations;
+    r = solve(ctx, x, stats);
+    r.iterations += following;
+    r.line_search_evaluations += evaluations;
+  }
+  m_following.clear();
   stats.newton_iterations += r.iterations;
   stats.line_search_evaluations += r.line_search_evaluations;
   stats.extrapolations += r.extrapolations;
   stats.residual = std::max(stats.residual, r.residual);
   if (!r.converged) {
+    if (std::getenv("PAPERSIM_DEBUG_NEWTON")) std::fprintf(stderr, "  failed: %s\n", r.failure.c_str());
     ++stats.failed_solves;
     if (depth >= m_params.max_halvings) {
       std::ostringstream s;

@@ -37,6 +37,9 @@ struct NewtonParams {
   /// 0: refactor every iteration.
   /// Factoring is most of an iteration's cost (docs/performance.md, "Where a fall's time goes").
   int max_factor_reuse = 0;
+  /// Follow moving obstacles within a step where they close in on the sheet
+  /// (Integrator::follow_obstacles); false: every step starts against the obstacles at its end.
+  bool follow_obstacles = true;
 };
 
 /// What one Newton solve did.
@@ -58,6 +61,9 @@ struct StepStats {
   int line_search_evaluations = 0;
   int extrapolations = 0;  ///< Newton steps lengthened beyond the full step
   int reused_factorizations = 0;  ///< iterations that reused the previous factorisation
+  /// Newton iterations that moved obstacles from the step start to its end with the sheet
+  /// (Integrator::follow_obstacles); counted in newton_iterations too.
+  int following_iterations = 0;
   double seconds_assembly = 0, seconds_solve = 0, seconds_line_search = 0;
   double residual = 0;  ///< largest final residual [m/s]
   /// Sums the counts and times; keeps the larger residual.
@@ -88,6 +94,13 @@ class Integrator {
 
  private:
   NewtonResult solve(const StepContext& ctx, Eigen::VectorXd& x, StepStats& stats);
+  /// Following moving obstacles: with the obstacles evaluated at time tau (the step start),
+  /// moves them to the step's end in Newton iterations on the joint motion (see the .cpp).
+  /// @return false (r.failure set) when they cannot get there within the iteration budget
+  bool follow_obstacles(const StepContext& ctx, Eigen::VectorXd& x, double tau, StepStats& stats,
+                        NewtonResult& r);
+  /// Terms whose moving obstacles are followed in this step (empty: evaluated at the step's end).
+  std::vector<EnergyTerm*> m_following;
   bool advance(SheetState& state, double h, int depth, StepStats& stats);
   /// The gradient of the incremental potential at x into g (no Hessian).
   void assemble_gradient(const Eigen::VectorXd& x, Eigen::VectorXd& g) const;

@@ -349,6 +349,7 @@ Scene scene_from_json(const json& j, const std::string& source) {
     s.newton.max_halvings = n.integer("max_halvings", s.newton.max_halvings, 0, 30);
     s.newton.max_extrapolation = n.integer("max_extrapolation", s.newton.max_extrapolation, 1, 1024);
     s.newton.max_factor_reuse = n.integer("max_factor_reuse", s.newton.max_factor_reuse, 0, 1000);
+    s.newton.follow_obstacles = n.boolean("follow_obstacles", s.newton.follow_obstacles);
     n.finish();
   }
   s.remesh = read_remesh(r.child("remesh"));
@@ -485,7 +486,8 @@ json scene_to_json(const Scene& s) {
                  {"tolerance", s.newton.tolerance},
                  {"max_halvings", s.newton.max_halvings},
                  {"max_extrapolation", s.newton.max_extrapolation},
-                 {"max_factor_reuse", s.newton.max_factor_reuse}};
+                 {"max_factor_reuse", s.newton.max_factor_reuse},
+                 {"follow_obstacles", s.newton.follow_obstacles}};
   const remesh::RemeshParams& rp = s.remesh.params;
   j["remesh"] = {{"enabled", s.remesh.enabled},
                  {"every", s.remesh.every},

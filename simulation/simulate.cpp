@@ -49,6 +49,7 @@ json meta_json(const Scene& scene, const RunResult& r, const json& extra) {
               {"line_search_evaluations", t.line_search_evaluations},
               {"extrapolations", t.extrapolations},
               {"reused_factorizations", t.reused_factorizations},
+              {"following_iterations", t.following_iterations},
               {"seconds_assembly", t.seconds_assembly},
               {"seconds_solve", t.seconds_solve},
               {"seconds_line_search", t.seconds_line_search},

@@ -6,6 +6,7 @@
 #include "collision/barrier.hpp"
 #include "collision/shapes.hpp"
 #include "simulation/energies/psd.hpp"
+#include "simulation/errors.hpp"
 #include "simulation/energies/scoped_timer.hpp"
 
 namespace papersim::simulation {
@@ -276,17 +277,24 @@ bool ObstacleContactEnergy::near_bounds(int o, const Eigen::Vector3d& p) const {
   return (p.array() >= b.lo.array()).all() && (p.array() <= b.hi.array()).all();
 }
 
-void ObstacleContactEnergy::begin_step(const StepContext& ctx, const Eigen::VectorXd& x_t0) {
-  ScopedTimer timer(m_stats->seconds);
-  m_t1 = ctx.time_t1();
-  m_eps = m_params.eps_velocity * ctx.h;
+void ObstacleContactEnergy::update_bounds() {
   m_bounds.clear();
   for (const auto& o : m_obstacles) {
-    collision::Aabb b = o->bounds(m_t1);
+    collision::Aabb b = o->bounds(m_time);
     b.lo.array() -= m_params.dhat;
     b.hi.array() += m_params.dhat;
     m_bounds.push_back(b);
   }
+}
+
+void ObstacleContactEnergy::begin_step(const StepContext& ctx, const Eigen::VectorXd& x_t0) {
+  ScopedTimer timer(m_stats->seconds);
+  m_t0 = ctx.time_t0;
+  m_t1 = m_time = ctx.time_t1();
+  m_eps = m_params.eps_velocity * ctx.h;
+  update_bounds();
+  m_moving.clear();
+  for (const auto& o : m_obstacles) m_moving.push_back(o->motion.moves_during(m_t0, m_t1));
   m_stiffness = m_params.stiffness;
   if (m_impact_density > 0 && ctx.v_t0) {
     // Impact rule (header): the fastest normal approach of a vertex that can reach an obstacle
@@ -356,7 +364,7 @@ void ObstacleContactEnergy::begin_step(const StepContext& ctx, const Eigen::Vect
   m_features.assign(m_obstacles.size(), {});
   std::vector<WorldFeatures> at_t0(m_obstacles.size());
   for (int o = 0; o < num_obstacles(); ++o) {
-    m_features[o] = world_features(o, m_t1);
+    m_features[o] = world_features(o, m_time);
     at_t0[o] = world_features(o, ctx.time_t0);
   }
   for (const FeaturePair& p : feature_pairs(x_t0, nullptr, m_params.dhat, at_t0)) {
@@ -410,7 +418,7 @@ double ObstacleContactEnergy::value(const Eigen::VectorXd& x) const {
   const double dhat = m_params.dhat;
   for (int o = 0; o < num_obstacles(); ++o) {
     if (m_mode[o] == Mode::sphere || m_mode[o] == Mode::search) {
-      const Eigen::Affine3d pose = m_obstacles[o]->motion.pose(m_t1);
+      const Eigen::Affine3d pose = m_obstacles[o]->motion.pose(m_time);
       collision::PairPoints pts;
       collision::DistanceStencil s;
       for (int f = 0; f < m_faces.rows(); ++f) {
@@ -425,7 +433,7 @@ double ObstacleContactEnergy::value(const Eigen::VectorXd& x) const {
     for (int v = 0; v < nv; ++v) {
       const Eigen::Vector3d p = x.segment<3>(3 * v);
       if (!near_bounds(o, p)) continue;
-      const double d = m_obstacles[o]->distance(p, m_t1);
+      const double d = m_obstacles[o]->distance(p, m_time);
       if (d <= 0) return INF;
       if (d < dhat) e += kappa(v) * barrier(d, dhat);
     }
@@ -483,7 +491,7 @@ void ObstacleContactEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::Vec
   collision::Matrix12d hess;
   for (int o = 0; o < num_obstacles(); ++o) {
     if (m_mode[o] == Mode::sphere || m_mode[o] == Mode::search) {
-      const Eigen::Affine3d pose = m_obstacles[o]->motion.pose(m_t1);
+      const Eigen::Affine3d pose = m_obstacles[o]->motion.pose(m_time);
       collision::PairPoints pts;
       collision::DistanceStencil s;
       for (int f = 0; f < m_faces.rows(); ++f) {
@@ -508,7 +516,7 @@ void ObstacleContactEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::Vec
       const Eigen::Vector3d p = x.segment<3>(3 * v);
       if (!near_bounds(o, p)) continue;
       Eigen::Vector3d n;
-      const double d = m_obstacles[o]->distance(p, m_t1, &n);
+      const double d = m_obstacles[o]->distance(p, m_time, &n);
       if (d >= dhat || d <= 0) continue;
       const double b1 = barrier_first_derivative(d, dhat);
       g.segment<3>(3 * v) += kappa(v) * b1 * n;
@@ -516,7 +524,7 @@ void ObstacleContactEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::Vec
         Eigen::Matrix3d local = kappa(v) * barrier_second_derivative(d, dhat) * n * n.transpose();
         // The curvature term b' Hess phi where the collider provides Hess phi (see the header).
         Eigen::Matrix3d curvature;
-        if (m_obstacles[o]->distance_hessian(p, m_t1, curvature)) {
+        if (m_obstacles[o]->distance_hessian(p, m_time, curvature)) {
           local += kappa(v) * b1 * curvature;
           if (m_project) local = project_psd(local);
         }
@@ -555,8 +563,14 @@ void ObstacleContactEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::Vec
 double ObstacleContactEnergy::max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const {
   ScopedTimer timer(m_stats->seconds);
   double alpha = 1.0;
+  for (int o = 0; o < num_obstacles(); ++o) alpha = obstacle_max_step(o, x, dx, alpha);
+  return pairs_max_step(x, dx, alpha);
+}
+
+double ObstacleContactEnergy::obstacle_max_step(int o, const Eigen::VectorXd& x, const Eigen::VectorXd& dx,
+                                                double alpha) const {
   const int nv = static_cast<int>(m_area.size());
-  for (int o = 0; o < num_obstacles(); ++o) {
+  {
     const auto& obs = *m_obstacles[o];
     // Faces against a convex obstacle cover their vertices (below); otherwise the vertices of
     // the terms are traced.
@@ -566,7 +580,7 @@ double ObstacleContactEnergy::max_step(const Eigen::VectorXd& x, const Eigen::Ve
       const double len = d.norm();
       if (len == 0) continue;
       Eigen::Vector3d n;
-      double dist = obs.distance(p, m_t1, &n);
+      double dist = obs.distance(p, m_time, &n);
       if (dist >= alpha * len) continue;  // cannot reach the surface within this step
       if (obs.is_convex() && dist > 0) {
         // The solid lies behind the tangent plane at the closest surface point: the vertex may
@@ -578,11 +592,11 @@ double ObstacleContactEnergy::max_step(const Eigen::VectorXd& x, const Eigen::Ve
       }
       // Sphere tracing (exact for an inverted sphere): the vertex may close at most 90% of
       // its gap.
-      alpha = std::min(alpha, obs.segment_step(p, d, m_t1, alpha, 0.1));
+      alpha = std::min(alpha, obs.segment_step(p, d, m_time, alpha, 0.1));
     }
-    if (m_mode[o] != Mode::sphere && m_mode[o] != Mode::search) continue;
+    if (m_mode[o] != Mode::sphere && m_mode[o] != Mode::search) return alpha;
     // Faces: conservative advancement on a lower bound of the field over the moving triangle.
-    const Eigen::Affine3d pose = obs.motion.pose(m_t1);
+    const Eigen::Affine3d pose = obs.motion.pose(m_time);
     for (int f = 0; f < m_faces.rows(); ++f) {
       double speed = 0;
       for (int k = 0; k < 3; ++k) speed = std::max(speed, dx.segment<3>(3 * m_faces(f, k)).norm());
@@ -666,8 +680,13 @@ double ObstacleContactEnergy::max_step(const Eigen::VectorXd& x, const Eigen::Ve
       alpha = std::min(alpha, t);
     }
   }
+  return alpha;
+}
+
+double ObstacleContactEnergy::pairs_max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx,
+                                             double alpha) const {
   // Corner-triangle and edge-edge pairs of polyhedral obstacles: additive CCD, the obstacle held
-  // at its end-of-step pose.
+  // at its pose at m_time (the step's end).
   const Eigen::VectorXd reach = alpha * dx;
   for (const FeaturePair& p : feature_pairs(x, &reach, 0.0, m_features)) {
     const collision::PairPoints pts = pair_points(p, x, m_features);
@@ -683,6 +702,85 @@ double ObstacleContactEnergy::max_step(const Eigen::VectorXd& x, const Eigen::Ve
     }
   }
   return alpha;
+}
+
+EnergyTerm::ObstacleMotion ObstacleContactEnergy::obstacle_motion() const {
+  ObstacleMotion motion = ObstacleMotion::none;
+  for (int o = 0; o < num_obstacles(); ++o) {
+    if (!m_moving[o]) continue;
+    if (m_mode[o] != Mode::vertices || !m_obstacles[o]->moves_affinely(m_t0, m_t1))
+      return ObstacleMotion::unsupported;
+    motion = ObstacleMotion::follow;
+  }
+  return motion;
+}
+
+bool ObstacleContactEnergy::obstacles_close_in(const Eigen::VectorXd& x) const {
+  ScopedTimer timer(m_stats->seconds);
+  const double dhat = m_params.dhat;
+  for (int o = 0; o < num_obstacles(); ++o) {
+    if (!m_moving[o]) continue;
+    const auto& obs = *m_obstacles[o];
+    collision::Aabb swept = obs.swept_bounds(m_t0, m_t1);
+    swept.inflate(dhat);
+    for (int v = 0; v < m_area.size(); ++v) {
+      const Eigen::Vector3d p = x.segment<3>(3 * v);
+      if (swept.distance_to(p) > 0) continue;
+      const double before = obs.distance(p, m_t0), after = obs.distance(p, m_t1);
+      if (after < 0.5 * std::min(before, dhat)) return true;
+    }
+  }
+  return false;
+}
+
+void ObstacleContactEnergy::set_obstacle_time(double t) {
+  m_time = t;
+  update_bounds();
+}
+
+void ObstacleContactEnergy::add_obstacle_motion_gradient(const Eigen::VectorXd& x, double dt,
+                                                         Eigen::VectorXd& g) const {
+  ScopedTimer timer(m_stats->seconds);
+  const double dhat = m_params.dhat;
+  for (int o = 0; o < num_obstacles(); ++o) {
+    if (!m_moving[o]) continue;
+    const auto& obs = *m_obstacles[o];
+    for (int v = 0; v < m_area.size(); ++v) {
+      const Eigen::Vector3d p = x.segment<3>(3 * v);
+      if (!near_bounds(o, p)) continue;
+      Eigen::Vector3d n;
+      const double d = obs.distance(p, m_time, &n);
+      if (d >= dhat || d <= 0) continue;
+      const double phi_t = -n.dot(obs.velocity(p, m_time));
+      g.segment<3>(3 * v) += kappa(v) * barrier_second_derivative(d, dhat) * phi_t * dt * n;
+    }
+  }
+}
+
+double ObstacleContactEnergy::max_step_with_obstacles(const Eigen::VectorXd& x, const Eigen::VectorXd& dx,
+                                                      double dt) const {
+  ScopedTimer timer(m_stats->seconds);
+  double alpha = 1.0;
+  for (int o = 0; o < num_obstacles(); ++o) {
+    if (!m_moving[o] || dt == 0) {
+      alpha = obstacle_max_step(o, x, dx, alpha);
+      continue;
+    }
+    const auto& obs = *m_obstacles[o];
+    collision::Aabb swept = obs.swept_bounds(m_time, m_time + dt);
+    swept.inflate(m_params.dhat);
+    for (int v = 0; v < m_area.size(); ++v) {
+      const Eigen::Vector3d p = x.segment<3>(3 * v), d = dx.segment<3>(3 * v);
+      collision::Aabb path;
+      path.extend(p);
+      path.extend(Eigen::Vector3d(p + alpha * d));
+      if (path.distance_to(swept) > 0) continue;  // cannot reach the obstacle within this step
+      const double a = obs.moving_segment_step(p, d, m_time, dt, alpha, 0.1);
+      if (a < 0) throw NumericError("contact: an obstacle's motion cannot be followed");
+      alpha = std::min(alpha, a);
+    }
+  }
+  return pairs_max_step(x, dx, alpha);
 }
 
 double ObstacleContactEnergy::surface_distance(int o, const Eigen::VectorXd& x, double t) const {

@@ -96,6 +96,24 @@ class ObstacleContactEnergy : public EnergyTerm {
                        BlockSymmetricMatrix* hessian) const override;
   double max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const override;
 
+  /// Moving obstacles (EnergyTerm, Integrator "Following moving obstacles"): supported when
+  /// every obstacle that moves during the step touches the sheet by its vertices and moves
+  /// affinely (collision::Collider::moves_affinely: the fold's rolling cylinder, the crumple's
+  /// shrinking cavity).
+  ObstacleMotion obstacle_motion() const override;
+  /// Some vertex within the contact thickness of a moving obstacle at the step start, or
+  /// reached by one, ends the step closer to it than half its gap and half the thickness, with
+  /// the sheet held where it is.
+  bool obstacles_close_in(const Eigen::VectorXd& x) const override;
+  void set_obstacle_time(double t) override;
+  /// Vertex barriers: d/dt (kappa b'(phi) n) ~ kappa b''(phi) (d phi / dt) n with
+  /// d phi / dt = -n . (velocity of the obstacle at the vertex), the change of n dropped as the
+  /// Hessian drops b' Hess phi.
+  void add_obstacle_motion_gradient(const Eigen::VectorXd& x, double dt, Eigen::VectorXd& gradient) const override;
+  /// max_step, with each moving obstacle's vertex CCD done on the joint motion
+  /// (collision::Collider::moving_segment_step, exact for the affine motions supported).
+  double max_step_with_obstacles(const Eigen::VectorXd& x, const Eigen::VectorXd& dx, double dt) const override;
+
   /// Switches obstacles other than planes to face contact (see above).
   /// @param faces #F by 3 vertex indices; @param material_coords #V by 2 flat sheet
   /// coordinates [m] (face areas and rest edge lengths)
@@ -147,6 +165,12 @@ class ObstacleContactEnergy : public EnergyTerm {
   };
 
   bool near_bounds(int o, const Eigen::Vector3d& p) const;
+  /// Bounds of the field at m_time, inflated by the thickness (m_bounds).
+  void update_bounds();
+  /// Largest step along dx for obstacle o held at m_time (vertices and faces; not the pairs).
+  double obstacle_max_step(int o, const Eigen::VectorXd& x, const Eigen::VectorXd& dx, double alpha) const;
+  /// Largest step along dx for the pairs of polyhedral obstacles held at m_time.
+  double pairs_max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx, double alpha) const;
   bool face_near_bounds(int o, const Eigen::VectorXd& x, int f, double margin) const;
   bool uses_faces(int o) const { return m_mode[o] != Mode::vertices; }
   bool uses_vertices(int o) const { return m_mode[o] == Mode::vertices || m_mode[o] == Mode::polytope; }
@@ -193,7 +217,10 @@ class ObstacleContactEnergy : public EnergyTerm {
   Eigen::VectorXd m_face_area, m_edge_area, m_edge_rest;
   collision::TriangleSdfParams m_triangle;
   bool m_project = true;
-  double m_t1 = 0.0, m_eps = 1e-6, m_normal_force = 0.0;
+  double m_time = 0.0;      // time the obstacles are evaluated at: the step's end unless followed
+  double m_t0 = 0.0, m_t1 = 0.0;  // the current step [s]
+  std::vector<bool> m_moving;     // per obstacle: moves during the current step
+  double m_eps = 1e-6, m_normal_force = 0.0;
   double m_impact_density = 0.0;  // rho_A for the impact rule; 0: off
   double m_stiffness = 0.0;       // this step's stiffness [Pa]
   ContactStatistics m_own_stats;

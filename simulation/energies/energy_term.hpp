@@ -66,6 +66,29 @@ class EnergyTerm {
   virtual double max_step(const Eigen::VectorXd& /*x*/, const Eigen::VectorXd& /*dx*/) const {
     return 1.0;
   }
+
+  /// Obstacles that move during the step (Integrator: "Following moving obstacles"). A term
+  /// evaluates them at the step's end unless set_obstacle_time says otherwise.
+  enum class ObstacleMotion {
+    none,       ///< the term does not depend on obstacles that move during the current step
+    follow,     ///< it does, and supports every call below
+    unsupported ///< it does, but cannot be evaluated with them part-way
+  };
+  virtual ObstacleMotion obstacle_motion() const { return ObstacleMotion::none; }
+  /// True when, from x at the step start, an obstacle closes in on the sheet during the step by
+  /// more than the sheet can be trusted to get out of its way in one solve.
+  virtual bool obstacles_close_in(const Eigen::VectorXd& /*x*/) const { return false; }
+  /// Evaluates the moving obstacles at time t [s] (within the current step) from now on.
+  virtual void set_obstacle_time(double /*t*/) {}
+  /// Adds (d gradient / d t) dt at x to `gradient`: how the gradient changes when the
+  /// obstacles move on by dt [s].
+  virtual void add_obstacle_motion_gradient(const Eigen::VectorXd& /*x*/, double /*dt*/,
+                                            Eigen::VectorXd& /*gradient*/) const {}
+  /// max_step for the joint motion x -> x + a dx, obstacle time t -> t + a dt.
+  virtual double max_step_with_obstacles(const Eigen::VectorXd& x, const Eigen::VectorXd& dx,
+                                         double /*dt*/) const {
+    return max_step(x, dx);
+  }
 };
 
 constexpr double INF = std::numeric_limits<double>::infinity();
