@@ -327,10 +327,7 @@ bool Integrator::follow_obstacles(const StepContext& ctx, Eigen::VectorXd& x, do
     }
     t0 = std::chrono::steady_clock::now();
     double alpha = 1.0;
-    for (const auto& term : m_terms) {
-      alpha = std::min(alpha, term->max_step_with_obstacles(x, dx, dt));
-      if (std::getenv("PAPERSIM_DEBUG_FOLLOW")) std::fprintf(stderr, "   %s alpha %.3e |dx| %.3e\n", term->name().c_str(), alpha, max_vertex_norm(dx));
-    }
+    for (const auto& term : m_terms) alpha = std::min(alpha, term->max_step_with_obstacles(x, dx, dt));
     for (; alpha > 1e-12; alpha *= 0.5) {
       set_time(alpha == 1.0 ? t1 : tau + alpha * dt);
       ++r.line_search_evaluations;

@@ -113,6 +113,15 @@ Scene resting_on_scaled(papersim::collision::ColliderKind kind, double end_scale
   return s;
 }
 
+/// Smallest distance of the final sheet's vertices to the scene's first obstacle at the end [m].
+double final_gap(const Scene& scene, const RunResult& r) {
+  const auto obstacle = papersim::collision::make_collider(scene.obstacles[0]);
+  double gap = INFINITY;
+  for (int v = 0; v < r.state.num_vertices(); ++v)
+    gap = std::min(gap, obstacle->distance(r.state.positions.segment<3>(3 * v), scene.duration));
+  return gap;
+}
+
 }  // namespace
 
 // A sheet resting on a growing or shrinking sphere, or on the bottom of a shrinking cavity, is
@@ -137,10 +146,7 @@ TEST(ObstacleContact, SheetIsCarriedByAGrowingOrShrinkingSphere) {
     // At the end the sheet rests on the surface at its final size: its nearest vertex is within
     // the contact thickness, where the barrier holds its weight (a flat 4 cm sheet in a 5 cm
     // bowl touches it with its corners, on a sphere with its centre).
-    const auto obstacle = papersim::collision::make_collider(scene.obstacles[0]);
-    double gap = INFINITY;
-    for (int v = 0; v < r.state.num_vertices(); ++v)
-      gap = std::min(gap, obstacle->distance(r.state.positions.segment<3>(3 * v), scene.duration));
+    const double gap = final_gap(scene, r);
     EXPECT_GT(gap, 0.0);
     EXPECT_LT(gap, scene.contact.dhat);
     int centre = 0;
@@ -174,10 +180,7 @@ TEST(ObstacleContact, ShrinkingCavityIsFollowedWithinTheStep) {
   EXPECT_EQ(r.totals.failed_solves, 0);
   // It rests on the cavity at its final size (radius 5 cm): its lowest vertex within the
   // contact thickness of the wall, 5 cm below the centre.
-  const auto cavity = papersim::collision::make_collider(scene.obstacles[0]);
-  double gap = INFINITY;
-  for (int v = 0; v < r.state.num_vertices(); ++v)
-    gap = std::min(gap, cavity->distance(r.state.positions.segment<3>(3 * v), scene.duration));
+  const double gap = final_gap(scene, r);
   EXPECT_GT(gap, 0.0);
   EXPECT_LT(gap, scene.contact.dhat);
   scene.newton.follow_obstacles = false;
