@@ -162,6 +162,13 @@ void occlude_rows(const SheetHeightField& f, const ContactParams& params, const 
 
 }  // namespace
 
+ContactParams contact_params_for(double extent) {
+  ContactParams p;
+  p.cell = std::max(p.cell, extent / 1600.0);
+  p.reach = std::max(p.reach, 80.0 * p.cell);
+  return p;
+}
+
 SheetHeightField sheet_height_field(const SheetMesh& surface, const Stage& stage, const ContactParams& params) {
   if (surface.num_vertices() == 0 || surface.num_faces() == 0) throw InputError("contact shadow: empty mesh");
   if (!(params.cell > 0.0) || !(params.reach >= 0.0)) throw InputError("contact shadow: cell must be > 0 and reach >= 0");

@@ -21,6 +21,12 @@ struct ContactParams {
   double gap = 3e-4;    ///< the table lies this far below the support plane [m]
 };
 
+/// Settings for a sheet whose positions span `extent` [m] (the largest side of their bounding
+/// box): the defaults for sheets up to 0.8 m; larger sheets get coarser cells (at most 1,600
+/// across the sheet) and a reach of at least 80 cells, so the map's size and cost stay bounded
+/// for every sheet the limits accept (up to 1,000 m).
+ContactParams contact_params_for(double extent);
+
 /// The sheet as a height field over the table: for each cell of a grid in the stage's (x, y)
 /// plane, the lowest and highest height of the sheet above the table surface [m] among the
 /// points of the sheet above the cell, +inf / -inf where no part of the sheet is above it.

@@ -175,8 +175,9 @@ std::string view_stream(const std::string& component, int view) {
 /// share of the light on an open table that comes from the sky (radiosity) or the ambient fill
 /// (draft), the part of the light the sheet's occlusion of the sky removes.
 ContactShadowDecl place_contact_shadow(const SheetMesh& surface, const Stage& stage, const SceneDescription& scene,
-                                       const fs::path& job) {
-  ContactParams params;
+                                       const fs::path& job, json& meta) {
+  const Eigen::Vector3d span = surface.positions.colwise().maxCoeff() - surface.positions.colwise().minCoeff();
+  ContactParams params = contact_params_for(span.maxCoeff());
   params.gap = scene.background_gap;
   const SheetHeightField field = sheet_height_field(surface, stage, params);
   write_contact_png((job / "contact.png").string(), field, contact_occlusion(field, params));
@@ -188,14 +189,9 @@ ContactShadowDecl place_contact_shadow(const SheetMesh& surface, const Stage& st
   c.height = field.height * field.cell;
   const double fill = scene.quality.radiosity ? scene.lighting.sky : scene.quality.ambient;
   c.strength = fill / (fill + scene.lighting.exposure);
+  meta = {{"enabled", true}, {"file", c.file}, {"origin_stage_m", {c.x0, c.y0}}, {"size_m", {c.width, c.height}},
+          {"cell_m", params.cell}, {"reach_m", params.reach}, {"azimuths", params.azimuths}, {"strength", c.strength}};
   return c;
-}
-
-json contact_json(const ContactShadowDecl& c) {
-  if (!c.enabled) return {{"enabled", false}};
-  const ContactParams p;
-  return {{"enabled", true}, {"file", c.file}, {"origin_stage_m", {c.x0, c.y0}}, {"size_m", {c.width, c.height}},
-          {"cell_m", p.cell}, {"reach_m", p.reach}, {"azimuths", p.azimuths}, {"strength", c.strength}};
 }
 
 void remove_quietly(const fs::path& p) {
@@ -289,7 +285,8 @@ void prepare_job(const SampleOptions& o, const std::string& job_dir) {
     }
     scene.paper = draw_paper(paper_rng);
     set_coords_encoding(scene, surface);
-    if (o.contact_shadow) scene.contact = place_contact_shadow(surface, stage, scene, tmp);
+    json contact_meta = {{"enabled", false}};
+    if (o.contact_shadow) scene.contact = place_contact_shadow(surface, stage, scene, tmp, contact_meta);
     const auto [doc_file, doc_meta] = place_document(o, mesh, tmp, o.threads, o.templates_dir);
     scene.document_file = doc_file;
 
@@ -336,7 +333,7 @@ void prepare_job(const SampleOptions& o, const std::string& job_dir) {
     meta["lighting"] = to_json(scene.lighting);
     meta["background"] = to_json(scene.background);
     meta["background"]["gap_m"] = scene.background_gap;
-    meta["contact_shadow"] = contact_json(scene.contact);
+    meta["contact_shadow"] = contact_meta;
     meta["paper"] = to_json(scene.paper);
     meta["document"] = doc_meta;
     meta["encoding"] = {{"coords_min", to_json(scene.coords_min)}, {"coords_span", scene.coords_span},

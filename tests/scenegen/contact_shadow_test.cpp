@@ -128,6 +128,24 @@ TEST(ContactShadow, UnderARaisedPartDarkestWhereItLeavesTheTable) {
     EXPECT_LT(std::abs(occlusion_at(f, occ, x + p.cell, y) - occlusion_at(f, occ, x, y)), 0.05) << "x = " << x;
 }
 
+TEST(ContactShadow, MapStaysBoundedForEverySheetSizeTheLimitsAccept) {
+  // A 3 m and a 1,000 m flat sheet (the largest the limits accept): the map is built, with
+  // coarser cells, and still shows the contact line beside the edge.
+  for (double side : {3.0, 1000.0}) {
+    ContactParams p = contact_params_for(side);
+    EXPECT_GT(p.cell, ContactParams{}.cell);
+    const SheetHeightField f = sheet_height_field(extruded(side, side, 4, 4, [](double) { return 0.0; }), Stage{}, p);
+    EXPECT_LE(std::max(f.width, f.height), 2000);
+    p.azimuths = 8;  // the property, not the quality, is checked here
+    const auto occ = contact_occlusion(f, p);
+    EXPECT_GT(occlusion_at(f, occ, side / 2, side / 2), 0.99) << side;
+    EXPECT_EQ(occ.front(), 0.0f) << side;
+  }
+  // Sheets up to 0.8 m keep the default settings.
+  EXPECT_EQ(contact_params_for(0.3).cell, ContactParams{}.cell);
+  EXPECT_EQ(contact_params_for(0.3).reach, ContactParams{}.reach);
+}
+
 TEST(ContactShadow, SameValuesWhateverTheThreadCount) {
   const SheetMesh sheet = make_example_sheet("fold");
   ContactParams p;
