@@ -52,8 +52,8 @@ void mark_edge(SheetHeightField& f, const StagePoint& a, const StagePoint& b) {
   for (int k = 0; k <= n; ++k) {
     const double t = static_cast<double>(k) / n;
     const double x = a.x + t * (b.x - a.x), y = a.y + t * (b.y - a.y);
-    mark(f, static_cast<int>(std::floor((x - f.x0) / f.cell)), static_cast<int>(std::floor((y - f.y0) / f.cell)),
-         a.h + t * (b.h - a.h));
+    mark(f, static_cast<int>(std::floor((x - f.x0) / f.cell)),
+         static_cast<int>(std::floor((y - f.y0) / f.cell)), a.h + t * (b.h - a.h));
   }
 }
 
@@ -65,7 +65,10 @@ std::vector<int> distance_to_sheet(const SheetHeightField& f, int cap) {
   const auto at = [&](int i, int j) -> int& { return d[std::size_t(j) * f.width + i]; };
   for (int j = 0; j < f.height; ++j)
     for (int i = 0; i < f.width; ++i) {
-      if (f.covered(i, j)) { at(i, j) = 0; continue; }
+      if (f.covered(i, j)) {
+        at(i, j) = 0;
+        continue;
+      }
       int& v = at(i, j);
       if (i > 0) v = std::min(v, at(i - 1, j) + 1);
       if (j > 0) {
@@ -96,7 +99,8 @@ struct March {
 
 /// Blocked part of one direction's cosine-weighted half-disc at cell (i, j) (see
 /// contact_occlusion). Stops early once farther cells cannot change it by more than 1e-3.
-double blocked_along(const SheetHeightField& f, const ContactParams& params, const March& m, int i, int j, int k) {
+double blocked_along(const SheetHeightField& f, const ContactParams& params, const March& m, int i,
+                     int j, int k) {
   constexpr double TOL = 1e-3;
   const double inf = std::numeric_limits<double>::infinity();
   const double x = (i + 0.5) * f.cell, y = (j + 0.5) * f.cell;  // relative to (x0, y0)
@@ -143,13 +147,14 @@ bool resting_inside(const SheetHeightField& f, const ContactParams& params, int 
 }
 
 /// Occlusion of the cells of rows [row_begin, row_end).
-void occlude_rows(const SheetHeightField& f, const ContactParams& params, const March& m, int row_begin, int row_end,
-                  std::vector<float>& out) {
+void occlude_rows(const SheetHeightField& f, const ContactParams& params, const March& m,
+                  int row_begin, int row_end, std::vector<float>& out) {
   const int n_az = static_cast<int>(m.cx.size());
   const double reach_cells = params.reach / f.cell;
   for (int j = row_begin; j < row_end; ++j)
     for (int i = 0; i < f.width; ++i) {
-      if (m.dist[std::size_t(j) * f.width + i] - 1 > reach_cells) continue;  // no sheet within reach
+      if (m.dist[std::size_t(j) * f.width + i] - 1 > reach_cells)
+        continue;  // no sheet within reach
       if (resting_inside(f, params, i, j)) {
         out[std::size_t(j) * f.width + i] = 1.0f;
         continue;
@@ -169,9 +174,12 @@ ContactParams contact_params_for(double extent) {
   return p;
 }
 
-SheetHeightField sheet_height_field(const SheetMesh& surface, const Stage& stage, const ContactParams& params) {
-  if (surface.num_vertices() == 0 || surface.num_faces() == 0) throw InputError("contact shadow: empty mesh");
-  if (!(params.cell > 0.0) || !(params.reach >= 0.0)) throw InputError("contact shadow: cell must be > 0 and reach >= 0");
+SheetHeightField sheet_height_field(const SheetMesh& surface, const Stage& stage,
+                                    const ContactParams& params) {
+  if (surface.num_vertices() == 0 || surface.num_faces() == 0)
+    throw InputError("contact shadow: empty mesh");
+  if (!(params.cell > 0.0) || !(params.reach >= 0.0))
+    throw InputError("contact shadow: cell must be > 0 and reach >= 0");
   std::vector<StagePoint> pts(static_cast<std::size_t>(surface.num_vertices()));
   double lx = std::numeric_limits<double>::infinity(), hx = -lx, ly = lx, hy = -lx;
   for (int v = 0; v < surface.num_vertices(); ++v) {
@@ -182,9 +190,11 @@ SheetHeightField sheet_height_field(const SheetMesh& surface, const Stage& stage
   }
   SheetHeightField f;
   f.cell = params.cell;
-  const double w = (hx - lx + 2.0 * params.reach) / f.cell, h = (hy - ly + 2.0 * params.reach) / f.cell;
+  const double w = (hx - lx + 2.0 * params.reach) / f.cell,
+               h = (hy - ly + 2.0 * params.reach) / f.cell;
   if (!(w < MAX_FIELD_SIDE - 1) || !(h < MAX_FIELD_SIDE - 1))
-    throw InputError("contact shadow: the map would exceed " + std::to_string(MAX_FIELD_SIDE) + " cells per side");
+    throw InputError("contact shadow: the map would exceed " + std::to_string(MAX_FIELD_SIDE) +
+                     " cells per side");
   f.width = static_cast<int>(std::ceil(w)) + 1;
   f.height = static_cast<int>(std::ceil(h)) + 1;
   f.x0 = lx - params.reach;
@@ -193,7 +203,8 @@ SheetHeightField sheet_height_field(const SheetMesh& surface, const Stage& stage
   f.lo.assign(n, std::numeric_limits<float>::infinity());
   f.hi.assign(n, -std::numeric_limits<float>::infinity());
   for (int t = 0; t < surface.num_faces(); ++t) {
-    const StagePoint tri[3] = {pts[static_cast<std::size_t>(surface.faces(t, 0))], pts[static_cast<std::size_t>(surface.faces(t, 1))],
+    const StagePoint tri[3] = {pts[static_cast<std::size_t>(surface.faces(t, 0))],
+                               pts[static_cast<std::size_t>(surface.faces(t, 1))],
                                pts[static_cast<std::size_t>(surface.faces(t, 2))]};
     fill_triangle(f, tri);
     for (int e = 0; e < 3; ++e) mark_edge(f, tri[e], tri[(e + 1) % 3]);
@@ -201,7 +212,8 @@ SheetHeightField sheet_height_field(const SheetMesh& surface, const Stage& stage
   return f;
 }
 
-std::vector<float> contact_occlusion(const SheetHeightField& field, const ContactParams& params, int threads) {
+std::vector<float> contact_occlusion(const SheetHeightField& field, const ContactParams& params,
+                                     int threads) {
   std::vector<float> out(std::size_t(field.width) * field.height, 0.0f);
   March m;
   const int n_az = std::max(1, params.azimuths);
@@ -213,18 +225,22 @@ std::vector<float> contact_occlusion(const SheetHeightField& field, const Contac
   m.dist = distance_to_sheet(field, field.width + field.height);
   for (std::size_t c = 0; c < field.hi.size(); ++c)
     if (field.lo[c] <= field.hi[c]) m.top = std::max(m.top, static_cast<double>(field.hi[c]));
-  int t = threads > 0 ? threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  int t =
+      threads > 0 ? threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   t = std::clamp(t, 1, std::max(1, field.height));
   // Each cell is computed on its own, so the split over threads does not change any value.
   std::vector<std::thread> pool;
   for (int k = 1; k < t; ++k)
-    pool.emplace_back([&, k] { occlude_rows(field, params, m, k * field.height / t, (k + 1) * field.height / t, out); });
+    pool.emplace_back([&, k] {
+      occlude_rows(field, params, m, k * field.height / t, (k + 1) * field.height / t, out);
+    });
   occlude_rows(field, params, m, 0, field.height / t, out);
   for (auto& th : pool) th.join();
   return out;
 }
 
-void write_contact_png(const std::string& path, const SheetHeightField& field, const std::vector<float>& occlusion) {
+void write_contact_png(const std::string& path, const SheetHeightField& field,
+                       const std::vector<float>& occlusion) {
   ImageF img(field.width, field.height, 1);
   for (int j = 0; j < field.height; ++j)
     for (int i = 0; i < field.width; ++i)

@@ -35,7 +35,9 @@ struct SheetHeightField {
   double x0 = 0.0, y0 = 0.0, cell = 1.0;  ///< [m]
   int width = 0, height = 0;              ///< [cells]
   std::vector<float> lo, hi;              ///< row-major, row j = y0 + j cell
-  bool covered(int i, int j) const { return lo[std::size_t(j) * width + i] <= hi[std::size_t(j) * width + i]; }
+  bool covered(int i, int j) const {
+    return lo[std::size_t(j) * width + i] <= hi[std::size_t(j) * width + i];
+  }
 };
 
 /// Rasterise `surface` (world positions [m]) over the stage's plane: cell centres inside a
@@ -44,7 +46,8 @@ struct SheetHeightField {
 /// cells. Heights are measured from the table: stage height + params.gap. The grid covers the
 /// sheet's projection plus params.reach on every side.
 /// @throw InputError when the mesh is empty or the grid would exceed 4096 cells per side
-SheetHeightField sheet_height_field(const SheetMesh& surface, const Stage& stage, const ContactParams& params);
+SheetHeightField sheet_height_field(const SheetMesh& surface, const Stage& stage,
+                                    const ContactParams& params);
 
 /// Occlusion of the table by the sheet, one value per cell of `field` (row-major, row j at
 /// y0 + j cell): the fraction of the cosine-weighted irradiance of a uniform sky that the sheet
@@ -55,11 +58,13 @@ SheetHeightField sheet_height_field(const SheetMesh& surface, const Stage& stage
 /// passes (r the distance along the table), and the blocked part of the direction's cosine-
 /// weighted half-disc is cos^2(atan a) - cos^2(atan b) = 1 / (1 + a^2) - 1 / (1 + b^2).
 /// Deterministic: the same field gives the same values whatever `threads` (0: one per core).
-std::vector<float> contact_occlusion(const SheetHeightField& field, const ContactParams& params, int threads = 0);
+std::vector<float> contact_occlusion(const SheetHeightField& field, const ContactParams& params,
+                                     int threads = 0);
 
 /// The occlusion as a 16-bit grey PNG of field.width x field.height, linear, row 0 = the
 /// highest y (POV-Ray's image_map puts an image's bottom row at y = 0 of the unit square).
 /// @throw common::OutputError
-void write_contact_png(const std::string& path, const SheetHeightField& field, const std::vector<float>& occlusion);
+void write_contact_png(const std::string& path, const SheetHeightField& field,
+                       const std::vector<float>& occlusion);
 
 }  // namespace papersim::scenegen

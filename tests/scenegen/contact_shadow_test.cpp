@@ -2,13 +2,14 @@
 // analytic form factor of a disc, and for the properties the photo relies on: darkest along a
 // touching edge and under a raised part near where it leaves the table, nothing beyond the
 // reach, the same values whatever the thread count, the same file for the same seed.
+#include "scenegen/contact_shadow.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <filesystem>
 #include <iostream>
 
-#include "scenegen/contact_shadow.hpp"
 #include "scenegen/job.hpp"
 #include "test_support.hpp"
 
@@ -62,7 +63,8 @@ SheetMesh disc(double r, double h, int k) {
 double occlusion_at(const SheetHeightField& f, const std::vector<float>& occ, double x, double y) {
   const int i = static_cast<int>(std::floor((x - f.x0) / f.cell));
   const int j = static_cast<int>(std::floor((y - f.y0) / f.cell));
-  EXPECT_TRUE(i >= 0 && j >= 0 && i < f.width && j < f.height) << "(" << x << ", " << y << ") is off the map";
+  EXPECT_TRUE(i >= 0 && j >= 0 && i < f.width && j < f.height)
+      << "(" << x << ", " << y << ") is off the map";
   return occ[std::size_t(j) * f.width + i];
 }
 
@@ -85,13 +87,16 @@ TEST(ContactShadow, UnderADiscItIsTheDiscsFormFactor) {
 TEST(ContactShadow, DarkestAlongATouchingEdgeAndZeroBeyondTheReach) {
   // A flat sheet resting on the support plane (0.3 mm above the table).
   const ContactParams p;
-  const SheetHeightField f = sheet_height_field(extruded(0.1, 0.1, 10, 10, [](double) { return 0.0; }), Stage{}, p);
+  const SheetHeightField f =
+      sheet_height_field(extruded(0.1, 0.1, 10, 10, [](double) { return 0.0; }), Stage{}, p);
   const auto occ = contact_occlusion(f, p);
   // The first cell right of the sheet's edge x = 0.1 that the sheet does not cover.
   const int j = static_cast<int>((0.05 - f.y0) / f.cell);
   int i = static_cast<int>((0.1 - f.x0) / f.cell) - 2;
   while (f.covered(i, j)) ++i;
-  const auto at = [&](int di) { return static_cast<double>(occ[std::size_t(j) * f.width + i + di]); };
+  const auto at = [&](int di) {
+    return static_cast<double>(occ[std::size_t(j) * f.width + i + di]);
+  };
   const double at_edge = at(0), beside = at(4), far = at(40);
   // A 0.3 mm gap under a flat sheet: the line is about a millimetre wide.
   EXPECT_GT(at_edge, 0.05) << "no contact line";
@@ -110,7 +115,8 @@ TEST(ContactShadow, DarkestAlongATouchingEdgeAndZeroBeyondTheReach) {
 TEST(ContactShadow, UnderARaisedPartDarkestWhereItLeavesTheTable) {
   // Flat for x < 0.1, then rising at 30 degrees to x = 0.2 (about 5.8 cm up).
   const double slope = std::tan(30 * M_PI / 180);
-  const SheetMesh sheet = extruded(0.2, 0.15, 40, 30, [&](double x) { return x < 0.1 ? 0.0 : (x - 0.1) * slope; });
+  const SheetMesh sheet =
+      extruded(0.2, 0.15, 40, 30, [&](double x) { return x < 0.1 ? 0.0 : (x - 0.1) * slope; });
   const ContactParams p;
   const SheetHeightField f = sheet_height_field(sheet, Stage{}, p);
   const auto occ = contact_occlusion(f, p);
@@ -125,7 +131,8 @@ TEST(ContactShadow, UnderARaisedPartDarkestWhereItLeavesTheTable) {
   EXPECT_GT(past_tip, 0.0) << "the raised part shadows the table beyond its edge";
   // Soft: no step between neighbouring cells under the raised part.
   for (double x = 0.102; x < 0.2; x += p.cell)
-    EXPECT_LT(std::abs(occlusion_at(f, occ, x + p.cell, y) - occlusion_at(f, occ, x, y)), 0.05) << "x = " << x;
+    EXPECT_LT(std::abs(occlusion_at(f, occ, x + p.cell, y) - occlusion_at(f, occ, x, y)), 0.05)
+        << "x = " << x;
 }
 
 TEST(ContactShadow, MapStaysBoundedForEverySheetSizeTheLimitsAccept) {
@@ -134,7 +141,8 @@ TEST(ContactShadow, MapStaysBoundedForEverySheetSizeTheLimitsAccept) {
   for (double side : {3.0, 1000.0}) {
     ContactParams p = contact_params_for(side);
     EXPECT_GT(p.cell, ContactParams{}.cell);
-    const SheetHeightField f = sheet_height_field(extruded(side, side, 4, 4, [](double) { return 0.0; }), Stage{}, p);
+    const SheetHeightField f =
+        sheet_height_field(extruded(side, side, 4, 4, [](double) { return 0.0; }), Stage{}, p);
     EXPECT_LE(std::max(f.width, f.height), 2000);
     p.azimuths = 8;  // the property, not the quality, is checked here
     const auto occ = contact_occlusion(f, p);
@@ -169,13 +177,17 @@ TEST(ContactShadow, SameSeedGivesTheSameMapAndTheGroundTruthSurfaceIsUntouched) 
   o.contact_shadow = false;
   prepare_job(o, dir.str("off"));
   ASSERT_TRUE(fs::exists(dir.path() / "a" / "contact.png"));
-  EXPECT_EQ(test::file_bytes(dir.path() / "a" / "contact.png"), test::file_bytes(dir.path() / "b" / "contact.png"));
-  EXPECT_EQ(test::file_bytes(dir.path() / "a" / "scene.inc"), test::file_bytes(dir.path() / "b" / "scene.inc"));
+  EXPECT_EQ(test::file_bytes(dir.path() / "a" / "contact.png"),
+            test::file_bytes(dir.path() / "b" / "contact.png"));
+  EXPECT_EQ(test::file_bytes(dir.path() / "a" / "scene.inc"),
+            test::file_bytes(dir.path() / "b" / "scene.inc"));
   EXPECT_FALSE(fs::exists(dir.path() / "off" / "contact.png"));
   // The contact shadow is a layer on the table: the surface every pass is cast or rendered on,
   // and the sheet's scene text, are the same with and without it.
   for (const char* name : {"sheet.obj", "sheet_normals.txt", "sheet.inc", "shadow.inc", "main.pov"})
-    EXPECT_EQ(test::file_bytes(dir.path() / "a" / name), test::file_bytes(dir.path() / "off" / name)) << name;
+    EXPECT_EQ(test::file_bytes(dir.path() / "a" / name),
+              test::file_bytes(dir.path() / "off" / name))
+        << name;
   const ImageF map = read_png((dir.path() / "a" / "contact.png").string());
   float lo = 1, hi = 0;
   for (float v : map.data) lo = std::min(lo, v), hi = std::max(hi, v);
@@ -208,7 +220,8 @@ int distance_to_mask(const ImageF& mask, int x, int y, int radius) {
   for (int dy = -radius; dy <= radius; ++dy)
     for (int dx = -radius; dx <= radius; ++dx) {
       const int u = x + dx, v = y + dy;
-      if (u < 0 || v < 0 || u >= mask.width || v >= mask.height || mask.at(u, v, 0) < 0.5f) continue;
+      if (u < 0 || v < 0 || u >= mask.width || v >= mask.height || mask.at(u, v, 0) < 0.5f)
+        continue;
       best = std::min(best, std::max(std::abs(dx), std::abs(dy)));
     }
   return best;
@@ -225,8 +238,11 @@ TEST(Render, ContactShadowDarkensTheTableBesideTheSheetAndNoGroundTruthPass) {
   render_sample(o, dir.str("on"), RunOptions{});
   o.contact_shadow = false;
   render_sample(o, dir.str("off"), RunOptions{});
-  for (const char* name : {"uv.exr", "coords.exr", "normal.exr", "mask.png", "albedo.png", "backward.npy"})
-    EXPECT_EQ(test::file_bytes(dir.path() / "on" / name), test::file_bytes(dir.path() / "off" / name)) << name;
+  for (const char* name :
+       {"uv.exr", "coords.exr", "normal.exr", "mask.png", "albedo.png", "backward.npy"})
+    EXPECT_EQ(test::file_bytes(dir.path() / "on" / name),
+              test::file_bytes(dir.path() / "off" / name))
+        << name;
   const ImageF mask = read_png((dir.path() / "on" / "mask.png").string());
   const ImageF on = read_png((dir.path() / "on" / "image.png").string());
   const ImageF off = read_png((dir.path() / "off" / "image.png").string());
@@ -240,7 +256,8 @@ TEST(Render, ContactShadowDarkensTheTableBesideTheSheetAndNoGroundTruthPass) {
     return m.at(x, y, 0) < 0.5f && distance_to_mask(m, x, y, 30) > 30;
   };
   const double beside_on = mean_where(on, mask, beside), beside_off = mean_where(off, mask, beside);
-  std::cout << "table beside the sheet: " << beside_on << " with, " << beside_off << " without the contact shadow\n";
+  std::cout << "table beside the sheet: " << beside_on << " with, " << beside_off
+            << " without the contact shadow\n";
   EXPECT_LT(beside_on, beside_off - 0.4 / 255);
   EXPECT_NEAR(mean_where(on, mask, far), mean_where(off, mask, far), 0.1 / 255);
 }
