@@ -285,8 +285,10 @@ void prepare_job(const SampleOptions& o, const std::string& job_dir) {
     }
     scene.paper = draw_paper(paper_rng);
     set_coords_encoding(scene, surface);
+    // Only the lit renders (photo, shading) see the table.
+    const bool lit = std::any_of(o.passes.begin(), o.passes.end(), [](Pass p) { return p == Pass::image || p == Pass::shading; });
     json contact_meta = {{"enabled", false}};
-    if (o.contact_shadow) scene.contact = place_contact_shadow(surface, stage, scene, tmp, contact_meta);
+    if (o.contact_shadow && lit) scene.contact = place_contact_shadow(surface, stage, scene, tmp, contact_meta);
     const auto [doc_file, doc_meta] = place_document(o, mesh, tmp, o.threads, o.templates_dir);
     scene.document_file = doc_file;
 

@@ -182,6 +182,11 @@ TEST(ContactShadow, SameSeedGivesTheSameMapAndTheGroundTruthSurfaceIsUntouched) 
   EXPECT_EQ(test::file_bytes(dir.path() / "a" / "scene.inc"),
             test::file_bytes(dir.path() / "b" / "scene.inc"));
   EXPECT_FALSE(fs::exists(dir.path() / "off" / "contact.png"));
+  // Ground-truth passes alone never see the table: no map is made for them.
+  o.contact_shadow = true;
+  o.passes = {Pass::albedo, Pass::uv, Pass::mask};
+  prepare_job(o, dir.str("gt"));
+  EXPECT_FALSE(fs::exists(dir.path() / "gt" / "contact.png"));
   // The contact shadow is a layer on the table: the surface every pass is cast or rendered on,
   // and the sheet's scene text, are the same with and without it.
   for (const char* name : {"sheet.obj", "sheet_normals.txt", "sheet.inc", "shadow.inc", "main.pov"})
