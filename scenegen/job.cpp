@@ -21,6 +21,7 @@
 
 #include "common/atomic_file.hpp"
 #include "common/interrupt.hpp"
+#include "scenegen/contact_shadow.hpp"
 #include "scenegen/errors.hpp"
 #include "scenegen/limits.hpp"
 #include "scenegen/geometry.hpp"
@@ -170,6 +171,29 @@ std::string view_stream(const std::string& component, int view) {
   return view == 0 ? component : component + "/view" + std::to_string(view);
 }
 
+/// The contact shadow's map (contact.png in the job) and its declaration. Its strength is the
+/// share of the light on an open table that comes from the sky (radiosity) or the ambient fill
+/// (draft), the part of the light the sheet's occlusion of the sky removes.
+ContactShadowDecl place_contact_shadow(const SheetMesh& surface, const Stage& stage, const SceneDescription& scene,
+                                       const fs::path& job, json& meta) {
+  const Eigen::Vector3d span = surface.positions.colwise().maxCoeff() - surface.positions.colwise().minCoeff();
+  ContactParams params = contact_params_for(span.maxCoeff());
+  params.gap = scene.background_gap;
+  const SheetHeightField field = sheet_height_field(surface, stage, params);
+  write_contact_png((job / "contact.png").string(), field, contact_occlusion(field, params));
+  ContactShadowDecl c;
+  c.enabled = true;
+  c.x0 = field.x0;
+  c.y0 = field.y0;
+  c.width = field.width * field.cell;
+  c.height = field.height * field.cell;
+  const double fill = scene.quality.radiosity ? scene.lighting.sky : scene.quality.ambient;
+  c.strength = fill / (fill + scene.lighting.exposure);
+  meta = {{"enabled", true}, {"file", c.file}, {"origin_stage_m", {c.x0, c.y0}}, {"size_m", {c.width, c.height}},
+          {"cell_m", params.cell}, {"reach_m", params.reach}, {"azimuths", params.azimuths}, {"strength", c.strength}};
+  return c;
+}
+
 void remove_quietly(const fs::path& p) {
   std::error_code ec;
   fs::remove_all(p, ec);
@@ -261,6 +285,10 @@ void prepare_job(const SampleOptions& o, const std::string& job_dir) {
     }
     scene.paper = draw_paper(paper_rng);
     set_coords_encoding(scene, surface);
+    // Only the lit renders (photo, shading) see the table.
+    const bool lit = std::any_of(o.passes.begin(), o.passes.end(), [](Pass p) { return p == Pass::image || p == Pass::shading; });
+    json contact_meta = {{"enabled", false}};
+    if (o.contact_shadow && lit) scene.contact = place_contact_shadow(surface, stage, scene, tmp, contact_meta);
     const auto [doc_file, doc_meta] = place_document(o, mesh, tmp, o.threads, o.templates_dir);
     scene.document_file = doc_file;
 
@@ -307,6 +335,7 @@ void prepare_job(const SampleOptions& o, const std::string& job_dir) {
     meta["lighting"] = to_json(scene.lighting);
     meta["background"] = to_json(scene.background);
     meta["background"]["gap_m"] = scene.background_gap;
+    meta["contact_shadow"] = contact_meta;
     meta["paper"] = to_json(scene.paper);
     meta["document"] = doc_meta;
     meta["encoding"] = {{"coords_min", to_json(scene.coords_min)}, {"coords_span", scene.coords_span},

@@ -45,6 +45,8 @@ struct SampleOptions {
   bool flip = false;               ///< render the sheet from its other side (flip_sheet)
   std::vector<Light> lights;       ///< non-empty: these lights replace the drawn rig's (studies,
                                    ///< tests); colour and sky are still drawn
+  bool contact_shadow = true;      ///< darken the table where the sheet hides its sky
+                                   ///< (contact_shadow.hpp); the ground truth does not change
   int view = 0;                    ///< view index: views > 0 draw camera, lights, background
                                    ///< and paper from their own streams; the page is shared
 };

@@ -26,7 +26,7 @@ struct Cli {
   sg::SampleOptions sample;
   std::string out, passes = "all", quality = "final", size = "1024x1440", backward_grid = "121x177";
   std::string job, povray = "povray", ground_truth = "raycast";
-  bool exact16 = false, keep_job = false, quiet = false;
+  bool exact16 = false, keep_job = false, quiet = false, no_contact = false;
   int parallel = 0, views = 1;
 };
 
@@ -87,6 +87,7 @@ void add_sample_options(CLI::App* app, Cli& c) {
   app->add_option("--templates", c.sample.templates_dir, "use POV-Ray templates from this folder instead of the built-in copy");
   app->add_option("--subdivision", c.sample.surface.level, "butterfly subdivision steps of the rendered surface (0: the mesh as it is, at most 4)")->capture_default_str();
   app->add_option("--layout", c.sample.layout, "output names: scenegen | syntheticdoc (the reference dataset's names and conventions)")->capture_default_str();
+  app->add_flag("--no-contact-shadow", c.no_contact, "do not darken the table where the sheet hides its sky (contact shadow)");
   app->add_flag("--flip", c.sample.flip, "render the sheet from its other side (mirror x, u -> 1 - u)");
 }
 
@@ -96,6 +97,7 @@ void finalise(Cli& c) {
   c.sample.passes = sg::parse_passes(c.passes);
   c.sample.quality = sg::parse_quality(c.quality);
   c.sample.fine_passes = !c.exact16;
+  c.sample.contact_shadow = !c.no_contact;
   c.sample.ground_truth = sg::parse_ground_truth(c.ground_truth);
 }
 

@@ -106,6 +106,15 @@ void write_paper(std::ostream& out, const SceneDescription& s) {
       << "#declare SG_Roughness_Paper = " << num(p.roughness_paper) << ";\n";
 }
 
+void write_contact(std::ostream& out, const ContactShadowDecl& c) {
+  out << "#declare SG_Contact = " << (c.enabled ? 1 : 0) << ";\n";
+  if (!c.enabled) return;
+  out << "#declare SG_Contact_File = \"" << c.file << "\";\n"
+      << "#declare SG_Contact_Origin = <" << num(c.x0) << ", " << num(c.y0) << ">;\n"
+      << "#declare SG_Contact_Size = <" << num(c.width) << ", " << num(c.height) << ">;\n"
+      << "#declare SG_Contact_Strength = " << num(c.strength) << ";\n";
+}
+
 }  // namespace
 
 QualitySettings quality_settings(Quality q) {
@@ -188,6 +197,7 @@ void write_scene_inc(std::ostream& out, const SceneDescription& s) {
   write_lighting(out, s);
   write_background(out, s);
   write_paper(out, s);
+  write_contact(out, s.contact);
 }
 
 std::string raw_render_name(RawPass pass, RowBand band) {

@@ -39,6 +39,16 @@ QualitySettings quality_settings(Quality q);
 Quality parse_quality(const std::string& name);
 std::string quality_name(Quality q);
 
+/// The contact shadow on the table (contact_shadow.hpp): a map of the sheet's occlusion of the
+/// sky over the stage plane, multiplied into the table's lit colour as 1 - strength x occlusion.
+struct ContactShadowDecl {
+  bool enabled = false;
+  std::string file = "contact.png";  ///< in the job folder
+  double x0 = 0.0, y0 = 0.0;         ///< stage coordinates of the map's lower-left corner [m]
+  double width = 0.0, height = 0.0;  ///< extent of the map [m]
+  double strength = 0.0;             ///< share of the table's light the occlusion removes
+};
+
 /// Everything scene.inc declares for one sample.
 struct SceneDescription {
   Camera camera;
@@ -52,6 +62,7 @@ struct SceneDescription {
   Eigen::Vector3d coords_min = Eigen::Vector3d::Zero();  ///< coords pass offset [m]
   double coords_span = 1.0;                              ///< coords pass scale [m]
   double background_gap = 3e-4;  ///< background slab below the support plane [m]
+  ContactShadowDecl contact;
 };
 
 /// Coords pass encoding: offset and span such that (p - min) / span is in [0.01, 0.99).
