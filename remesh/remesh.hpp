@@ -115,6 +115,23 @@ RemeshStats remesh(SheetMesh& mesh, RemeshState& state, const RemeshParams& para
 std::vector<Eigen::Matrix2d> sizing(const SheetMesh& mesh, const RemeshState& state,
                                     const RemeshParams& params);
 
+/// The criteria of one face's sizing before they are combined and clamped, each a 2 x 2
+/// symmetric positive semi-definite metric in material space [1/m^2] (zero when off): an edge u
+/// is as long as a criterion allows when u^T M u = 1.
+struct SizingTerms {
+  Eigen::Matrix2d curvature = Eigen::Matrix2d::Zero();    ///< world shape: S^T S / refine_angle^2
+  Eigen::Matrix2d plastic = Eigen::Matrix2d::Zero();      ///< plastic curvature: Kp^T Kp / refine_angle^2
+  Eigen::Matrix2d compression = Eigen::Matrix2d::Zero();  ///< membrane compression (ArcSim)
+  Eigen::Matrix2d velocity = Eigen::Matrix2d::Zero();     ///< velocity gradient
+  Eigen::Matrix2d obstacle = Eigen::Matrix2d::Zero();     ///< obstacle proximity
+};
+
+/// The criteria per face (#F), unclamped: sizing() is clamp_metric(tensor_max of these). Exposed
+/// for tests and for diagnostics that ask which criterion refines a mesh.
+/// @throw ParameterError, MeshError as remesh().
+std::vector<SizingTerms> sizing_terms(const SheetMesh& mesh, const RemeshState& state,
+                                      const RemeshParams& params);
+
 /// Checks the parameters. @throw ParameterError naming the first one out of range.
 void check_params(const RemeshParams& params);
 
