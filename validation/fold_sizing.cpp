@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <fstream>
 #include <set>
 #include <sstream>
 #include <string>
@@ -22,6 +23,7 @@
 #include <sys/resource.h>
 
 #include "remesh/remesh.hpp"
+#include "remesh/sheet_io.hpp"
 #include "remesh/sizing.hpp"
 #include "simulation/run.hpp"
 #include "validation/fold_scene.hpp"
@@ -41,7 +43,7 @@ double largest_eigenvalue(const Eigen::Matrix2d& m) {
   return Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(0.5 * (m + m.transpose())).eigenvalues()(1);
 }
 
-void report(const ps::Run& run, const rm::RemeshParams& p) {
+void report(const ps::Run& run, const rm::RemeshParams& p, const std::string& dump) {
   const rm::SheetMesh& mesh = run.mesh();
   rm::RemeshState rs;
   rs.positions = run.state().positions_matrix();
@@ -54,6 +56,13 @@ void report(const ps::Run& run, const rm::RemeshParams& p) {
   std::printf("step %d (t = %.3f s): %d vertices, %d faces, loop height %.1f mm\n", run.steps_done(),
               run.state().time, mesh.num_vertices(), mesh.num_faces(), 1e3 * (zmax - zmin));
   const char* names[5] = {"curvature", "plastic", "compression", "velocity", "obstacle"};
+  std::FILE* out = nullptr;
+  if (!dump.empty()) {
+    out = std::fopen((dump + "/faces_" + std::to_string(run.steps_done()) + ".csv").c_str(), "w");
+    if (!out) throw std::runtime_error("cannot write to " + dump);
+    std::fprintf(out, "mx,my,wx,wy,wz,l_curvature,l_plastic,l_compression,kp_xx,kp_yy,kp_xy,size\n");
+  }
+  const Eigen::MatrixX3d kp = mesh.plastic_curvature();
   const double at_min = 1.0 / (p.size_min * p.size_min) * (1 - 1e-9);
   std::vector<int> finest(5, 0), dominant(5, 0);
   std::vector<std::vector<int>> finest_at(5, std::vector<int>(12, 0));  // by material x, 1 cm bins
@@ -77,6 +86,22 @@ void report(const ps::Run& run, const rm::RemeshParams& p) {
       if (l > best_l) best_l = l, best = k;
     }
     if (best >= 0) ++dominant[best];
+    if (out) {
+      Eigen::Vector2d mc = Eigen::Vector2d::Zero();
+      Eigen::Vector3d wc = Eigen::Vector3d::Zero();
+      double size = 0;
+      for (int c = 0; c < 3; ++c) {
+        mc += mesh.material_coord(f(i, c)) / 3;
+        wc += x.row(f(i, c)).transpose() / 3;
+        size = std::max(size, (mesh.material_coord(f(i, (c + 1) % 3)) - mesh.material_coord(f(i, c))).norm());
+      }
+      auto len = [&](int k) {
+        const double l = largest_eigenvalue(m[k]);
+        return l > 0 ? 1 / std::sqrt(l) : INFINITY;
+      };
+      std::fprintf(out, "%.6g,%.6g,%.6g,%.6g,%.6g,%.4g,%.4g,%.4g,%.4g,%.4g,%.4g,%.4g\n", mc.x(), mc.y(), wc.x(), wc.y(),
+                   wc.z(), len(0), len(1), len(2), kp(i, 0), kp(i, 1), kp(i, 2), size);
+    }
     const Eigen::Vector2d a = mesh.material_coord(f(i, 0)), b = mesh.material_coord(f(i, 1)),
                           c = mesh.material_coord(f(i, 2));
     Eigen::Matrix2d dm;
@@ -94,6 +119,18 @@ void report(const ps::Run& run, const rm::RemeshParams& p) {
     const double g = Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(green).eigenvalues()(0);
     green_min = std::min(green_min, g);
     if (g < -1e-3) ++compressed;
+  }
+  if (out) {
+    std::fclose(out);
+    std::ofstream obj(dump + "/sheet_" + std::to_string(run.steps_done()) + ".obj");
+    rm::write_obj(obj, mesh, x, run.scene().sheet.width, run.scene().sheet.height);
+  }
+  if (run.scene().remesh.enabled) {
+    const ps::RunResult r = run.result(0);
+    std::printf("  remeshing so far: %d passes, %d rollbacks, %d splits, %d flips, %d collapses; refused:",
+                r.remesh->passes, r.remesh->rollbacks, r.remesh->splits, r.remesh->flips, r.remesh->collapses);
+    for (const auto& [reason, n] : r.remesh->refusals) std::printf(" %s %d,", reason.c_str(), n);
+    std::printf("\n");
   }
   std::printf("  smallest principal Green strain %.3g; faces compressed beyond 1e-3: %d\n", green_min,
               compressed);
@@ -125,11 +162,13 @@ bool parse_pair(const std::string& text, double& lo, double& hi) {
 int main(int argc, char** argv) {
   CLI::App app{"papersim_fold_sizing: which sizing criterion refines the 180-degree fold"};
   double edge = 8;
-  std::string remesh_text, size_text = "1:100", steps_text = "1,2,50,100,160";
+  std::string remesh_text, size_text = "1:100", steps_text = "1,2,50,100,160", dump;
   app.add_option("--edge", edge, "start edge length [mm]")->capture_default_str();
   app.add_option("--remesh", remesh_text, "remesh the run with MIN:MAX [mm] (default: uniform)");
   app.add_option("--size", size_text, "size_min:size_max [mm] of the report's sizing")->capture_default_str();
   app.add_option("--steps", steps_text, "steps after which to report, comma separated")->capture_default_str();
+  app.add_option("--dump", dump, "write faces_STEP.csv (per face: material and world centroid [m], the edge each "
+                 "criterion asks for [m], plastic curvature [1/m], longest edge [m]) into this directory");
   CLI11_PARSE(app, argc, argv);
   try {
     ps::Scene scene = papersim::validation::fold_180_scene(1e-3 * edge);
@@ -149,7 +188,7 @@ int main(int argc, char** argv) {
     std::string item;
     while (std::getline(in, item, ',')) at.insert(std::stoi(item));
     ps::Run run(scene);
-    if (at.count(0)) report(run, p);
+    if (at.count(0)) report(run, p, dump);
     const double c0 = cpu_seconds();
     while (!run.finished() && run.steps_done() < *at.rbegin()) {
       const double c = cpu_seconds();
@@ -157,7 +196,7 @@ int main(int argc, char** argv) {
       std::printf("step %d: %d vertices, %d Newton iterations, %.2f s CPU\n", run.steps_done(),
                   run.mesh().num_vertices(), st.newton_iterations, cpu_seconds() - c);
       std::fflush(stdout);
-      if (at.count(run.steps_done())) report(run, p);
+      if (at.count(run.steps_done())) report(run, p, dump);
     }
     std::printf("total %.1f s CPU\n", cpu_seconds() - c0);
     return 0;
