@@ -199,6 +199,19 @@ int main(int argc, char** argv) {
       if (at.count(run.steps_done())) report(run, p, dump);
     }
     std::printf("total %.1f s CPU\n", cpu_seconds() - c0);
+    if (run.finished()) {  // the figures of papersim_fold_remesh
+      const ps::RunResult r = run.result(0);
+      const Eigen::VectorXd& x = r.state.positions;
+      double zmin = INFINITY, zmax = -INFINITY;
+      for (Eigen::Index i = 2; i < x.size(); i += 3) zmin = std::min(zmin, x(i)), zmax = std::max(zmax, x(i));
+      const double radius = 0.5 * (zmax - zmin);
+      const double continuum = M_PI * scene.sheet.material.bending_stiffness * scene.sheet.height / radius;
+      std::printf("end: %d vertices (%d at most), bending energy %.4g J, radius %.2f mm, pi D w / r %.4g J, "
+                  "ratio %.3f, self-intersections %d, max stretch %.6f, min ground %.3g m\n",
+                  r.sheet.vertices, r.sheet.vertices_max, r.energy.bend, 1e3 * radius, continuum,
+                  r.energy.bend / continuum, r.quality.self_intersections, r.quality.max_principal_stretch,
+                  r.quality.min_obstacle_distance.empty() ? NAN : r.quality.min_obstacle_distance.front());
+    }
     return 0;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "papersim_fold_sizing: %s\n", e.what());
