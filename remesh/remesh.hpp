@@ -114,8 +114,9 @@ RemeshStats remesh(SheetMesh& mesh, RemeshState& state, const RemeshParams& para
 /// The sizing metric per face (#F, each 2 x 2 symmetric positive definite, material space
 /// [1/m^2]): the anisotropic maximum of the curvature (of the world shape, and the plastic
 /// curvature the face carries, as ArcSim's plastic-space curvature, so a crease stays refined
-/// when it is pressed flat or unfolded), compression, velocity and obstacle metrics, its eigenvalues clamped to [1/size_max^2, 1/size_min^2] and to an aspect of at least
-/// aspect_min. Exposed for tests.
+/// when it is pressed flat or unfolded), compression, velocity and obstacle metrics, its
+/// eigenvalues clamped to [1/size_max^2, 1/size_min^2] and to an aspect of at least aspect_min.
+/// Exposed for tests.
 /// @throw ParameterError, MeshError as remesh().
 std::vector<Eigen::Matrix2d> sizing(const SheetMesh& mesh, const RemeshState& state,
                                     const RemeshParams& params);
