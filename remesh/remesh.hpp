@@ -29,8 +29,12 @@ struct RemeshParams {
   /// wanted edge length is refine_angle * R. Must be > 0.
   double refine_angle = 0.2;
   /// [m] compression criterion of ArcSim, <= 0 off: an edge of length l under compressive
-  /// (Green) strain e is split when l^2 |e| > refine_compression^2, i.e. when a buckle of
-  /// amplitude about refine_compression could hide inside it. Curvature lowers the demand.
+  /// Green strain e is split when l^2 |e| > refine_compression^2, i.e. when a buckle of
+  /// amplitude about refine_compression could hide inside it. Curvature lowers the demand. On a
+  /// face coarser than 2 pi refine_compression / refine_angle the demand is relative to the
+  /// face (compression_metric_at_resolution, sizing.hpp): a face is refined only when it holds
+  /// more compression than a buckle on its own edges could take up (|e| > (refine_angle /
+  /// 2 pi)^2, 1.0e-3 at 0.2 rad), and only to the edges that buckle needs.
   double refine_compression = 1e-4;
   /// [m/s] velocity difference an edge may span (velocity-gradient criterion), <= 0 off.
   double refine_velocity = 0.0;
@@ -108,12 +112,31 @@ RemeshStats remesh(SheetMesh& mesh, RemeshState& state, const RemeshParams& para
                    const EditVeto& veto = {});
 
 /// The sizing metric per face (#F, each 2 x 2 symmetric positive definite, material space
-/// [1/m^2]): the anisotropic maximum of the curvature, compression, velocity and obstacle
-/// metrics, its eigenvalues clamped to [1/size_max^2, 1/size_min^2] and to an aspect of at least
-/// aspect_min. Exposed for tests.
+/// [1/m^2]): the anisotropic maximum of the curvature (of the world shape, and the plastic
+/// curvature the face carries, as ArcSim's plastic-space curvature, so a crease stays refined
+/// when it is pressed flat or unfolded), compression, velocity and obstacle metrics, its
+/// eigenvalues clamped to [1/size_max^2, 1/size_min^2] and to an aspect of at least aspect_min.
+/// Exposed for tests.
 /// @throw ParameterError, MeshError as remesh().
 std::vector<Eigen::Matrix2d> sizing(const SheetMesh& mesh, const RemeshState& state,
                                     const RemeshParams& params);
+
+/// The criteria of one face's sizing before they are combined and clamped, each a 2 x 2
+/// symmetric positive semi-definite metric in material space [1/m^2] (zero when off): an edge u
+/// is as long as a criterion allows when u^T M u = 1.
+struct SizingTerms {
+  Eigen::Matrix2d curvature = Eigen::Matrix2d::Zero();    ///< world shape: S^T S / refine_angle^2
+  Eigen::Matrix2d plastic = Eigen::Matrix2d::Zero();      ///< plastic curvature: Kp^T Kp / refine_angle^2
+  Eigen::Matrix2d compression = Eigen::Matrix2d::Zero();  ///< membrane compression (ArcSim)
+  Eigen::Matrix2d velocity = Eigen::Matrix2d::Zero();     ///< velocity gradient
+  Eigen::Matrix2d obstacle = Eigen::Matrix2d::Zero();     ///< obstacle proximity
+};
+
+/// The criteria per face (#F), unclamped: sizing() is clamp_metric(tensor_max of these). Exposed
+/// for tests and for diagnostics that ask which criterion refines a mesh.
+/// @throw ParameterError, MeshError as remesh().
+std::vector<SizingTerms> sizing_terms(const SheetMesh& mesh, const RemeshState& state,
+                                      const RemeshParams& params);
 
 /// Checks the parameters. @throw ParameterError naming the first one out of range.
 void check_params(const RemeshParams& params);

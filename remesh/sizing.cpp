@@ -190,6 +190,23 @@ Eigen::Matrix2d compression_metric(const Eigen::Matrix2d& e, const Eigen::Matrix
   return map_eigenvalues(-e + root, [](double l) { return std::max(l, 0.0); }) / (2.0 * c * c);
 }
 
+Eigen::Matrix2d compression_metric_at_resolution(const Eigen::Matrix2d& arcsim,
+                                                 const Eigen::Matrix<double, 2, 3>& edges, double c,
+                                                 double angle) {
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> es(0.5 * (arcsim + arcsim.transpose()));
+  Eigen::Vector2d mu = es.eigenvalues();
+  for (int j = 0; j < 2; ++j) {
+    if (!(mu(j) > 0)) {
+      mu(j) = 0;
+      continue;
+    }
+    const double h = (es.eigenvectors().col(j).transpose() * edges).cwiseAbs().maxCoeff();
+    const double factor = std::max(1.0, angle * h / (2 * M_PI * c));
+    mu(j) /= factor * factor;
+  }
+  return es.eigenvectors() * mu.asDiagonal() * es.eigenvectors().transpose();
+}
+
 Eigen::Matrix2d tensor_max(const std::vector<Eigen::Matrix2d>& tensors) {
   std::vector<Disk> disks;
   for (const Eigen::Matrix2d& t : tensors) {
@@ -294,38 +311,46 @@ struct FaceInputs {
   Eigen::Vector3d distance = Eigen::Vector3d::Zero();
 };
 
-/// The unclamped criteria of one face, combined by the anisotropic maximum (Narain et al. 2012,
-/// section 4); s is the face's curvature in material coordinates [1/m].
-Eigen::Matrix2d combined_metric(const FaceInputs& in, const Eigen::Matrix2d& s,
-                                const RemeshParams& p, bool use_obstacles) {
+/// The unclamped criteria of one face (Narain et al. 2012, section 4); s is the face's curvature
+/// in material coordinates [1/m], kp its plastic curvature [1/m].
+SizingTerms face_terms(const FaceInputs& in, const Eigen::Matrix2d& s, const Eigen::Matrix2d& kp,
+                       const RemeshParams& p, bool use_obstacles) {
   const Eigen::Matrix2d dm_inv =
       material_gradient<2>(in.material, Eigen::Matrix2d::Identity()).inverse();
   const Eigen::Matrix2d s2 = s.transpose() * s;
-  std::vector<Eigen::Matrix2d> terms = {s2 / (p.refine_angle * p.refine_angle)};
+  const double a2 = p.refine_angle * p.refine_angle;
+  SizingTerms t;
+  t.curvature = s2 / a2;
+  t.plastic = kp.transpose() * kp / a2;
   if (p.refine_compression > 0) {
     const Eigen::Matrix<double, 3, 2> def = material_gradient<3>(in.world, dm_inv);
-    const Eigen::Matrix2d green = def.transpose() * def - Eigen::Matrix2d::Identity();
-    terms.push_back(compression_metric(green, s2, p.refine_compression));
+    const Eigen::Matrix2d green = 0.5 * (def.transpose() * def - Eigen::Matrix2d::Identity());
+    Eigen::Matrix<double, 2, 3> edges;
+    for (int k = 0; k < 3; ++k) edges.col(k) = in.material.col((k + 1) % 3) - in.material.col(k);
+    t.compression = compression_metric_at_resolution(
+        compression_metric(green, s2, p.refine_compression), edges, p.refine_compression,
+        p.refine_angle);
   }
   if (p.refine_velocity > 0) {
     const Eigen::Matrix<double, 3, 2> grad_v = material_gradient<3>(in.velocity, dm_inv);
-    terms.push_back(grad_v.transpose() * grad_v / (p.refine_velocity * p.refine_velocity));
+    t.velocity = grad_v.transpose() * grad_v / (p.refine_velocity * p.refine_velocity);
   }
   if (use_obstacles)
-    terms.push_back(obstacle_metric(in.distance, dm_inv, p.obstacle_distance, 1e-3 * p.size_min));
-  return tensor_max(terms);
+    t.obstacle = obstacle_metric(in.distance, dm_inv, p.obstacle_distance, 1e-3 * p.size_min);
+  return t;
 }
 
 }  // namespace
 
-std::vector<Eigen::Matrix2d> sizing(const SheetMesh& mesh, const RemeshState& state,
-                                    const RemeshParams& p) {
+std::vector<SizingTerms> sizing_terms(const SheetMesh& mesh, const RemeshState& state,
+                                      const RemeshParams& p) {
   check_params(p);
   check_state(mesh, state);
   const std::vector<double> angles = edge_dihedral_angles(mesh, state.positions);
   const Eigen::MatrixX3i faces = mesh.faces();
+  const Eigen::MatrixX3d plastic = mesh.plastic_curvature();
   const bool use_obstacles = p.obstacle_distance > 0 && state.obstacle_distance.size() > 0;
-  std::vector<Eigen::Matrix2d> out(faces.rows());
+  std::vector<SizingTerms> out(faces.rows());
   for (int f = 0; f < faces.rows(); ++f) {
     FaceInputs in;
     for (int k = 0; k < 3; ++k) {
@@ -335,7 +360,21 @@ std::vector<Eigen::Matrix2d> sizing(const SheetMesh& mesh, const RemeshState& st
       in.velocity.col(k) = state.velocities.row(v).transpose();
       if (use_obstacles) in.distance(k) = state.obstacle_distance(v);
     }
-    out[f] = clamp_metric(combined_metric(in, face_curvature(mesh, f, angles), p, use_obstacles), p);
+    Eigen::Matrix2d kp;
+    kp << plastic(f, 0), plastic(f, 2), plastic(f, 2), plastic(f, 1);
+    out[f] = face_terms(in, face_curvature(mesh, f, angles), kp, p, use_obstacles);
+  }
+  return out;
+}
+
+std::vector<Eigen::Matrix2d> sizing(const SheetMesh& mesh, const RemeshState& state,
+                                    const RemeshParams& p) {
+  const std::vector<SizingTerms> terms = sizing_terms(mesh, state, p);
+  std::vector<Eigen::Matrix2d> out(terms.size());
+  for (size_t f = 0; f < terms.size(); ++f) {
+    const SizingTerms& t = terms[f];
+    out[f] = clamp_metric(
+        tensor_max({t.curvature, t.plastic, t.compression, t.velocity, t.obstacle}), p);
   }
   return out;
 }

@@ -21,11 +21,28 @@ std::vector<double> edge_dihedral_angles(const SheetMesh& mesh, const Eigen::Mat
 Eigen::Matrix2d face_curvature(const SheetMesh& mesh, int f, const std::vector<double>& angles);
 
 /// ArcSim's compression metric [1/m^2]: the positive part of (-e + sqrt(e^T e - 4 c^2 adj(S^T S)))
-/// / (2 c^2), with e = F^T F - I the Green strain (times 2) [-], curvature2 = S^T S [1/m^2] and
+/// / (2 c^2), with e = (F^T F - I) / 2 the Green strain [-], curvature2 = S^T S [1/m^2] and
 /// c = refine_compression [m]; it asks for edges l with l^2 |e| <= c^2 along compressed
 /// directions, less where the face is already bent there.
 Eigen::Matrix2d compression_metric(const Eigen::Matrix2d& green_strain,
                                    const Eigen::Matrix2d& curvature2, double c);
+
+/// The compression metric at the resolution of a face (Narain et al. 2012 resolve the buckles
+/// that compression makes; a mesh resolves a buckle only as fine as its own edges). Along each
+/// eigendirection d of `arcsim` (compression_metric, eigenvalue mu, asking for l_a = 1/sqrt(mu))
+/// the face spans h = max_i |u_i . d| over its material edges u_i (#columns of `edges`, [m]).
+/// The compression the face holds is what its edges could not turn into bending: a buckle of
+/// the shortest wavelength the face can carry, 2 h, taking up Green strain G = c^2 / l_a^2 has
+/// peak curvature 2 pi sqrt(G) / h, and spans the dihedral angle `angle` per edge on edges
+///   l = angle h / (2 pi sqrt(G)) = l_a angle h / (2 pi c).
+/// The metric asks for the longer of l_a and l: so it refines a face only when its compression
+/// is more than it could turn into a buckle with edges that each span `angle` (G >
+/// (angle / 2 pi)^2, 1.0e-3 at 0.2 rad), and by the factor that buckle needs rather than to
+/// buckles of amplitude c at once; on faces finer than 2 pi c / angle (3.1 mm at the
+/// defaults) it is ArcSim's metric unchanged.
+Eigen::Matrix2d compression_metric_at_resolution(const Eigen::Matrix2d& arcsim,
+                                                 const Eigen::Matrix<double, 2, 3>& edges, double c,
+                                                 double angle);
 
 /// The anisotropic maximum of symmetric positive semi-definite 2 x 2 tensors: the smallest-trace
 /// tensor M with M >= M_i for every i (ArcSim's tensor_max: writing M = r I + a diag(1, -1)

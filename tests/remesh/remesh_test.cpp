@@ -152,6 +152,61 @@ TEST(Remesh, FoldRefinesToSizeMinAlongTheFoldOnly) {
   }
 }
 
+// A crease pressed flat: the sheet was folded 180 degrees along y = y0 and yielded there, then
+// flattened. The world shape is flat, so only the plastic curvature (Kp, the crease's memory)
+// can keep the mesh fine along the crease: it must stay at size_min there, pass after pass,
+// and coarsen everywhere else.
+TEST(Remesh, PlasticCreasePressedFlatKeepsSizeMinAlongTheCreaseOnly) {
+  SheetMesh mesh = grid(0.1, 0.1, 51, 51);  // 2 mm
+  const double y0 = 0.05, band = 0.002;
+  // 180 degrees of plastic bending spread over the faces within 2 mm of the crease line:
+  // Kp_yy = pi / (2 band) = 785 1/m, which asks for 0.25 mm edges across (clamped to size_min).
+  Eigen::MatrixX3d k = Eigen::MatrixX3d::Zero(mesh.num_faces(), 3);
+  const Eigen::MatrixX3i f = mesh.faces();
+  for (int i = 0; i < f.rows(); ++i) {
+    double cy = 0;
+    for (int c = 0; c < 3; ++c) cy += mesh.material_coord(f(i, c)).y() / 3;
+    if (std::abs(cy - y0) < band) k(i, 1) = M_PI / (2 * band);
+  }
+  mesh.set_plastic_curvature(k);
+  const Eigen::Vector4d integral = integrals(mesh);
+  RemeshState state = flat_state(mesh);
+  const Eigen::Vector4d bounds = mesh.material_bounds();
+  RemeshParams p;
+  p.size_min = 1e-3;
+  for (int pass = 0; pass < 3; ++pass) {
+    SCOPED_TRACE("pass " + std::to_string(pass));
+    remesh(mesh, state, p);
+    std::vector<double> near_across, far;
+    for (const Edge& e : material_edges(mesh)) {
+      const double d = std::abs(e.mid.y() - y0);
+      if (d < 0.5 * band && std::abs(e.u.y()) > std::abs(e.u.x())) near_across.push_back(e.length);
+      if (d > 0.02) far.push_back(e.length);
+    }
+    ASSERT_FALSE(near_across.empty());
+    // As for a fold in the world shape: l <= sqrt(2) size_min across the crease.
+    EXPECT_LE(*std::max_element(near_across.begin(), near_across.end()), std::sqrt(2.0) * p.size_min);
+    EXPECT_LE(median(near_across), p.size_min * (1 + 1e-9));
+    // Away from it the flat sheet coarsens (edges of a few centimetres on a 10 cm sheet).
+    EXPECT_GE(median(far), 0.02);
+    // The crease's plastic curvature is carried exactly.
+    EXPECT_NEAR(integrals(mesh)(1), integral(1), 1e-9 * integral(1));
+    expect_quality(mesh, state, bounds, p);
+  }
+  // Only there: the faces at size_min all lie within a few size_min of the band.
+  const std::vector<Eigen::Matrix2d> m = sizing(mesh, state, p);
+  const Eigen::MatrixX3i g = mesh.faces();
+  int finest = 0;
+  for (int i = 0; i < g.rows(); ++i) {
+    if (m[i].trace() < 0.9 / (p.size_min * p.size_min)) continue;
+    ++finest;
+    double cy = 0;
+    for (int c = 0; c < 3; ++c) cy += mesh.material_coord(g(i, c)).y() / 3;
+    EXPECT_LT(std::abs(cy - y0), band + 3 * p.size_min);
+  }
+  EXPECT_GT(finest, 0);
+}
+
 TEST(Remesh, ConservesPlasticStateAndIsDeterministic) {
   SheetMesh mesh = grid(A4_WIDTH, A4_HEIGHT, 21, 30, 0.3, 4);
   RemeshState state = folded_state(mesh, 0.1, M_PI / 2);

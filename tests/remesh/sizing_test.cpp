@@ -70,6 +70,82 @@ TEST(CompressionMetric, AsksForBucklesOfTheGivenAmplitude) {
   EXPECT_LT(compression_metric(Eigen::Vector2d(1e-3, 1e-3).asDiagonal(), Eigen::Matrix2d::Zero(), c).norm(), 1e-6);
 }
 
+namespace {
+
+/// The flat sheet compressed uniformly along material x to Green strain g < 0.
+RemeshState compressed_state(const SheetMesh& mesh, double g) {
+  RemeshState s = flat_state(mesh);
+  s.positions.col(0) *= std::sqrt(1 + 2 * g);
+  return s;
+}
+
+/// The wanted edge length along material x of every face [m].
+std::vector<double> wanted_along_x(const std::vector<Eigen::Matrix2d>& m) {
+  std::vector<double> out;
+  for (const auto& mf : m) out.push_back(1 / std::sqrt(mf(0, 0)));
+  return out;
+}
+
+}  // namespace
+
+TEST(CompressionMetric, FaceThatCanBuckleIsNotRefined) {
+  // A flat 5 mm grid compressed along x by Green strain 5e-4: ArcSim's metric alone asks for
+  // c / sqrt(|G|) = 4.5 mm, finer than the grid; but a buckle of wavelength 2 h = 10 mm taking
+  // up that strain spans 2 pi sqrt(|G|) = 0.14 rad per 5 mm edge, below refine_angle: the grid
+  // can already carry it, so the compression criterion asks for nothing finer than the grid.
+  const double g = -5e-4, h = 0.005;
+  SheetMesh mesh = grid(0.1, 0.1, 21, 21);
+  RemeshState s = compressed_state(mesh, g);
+  RemeshParams p;
+  p.size_min = 1e-3;
+  p.size_max = 0.1;
+  const Eigen::Matrix2d arcsim =
+      compression_metric(Eigen::Vector2d(g, 0).asDiagonal(), Eigen::Matrix2d::Zero(), p.refine_compression);
+  EXPECT_NEAR(1 / std::sqrt(arcsim(0, 0)), p.refine_compression / std::sqrt(-g), 1e-9);
+  EXPECT_LT(1 / std::sqrt(arcsim(0, 0)), h);
+  for (const SizingTerms& t : sizing_terms(mesh, s, p)) {
+    const double l = 1 / std::sqrt(t.compression(0, 0));
+    EXPECT_NEAR(l, p.refine_angle * h / (2 * M_PI * std::sqrt(-g)), 1e-6);
+    EXPECT_GT(l, h);
+    EXPECT_LT(std::abs(t.compression(1, 1)), 1e-9 * t.compression(0, 0));  // nothing along y
+  }
+  // So a remeshing pass splits nothing (it coarsens: the sheet is flat).
+  const int before = mesh.num_vertices();
+  const RemeshStats stats = remesh(mesh, s, p);
+  EXPECT_EQ(stats.splits, 0);
+  EXPECT_LT(mesh.num_vertices(), before);
+}
+
+TEST(CompressionMetric, CompressedCoarseFaceRefinesByTheBuckleItNeedsNotToSizeMin) {
+  // A 20 mm grid compressed by 1%: beyond what its edges can buckle (G > (refine_angle /
+  // 2 pi)^2 = 1.0e-3), so it is refined, to the edges a buckle of wavelength 40 mm needs,
+  // refine_angle h / (2 pi sqrt(|G|)) = 6.4 mm, not to ArcSim's c / sqrt(|G|) = 1 mm at once.
+  const double g = -1e-2, h = 0.02;
+  SheetMesh mesh = grid(0.2, 0.2, 11, 11);
+  RemeshState s = compressed_state(mesh, g);
+  RemeshParams p;
+  p.size_min = 1e-3;
+  const std::vector<Eigen::Matrix2d> m = sizing(mesh, s, p);
+  for (double l : wanted_along_x(m)) EXPECT_NEAR(l, p.refine_angle * h / (2 * M_PI * std::sqrt(-g)), 1e-6);
+  // A face finer than 2 pi c / refine_angle (3.1 mm) gets ArcSim's metric unchanged.
+  SheetMesh fine = grid(0.02, 0.02, 11, 11);  // 2 mm
+  const std::vector<Eigen::Matrix2d> mf = sizing(fine, compressed_state(fine, -4e-3), p);
+  for (double l : wanted_along_x(mf)) EXPECT_NEAR(l, p.refine_compression / std::sqrt(4e-3), 1e-9);
+}
+
+TEST(Sizing, PlasticCurvatureRefinesAFlatSheetAlongTheCrease) {
+  // A crease pressed flat: the world shape is flat, the plastic curvature remembers the fold.
+  SheetMesh mesh = grid(0.1, 0.1, 11, 11);
+  Eigen::MatrixX3d k = Eigen::MatrixX3d::Zero(mesh.num_faces(), 3);
+  k(0, 1) = 50;  // bent about the x axis by 50 1/m: edges across of refine_angle / 50 = 4 mm
+  mesh.set_plastic_curvature(k);
+  const std::vector<SizingTerms> t = sizing_terms(mesh, flat_state(mesh), RemeshParams());
+  EXPECT_NEAR(1 / std::sqrt(t[0].plastic(1, 1)), 0.2 / 50, 1e-12);
+  EXPECT_EQ(t[0].plastic(0, 0), 0.0);
+  EXPECT_EQ(t[0].curvature.norm(), 0.0);
+  EXPECT_EQ(t[1].plastic.norm(), 0.0);
+}
+
 TEST(Sizing, CylinderCurvatureAcrossTheAxis) {
   // A fine grid wrapped on a cylinder of radius R (axis along x): the curvature criterion asks
   // for l = refine_angle * R across the axis; along it the aspect clamp (l / aspect_min) or
