@@ -18,7 +18,8 @@ global_settings {
   max_trace_level 6
   #if (SG_Lit & SG_Radiosity)
     radiosity {
-      pretrace_start 0.08 pretrace_end 0.02 count SG_Radiosity_Count nearest_count 5
+      pretrace_start 0.08 pretrace_end SG_Radiosity_Pretrace_End count SG_Radiosity_Count
+      nearest_count SG_Radiosity_Nearest
       error_bound SG_Radiosity_Error recursion_limit 1 low_error_factor 0.5
       gray_threshold 0 brightness 1 adc_bailout 0.01 / 2 normal on }
   #end

@@ -54,10 +54,15 @@ void write_lighting(std::ostream& out, const SceneDescription& s) {
       << "#declare SG_Area_Samples = " << s.quality.area_samples << ";\n"
       << "#declare SG_Area_Adaptive = " << s.quality.area_adaptive << ";\n"
       << "#macro SG_Lights()\n";
-  for (const Light& light : l.lights)
-    out << "  SG_Light(" << vec(light.position) << ", " << num(light.size) << ", "
-        << num(light.intensity) << ", " << num(light.fade_distance) << ")  // " << light.name
-        << ", " << num(light.power) << " W\n";
+  double total = 0;
+  for (const Light& light : l.lights) total += light.intensity;
+  for (const Light& light : l.lights) {
+    const bool dim = light.intensity < s.quality.dim_light_share * total;
+    out << (dim ? "  SG_Light_Samples(" : "  SG_Light(") << vec(light.position) << ", " << num(light.size)
+        << ", " << num(light.intensity) << ", " << num(light.fade_distance);
+    if (dim) out << ", " << s.quality.dim_area_samples;
+    out << ")  // " << light.name << ", " << num(light.power) << " W\n";
+  }
   out << "#end\n";
 }
 
@@ -122,12 +127,17 @@ QualitySettings quality_settings(Quality q) {
   if (q == Quality::final) {
     // Chosen on scenegen_quality_study's front (docs/scenegen.md, "Render time against image
     // error"): the photo's error is mostly antialiasing, so a second antialiasing level where
-    // neighbours differ by more than 0.9 buys more than 3 x 3 area-light samples cost.
+    // neighbours differ by more than 0.8 buys more than 3 x 3 area-light samples cost.
+    // Radiosity lookups were ~40% of the photo's trace (each lookup examined nearly every
+    // sample): nearest_count 2 and a pretrace to 0.04 take about a quarter off the photo's CPU
+    // for 0.04 dB, which the lower antialiasing threshold more than buys back.
     s.radiosity = true;
+    s.radiosity_nearest = 2;
+    s.radiosity_pretrace_end = 0.04;
     s.area_samples = 2;
     s.area_adaptive = 1;
     s.antialias = true;
-    s.antialias_threshold = 0.9;
+    s.antialias_threshold = 0.8;
     s.antialias_depth = 2;
     s.ambient = 0.0;
   } else {
@@ -191,6 +201,8 @@ void write_scene_inc(std::ostream& out, const SceneDescription& s) {
   out << "#declare SG_Radiosity = " << (s.quality.radiosity ? 1 : 0) << ";\n"
       << "#declare SG_Radiosity_Count = " << s.quality.radiosity_count << ";\n"
       << "#declare SG_Radiosity_Error = " << num(s.quality.radiosity_error) << ";\n"
+      << "#declare SG_Radiosity_Nearest = " << s.quality.radiosity_nearest << ";\n"
+      << "#declare SG_Radiosity_Pretrace_End = " << num(s.quality.radiosity_pretrace_end) << ";\n"
       << "#declare SG_Ambient = " << num(s.quality.ambient) << ";\n"
       << "#declare SG_Coords_Min = " << vec(s.coords_min) << ";\n"
       << "#declare SG_Coords_Span = " << num(s.coords_span) << ";\n";
@@ -224,7 +236,8 @@ void write_pass_ini(std::ostream& out, RawPass pass, int width, int height,
       << "Output_Alpha=Off\n"
       << "Jitter=Off\n";
   if (photo && quality.antialias)
-    out << "Antialias=On\nSampling_Method=2\nAntialias_Threshold=" << num(quality.antialias_threshold)
+    out << "Antialias=On\nSampling_Method=" << quality.antialias_method
+        << "\nAntialias_Threshold=" << num(quality.antialias_threshold)
         << "\nAntialias_Depth=" << quality.antialias_depth << "\n";
   else
     out << "Antialias=Off\n";

@@ -22,9 +22,17 @@ struct QualitySettings {
   bool radiosity = false;          ///< final: radiosity (1 bounce)
   int radiosity_count = 35;        ///< rays per radiosity sample
   double radiosity_error = 1.8;    ///< error_bound
+  int radiosity_nearest = 5;       ///< nearest_count: samples averaged per lookup
+  double radiosity_pretrace_end = 0.02;  ///< pretrace_end (pretrace_start 0.08; each pass halves it)
   int area_samples = 1;            ///< area light samples per side (1: point lights)
   int area_adaptive = 1;           ///< adaptive depth of area lights
+  /// Lights whose intensity is below this share of the rig's summed intensity get
+  /// `dim_area_samples` per side instead of `area_samples` (1: point light; 0: point light
+  /// that casts no shadow, POV-Ray `shadowless`). 0: every light gets `area_samples`.
+  double dim_light_share = 0.0;
+  int dim_area_samples = 1;
   bool antialias = false;          ///< image pass only (non-jittered adaptive supersampling)
+  int antialias_method = 2;       ///< POV-Ray Sampling_Method: 1 (non-adaptive) or 2 (adaptive)
   double antialias_threshold = 0.1;
   int antialias_depth = 1;        ///< 1: corner samples shared by neighbouring pixels (cheap)
   double ambient = 0.12;           ///< ambient fill when radiosity is off

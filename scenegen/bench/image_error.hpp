@@ -16,8 +16,12 @@ inline QualitySettings reference_quality() {
   QualitySettings q = quality_settings(Quality::final);
   q.radiosity_count = 600;
   q.radiosity_error = 0.25;
+  q.radiosity_nearest = 5;
+  q.radiosity_pretrace_end = 0.02;
   q.area_samples = 5;
   q.area_adaptive = 3;
+  q.dim_light_share = 0.0;
+  q.antialias_method = 2;
   q.antialias_threshold = 0.02;
   q.antialias_depth = 3;
   q.bands = 1;

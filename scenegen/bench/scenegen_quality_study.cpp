@@ -3,7 +3,8 @@
 // sample; for each: wall time of the photo render (one single-threaded POV-Ray process) and
 // PSNR / SSIM against the reference. Writes a CSV.
 //   scenegen_quality_study [--size WxH] [--seed N] [--mesh fold|cylinder|bump|flat] [--subdivision L]
-//                          [--csv FILE]
+//                          [--csv FILE] [--reference FILE.png] [--match TEXT]
+//   scenegen_quality_study --compare REFERENCE.png IMAGE.png
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -40,11 +41,27 @@ sg::QualitySettings previous_final() {
   return q;
 }
 
+/// The final preset before issue 19's cheaper photo (commit 9b9e633): 2 x 2 area samples,
+/// antialiasing threshold 0.9 at depth 2, radiosity nearest_count 5 and pretrace to 0.02.
+sg::QualitySettings final_9b9e633() {
+  sg::QualitySettings q = sg::quality_settings(sg::Quality::final);
+  q.area_samples = 2;
+  q.area_adaptive = 1;
+  q.dim_light_share = 0.0;
+  q.antialias_method = 2;
+  q.antialias_threshold = 0.9;
+  q.antialias_depth = 2;
+  q.radiosity_nearest = 5;
+  q.radiosity_pretrace_end = 0.02;
+  return q;
+}
+
 std::vector<Preset> presets() {
   std::vector<Preset> p;
   p.push_back({"draft", sg::quality_settings(sg::Quality::draft)});
   const sg::QualitySettings old = previous_final();
   p.push_back({"final (180441f)", old});
+  p.push_back({"final (9b9e633)", final_9b9e633()});
   p.push_back({"final (new)", sg::quality_settings(sg::Quality::final)});
   sg::QualitySettings q = old;
   q.antialias = false;
@@ -65,9 +82,55 @@ std::vector<Preset> presets() {
   p.push_back({"2x2 area, AA 0.6 depth 2", q});
   q.antialias_threshold = 0.3;
   p.push_back({"2x2 area, AA 0.3 depth 2", q});
-  q = sg::quality_settings(sg::Quality::final);
+  q = final_9b9e633();
   q.bands = 1;
-  p.push_back({"final (new), 1 band", q});
+  p.push_back({"final (9b9e633), 1 band", q});
+  // Issue 19's cheaper photo: fewer shadow rays for dim lights, antialiasing method 1.
+  const sg::QualitySettings fin = final_9b9e633();
+  q = fin;
+  q.dim_light_share = 0.2;
+  q.dim_area_samples = 1;
+  p.push_back({"final, lights < 20% as point lights", q});
+  q.dim_area_samples = 0;
+  p.push_back({"final, lights < 20% shadowless", q});
+  q = fin;
+  q.area_samples = 1;
+  p.push_back({"final, point lights", q});
+  q = fin;
+  q.antialias_method = 1;
+  p.push_back({"final, AA method 1 0.9 depth 2", q});
+  q.antialias_threshold = 0.3;
+  p.push_back({"final, AA method 1 0.3 depth 2", q});
+  q = fin;
+  q.dim_light_share = 0.2;
+  q.dim_area_samples = 1;
+  q.antialias_threshold = 0.6;
+  p.push_back({"lights < 20% point, AA 0.6 depth 2", q});
+  q = fin;
+  q.radiosity_nearest = 2;
+  p.push_back({"final, radiosity nearest 2", q});
+  q.radiosity_pretrace_end = 0.04;
+  p.push_back({"final, radiosity nearest 2, pretrace to 0.04", q});
+  q.dim_light_share = 0.2;
+  q.dim_area_samples = 1;
+  p.push_back({"lights < 20% point, radiosity nearest 2, pretrace to 0.04", q});
+  q.antialias_threshold = 0.6;
+  p.push_back({"lights < 20% point, radiosity nearest 2, pretrace to 0.04, AA 0.6", q});
+  q = fin;
+  q.radiosity_nearest = 1;
+  q.radiosity_pretrace_end = 0.04;
+  p.push_back({"final, radiosity nearest 1, pretrace to 0.04", q});
+  q = fin;
+  q.radiosity_nearest = 2;
+  q.radiosity_pretrace_end = 0.08;
+  p.push_back({"final, radiosity nearest 2, pretrace 0.08 only", q});
+  q = fin;
+  q.radiosity_nearest = 2;
+  q.radiosity_pretrace_end = 0.04;
+  q.antialias_threshold = 0.8;
+  p.push_back({"radiosity nearest 2, pretrace to 0.04, AA 0.8", q});
+  q.antialias_threshold = 0.7;
+  p.push_back({"radiosity nearest 2, pretrace to 0.04, AA 0.7", q});
   return p;
 }
 
@@ -90,12 +153,28 @@ int main(int argc, char** argv) {
   std::uint64_t seed = 1;
   std::string kind = "fold", csv = "scenegen_quality.csv";
   int level = 2;
+  std::string match;          // --match TEXT: only the presets whose name contains TEXT
+  std::string reference_png;  // --reference FILE: read the reference from FILE if it exists, else render and write it there
+  // --compare REF.png IMAGE.png: PSNR / SSIM of one photo against a reference (e.g. a photo
+  // rendered with edited templates, `scenegen render --templates`, against a kept reference).
+  if (argc == 4 && !std::strcmp(argv[1], "--compare")) {
+    try {
+      const sg::ImageF ref = sg::read_png(argv[2]), im = sg::read_png(argv[3]);
+      std::printf("PSNR %.2f dB  SSIM %.4f\n", sg::bench::psnr(im, ref), sg::bench::ssim(im, ref));
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "scenegen_quality_study: %s\n", e.what());
+      return 1;
+    }
+    return 0;
+  }
   for (int i = 1; i + 1 < argc; i += 2) {
     if (!std::strcmp(argv[i], "--size")) std::sscanf(argv[i + 1], "%dx%d", &width, &height);
     else if (!std::strcmp(argv[i], "--seed")) seed = std::stoull(argv[i + 1]);
     else if (!std::strcmp(argv[i], "--mesh")) kind = argv[i + 1];
     else if (!std::strcmp(argv[i], "--csv")) csv = argv[i + 1];
     else if (!std::strcmp(argv[i], "--subdivision")) level = std::atoi(argv[i + 1]);
+    else if (!std::strcmp(argv[i], "--reference")) reference_png = argv[i + 1];
+    else if (!std::strcmp(argv[i], "--match")) match = argv[i + 1];
     else {
       std::fprintf(stderr, "scenegen_quality_study: unknown option '%s'\n", argv[i]);
       return 2;
@@ -114,18 +193,28 @@ int main(int argc, char** argv) {
     o.passes = {sg::Pass::image};
     o.surface.level = level;
     sg::ImageF ref;
-    const double ref_time = render(o, sg::bench::reference_quality(), dir / "reference", ref);
-    std::printf("reference: %.2f s\n", ref_time);
+    double ref_time = NAN;
+    if (!reference_png.empty() && fs::exists(reference_png)) {
+      ref = sg::read_png(reference_png);
+      std::printf("reference: read %s\n", reference_png.c_str());
+    } else {
+      ref_time = render(o, sg::bench::reference_quality(), dir / "reference", ref);
+      std::printf("reference: %.2f s\n", ref_time);
+      if (!reference_png.empty()) fs::copy_file(dir / "reference" / "image.png", reference_png);
+    }
     const std::string tmp = csv + ".partial";
     std::ofstream out(tmp);
-    out << "preset,seconds,psnr_db,ssim,radiosity,radiosity_count,radiosity_error,area_samples,area_adaptive,antialias,antialias_threshold,antialias_depth,bands\n";
+    out << "preset,seconds,psnr_db,ssim,radiosity,radiosity_count,radiosity_error,area_samples,area_adaptive,antialias,antialias_threshold,antialias_depth,bands,dim_light_share,dim_area_samples,antialias_method,radiosity_nearest,radiosity_pretrace_end\n";
     const auto row = [&](const std::string& name, const sg::QualitySettings& q, double sec, double p, double s) {
       out << '"' << name << "\"," << sec << ',' << p << ',' << s << ',' << q.radiosity << ',' << q.radiosity_count
           << ',' << q.radiosity_error << ',' << q.area_samples << ',' << q.area_adaptive << ',' << q.antialias
-          << ',' << q.antialias_threshold << ',' << q.antialias_depth << ',' << q.bands << '\n';
+          << ',' << q.antialias_threshold << ',' << q.antialias_depth << ',' << q.bands << ',' << q.dim_light_share
+          << ',' << q.dim_area_samples << ',' << q.antialias_method << ',' << q.radiosity_nearest << ','
+          << q.radiosity_pretrace_end << '\n';
       std::printf("%-28s %7.2f s  PSNR %6.2f dB  SSIM %.4f\n", name.c_str(), sec, p, s);
     };
     for (const Preset& p : presets()) {
+      if (p.name.find(match) == std::string::npos) continue;
       sg::ImageF im;
       const double sec = render(o, p.q, dir / "preset", im);
       row(p.name, p.q, sec, sg::bench::psnr(im, ref), sg::bench::ssim(im, ref));
