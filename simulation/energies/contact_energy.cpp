@@ -570,115 +570,113 @@ double ObstacleContactEnergy::max_step(const Eigen::VectorXd& x, const Eigen::Ve
 double ObstacleContactEnergy::obstacle_max_step(int o, const Eigen::VectorXd& x, const Eigen::VectorXd& dx,
                                                 double alpha) const {
   const int nv = static_cast<int>(m_area.size());
-  {
-    const auto& obs = *m_obstacles[o];
-    // Faces against a convex obstacle cover their vertices (below); otherwise the vertices of
-    // the terms are traced.
-    const bool trace_vertices = uses_vertices(o) || (m_mode[o] == Mode::search && !obs.is_convex());
-    for (int v = 0; v < nv && trace_vertices; ++v) {
-      const Eigen::Vector3d p = x.segment<3>(3 * v), d = dx.segment<3>(3 * v);
-      const double len = d.norm();
-      if (len == 0) continue;
-      Eigen::Vector3d n;
-      double dist = obs.distance(p, m_time, &n);
-      if (dist >= alpha * len) continue;  // cannot reach the surface within this step
-      if (obs.is_convex() && dist > 0) {
-        // The solid lies behind the tangent plane at the closest surface point: the vertex may
-        // close 90% of its gap to that plane (exact for the ground; sliding along a curved
-        // surface is not held back as sphere tracing would hold it).
-        const double rate = -n.dot(d);
-        if (rate > 0) alpha = std::min(alpha, 0.9 * dist / rate);
-        continue;
-      }
-      // Sphere tracing (exact for an inverted sphere): the vertex may close at most 90% of
-      // its gap.
-      alpha = std::min(alpha, obs.segment_step(p, d, m_time, alpha, 0.1));
+  const auto& obs = *m_obstacles[o];
+  // Faces against a convex obstacle cover their vertices (below); otherwise the vertices of
+  // the terms are traced.
+  const bool trace_vertices = uses_vertices(o) || (m_mode[o] == Mode::search && !obs.is_convex());
+  for (int v = 0; v < nv && trace_vertices; ++v) {
+    const Eigen::Vector3d p = x.segment<3>(3 * v), d = dx.segment<3>(3 * v);
+    const double len = d.norm();
+    if (len == 0) continue;
+    Eigen::Vector3d n;
+    double dist = obs.distance(p, m_time, &n);
+    if (dist >= alpha * len) continue;  // cannot reach the surface within this step
+    if (obs.is_convex() && dist > 0) {
+      // The solid lies behind the tangent plane at the closest surface point: the vertex may
+      // close 90% of its gap to that plane (exact for the ground; sliding along a curved
+      // surface is not held back as sphere tracing would hold it).
+      const double rate = -n.dot(d);
+      if (rate > 0) alpha = std::min(alpha, 0.9 * dist / rate);
+      continue;
     }
-    if (m_mode[o] != Mode::sphere && m_mode[o] != Mode::search) return alpha;
-    // Faces: conservative advancement on a lower bound of the field over the moving triangle.
-    const Eigen::Affine3d pose = obs.motion.pose(m_time);
-    for (int f = 0; f < m_faces.rows(); ++f) {
-      double speed = 0;
-      for (int k = 0; k < 3; ++k) speed = std::max(speed, dx.segment<3>(3 * m_faces(f, k)).norm());
-      if (speed == 0 || !face_near_bounds(o, x, f, alpha * speed)) continue;
-      if (obs.is_convex()) {
-        // The minimiser m of the field over the triangle, with normal n, gives a plane that
-        // separates the triangle from the convex solid: the solid lies behind the tangent plane
-        // at its closest point m - phi(m) n, and the triangle (the hull of its vertices) in
-        // front of it. Each vertex may close 90% of the smallest vertex gap to that plane.
-        collision::TriangleSdfResult r;
-        if (m_mode[o] == Mode::sphere) {
-          r = face_contact(o, x, f, pose);
-        } else {
-          collision::TriangleSdfParams p = m_triangle;
-          p.cutoff = std::max(m_params.dhat, alpha * speed);
-          r = face_minimum(obs, x.segment<3>(3 * m_faces(f, 0)), x.segment<3>(3 * m_faces(f, 1)),
-                           x.segment<3>(3 * m_faces(f, 2)), pose, p);
+    // Sphere tracing (exact for an inverted sphere): the vertex may close at most 90% of
+    // its gap.
+    alpha = std::min(alpha, obs.segment_step(p, d, m_time, alpha, 0.1));
+  }
+  if (m_mode[o] != Mode::sphere && m_mode[o] != Mode::search) return alpha;
+  // Faces: conservative advancement on a lower bound of the field over the moving triangle.
+  const Eigen::Affine3d pose = obs.motion.pose(m_time);
+  for (int f = 0; f < m_faces.rows(); ++f) {
+    double speed = 0;
+    for (int k = 0; k < 3; ++k) speed = std::max(speed, dx.segment<3>(3 * m_faces(f, k)).norm());
+    if (speed == 0 || !face_near_bounds(o, x, f, alpha * speed)) continue;
+    if (obs.is_convex()) {
+      // The minimiser m of the field over the triangle, with normal n, gives a plane that
+      // separates the triangle from the convex solid: the solid lies behind the tangent plane
+      // at its closest point m - phi(m) n, and the triangle (the hull of its vertices) in
+      // front of it. Each vertex may close 90% of the smallest vertex gap to that plane.
+      collision::TriangleSdfResult r;
+      if (m_mode[o] == Mode::sphere) {
+        r = face_contact(o, x, f, pose);
+      } else {
+        collision::TriangleSdfParams p = m_triangle;
+        p.cutoff = std::max(m_params.dhat, alpha * speed);
+        r = face_minimum(obs, x.segment<3>(3 * m_faces(f, 0)), x.segment<3>(3 * m_faces(f, 1)),
+                         x.segment<3>(3 * m_faces(f, 2)), pose, p);
+      }
+      if (r.lower_bound >= alpha * speed) continue;  // out of reach this step
+      if (r.distance > 0) {
+        const Eigen::Vector3d q = r.point - r.distance * r.gradient;
+        double gap[3], smallest = INF;
+        for (int k = 0; k < 3; ++k) {
+          gap[k] = r.gradient.dot(x.segment<3>(3 * m_faces(f, k)) - q);
+          smallest = std::min(smallest, gap[k]);
         }
-        if (r.lower_bound >= alpha * speed) continue;  // out of reach this step
-        if (r.distance > 0) {
-          const Eigen::Vector3d q = r.point - r.distance * r.gradient;
-          double gap[3], smallest = INF;
+        if (smallest > 0) {
+          double plane = alpha;
           for (int k = 0; k < 3; ++k) {
-            gap[k] = r.gradient.dot(x.segment<3>(3 * m_faces(f, k)) - q);
-            smallest = std::min(smallest, gap[k]);
+            const double rate = -r.gradient.dot(dx.segment<3>(3 * m_faces(f, k)));
+            if (rate > 0) plane = std::min(plane, (gap[k] - 0.1 * smallest) / rate);
           }
-          if (smallest > 0) {
-            double plane = alpha;
-            for (int k = 0; k < 3; ++k) {
-              const double rate = -r.gradient.dot(dx.segment<3>(3 * m_faces(f, k)));
-              if (rate > 0) plane = std::min(plane, (gap[k] - 0.1 * smallest) / rate);
-            }
-            if (plane < alpha && m_mode[o] == Mode::sphere) {
-              // The plane bound is one step: a face turning on a sphere smaller than itself
-              // closes its tangent plane at once while keeping its distance. Additive CCD on
-              // the exact centre-triangle distance follows the turn; both bounds are safe.
-              collision::PairPoints d;
-              d[0].setZero();
-              for (int k = 0; k < 3; ++k) d[k + 1] = dx.segment<3>(3 * m_faces(f, k));
-              plane = std::max(plane, collision::point_triangle_ccd(sphere_points(x, f, pose), d, alpha, 0.1,
-                                                                    sphere_radius(o, pose)));
-            }
-            alpha = std::min(alpha, plane);
-            continue;
+          if (plane < alpha && m_mode[o] == Mode::sphere) {
+            // The plane bound is one step: a face turning on a sphere smaller than itself
+            // closes its tangent plane at once while keeping its distance. Additive CCD on
+            // the exact centre-triangle distance follows the turn; both bounds are safe.
+            collision::PairPoints d;
+            d[0].setZero();
+            for (int k = 0; k < 3; ++k) d[k + 1] = dx.segment<3>(3 * m_faces(f, k));
+            plane = std::max(plane, collision::point_triangle_ccd(sphere_points(x, f, pose), d, alpha, 0.1,
+                                                                  sphere_radius(o, pose)));
           }
+          alpha = std::min(alpha, plane);
+          continue;
         }
-        // No separating plane found (the minimum is not resolved): trace as below.
       }
-      // A lower bound of the field over the triangle at parameter t: the larger of the
-      // certified bound of the branch and bound (triangle_min_distance) and the minimum found
-      // less the search resolution. The resolution is refined to a fifth of the distance when
-      // the face is close, so that the advancement below can close in on the obstacle as far
-      // as the barrier lets it (a fixed resolution would stall every face at that distance).
-      // The certified bound alone is weak for a face nearly tangent to a large smooth surface
-      // (the query budget runs out), hence the maximum.
-      collision::TriangleSdfParams p = m_triangle;
-      p.cutoff = std::max(m_params.dhat, alpha * speed);
-      const auto lower_bound = [&](double t) {
-        const Eigen::Vector3d a = x.segment<3>(3 * m_faces(f, 0)) + t * dx.segment<3>(3 * m_faces(f, 0));
-        const Eigen::Vector3d b = x.segment<3>(3 * m_faces(f, 1)) + t * dx.segment<3>(3 * m_faces(f, 1));
-        const Eigen::Vector3d c = x.segment<3>(3 * m_faces(f, 2)) + t * dx.segment<3>(3 * m_faces(f, 2));
-        p.resolution = m_triangle.resolution;
-        auto r = face_minimum(obs, a, b, c, pose, p);
-        if (r.distance > 0 && r.distance < 5 * p.resolution) {
-          p.resolution = 0.2 * r.distance;
-          r = face_minimum(obs, a, b, c, pose, p);
-        }
-        return std::max(r.lower_bound, r.distance - p.resolution);
-      };
-      double bound = lower_bound(0.0);
-      if (bound <= 0 || bound >= alpha * speed) continue;  // in contact, or out of reach this step
-      const double stop = 0.1 * bound;
-      double t = 0;
-      for (int it = 0; it < 64; ++it) {
-        const double advance = (bound - stop) / speed;
-        if (advance <= 1e-12) break;
-        t += advance;
-        if (t >= alpha) break;
-        bound = lower_bound(t);
-      }
-      alpha = std::min(alpha, t);
+      // No separating plane found (the minimum is not resolved): trace as below.
     }
+    // A lower bound of the field over the triangle at parameter t: the larger of the
+    // certified bound of the branch and bound (triangle_min_distance) and the minimum found
+    // less the search resolution. The resolution is refined to a fifth of the distance when
+    // the face is close, so that the advancement below can close in on the obstacle as far
+    // as the barrier lets it (a fixed resolution would stall every face at that distance).
+    // The certified bound alone is weak for a face nearly tangent to a large smooth surface
+    // (the query budget runs out), hence the maximum.
+    collision::TriangleSdfParams p = m_triangle;
+    p.cutoff = std::max(m_params.dhat, alpha * speed);
+    const auto lower_bound = [&](double t) {
+      const Eigen::Vector3d a = x.segment<3>(3 * m_faces(f, 0)) + t * dx.segment<3>(3 * m_faces(f, 0));
+      const Eigen::Vector3d b = x.segment<3>(3 * m_faces(f, 1)) + t * dx.segment<3>(3 * m_faces(f, 1));
+      const Eigen::Vector3d c = x.segment<3>(3 * m_faces(f, 2)) + t * dx.segment<3>(3 * m_faces(f, 2));
+      p.resolution = m_triangle.resolution;
+      auto r = face_minimum(obs, a, b, c, pose, p);
+      if (r.distance > 0 && r.distance < 5 * p.resolution) {
+        p.resolution = 0.2 * r.distance;
+        r = face_minimum(obs, a, b, c, pose, p);
+      }
+      return std::max(r.lower_bound, r.distance - p.resolution);
+    };
+    double bound = lower_bound(0.0);
+    if (bound <= 0 || bound >= alpha * speed) continue;  // in contact, or out of reach this step
+    const double stop = 0.1 * bound;
+    double t = 0;
+    for (int it = 0; it < 64; ++it) {
+      const double advance = (bound - stop) / speed;
+      if (advance <= 1e-12) break;
+      t += advance;
+      if (t >= alpha) break;
+      bound = lower_bound(t);
+    }
+    alpha = std::min(alpha, t);
   }
   return alpha;
 }
