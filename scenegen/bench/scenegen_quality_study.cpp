@@ -56,12 +56,23 @@ sg::QualitySettings final_9b9e633() {
   return q;
 }
 
+/// The final preset of commit 4731a3c (issue 19's first cheaper photo): 9b9e633's with
+/// radiosity nearest_count 2, pretrace to 0.04 and antialiasing threshold 0.8.
+sg::QualitySettings final_4731a3c() {
+  sg::QualitySettings q = final_9b9e633();
+  q.radiosity_nearest = 2;
+  q.radiosity_pretrace_end = 0.04;
+  q.antialias_threshold = 0.8;
+  return q;
+}
+
 std::vector<Preset> presets() {
   std::vector<Preset> p;
   p.push_back({"draft", sg::quality_settings(sg::Quality::draft)});
   const sg::QualitySettings old = previous_final();
   p.push_back({"final (180441f)", old});
   p.push_back({"final (9b9e633)", final_9b9e633()});
+  p.push_back({"final (4731a3c)", final_4731a3c()});
   p.push_back({"final (new)", sg::quality_settings(sg::Quality::final)});
   sg::QualitySettings q = old;
   q.antialias = false;
@@ -131,6 +142,15 @@ std::vector<Preset> presets() {
   p.push_back({"radiosity nearest 2, pretrace to 0.04, AA 0.8", q});
   q.antialias_threshold = 0.7;
   p.push_back({"radiosity nearest 2, pretrace to 0.04, AA 0.7", q});
+  // Radiosity nearest_count 1 (each lookup takes its nearest sample) with the antialiasing pair.
+  q = final_4731a3c();
+  q.radiosity_nearest = 1;
+  for (const double t : {0.9, 0.8, 0.7}) {
+    q.antialias_threshold = t;
+    char name[96];
+    std::snprintf(name, sizeof name, "radiosity nearest 1, pretrace to 0.04, AA %.1f", t);
+    p.push_back({name, q});
+  }
   return p;
 }
 
