@@ -1,9 +1,12 @@
 #include "validation/fold_crease.hpp"
 
+#include <Eigen/Eigenvalues>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+#include <utility>
 #include <vector>
 
 namespace papersim::validation {
@@ -29,6 +32,36 @@ FoldLine fold_line_in_rectangle(const Eigen::Vector2d& centre, const Eigen::Vect
   // Keep the centre at the chord's midpoint, so pieces are measured from one end.
   f.centre += 0.5 * (ends[0] - ends[1]) * t;
   return f;
+}
+
+FoldLine fit_crease_line(const Eigen::MatrixX2d& X, const Eigen::MatrixX3i& F, const Eigen::MatrixX3d& K,
+                         const FoldLine& nominal, double width, double height, double search) {
+  if (K.rows() != F.rows()) throw std::invalid_argument("fit_crease_line: one plastic curvature per face");
+  double total = 0.0;
+  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+  std::vector<std::pair<Eigen::Vector2d, double>> points;
+  for (Eigen::Index i = 0; i < F.rows(); ++i) {
+    const Eigen::Vector2d a = X.row(F(i, 0)), b = X.row(F(i, 1)), c = X.row(F(i, 2));
+    const Eigen::Vector2d g = (a + b + c) / 3;
+    if (std::abs((g - nominal.centre).dot(nominal.d)) > search) continue;
+    // Largest |eigenvalue| of [[kxx, kxy], [kxy, kyy]].
+    const double mid = 0.5 * (K(i, 0) + K(i, 1)), half = 0.5 * (K(i, 0) - K(i, 1));
+    const double k = std::abs(mid) + std::hypot(half, K(i, 2));
+    const double w = 0.5 * std::abs((b - a).x() * (c - a).y() - (b - a).y() * (c - a).x()) * k * k;
+    if (!(w > 0)) continue;
+    points.emplace_back(g, w);
+    total += w;
+    mean += w * g;
+  }
+  if (!(total > 0)) return nominal;
+  mean /= total;
+  Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
+  for (const auto& [g, w] : points) cov += w * (g - mean) * (g - mean).transpose();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(cov);
+  const Eigen::Vector2d along = eig.eigenvectors().col(1);  // largest eigenvalue
+  Eigen::Vector2d d(-along.y(), along.x());
+  if (d.dot(nominal.d) < 0) d = -d;
+  return fold_line_in_rectangle(mean, d, width, height);
 }
 
 FoldCrease measure_fold_crease(const Eigen::MatrixX2d& X, const Eigen::MatrixX3i& F, const Eigen::MatrixX3d& K,

@@ -18,6 +18,17 @@ struct FoldLine {
 FoldLine fold_line_in_rectangle(const Eigen::Vector2d& centre, const Eigen::Vector2d& d, double width,
                                 double height);
 
+/// The straight line that best fits the plastic crease near `nominal`: the faces whose material
+/// centroid lies within `search` of the nominal line, each weighted by its area times the square
+/// of its plastic curvature's largest principal value, give a weighted centroid and principal
+/// axis; the line runs through the centroid along that axis (its normal d on the side of the
+/// nominal d), clipped to the rectangle [0, width] x [0, height]. Where the sheet actually
+/// folded can lie some centimetres from, and turned against, the line a scenario aims at. With
+/// no plastic curvature near the line, returns `nominal`.
+FoldLine fit_crease_line(const Eigen::MatrixX2d& material_coords, const Eigen::MatrixX3i& faces,
+                         const Eigen::MatrixX3d& plastic_curvature, const FoldLine& nominal, double width,
+                         double height, double search = 0.05);
+
 struct FoldCreaseOptions {
   double threshold = 0.5235987755982988;  ///< rest angle a piece must exceed to be creased [rad] (30 deg)
   double band = 0.02;                     ///< half-width of the band about the line [m]

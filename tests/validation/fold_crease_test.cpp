@@ -85,6 +85,40 @@ TEST(FoldCrease, InterruptedCreaseIsTwoLines) {
   EXPECT_NEAR(c.angle, theta, 0.1 * theta);
 }
 
+// The crease actually lies 3 cm beside the line the scenario aims at and turned by 12 degrees:
+// the fit finds it (the band is symmetric about the true line, so its weighted centroid and
+// axis are the line's up to the binning of 1 mm faces), and measured along the fitted line the
+// crease runs the whole chord, while along the nominal line most pieces miss it. A second,
+// weaker plastic patch 4 cm away inside the search band pulls the fit by well under a degree.
+TEST(FoldCrease, FitFindsTheCreaseBesideTheNominalLine) {
+  const Grid g = make_grid(211, 298, W, H);
+  const Eigen::Vector2d centre(0.5 * W, 0.5 * H);
+  const FoldLine nominal = fold_line_in_rectangle(centre, Eigen::Vector2d(0, 1), W, H);
+  const double turn = 12 * PI / 180;
+  const FoldLine truth = fold_line_in_rectangle(centre + Eigen::Vector2d(0, 0.03),
+                                                Eigen::Vector2d(-std::sin(turn), std::cos(turn)), W, H);
+  Eigen::MatrixX3d K = band(g, truth, PI / 2, 0.003, [](double) { return true; });
+  for (Eigen::Index f = 0; f < g.faces.rows(); ++f) {  // the weak patch: 40 1/m over 1 x 1 cm
+    const Eigen::Vector2d c =
+        (g.material.row(g.faces(f, 0)) + g.material.row(g.faces(f, 1)) + g.material.row(g.faces(f, 2))).transpose() / 3;
+    if ((c - Eigen::Vector2d(0.05, 0.1485 - 0.04)).cwiseAbs().maxCoeff() < 0.005) K.row(f) << 0, 40, 0;
+  }
+  const FoldLine fit = fit_crease_line(g.material, g.faces, K, nominal, W, H);
+  EXPECT_GT(fit.d.dot(truth.d), std::cos(0.5 * PI / 180));
+  EXPECT_LT(std::abs((fit.centre - truth.centre).dot(truth.d)), 1e-3);
+  EXPECT_NEAR(fit.chord, truth.chord, 2e-3);
+  const FoldCrease along_fit = measure_fold_crease(g.material, g.faces, K, fit);
+  EXPECT_EQ(along_fit.lines, 1);
+  EXPECT_NEAR(along_fit.longest, fit.chord, 1e-9);
+  EXPECT_NEAR(along_fit.angle, PI / 2, 0.05 * PI / 2);
+  const FoldCrease along_nominal = measure_fold_crease(g.material, g.faces, K, nominal);
+  EXPECT_LT(along_nominal.longest, 0.5 * nominal.chord);
+  // Nothing plastic near the line: the nominal line comes back.
+  const FoldLine none = fit_crease_line(g.material, g.faces, Eigen::MatrixX3d::Zero(g.faces.rows(), 3), nominal, W, H);
+  EXPECT_EQ(none.centre, nominal.centre);
+  EXPECT_EQ(none.d, nominal.d);
+}
+
 // Below the threshold (20 against 30 degrees) nothing is creased; above it with the opposite
 // sign (a valley instead of a mountain) the crease is found.
 TEST(FoldCrease, ThresholdAndSign) {
