@@ -95,7 +95,7 @@ int main(int argc, char** argv) {
   app.add_option("--edge", edge, "initial edge length [m] instead of the scenario's (0: the scenario's)")
       ->check(CLI::Range(0.0, 0.05));
   app.add_option("--csv", csv, "also write the table as CSV");
-  app.add_option("--keep", keep, "write each seed's outputs (sheet.ply with the plastic state, meta.json) to DIR/seed_N");
+  app.add_option("--keep", keep, "write each seed's outputs (sheet.ply with the plastic state, meta.json, scene.json) to DIR/seed_N");
   app.add_option("--measure", measure_dirs,
                  "only measure the crease of finished runs (each DIR with scene.json and sheet.ply, e.g. from --keep "
                  "or papersim scenario fold) and stop")
