@@ -1,5 +1,6 @@
 #include "simulation/integrator.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -119,7 +120,8 @@ void Integrator::assemble(const Eigen::VectorXd& x, Eigen::VectorXd& g, bool pro
   }
 }
 
-bool Integrator::factor_newton_matrix(const Eigen::VectorXd& x, Eigen::VectorXd& g, StepStats& stats) {
+bool Integrator::factor_newton_matrix(const StepContext& ctx, const Eigen::VectorXd& x, Eigen::VectorXd& g,
+                                      StepStats& stats) {
   auto t0 = std::chrono::steady_clock::now();
   bool project = !m_params.exact_hessian_first;
   assemble(x, g, project);
@@ -141,7 +143,18 @@ bool Integrator::factor_newton_matrix(const Eigen::VectorXd& x, Eigen::VectorXd&
       const double next = shift == 0 ? 1e-10 : 10 * shift;
       m_hessian.add_diagonal(Eigen::VectorXd::Constant(m_hessian.size(), next - shift));
       shift = next;
-      if (shift > 1e3) throw NumericError("newton: the Hessian cannot be factored");
+      if (shift > 1e3) {
+        const auto& v = m_hessian.values();
+        const auto bad = std::count_if(v.begin(), v.end(), [](double a) { return !std::isfinite(a); });
+        double largest = 0;
+        for (double a : v) if (std::isfinite(a)) largest = std::max(largest, std::abs(a));
+        char what[160];
+        std::snprintf(what, sizeof what,
+                      "newton: the Hessian cannot be factored (t = %.6g s, h = %.3g s, %ld non-finite "
+                      "entries, largest entry %.3g)",
+                      ctx.time_t0, ctx.h, static_cast<long>(bad), largest);
+        throw NumericError(what);
+      }
     }
   m_factor_pattern = m_pattern_id;
   stats.seconds_solve += seconds_since(t0);
@@ -179,7 +192,7 @@ NewtonResult Integrator::solve(const StepContext& ctx, Eigen::VectorXd& x, StepS
       t0 = std::chrono::steady_clock::now();
     } else {
       m_reused = 0;
-      project = factor_projected = factor_newton_matrix(x, g, stats);
+      project = factor_projected = factor_newton_matrix(ctx, x, g, stats);
       m_factor_h = ctx.h;
       t0 = std::chrono::steady_clock::now();
     }
@@ -309,7 +322,7 @@ bool Integrator::follow_obstacles(const StepContext& ctx, Eigen::VectorXd& x, do
     ++stats.following_iterations;
     auto t0 = std::chrono::steady_clock::now();
     update_pattern(x);
-    factor_newton_matrix(x, g, stats);
+    factor_newton_matrix(ctx, x, g, stats);
     m_reused = 0;
     m_factor_h = ctx.h;
     const double dt = t1 - tau;

@@ -110,7 +110,8 @@ class Integrator {
   /// NewtonParams::exact_hessian_first), the projected one when that is not positive definite.
   /// @return true when the factored matrix is the projected Hessian
   /// @throw NumericError when even a shifted projected Hessian cannot be factored
-  bool factor_newton_matrix(const Eigen::VectorXd& x, Eigen::VectorXd& g, StepStats& stats);
+  bool factor_newton_matrix(const StepContext& ctx, const Eigen::VectorXd& x, Eigen::VectorXd& g,
+                            StepStats& stats);
   /// Asks every term whether its dynamic pattern changed at x and rebuilds the matrix if so.
   void update_pattern(const Eigen::VectorXd& x);
   std::vector<std::unique_ptr<EnergyTerm>> m_terms;

@@ -1,7 +1,6 @@
 #include "validation/fold_crease.hpp"
 
 #include <Eigen/Eigenvalues>
-
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -11,15 +10,16 @@
 
 namespace papersim::validation {
 
-FoldLine fold_line_in_rectangle(const Eigen::Vector2d& centre, const Eigen::Vector2d& d, double width,
-                                double height) {
+FoldLine fold_line_in_rectangle(const Eigen::Vector2d& centre, const Eigen::Vector2d& d,
+                                double width, double height) {
   if (!(d.norm() > 0)) throw std::invalid_argument("fold_line_in_rectangle: zero direction");
   FoldLine f;
   f.centre = centre;
   f.d = d.normalized();
   const Eigen::Vector2d t(-f.d.y(), f.d.x());
   // Both ends: the largest s with centre +- s t inside the rectangle.
-  double ends[2] = {std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity()};
+  double ends[2] = {std::numeric_limits<double>::infinity(),
+                    std::numeric_limits<double>::infinity()};
   const double lo[2] = {0.0, 0.0}, hi[2] = {width, height};
   for (int side = 0; side < 2; ++side) {
     const Eigen::Vector2d dir = side == 0 ? t : Eigen::Vector2d(-t);
@@ -34,9 +34,11 @@ FoldLine fold_line_in_rectangle(const Eigen::Vector2d& centre, const Eigen::Vect
   return f;
 }
 
-FoldLine fit_crease_line(const Eigen::MatrixX2d& X, const Eigen::MatrixX3i& F, const Eigen::MatrixX3d& K,
-                         const FoldLine& nominal, double width, double height, double search) {
-  if (K.rows() != F.rows()) throw std::invalid_argument("fit_crease_line: one plastic curvature per face");
+FoldLine fit_crease_line(const Eigen::MatrixX2d& X, const Eigen::MatrixX3i& F,
+                         const Eigen::MatrixX3d& K, const FoldLine& nominal, double width,
+                         double height, double search) {
+  if (K.rows() != F.rows())
+    throw std::invalid_argument("fit_crease_line: one plastic curvature per face");
   double total = 0.0;
   Eigen::Vector2d mean = Eigen::Vector2d::Zero();
   std::vector<std::pair<Eigen::Vector2d, double>> points;
@@ -64,9 +66,11 @@ FoldLine fit_crease_line(const Eigen::MatrixX2d& X, const Eigen::MatrixX3i& F, c
   return fold_line_in_rectangle(mean, d, width, height);
 }
 
-FoldCrease measure_fold_crease(const Eigen::MatrixX2d& X, const Eigen::MatrixX3i& F, const Eigen::MatrixX3d& K,
-                               const FoldLine& f, const FoldCreaseOptions& o) {
-  if (K.rows() != F.rows()) throw std::invalid_argument("measure_fold_crease: one plastic curvature per face");
+FoldCrease measure_fold_crease(const Eigen::MatrixX2d& X, const Eigen::MatrixX3i& F,
+                               const Eigen::MatrixX3d& K, const FoldLine& f,
+                               const FoldCreaseOptions& o) {
+  if (K.rows() != F.rows())
+    throw std::invalid_argument("measure_fold_crease: one plastic curvature per face");
   const Eigen::Vector2d t(-f.d.y(), f.d.x());
   const int n = std::max(1, static_cast<int>(std::ceil(f.chord / o.piece - 1e-9)));
   const double piece = f.chord / n;
@@ -78,7 +82,8 @@ FoldCrease measure_fold_crease(const Eigen::MatrixX2d& X, const Eigen::MatrixX3i
     const double s = g.dot(t) + 0.5 * f.chord;
     const int k = std::clamp(static_cast<int>(std::floor(s / piece)), 0, n - 1);
     const double area = 0.5 * std::abs((b - a).x() * (c - a).y() - (b - a).y() * (c - a).x());
-    const double kn = K(i, 0) * f.d.x() * f.d.x() + K(i, 1) * f.d.y() * f.d.y() + 2 * K(i, 2) * f.d.x() * f.d.y();
+    const double kn =
+        K(i, 0) * f.d.x() * f.d.x() + K(i, 1) * f.d.y() * f.d.y() + 2 * K(i, 2) * f.d.x() * f.d.y();
     integral[static_cast<std::size_t>(k)] += kn * area;
   }
   FoldCrease r;

@@ -15,8 +15,8 @@ struct FoldLine {
 
 /// The line through `centre` perpendicular to `d` (normalised here), clipped to the rectangle
 /// [0, width] x [0, height] that contains `centre`.
-FoldLine fold_line_in_rectangle(const Eigen::Vector2d& centre, const Eigen::Vector2d& d, double width,
-                                double height);
+FoldLine fold_line_in_rectangle(const Eigen::Vector2d& centre, const Eigen::Vector2d& d,
+                                double width, double height);
 
 /// The straight line that best fits the plastic crease near `nominal`: the faces whose material
 /// centroid lies within `search` of the nominal line, each weighted by its area times the square
@@ -26,13 +26,14 @@ FoldLine fold_line_in_rectangle(const Eigen::Vector2d& centre, const Eigen::Vect
 /// folded can lie some centimetres from, and turned against, the line a scenario aims at. With
 /// no plastic curvature near the line, returns `nominal`.
 FoldLine fit_crease_line(const Eigen::MatrixX2d& material_coords, const Eigen::MatrixX3i& faces,
-                         const Eigen::MatrixX3d& plastic_curvature, const FoldLine& nominal, double width,
-                         double height, double search = 0.05);
+                         const Eigen::MatrixX3d& plastic_curvature, const FoldLine& nominal,
+                         double width, double height, double search = 0.05);
 
 struct FoldCreaseOptions {
-  double threshold = 0.5235987755982988;  ///< rest angle a piece must exceed to be creased [rad] (30 deg)
-  double band = 0.02;                     ///< half-width of the band about the line [m]
-  double piece = 0.01;                    ///< length the line is cut into (rounded to divide the chord) [m]
+  double threshold =
+      0.5235987755982988;  ///< rest angle a piece must exceed to be creased [rad] (30 deg)
+  double band = 0.02;      ///< half-width of the band about the line [m]
+  double piece = 0.01;     ///< length the line is cut into (rounded to divide the chord) [m]
 };
 
 struct FoldCrease {
@@ -49,7 +50,8 @@ struct FoldCrease {
 /// its absolute value is compared with the threshold. Unlike the plastic network of
 /// compute_metrics, which thresholds each edge's own rest angle, this does not split a crease
 /// that remeshing has spread over several thin faces.
-FoldCrease measure_fold_crease(const Eigen::MatrixX2d& material_coords, const Eigen::MatrixX3i& faces,
+FoldCrease measure_fold_crease(const Eigen::MatrixX2d& material_coords,
+                               const Eigen::MatrixX3i& faces,
                                const Eigen::MatrixX3d& plastic_curvature, const FoldLine& line,
                                const FoldCreaseOptions& options = {});
 

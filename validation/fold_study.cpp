@@ -9,6 +9,7 @@
 // total length, mean rest angle) and wall time per sample (median, worst).
 #include <CLI/CLI.hpp>
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -34,8 +35,8 @@ namespace {
 /// direction from the pulled point to the centre.
 pv::FoldLine aimed_line(const ps::Scene& scene) {
   const Eigen::Vector2d centre(0.5 * scene.sheet.width, 0.5 * scene.sheet.height);
-  return pv::fold_line_in_rectangle(centre, centre - scene.handles.at(0).material_point, scene.sheet.width,
-                                    scene.sheet.height);
+  return pv::fold_line_in_rectangle(centre, centre - scene.handles.at(0).material_point,
+                                    scene.sheet.width, scene.sheet.height);
 }
 
 /// The crease near the aimed line: the fitted line and the crease measured along it.
@@ -44,16 +45,24 @@ struct CreaseFound {
   pv::FoldCrease crease;
   double offset = 0.0;  ///< distance of the aimed line's centre from the fitted line [m]
   double turn = 0.0;    ///< angle between the two lines [deg]
+  int network = 0;      ///< lines of `papersim metrics`' plastic crease network
 };
 
-CreaseFound find_crease(const ps::Scene& scene, const papersim::remesh::SheetMesh& mesh, double crease_angle_deg) {
+CreaseFound find_crease(const ps::Scene& scene, const papersim::remesh::SheetMesh& mesh,
+                        const Eigen::MatrixX3d& positions, double crease_angle_deg) {
   const pv::FoldLine aimed = aimed_line(scene);
   CreaseFound f;
-  f.line = pv::fit_crease_line(mesh.material_coords(), mesh.faces(), mesh.plastic_curvature(), aimed,
-                               scene.sheet.width, scene.sheet.height);
+  pv::MetricsOptions metrics_options;
+  metrics_options.crease_angle_deg = crease_angle_deg;
+  f.network = pv::compute_metrics(mesh.material_coords(), positions, mesh.faces(),
+                                  mesh.plastic_curvature(), metrics_options)
+                  .creases.plastic_network_lines;
+  f.line = pv::fit_crease_line(mesh.material_coords(), mesh.faces(), mesh.plastic_curvature(),
+                               aimed, scene.sheet.width, scene.sheet.height);
   pv::FoldCreaseOptions options;
   options.threshold = crease_angle_deg * M_PI / 180;
-  f.crease = pv::measure_fold_crease(mesh.material_coords(), mesh.faces(), mesh.plastic_curvature(), f.line, options);
+  f.crease = pv::measure_fold_crease(mesh.material_coords(), mesh.faces(), mesh.plastic_curvature(),
+                                     f.line, options);
   f.offset = std::abs((aimed.centre - f.line.centre).dot(f.line.d));
   f.turn = std::acos(std::clamp(std::abs(f.line.d.dot(aimed.d)), 0.0, 1.0)) * 180 / M_PI;
   return f;
@@ -61,26 +70,24 @@ CreaseFound find_crease(const ps::Scene& scene, const papersim::remesh::SheetMes
 
 /// --measure: the crease of finished runs (DIR/scene.json and DIR/sheet.ply).
 int measure(const std::vector<std::string>& dirs, double crease_angle) {
-  std::printf("%-5s %-6s %-9s %-9s %-9s %-9s %-8s %-8s %-9s %-8s %s\n", "seed", "lines", "longest_m", "creased_m",
-              "line_m", "rest_deg", "mean_deg", "network", "offset_mm", "turn_deg", "run");
+  std::printf("%-5s %-6s %-9s %-9s %-9s %-9s %-8s %-8s %-9s %-8s %s\n", "seed", "lines",
+              "longest_m", "creased_m", "line_m", "rest_deg", "mean_deg", "network", "offset_mm",
+              "turn_deg", "run");
   for (const std::string& dir : dirs) {
     const ps::Scene scene = ps::load_scene(dir + "/scene.json");
-    if (scene.handles.empty()) throw std::runtime_error(dir + "/scene.json: not a fold scene (no handle)");
+    if (scene.handles.empty())
+      throw std::runtime_error(dir + "/scene.json: not a fold scene (no handle)");
     const papersim::remesh::SheetData sheet = papersim::remesh::read_sheet(dir + "/sheet.ply");
-    const CreaseFound f = find_crease(scene, sheet.mesh, crease_angle);
-    pv::MetricsOptions options;
-    options.crease_angle_deg = crease_angle;
-    const pv::MeshMetrics m = pv::compute_metrics(sheet.mesh.material_coords(), sheet.positions, sheet.mesh.faces(),
-                                                  sheet.mesh.plastic_curvature(), options);
-    std::printf("%-5lld %-6d %-9.4f %-9.4f %-9.4f %-9.1f %-8.1f %-8d %-9.1f %-8.2f %s\n", scene.seed, f.crease.lines,
-                f.crease.longest, f.crease.creased, f.line.chord, f.crease.angle * 180 / M_PI,
-                f.crease.mean_all * 180 / M_PI, m.creases.plastic_network_lines, f.offset * 1e3, f.turn, dir.c_str());
+    const CreaseFound f = find_crease(scene, sheet.mesh, sheet.positions, crease_angle);
+    std::printf("%-5lld %-6d %-9.4f %-9.4f %-9.4f %-9.1f %-8.1f %-8d %-9.1f %-8.2f %s\n",
+                scene.seed, f.crease.lines, f.crease.longest, f.crease.creased, f.line.chord,
+                f.crease.angle * 180 / M_PI, f.crease.mean_all * 180 / M_PI, f.network,
+                f.offset * 1e3, f.turn, dir.c_str());
   }
   return 0;
 }
 
 }  // namespace
-
 
 int main(int argc, char** argv) {
   CLI::App app{"papersim_fold_study: the fold scenario over seeds, with its acceptance checks"};
@@ -89,16 +96,21 @@ int main(int argc, char** argv) {
   int seeds = 20, first = 0;
   double crease_angle = 30.0, edge = 0.0;
   app.add_option("--seeds", seeds, "number of seeds")->check(CLI::PositiveNumber);
-  app.add_option("--first", first, "first seed (seeds first .. first + N - 1)")->check(CLI::NonNegativeNumber);
-  app.add_option("--crease-angle", crease_angle, "crease threshold of the residual rest angle [deg]")
+  app.add_option("--first", first, "first seed (seeds first .. first + N - 1)")
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--crease-angle", crease_angle,
+                 "crease threshold of the residual rest angle [deg]")
       ->check(CLI::Range(0.1, 179.0));
-  app.add_option("--edge", edge, "initial edge length [m] instead of the scenario's (0: the scenario's)")
+  app.add_option("--edge", edge,
+                 "initial edge length [m] instead of the scenario's (0: the scenario's)")
       ->check(CLI::Range(0.0, 0.05));
   app.add_option("--csv", csv, "also write the table as CSV");
-  app.add_option("--keep", keep, "write each seed's outputs (sheet.ply with the plastic state, meta.json, scene.json) to DIR/seed_N");
+  app.add_option("--keep", keep,
+                 "write each seed's outputs (sheet.ply with the plastic state, meta.json, "
+                 "scene.json) to DIR/seed_N");
   app.add_option("--measure", measure_dirs,
-                 "only measure the crease of finished runs (each DIR with scene.json and sheet.ply, e.g. from --keep "
-                 "or papersim scenario fold) and stop")
+                 "only measure the crease of finished runs (each DIR with scene.json and "
+                 "sheet.ply, e.g. from --keep or papersim scenario fold) and stop")
       ->check(CLI::ExistingDirectory);
   CLI11_PARSE(app, argc, argv);
   if (!measure_dirs.empty()) {
@@ -109,15 +121,19 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
-  std::printf("%-5s %-6s %-8s %-7s %-6s %-9s %-10s %-10s %-5s %-6s %-9s %-9s %-9s %-8s %-8s %-7s %-9s %-8s %s\n", "seed",
-              "verts", "wall_s", "newton", "halved", "max_s1", "min_roller", "min_ground", "self", "lines",
-              "longest_m", "creased_m", "fold_m", "rest_deg", "mean_deg", "network", "offset_mm", "turn_deg", "verdict");
+  std::printf(
+      "%-5s %-6s %-8s %-7s %-6s %-9s %-10s %-10s %-5s %-6s %-9s %-9s %-9s %-8s %-8s %-7s %-9s %-8s "
+      "%s\n",
+      "seed", "verts", "wall_s", "newton", "halved", "max_s1", "min_roller", "min_ground", "self",
+      "lines", "longest_m", "creased_m", "fold_m", "rest_deg", "mean_deg", "network", "offset_mm",
+      "turn_deg", "verdict");
   std::ofstream out;
   if (!csv.empty()) {
     out.open(csv);
-    out << "seed,vertices,wall_seconds,newton_iterations,failed_solves,max_stretch,min_roller,min_ground,"
-           "self_intersections,crease_lines,longest_crease,creased_length,fold_length,crease_rest_angle_deg,"
-           "fold_mean_rest_angle_deg,plastic_network_lines,crease_offset_m,crease_turn_deg,verdict\n";
+    out << "seed,vertices,wall_seconds,newton_iterations,failed_solves,max_stretch,"
+           "min_roller,min_ground,self_intersections,crease_lines,longest_crease,"
+           "creased_length,fold_length,crease_rest_angle_deg,fold_mean_rest_angle_deg,"
+           "plastic_network_lines,crease_offset_m,crease_turn_deg,verdict\n";
   }
   int failures = 0;
   std::vector<double> walls;
@@ -127,9 +143,10 @@ int main(int argc, char** argv) {
     const pv::FoldLine aimed = aimed_line(scene);
     std::string verdict = "PASS";
     double wall = 0, s1 = 0, roller = INFINITY, ground = INFINITY;
-    int newton = 0, halved = 0, verts = 0, self = -1, network = 0;
+    int newton = 0, halved = 0, verts = 0, self = -1;
     CreaseFound found;
     found.line = aimed;
+    auto start = std::chrono::steady_clock::now();
     try {
       ps::RunOptions run_options;
       if (!keep.empty()) {
@@ -138,6 +155,7 @@ int main(int argc, char** argv) {
         text << std::setw(2) << ps::scene_to_json(scene) << '\n';
         run_options.extra_files.emplace_back("scene.json", text.str());
       }
+      start = std::chrono::steady_clock::now();
       const ps::RunResult r = ps::run_scene(scene, run_options);
       const ps::RunQuality& q = r.quality;
       wall = r.wall_seconds;
@@ -148,16 +166,13 @@ int main(int argc, char** argv) {
       self = q.self_intersections;
       ground = q.min_obstacle_distance.at(0);
       roller = q.min_obstacle_distance.at(1);
-      pv::MetricsOptions options;
-      options.crease_angle_deg = crease_angle;
-      const pv::MeshMetrics m = pv::compute_metrics(r.mesh.material_coords(), r.state.positions_matrix(),
-                                                    r.mesh.faces(), r.mesh.plastic_curvature(), options);
-      network = m.creases.plastic_network_lines;
-      found = find_crease(scene, r.mesh, crease_angle);
+      found = find_crease(scene, r.mesh, r.state.positions_matrix(), crease_angle);
       verdict = pv::safety_verdict(scene, r);
       if (verdict == "PASS" && found.crease.longest < 0.5 * found.line.chord)
         verdict = "FAIL no plastic crease along the fold";
     } catch (const std::exception& e) {
+      // Wall time up to the failure.
+      wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       verdict = std::string("FAIL ") + e.what();
     }
     if (verdict != "PASS") ++failures;
@@ -166,17 +181,21 @@ int main(int argc, char** argv) {
     const pv::FoldCrease& crease = found.crease;
     const pv::FoldLine& line = found.line;
     const double offset = found.offset, turn = found.turn;
-    std::printf("%-5d %-6d %-8.1f %-7d %-6d %-9.6f %-10.3g %-10.3g %-5d %-6d %-9.4f %-9.4f %-9.4f %-8.1f %-8.1f %-7d %-9.1f "
-                "%-8.1f %s\n",
-                seed, verts, wall, newton, halved, s1, roller, ground, self, crease.lines, crease.longest,
-                crease.creased, line.chord, crease.angle * deg, crease.mean_all * deg, network, offset * 1e3, turn,
-                verdict.c_str());
+    std::printf(
+        "%-5d %-6d %-8.1f %-7d %-6d %-9.6f %-10.3g %-10.3g %-5d %-6d %-9.4f %-9.4f %-9.4f %-8.1f "
+        "%-8.1f %-7d %-9.1f "
+        "%-8.1f %s\n",
+        seed, verts, wall, newton, halved, s1, roller, ground, self, crease.lines, crease.longest,
+        crease.creased, line.chord, crease.angle * deg, crease.mean_all * deg, found.network,
+        offset * 1e3, turn, verdict.c_str());
     std::fflush(stdout);
     if (out)
-      out << seed << ',' << verts << ',' << wall << ',' << newton << ',' << halved << ',' << s1 << ',' << roller << ','
-          << ground << ',' << self << ',' << crease.lines << ',' << crease.longest << ',' << crease.creased << ','
-          << line.chord << ',' << crease.angle * deg << ',' << crease.mean_all * deg << ',' << network << ','
-          << offset << ',' << turn << ',' << verdict << std::endl;  // flushed: a stopped study keeps the seeds it finished
+      out << seed << ',' << verts << ',' << wall << ',' << newton << ',' << halved << ',' << s1
+          << ',' << roller << ',' << ground << ',' << self << ',' << crease.lines << ','
+          << crease.longest << ',' << crease.creased << ',' << line.chord << ','
+          << crease.angle * deg << ',' << crease.mean_all * deg << ',' << found.network << ','
+          << offset << ',' << turn << ',' << verdict
+          << std::endl;  // flushed: a stopped study keeps the seeds it finished
   }
   std::sort(walls.begin(), walls.end());
   std::printf("fold: %d seeds, %d failed; wall time median %.1f s, worst %.1f s\n", seeds, failures,

@@ -1,11 +1,12 @@
 // measure_fold_crease: the residual rest angle across a fold line, piece by piece, on grids whose
 // plastic curvature is a known band across the line.
+#include "validation/fold_crease.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 
 #include "tests/validation/test_meshes.hpp"
-#include "validation/fold_crease.hpp"
 
 namespace papersim::validation {
 namespace {
@@ -23,12 +24,15 @@ Eigen::MatrixX3d band(const Grid& g, const FoldLine& line, double theta, double 
   Eigen::MatrixX3d K = Eigen::MatrixX3d::Zero(g.faces.rows(), 3);
   const Eigen::Vector2d t(-line.d.y(), line.d.x());
   for (Eigen::Index f = 0; f < g.faces.rows(); ++f) {
-    const Eigen::Vector2d c =
-        (g.material.row(g.faces(f, 0)) + g.material.row(g.faces(f, 1)) + g.material.row(g.faces(f, 2))).transpose() / 3;
+    const Eigen::Vector2d c = (g.material.row(g.faces(f, 0)) + g.material.row(g.faces(f, 1)) +
+                               g.material.row(g.faces(f, 2)))
+                                  .transpose() /
+                              3;
     const double s = (c - line.centre).dot(line.d), along = (c - line.centre).dot(t);
     if (!keep(along)) continue;
     const double k = theta * std::exp(-0.5 * s * s / (sigma * sigma)) / (sigma * std::sqrt(2 * PI));
-    K.row(f) << k * line.d.x() * line.d.x(), k * line.d.y() * line.d.y(), k * line.d.x() * line.d.y();
+    K.row(f) << k * line.d.x() * line.d.x(), k * line.d.y() * line.d.y(),
+        k * line.d.x() * line.d.y();
   }
   return K;
 }
@@ -42,7 +46,8 @@ TEST(FoldCrease, LineIsClippedToTheRectangle) {
   const FoldLine diagonal = fold_line_in_rectangle(centre, Eigen::Vector2d(1, 1), W, H);
   EXPECT_NEAR(diagonal.chord, W * std::sqrt(2.0), 1e-12);
   // Off-centre: both ends on the boundary, the stored centre at the chord's midpoint.
-  const FoldLine off = fold_line_in_rectangle(Eigen::Vector2d(0.05, 0.1), Eigen::Vector2d(1, 2), W, H);
+  const FoldLine off =
+      fold_line_in_rectangle(Eigen::Vector2d(0.05, 0.1), Eigen::Vector2d(1, 2), W, H);
   const Eigen::Vector2d t(-off.d.y(), off.d.x());
   for (int side : {-1, 1}) {
     const Eigen::Vector2d end = off.centre + side * 0.5 * off.chord * t;
@@ -57,7 +62,8 @@ TEST(FoldCrease, LineIsClippedToTheRectangle) {
 // rule on 1 mm faces to well under 1%.
 TEST(FoldCrease, GaussianBandAlongAGridRowGivesItsAngleEverywhere) {
   const Grid g = make_grid(211, 298, W, H);
-  const FoldLine line = fold_line_in_rectangle(Eigen::Vector2d(0.5 * W, 0.1485), Eigen::Vector2d(0, 1), W, H);
+  const FoldLine line =
+      fold_line_in_rectangle(Eigen::Vector2d(0.5 * W, 0.1485), Eigen::Vector2d(0, 1), W, H);
   const double theta = PI / 2;
   const Eigen::MatrixX3d K = band(g, line, theta, 0.003, [](double) { return true; });
   const FoldCrease c = measure_fold_crease(g.material, g.faces, K, line);
@@ -75,9 +81,11 @@ TEST(FoldCrease, GaussianBandAlongAGridRowGivesItsAngleEverywhere) {
 // a slanted line varies by about a cell per 10 mm; 10% bounds both.
 TEST(FoldCrease, InterruptedCreaseIsTwoLines) {
   const Grid g = make_grid(211, 298, W, H);
-  const FoldLine line = fold_line_in_rectangle(Eigen::Vector2d(0.5 * W, 0.5 * H), Eigen::Vector2d(0.34, 0.94), W, H);
+  const FoldLine line =
+      fold_line_in_rectangle(Eigen::Vector2d(0.5 * W, 0.5 * H), Eigen::Vector2d(0.34, 0.94), W, H);
   const double theta = PI / 2;
-  const Eigen::MatrixX3d K = band(g, line, theta, 0.003, [](double along) { return std::abs(along) > 0.02; });
+  const Eigen::MatrixX3d K =
+      band(g, line, theta, 0.003, [](double along) { return std::abs(along) > 0.02; });
   const FoldCrease c = measure_fold_crease(g.material, g.faces, K, line);
   EXPECT_EQ(c.lines, 2);
   EXPECT_LT(c.longest, 0.5 * line.chord);
@@ -95,13 +103,16 @@ TEST(FoldCrease, FitFindsTheCreaseBesideTheNominalLine) {
   const Eigen::Vector2d centre(0.5 * W, 0.5 * H);
   const FoldLine nominal = fold_line_in_rectangle(centre, Eigen::Vector2d(0, 1), W, H);
   const double turn = 12 * PI / 180;
-  const FoldLine truth = fold_line_in_rectangle(centre + Eigen::Vector2d(0, 0.03),
-                                                Eigen::Vector2d(-std::sin(turn), std::cos(turn)), W, H);
+  const FoldLine truth = fold_line_in_rectangle(
+      centre + Eigen::Vector2d(0, 0.03), Eigen::Vector2d(-std::sin(turn), std::cos(turn)), W, H);
   Eigen::MatrixX3d K = band(g, truth, PI / 2, 0.003, [](double) { return true; });
   for (Eigen::Index f = 0; f < g.faces.rows(); ++f) {  // the weak patch: 40 1/m over 1 x 1 cm
-    const Eigen::Vector2d c =
-        (g.material.row(g.faces(f, 0)) + g.material.row(g.faces(f, 1)) + g.material.row(g.faces(f, 2))).transpose() / 3;
-    if ((c - Eigen::Vector2d(0.05, 0.1485 - 0.04)).cwiseAbs().maxCoeff() < 0.005) K.row(f) << 0, 40, 0;
+    const Eigen::Vector2d c = (g.material.row(g.faces(f, 0)) + g.material.row(g.faces(f, 1)) +
+                               g.material.row(g.faces(f, 2)))
+                                  .transpose() /
+                              3;
+    if ((c - Eigen::Vector2d(0.05, 0.1485 - 0.04)).cwiseAbs().maxCoeff() < 0.005)
+      K.row(f) << 0, 40, 0;
   }
   const FoldLine fit = fit_crease_line(g.material, g.faces, K, nominal, W, H);
   EXPECT_GT(fit.d.dot(truth.d), std::cos(0.5 * PI / 180));
@@ -114,7 +125,8 @@ TEST(FoldCrease, FitFindsTheCreaseBesideTheNominalLine) {
   const FoldCrease along_nominal = measure_fold_crease(g.material, g.faces, K, nominal);
   EXPECT_LT(along_nominal.longest, 0.5 * nominal.chord);
   // Nothing plastic near the line: the nominal line comes back.
-  const FoldLine none = fit_crease_line(g.material, g.faces, Eigen::MatrixX3d::Zero(g.faces.rows(), 3), nominal, W, H);
+  const FoldLine none = fit_crease_line(g.material, g.faces,
+                                        Eigen::MatrixX3d::Zero(g.faces.rows(), 3), nominal, W, H);
   EXPECT_EQ(none.centre, nominal.centre);
   EXPECT_EQ(none.d, nominal.d);
 }
@@ -123,13 +135,16 @@ TEST(FoldCrease, FitFindsTheCreaseBesideTheNominalLine) {
 // sign (a valley instead of a mountain) the crease is found.
 TEST(FoldCrease, ThresholdAndSign) {
   const Grid g = make_grid(106, 149, W, H);
-  const FoldLine line = fold_line_in_rectangle(Eigen::Vector2d(0.5 * W, 0.5 * H), Eigen::Vector2d(0, 1), W, H);
+  const FoldLine line =
+      fold_line_in_rectangle(Eigen::Vector2d(0.5 * W, 0.5 * H), Eigen::Vector2d(0, 1), W, H);
   const auto all = [](double) { return true; };
-  const FoldCrease weak = measure_fold_crease(g.material, g.faces, band(g, line, 20 * PI / 180, 0.004, all), line);
+  const FoldCrease weak =
+      measure_fold_crease(g.material, g.faces, band(g, line, 20 * PI / 180, 0.004, all), line);
   EXPECT_EQ(weak.lines, 0);
   EXPECT_EQ(weak.creased, 0.0);
   EXPECT_NEAR(weak.mean_all, 20 * PI / 180, 0.02 * 20 * PI / 180);
-  const FoldCrease valley = measure_fold_crease(g.material, g.faces, band(g, line, -PI / 3, 0.004, all), line);
+  const FoldCrease valley =
+      measure_fold_crease(g.material, g.faces, band(g, line, -PI / 3, 0.004, all), line);
   EXPECT_EQ(valley.lines, 1);
   EXPECT_NEAR(valley.angle, PI / 3, 0.02 * PI / 3);
 }
