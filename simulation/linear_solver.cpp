@@ -116,6 +116,19 @@ bool LinearSolver::factorize(const BlockSymmetricMatrix& A, long pattern_id) {
   return c.status != CHOLMOD_NOT_POSDEF && m_impl->factor->minor == m_impl->factor->n;
 }
 
+double LinearSolver::factorize_shifted(BlockSymmetricMatrix& A, long pattern_id) {
+  Eigen::VectorXd diagonal;
+  double shift = 0;
+  while (!factorize(A, pattern_id)) {
+    if (shift == 0) diagonal = A.diagonal().cwiseAbs();
+    const double next = shift == 0 ? 1e-10 : 10 * shift;
+    A.add_diagonal((next - shift) * (Eigen::VectorXd::Ones(diagonal.size()) + 1e-3 * diagonal));
+    shift = next;
+    if (shift > 1e3) return -1;
+  }
+  return shift;
+}
+
 Eigen::VectorXd LinearSolver::solve(const Eigen::VectorXd& b) {
   auto& c = m_impl->common;
   cholmod_dense rhs{};

@@ -22,6 +22,15 @@ class LinearSolver {
   /// @throw NumericError when A holds NaN or inf, or CHOLMOD fails for another reason.
   bool factorize(const BlockSymmetricMatrix& A, long pattern_id);
 
+  /// Factor a matrix that is positive semi-definite in exact arithmetic (a sum of projected
+  /// element Hessians and inertia) whose factorisation round-off may stop: retries with
+  /// s + 1e-3 s |A_ii| added to each diagonal entry, s = 1e-10, 1e-9, ..., 1e3. The absolute
+  /// part covers the static limit (no inertia); the relative part (from 1e-13 of the entry)
+  /// covers entries far apart in size, e.g. a barrier's ~1e22 beside inertia ~0.1, which no
+  /// absolute shift reaches.
+  /// @return the s used (0: none), or a negative number when even s = 1e3 failed (A shifted)
+  double factorize_shifted(BlockSymmetricMatrix& A, long pattern_id);
+
   /// Solve A x = b with the last factorisation.
   Eigen::VectorXd solve(const Eigen::VectorXd& b);
 

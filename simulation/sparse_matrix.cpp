@@ -87,6 +87,12 @@ void BlockSymmetricMatrix::add_diagonal(const Eigen::VectorXd& d) {
   for (int c = 0; c < d.size(); ++c) m_values[m_col_start[c + 1] - 1] += d[c];
 }
 
+Eigen::VectorXd BlockSymmetricMatrix::diagonal() const {
+  Eigen::VectorXd d(size());
+  for (int c = 0; c < size(); ++c) d[c] = m_values[m_col_start[c + 1] - 1];
+  return d;
+}
+
 Eigen::VectorXd BlockSymmetricMatrix::multiply(const Eigen::VectorXd& x) const {
   Eigen::VectorXd y = Eigen::VectorXd::Zero(size());
   for (int c = 0; c < size(); ++c)

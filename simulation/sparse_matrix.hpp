@@ -45,6 +45,8 @@ class BlockSymmetricMatrix {
   /// Adds d[i] to the diagonal entry of the first d.size() degrees of freedom (the vertices';
   /// auxiliary unknowns after them are left alone when d is shorter).
   void add_diagonal(const Eigen::VectorXd& d);
+  /// The diagonal entries (size()).
+  Eigen::VectorXd diagonal() const;
 
   /// y = A x
   Eigen::VectorXd multiply(const Eigen::VectorXd& x) const;
