@@ -149,6 +149,14 @@ int main(int argc, char** argv) {
     auto start = std::chrono::steady_clock::now();
     try {
       ps::RunOptions run_options;
+      // Progress on stderr every 10% of the simulated time, with the ETA of this seed.
+      run_options.progress = [seed, last = -1](double f, double seconds) mutable {
+        const int tenth = static_cast<int>(10 * f);
+        if (tenth == last) return;
+        last = tenth;
+        std::fprintf(stderr, "fold seed %d %3d%%  elapsed %.0f s  ETA %.0f s\n", seed, 10 * tenth,
+                     seconds, f > 0 ? seconds * (1 - f) / f : 0.0);
+      };
       if (!keep.empty()) {
         run_options.out_dir = keep + "/seed_" + std::to_string(seed);
         std::ostringstream text;
