@@ -2,6 +2,7 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -68,9 +69,47 @@ void prepare_output(const std::string& out) {
   if (!fs::exists(out, ec)) common::add_cleanup_path(out);
 }
 
+/// A non-empty option value.
+CLI::Validator non_empty() {
+  return CLI::Validator(
+      [](std::string& value) { return value.empty() ? std::string("must not be empty") : std::string(); },
+      "NONEMPTY");
+}
+
+/// Checkpoint options of `run` and `scenario`.
+struct CheckpointOptions {
+  std::string dir, resume;
+  int every = 0;
+};
+
+void add_checkpoint_options(CLI::App* app, CheckpointOptions& c) {
+  auto* dir = app->add_option("--checkpoint", c.dir,
+                              "Save the state every --checkpoint-every steps in DIR, a folder "
+                              "outside --out (kept when the run fails; continue with --resume DIR)");
+  app->add_option("--checkpoint-every", c.every, "Steps between checkpoints (default 100)")
+      ->check(CLI::Range(1, 1 << 30))
+      ->needs(dir);
+  dir->check(non_empty());
+  app->add_option("--resume", c.resume,
+                  "Continue from the checkpoint in DIR (same time step and duration; other scene "
+                  "keys may differ, listed in meta.json's `resumed`)")
+      ->check(CLI::ExistingDirectory);
+}
+
 int simulate(const ps::Scene& scene, const std::string& out, int frames, bool quiet,
-             const std::string& label, const std::string& scene_json) {
+             const std::string& label, const std::string& scene_json, const CheckpointOptions& checkpoint) {
+  if (!checkpoint.dir.empty()) {
+    // A folder the failed run created is removed with everything in it.
+    const fs::path c = fs::weakly_canonical(checkpoint.dir), o = fs::weakly_canonical(out);
+    const auto [end, _] = std::mismatch(o.begin(), o.end(), c.begin(), c.end());
+    if (end == o.end())
+      throw ps::SceneError("--checkpoint " + checkpoint.dir + " lies inside --out " + out +
+                           ", which a failed run removes: choose a folder outside it");
+  }
   ps::RunOptions options;
+  options.checkpoint_dir = checkpoint.dir;
+  options.checkpoint_every = checkpoint.dir.empty() ? 0 : (checkpoint.every > 0 ? checkpoint.every : 100);
+  options.resume_from = checkpoint.resume;
   options.out_dir = out;
   options.frames_every = frames;
   options.poll_stop = common::throw_if_stop_requested;
@@ -89,13 +128,6 @@ void write_scene_only(const std::string& out, const std::string& scene_json) {
   ps::Staging staging(out);
   common::write_text_atomically(staging.dir() / "scene.json", scene_json);
   staging.commit();
-}
-
-/// A non-empty option value.
-CLI::Validator non_empty() {
-  return CLI::Validator(
-      [](std::string& value) { return value.empty() ? std::string("must not be empty") : std::string(); },
-      "NONEMPTY");
 }
 
 /// The exit status for the exception being handled, after printing its message.
@@ -151,6 +183,8 @@ int main(int argc, char** argv) {
   run->add_option("--frames", frames, "Write every K-th step to OUT/frames/ (0: none)")
       ->check(CLI::Range(0, 1 << 30));
   run->add_flag("--quiet", quiet, "No progress on stderr");
+  CheckpointOptions checkpoint;
+  add_checkpoint_options(run, checkpoint);
 
   std::string name;
   long long seed = 0;
@@ -165,6 +199,7 @@ int main(int argc, char** argv) {
   scen->add_option("--frames", frames, "Write every K-th step to OUT/frames/ (0: none)")
       ->check(CLI::Range(0, 1 << 30));
   scen->add_flag("--quiet", quiet, "No progress on stderr");
+  add_checkpoint_options(scen, checkpoint);
   bool draw_only = false;
   scen->add_flag("--draw-only", draw_only, "Only write OUT/scene.json (edit it, then: papersim run)");
 
@@ -191,7 +226,7 @@ int main(int argc, char** argv) {
       return ps::run_batch_subcommand(batch_command, PAPERSIM_HAS_METRICS, std::cout, std::cerr);
     if (run->parsed()) {
       const ps::Scene scene = ps::load_scene(scene_path);
-      return simulate(scene, out_dir, frames, quiet, "run", "");
+      return simulate(scene, out_dir, frames, quiet, "run", "", checkpoint);
     }
     if (scen->parsed()) {
       const ps::Scene scene = ps::make_scenario(name, static_cast<std::uint64_t>(seed));
@@ -202,7 +237,8 @@ int main(int argc, char** argv) {
         std::cout << "wrote " << (fs::path(out_dir) / "scene.json").string() << '\n';
         return 0;
       }
-      return simulate(scene, out_dir, frames, quiet, name + " seed " + std::to_string(seed), text.str());
+      return simulate(scene, out_dir, frames, quiet, name + " seed " + std::to_string(seed), text.str(),
+                      checkpoint);
     }
 #ifdef PAPERSIM_WITH_METRICS
     return metrics_code;

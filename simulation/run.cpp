@@ -210,18 +210,7 @@ Run::Run(const Scene& scene) : m_scene(scene) {
   initial_sheet(scene, m_mesh, m_state);
   m_setup = physics_setup(scene, m_mesh, m_state);
   rebuild();
-  if (m_terms.self_contact) {
-    // The barrier keeps an intersection-free sheet so; it cannot undo an intersection.
-    const int crossings = collision::count_self_intersections(m_state.positions_matrix(), m_mesh.faces());
-    if (crossings > 0 || !(m_terms.self_contact->min_distance(m_state.positions, m_setup.self_contact_params.dhat) > 0))
-      throw SceneError("the sheet starts intersecting itself (" + std::to_string(crossings) +
-                       " triangle pairs); self-contact needs an intersection-free start");
-  }
-  for (size_t o = 0; o < m_setup.obstacles.size(); ++o)
-    for (int v = 0; v < m_state.num_vertices(); ++v)
-      if (m_setup.obstacles[o]->distance(m_state.positions.segment<3>(3 * v), 0.0) <= 0)
-        throw SceneError("the sheet starts inside obstacle " + std::to_string(o) +
-                         (scene.ground ? " (0 is the ground)" : ""));
+  check_state("starts");
   m_steps = std::max(1, static_cast<int>(std::lround(scene.duration / scene.time_step)));
   m_h = scene.duration / m_steps;
   m_counts.vertices_start = m_counts.vertices_max = m_mesh.num_vertices();
@@ -231,6 +220,42 @@ Run::Run(const Scene& scene) : m_scene(scene) {
 }
 
 Run::~Run() = default;
+
+void Run::check_state(const std::string& what) const {
+  if (m_terms.self_contact) {
+    // The barrier keeps an intersection-free sheet so; it cannot undo an intersection.
+    const int crossings = collision::count_self_intersections(m_state.positions_matrix(), m_mesh.faces());
+    if (crossings > 0 || !(m_terms.self_contact->min_distance(m_state.positions, m_setup.self_contact_params.dhat) > 0))
+      throw SceneError("the sheet " + what + " intersecting itself (" + std::to_string(crossings) +
+                       " triangle pairs); self-contact needs an intersection-free start");
+  }
+  for (size_t o = 0; o < m_setup.obstacles.size(); ++o)
+    for (int v = 0; v < m_state.num_vertices(); ++v)
+      if (m_setup.obstacles[o]->distance(m_state.positions.segment<3>(3 * v), m_state.time) <= 0)
+        throw SceneError("the sheet " + what + " inside obstacle " + std::to_string(o) +
+                         (m_scene.ground ? " (0 is the ground)" : ""));
+}
+
+void Run::resume(const remesh::SheetMesh& mesh, const SheetState& state, int step) {
+  if (state.positions.size() != 3 * mesh.num_vertices() || state.velocities.size() != state.positions.size())
+    throw SceneError("resume: the state has " + std::to_string(state.positions.size() / 3) +
+                     " vertices, the mesh " + std::to_string(mesh.num_vertices()));
+  if (step < 0 || step > m_steps)
+    throw SceneError("resume: step " + std::to_string(step) + " is outside the run's 0.." + std::to_string(m_steps));
+  if (std::abs(state.time - step * m_h) > 1e-9 * std::max(1.0, m_scene.duration))
+    throw SceneError("resume: the state's time does not match step " + std::to_string(step) +
+                     " of this scene's time step (another time_step or duration?)");
+  m_mesh = mesh;
+  m_state = state;
+  m_step = step;
+  rebuild();
+  check_state("resumes");
+  m_counts.vertices_start = m_counts.vertices_max = m_mesh.num_vertices();
+  m_counts.faces_start = m_counts.faces_max = m_mesh.num_faces();
+  m_quality = RunQuality{};
+  m_quality.strain_limit = m_setup.material.strain_limit;
+  track();
+}
 
 namespace {
 

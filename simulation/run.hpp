@@ -166,6 +166,14 @@ class Run {
   Run(const Run&) = delete;
   Run& operator=(const Run&) = delete;
 
+  /// Continue from a saved state (a checkpoint of a run of this scene): the mesh with its
+  /// plastic state, positions, velocities and time after `step` steps. The handles keep their
+  /// anchors from the scene's initial sheet; the run's statistics and quality extremes count
+  /// from here on. Checked like a start (outside every obstacle, free of self-intersection).
+  /// @throw SceneError when the state does not fit the mesh, the step is out of range or its
+  ///        time is not step x time_step, or the state fails a check
+  void resume(const remesh::SheetMesh& mesh, const SheetState& state, int step);
+
   /// Advance by one time step of the scene, remeshing before the first step, after it and then
   /// after every `remesh.every` steps when the scene remeshes.
   /// @throw NumericError when the step fails.
@@ -191,6 +199,9 @@ class Run {
  private:
   /// Builds the terms and the integrator for the current mesh.
   void rebuild();
+  /// @throw SceneError when the current state is inside an obstacle or, with self-contact,
+  ///        intersects itself (`what`: "starts" or "resumes")
+  void check_state(const std::string& what) const;
   void track();
   /// One remeshing pass: kept when the new mesh passes every check (no self-intersection,
   /// stretch within the limit, finite energy), undone otherwise.

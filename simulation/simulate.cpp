@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "common/atomic_file.hpp"
+#include "common/errors.hpp"
 #include "remesh/errors.hpp"
 #include "remesh/sheet_io.hpp"
 #include "simulation/errors.hpp"
@@ -91,21 +92,91 @@ json meta_json(const Scene& scene, const RunResult& r, const json& extra) {
   return m;
 }
 
+namespace {
+
+constexpr const char* CHECKPOINT_FORMAT = "papersim checkpoint 1";
+
+}  // namespace
+
+void save_checkpoint(const std::string& dir, const Scene& scene, int step, const remesh::SheetMesh& mesh,
+                     const SheetState& state) {
+  const fs::path d(dir);
+  std::error_code ec;
+  fs::create_directories(d, ec);
+  if (ec) throw common::OutputError(dir + ": cannot create the checkpoint folder: " + ec.message());
+  std::string previous;
+  try {
+    previous = json::parse(std::ifstream(d / "checkpoint.json")).at("sheet").get<std::string>();
+  } catch (const std::exception&) {
+  }
+  std::ostringstream name;
+  name << "checkpoint_" << std::setw(8) << std::setfill('0') << step << ".ply";
+  remesh::write_sheet_file((d / name.str()).string(), mesh, state.positions_matrix(), state.velocities_matrix(),
+                           scene.sheet.width, scene.sheet.height);
+  const json j = {{"format", CHECKPOINT_FORMAT}, {"step", step},        {"time", state.time},
+                  {"sheet", name.str()},         {"version", version()}, {"scene", scene_to_json(scene)}};
+  common::write_text_atomically(d / "checkpoint.json", j.dump(1) + "\n");
+  if (!previous.empty() && previous != name.str() && previous.find('/') == std::string::npos)
+    fs::remove(d / previous, ec);
+}
+
+Checkpoint load_checkpoint(const std::string& dir) {
+  const fs::path file = fs::path(dir) / "checkpoint.json";
+  const std::string where = file.string() + ": ";
+  std::ifstream in(file);
+  if (!in) throw SceneError(where + "cannot be read (no checkpoint in " + dir + ")");
+  Checkpoint c;
+  std::string sheet;
+  try {
+    const json j = json::parse(in);
+    if (j.value("format", std::string()) != CHECKPOINT_FORMAT)
+      throw SceneError(where + "key 'format' is not \"" + CHECKPOINT_FORMAT + "\"");
+    c.step = j.at("step").get<int>();
+    c.time = j.at("time").get<double>();
+    sheet = j.at("sheet").get<std::string>();
+    c.scene = j.at("scene");
+  } catch (const json::exception& e) {
+    throw SceneError(where + e.what());
+  }
+  if (sheet.empty() || sheet.find('/') != std::string::npos)
+    throw SceneError(where + "key 'sheet' is not a file name in the checkpoint folder");
+  try {
+    remesh::SheetData d = remesh::read_sheet((fs::path(dir) / sheet).string());
+    c.mesh = std::move(d.mesh);
+    c.state.positions = flatten(d.positions);
+    c.state.velocities = flatten(d.velocities);
+    c.state.time = c.time;
+  } catch (const std::runtime_error& e) {  // remesh::IoError, remesh::MeshError
+    throw SceneError(where + "key 'sheet': " + e.what());
+  }
+  return c;
+}
+
 RunResult run_scene(const Scene& scene, const RunOptions& options) {
   const auto t_start = std::chrono::steady_clock::now();
   const auto elapsed = [&] {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
   };
   Run run(scene);
+  json resumed;
+  if (!options.resume_from.empty()) {
+    const Checkpoint c = load_checkpoint(options.resume_from);
+    run.resume(c.mesh, c.state, c.step);
+    json changes = json::array();
+    for (const auto& patch : json::diff(c.scene, scene_to_json(scene))) changes.push_back(patch.at("path"));
+    resumed = {{"from", options.resume_from}, {"step", c.step}, {"time", c.time}, {"scene_changes", changes}};
+  }
   Staging staging(options.out_dir);
   if (!scene.source.empty()) staging.protect(scene.source);
   const int frames_every = options.frames_every >= 0 ? options.frames_every : scene.output.frames_every;
   if (staging.active() && frames_every > 0) fs::create_directories(staging.dir() / "frames");
   const int steps = run.steps_total();
   int last_percent = -1;
-  for (int k = 1; k <= steps; ++k) {
+  for (int k = run.steps_done() + 1; k <= steps; ++k) {
     run.step();
     if (options.poll_stop) options.poll_stop();
+    if (options.checkpoint_every > 0 && k % options.checkpoint_every == 0 && k < steps)
+      save_checkpoint(options.checkpoint_dir, scene, k, run.mesh(), run.state());
     if (options.on_step) {
       StepReport report;
       report.step = k;
@@ -134,7 +205,9 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
     write_outputs(staging.dir(), scene, r.mesh, r.state);
     for (const auto& [name, text] : options.extra_files)
       common::write_text_atomically(staging.dir() / name, text);
-    write_json(staging.dir() / "meta.json", meta_json(scene, r, options.extra_meta));
+    json extra = options.extra_meta;
+    if (!resumed.is_null()) extra["resumed"] = resumed;
+    write_json(staging.dir() / "meta.json", meta_json(scene, r, extra));
     staging.commit();
   }
   return r;

@@ -44,7 +44,37 @@ struct RunOptions {
   /// More files to publish with the run: name in out_dir -> content (e.g. the scene.json of a
   /// scenario). Names should be among run_output_names().
   std::vector<std::pair<std::string, std::string>> extra_files;
+  /// Every `checkpoint_every` steps (0: never) the state is saved in `checkpoint_dir`
+  /// (save_checkpoint), which is outside the run's output and stays when the run fails, so a
+  /// run can be continued from its last checkpoint or a failure studied from just before it.
+  std::string checkpoint_dir;
+  int checkpoint_every = 0;
+  /// Continue from the checkpoint in this folder (load_checkpoint) instead of the start. The
+  /// scene may differ from the checkpoint's (e.g. other solver settings at a hard spot) but not
+  /// in time step or duration; meta.json's `resumed` lists what differs.
+  std::string resume_from;
 };
+
+/// A saved state of a run: DIR/checkpoint.json (format, step, time, the sheet file's name, the
+/// scene) and the sheet file it names (PLY, doubles: positions, velocities, material
+/// coordinates, plastic curvature, damage), so a continued run starts from the same numbers.
+struct Checkpoint {
+  int step = 0;
+  double time = 0.0;  ///< [s]
+  remesh::SheetMesh mesh;
+  SheetState state;
+  nlohmann::json scene;  ///< scene_to_json of the run that saved it
+};
+
+/// Writes the checkpoint atomically: the sheet file under a new name, then checkpoint.json
+/// naming it, then the previous sheet file is removed; a run stopped at any moment leaves a
+/// complete checkpoint (the new or the previous one).
+/// @throw common::OutputError when a file cannot be written
+void save_checkpoint(const std::string& dir, const Scene& scene, int step, const remesh::SheetMesh& mesh,
+                     const SheetState& state);
+
+/// @throw SceneError naming the file and what is wrong (missing, not a checkpoint, bad sheet)
+Checkpoint load_checkpoint(const std::string& dir);
 
 /// meta.json of a finished run: the scene, provenance, run statistics, quality and energies,
 /// with `extra` merged in at the top level.

@@ -1,0 +1,106 @@
+// Checkpoints (RunOptions::checkpoint_dir, resume_from): a run continued from a checkpoint ends
+// in the state of the run that was not interrupted, and a checkpoint that does not fit the
+// scene is refused with a message that names what is wrong.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "simulation/errors.hpp"
+#include "simulation/simulate.hpp"
+
+using namespace papersim::simulation;
+namespace fs = std::filesystem;
+
+namespace {
+
+/// A 6 x 4 cm sheet with 1 cm edges on the ground, one corner lifted 1 cm over 0.04 s:
+/// 30 steps of 2 ms with contact, friction and a handle.
+Scene lifted_corner() {
+  Scene s;
+  s.sheet.width = 0.06;
+  s.sheet.height = 0.04;
+  s.sheet.edge_length = 0.01;
+  s.sheet.position = Eigen::Vector3d(0, 0, 1e-3);
+  s.duration = 0.06;
+  s.time_step = 0.002;
+  HandleSpec h;
+  h.material_point = Eigen::Vector2d(0.06, 0.04);
+  h.keyframes = {{0.0, Eigen::Vector3d::Zero()}, {0.04, Eigen::Vector3d(0, 0, 0.01)}};
+  s.handles = {h};
+  return s;
+}
+
+fs::path fresh_dir(const std::string& name) {
+  const fs::path d = fs::temp_directory_path() / ("papersim_checkpoint_test_" + name);
+  fs::remove_all(d);
+  return d;
+}
+
+}  // namespace
+
+// The checkpoint holds every number the next steps read (positions, velocities, time, the
+// mesh), so the continued run's end state is bit for bit the uninterrupted run's. The last
+// checkpoint replaces the earlier ones.
+TEST(Checkpoint, ResumedRunEndsInTheSameStateToTheBit) {
+  const Scene scene = lifted_corner();
+  const fs::path dir = fresh_dir("resume");
+  RunOptions with_checkpoints;
+  with_checkpoints.checkpoint_dir = dir.string();
+  with_checkpoints.checkpoint_every = 10;
+  const RunResult whole = run_scene(scene, with_checkpoints);
+  ASSERT_EQ(whole.steps, 30);
+  EXPECT_TRUE(fs::exists(dir / "checkpoint.json"));
+  EXPECT_TRUE(fs::exists(dir / "checkpoint_00000020.ply"));
+  EXPECT_FALSE(fs::exists(dir / "checkpoint_00000010.ply"));  // replaced
+  const Checkpoint c = load_checkpoint(dir.string());
+  EXPECT_EQ(c.step, 20);
+  EXPECT_NEAR(c.time, 0.04, 1e-12);
+
+  RunOptions resume;
+  resume.resume_from = dir.string();
+  const RunResult continued = run_scene(scene, resume);
+  EXPECT_EQ(continued.steps, 30);
+  EXPECT_EQ(continued.state.time, whole.state.time);
+  ASSERT_EQ(continued.state.positions.size(), whole.state.positions.size());
+  EXPECT_EQ((continued.state.positions - whole.state.positions).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_EQ((continued.state.velocities - whole.state.velocities).cwiseAbs().maxCoeff(), 0.0);
+  // Only the last 10 steps were simulated.
+  EXPECT_LT(continued.totals.newton_iterations, whole.totals.newton_iterations);
+  fs::remove_all(dir);
+}
+
+TEST(Checkpoint, ACheckpointThatDoesNotFitIsRefusedByName) {
+  const fs::path dir = fresh_dir("refuse");
+  RunOptions resume;
+  resume.resume_from = dir.string();
+  try {
+    run_scene(lifted_corner(), resume);
+    FAIL() << "a missing checkpoint was accepted";
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("checkpoint.json"), std::string::npos) << e.what();
+  }
+
+  RunOptions save;
+  save.checkpoint_dir = dir.string();
+  save.checkpoint_every = 10;
+  run_scene(lifted_corner(), save);
+  Scene other_step = lifted_corner();
+  other_step.time_step = 0.003;
+  try {
+    run_scene(other_step, resume);
+    FAIL() << "a checkpoint of another time step was accepted";
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("time step"), std::string::npos) << e.what();
+  }
+
+  std::ofstream(dir / "checkpoint.json") << R"({"format": "something else", "step": 1})";
+  try {
+    run_scene(lifted_corner(), resume);
+    FAIL() << "a file of another format was accepted";
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("'format'"), std::string::npos) << e.what();
+  }
+  fs::remove_all(dir);
+}
