@@ -172,7 +172,8 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
   if (staging.active() && frames_every > 0) fs::create_directories(staging.dir() / "frames");
   const int steps = run.steps_total();
   int last_percent = -1;
-  for (int k = run.steps_done() + 1; k <= steps; ++k) {
+  const int first = run.steps_done();  // > 0 when resumed
+  for (int k = first + 1; k <= steps; ++k) {
     run.step();
     if (options.poll_stop) options.poll_stop();
     if (options.checkpoint_every > 0 && k % options.checkpoint_every == 0 && k < steps)
@@ -194,10 +195,11 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
                                run.state().positions_matrix(), run.state().velocities_matrix(),
                                scene.sheet.width, scene.sheet.height);
     }
-    const int percent = static_cast<int>(100.0 * k / steps);
+    const double fraction = double(k - first) / (steps - first);
+    const int percent = static_cast<int>(100.0 * fraction);
     if (options.progress && percent != last_percent) {
       last_percent = percent;
-      options.progress(double(k) / steps, elapsed());
+      options.progress(fraction, elapsed());
     }
   }
   RunResult r = run.result(elapsed());

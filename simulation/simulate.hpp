@@ -13,7 +13,8 @@
 
 namespace papersim::simulation {
 
-/// Progress report: fraction done in [0, 1] and wall seconds so far.
+/// Progress report: fraction done in [0, 1] of the steps this call runs (a resumed run counts
+/// from its checkpoint) and wall seconds so far.
 using ProgressFn = std::function<void(double fraction, double seconds)>;
 
 /// What a step observer sees after each accepted step.
