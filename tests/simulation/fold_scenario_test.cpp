@@ -6,6 +6,7 @@
 #include "collision/collider_factory.hpp"
 #include "simulation/errors.hpp"
 #include "simulation/scenario.hpp"
+#include "simulation/scene.hpp"
 #include "simulation/simulate.hpp"
 
 using namespace papersim;
@@ -89,6 +90,32 @@ TEST(FoldScenario, RollerRollsAcrossPerpendicularToTheFoldDirection) {
     EXPECT_NEAR(roller->velocity(bottom, t).norm(), 0.0, 1e-9);
     const Eigen::Vector3d v = roller->motion.linear_velocity(t);
     EXPECT_NEAR((v + (0.7 / 3.0) * d).norm(), 0.0, 1e-9);
+  }
+}
+
+// The roller a run uses comes from scene.json (rotations as Euler angles in degrees): it must
+// still roll without slipping, with its front surface moving down onto the sheet (a sign error
+// would turn the roller into a conveyor that lifts what it meets up its front).
+TEST(FoldScenario, RollerReadBackFromSceneJsonRollsWithoutSlipping) {
+  for (std::uint64_t seed : {0u, 3u, 12u}) {
+    const Scene drawn = make_scenario("fold", seed);
+    const Scene s = scene_from_json(scene_to_json(drawn), "fold.json");
+    const auto roller = collision::make_collider(s.obstacles[0]);
+    const Eigen::Vector2d p = s.handles[0].material_point;
+    const Eigen::Vector2d c2 =
+        (Eigen::Vector2d(0.5 * s.sheet.width, 0.5 * s.sheet.height) - p).normalized();
+    const Eigen::Vector3d d(c2.x(), c2.y(), 0.0);
+    const double v = 0.7 / 3.0;
+    for (double t : {3.05, 4.03, 4.55, 5.97}) {
+      const Eigen::Vector3d c = roller->motion.pose(t).translation();
+      // Lowest point at rest; the front point (ahead along -d) moves forward and down at v each;
+      // the top moves forward at 2 v.
+      const Eigen::Vector3d up(0, 0, 0.05), bottom = c - up, top = c + up;
+      EXPECT_NEAR(roller->velocity(bottom, t).norm(), 0.0, 1e-9) << seed << " " << t;
+      const Eigen::Vector3d front = roller->velocity(c - 0.05 * d, t);
+      EXPECT_NEAR((front + v * d + Eigen::Vector3d(0, 0, v)).norm(), 0.0, 1e-9) << seed << " " << t;
+      EXPECT_NEAR((roller->velocity(top, t) + 2 * v * d).norm(), 0.0, 1e-9) << seed << " " << t;
+    }
   }
 }
 
