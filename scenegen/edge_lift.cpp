@@ -103,8 +103,8 @@ SheetMesh lift_edges(SheetMesh surface, const Eigen::Vector3d& origin, const Eig
     const double s = 1.0 - d / lift.width;
     raise[static_cast<std::size_t>(i)] = lift.amplitude * s * s * rest;
   }
-  // Half the free space above each lifted point, measured on the surface before the lift: a
-  // layer above moves up as much or more, so at least half the gap stays.
+  // At most half the free space above each lifted point, measured on the surface before the
+  // lift: a layer above only moves up, so at least half of every vertical gap stays.
   const MeshBvh bvh(surface);
   for (int i = 0; i < surface.num_vertices(); ++i) {
     double& r = raise[static_cast<std::size_t>(i)];
