@@ -22,6 +22,7 @@
 #include "common/atomic_file.hpp"
 #include "common/interrupt.hpp"
 #include "scenegen/contact_shadow.hpp"
+#include "scenegen/edge_lift.hpp"
 #include "scenegen/errors.hpp"
 #include "scenegen/limits.hpp"
 #include "scenegen/geometry.hpp"
@@ -224,7 +225,11 @@ void prepare_job(const SampleOptions& o, const std::string& job_dir) {
   // Draws (resting pose, camera) use the simulated vertices, so they do not depend on the
   // refinement level; every pass is rendered and decoded on the refined surface.
   const Stage stage = find_resting_pose(mesh);
-  const SheetMesh surface = lift_above_plane(refine_surface(mesh, o.surface), stage.origin, stage.up);
+  // The curl is the sheet's, not the view's: one stream for every view of it.
+  Rng lift_rng(o.seed, "edge_lift");
+  const EdgeLift lift = draw_edge_lift(lift_rng);
+  const RenderedSurface rendered = rendered_surface(mesh, stage.origin, stage.up, o.surface, o.edge_lift ? lift : EdgeLift{});
+  const SheetMesh& surface = rendered.surface;
   Rng cam_rng(o.seed, view_stream("camera", o.view));
   const CameraChoice choice = choose_camera(mesh, stage, o.width, o.height, o.camera, cam_rng);
 
@@ -239,7 +244,8 @@ void prepare_job(const SampleOptions& o, const std::string& job_dir) {
   meta["shadow_offset_m"] = o.shadow_offset;
   meta["view"] = o.view;
   meta["surface"] = {{"kind", "modified_butterfly"}, {"level", o.surface.level},
-                     {"vertices", surface.num_vertices()}, {"faces", surface.num_faces()}};
+                     {"vertices", surface.num_vertices()}, {"faces", surface.num_faces()},
+                     {"edge_lift", to_json(lift, o.edge_lift)}};
   meta["stage"] = to_json(stage);
   meta["camera"] = to_json(choice, o.camera);
   if (!choice.valid) {
@@ -294,7 +300,7 @@ void prepare_job(const SampleOptions& o, const std::string& job_dir) {
 
     for (const char* name : {"main.pov", "passes.inc", "paper.inc", "backgrounds.inc", "lights.inc"})
       write_text(tmp / name, template_text(name, o.templates_dir));
-    const Eigen::MatrixX3d normals = carried_normals(mesh, surface);
+    const Eigen::MatrixX3d& normals = rendered.normals;
     write_with(tmp / "sheet.inc", [&](std::ostream& out) { write_sheet_inc(out, surface, normals); });
     write_with(tmp / "shadow.inc", [&](std::ostream& out) { write_shadow_inc(out, surface, normals, o.shadow_offset); });
     write_with(tmp / "scene.inc", [&](std::ostream& out) { write_scene_inc(out, scene); });

@@ -47,6 +47,9 @@ struct SampleOptions {
                                    ///< tests); colour and sky are still drawn
   bool contact_shadow = true;      ///< darken the table where the sheet hides its sky
                                    ///< (contact_shadow.hpp); the ground truth does not change
+  bool edge_lift = true;           ///< curl the resting edges of the rendered surface by a drawn
+                                   ///< amplitude (edge_lift.hpp; stream "edge_lift", the same
+                                   ///< for every view of a sheet)
   int view = 0;                    ///< view index: views > 0 draw camera, lights, background
                                    ///< and paper from their own streams; the page is shared
 };

@@ -26,7 +26,7 @@ struct Cli {
   sg::SampleOptions sample;
   std::string out, passes = "all", quality = "final", size = "1024x1440", backward_grid = "121x177";
   std::string job, povray = "povray", ground_truth = "raycast";
-  bool exact16 = false, keep_job = false, quiet = false, no_contact = false;
+  bool exact16 = false, keep_job = false, quiet = false, no_contact = false, no_edge_lift = false;
   int parallel = 0, views = 1;
 };
 
@@ -72,7 +72,7 @@ void add_sample_options(CLI::App* app, Cli& c) {
   app->add_option("--document", c.sample.document, "document page (PNG or JPEG); default: built-in generator");
   app->add_option("--documents", c.sample.documents_dir, "folder of PNG/JPEG pages to draw from");
   app->add_option("--backgrounds", c.sample.backgrounds_dir, "folder of PNG/JPEG background images (added to the procedural ones)");
-  app->add_option("--seed", c.sample.seed, "sample seed (camera, lights, background, paper, document)")->capture_default_str()->check(digits_only());
+  app->add_option("--seed", c.sample.seed, "sample seed (camera, lights, background, paper, document, edge curl)")->capture_default_str()->check(digits_only());
   app->add_option("--size", c.size, "image size WIDTHxHEIGHT [pixels], 8 to 8192 per side")->capture_default_str();
   app->add_option("--passes", c.passes, "comma list of image,shading,albedo,uv,coords,normal,mask,backward, or all")->capture_default_str();
   app->add_option("--quality", c.quality, "draft | final (photo and shading pass only)")->capture_default_str();
@@ -88,6 +88,7 @@ void add_sample_options(CLI::App* app, Cli& c) {
   app->add_option("--subdivision", c.sample.surface.level, "butterfly subdivision steps of the rendered surface (0: the mesh as it is, at most 4)")->capture_default_str();
   app->add_option("--layout", c.sample.layout, "output names: scenegen | syntheticdoc (the reference dataset's names and conventions)")->capture_default_str();
   app->add_flag("--no-contact-shadow", c.no_contact, "do not darken the table where the sheet hides its sky (contact shadow)");
+  app->add_flag("--no-edge-lift", c.no_edge_lift, "render the sheet's resting edges flat on the table (no drawn edge curl)");
   app->add_flag("--flip", c.sample.flip, "render the sheet from its other side (mirror x, u -> 1 - u)");
 }
 
@@ -98,6 +99,7 @@ void finalise(Cli& c) {
   c.sample.quality = sg::parse_quality(c.quality);
   c.sample.fine_passes = !c.exact16;
   c.sample.contact_shadow = !c.no_contact;
+  c.sample.edge_lift = !c.no_edge_lift;
   c.sample.ground_truth = sg::parse_ground_truth(c.ground_truth);
 }
 

@@ -80,6 +80,22 @@ json to_json(const BackgroundDraw& b) {
   return j;
 }
 
+json to_json(const EdgeLift& lift, bool enabled) {
+  return {{"enabled", enabled}, {"stream", "edge_lift"}, {"amplitude_m", lift.amplitude},
+          {"width_m", lift.width}, {"rest_low_m", lift.rest_low}, {"rest_high_m", lift.rest_high}};
+}
+
+EdgeLift edge_lift_from_json(const json& surface) {
+  EdgeLift lift;
+  if (!surface.contains("edge_lift") || !surface["edge_lift"]["enabled"].get<bool>()) return lift;
+  const json& j = surface["edge_lift"];
+  lift.amplitude = j["amplitude_m"];
+  lift.width = j["width_m"];
+  lift.rest_low = j["rest_low_m"];
+  lift.rest_high = j["rest_high_m"];
+  return lift;
+}
+
 json to_json(const PaperDraw& p) {
   return {{"colour", to_json(p.colour)}, {"ink_floor", p.ink_floor},
           {"wave_amplitude", p.wave_amplitude}, {"wave_scale_m", p.wave_scale},

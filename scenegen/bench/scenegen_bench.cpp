@@ -38,6 +38,7 @@
 #include "scenegen/job.hpp"
 #include "scenegen/meta.hpp"
 #include "scenegen/random.hpp"
+#include "scenegen/edge_lift.hpp"
 #include "scenegen/smooth_surface.hpp"
 #include "image_error.hpp"
 
@@ -104,13 +105,15 @@ std::map<std::string, std::string> sample_bytes(const fs::path& dir) {
 void exactness(const fs::path& dir, const std::string& mesh_path) {
   std::ifstream in(dir / "meta.json");
   const auto meta = nlohmann::json::parse(in);
-  // Exact for the surface rendered: the mesh refined at the recorded level.
+  // Exact for the surface rendered: the mesh refined at the recorded level, lifted, curled.
   sg::SurfaceParams surface;
   surface.level = meta["surface"]["level"];
   const auto& st = meta["stage"];
-  const sg::SheetMesh mesh = sg::lift_above_plane(sg::refine_surface(sg::read_sheet_obj(mesh_path), surface),
-                                                  Eigen::Vector3d(st["origin"][0], st["origin"][1], st["origin"][2]),
-                                                  Eigen::Vector3d(st["up"][0], st["up"][1], st["up"][2]));
+  const sg::SheetMesh mesh =
+      sg::rendered_surface(sg::read_sheet_obj(mesh_path), Eigen::Vector3d(st["origin"][0], st["origin"][1], st["origin"][2]),
+                           Eigen::Vector3d(st["up"][0], st["up"][1], st["up"][2]), surface,
+                           sg::edge_lift_from_json(meta["surface"]))
+          .surface;
   const sg::UvLocator loc(mesh);
   const sg::Camera cam = sg::camera_from_json(meta["camera"]);
   const sg::ImageF uv = sg::read_exr((dir / "uv.exr").string(), {"R", "G", "B"});

@@ -59,22 +59,25 @@ TEST_F(RenderedSample, WritesEveryFile) {
 
 TEST_F(RenderedSample, UvCoordsAndNormalsAreExact) {
   // Exact for the surface rendered: the mesh refined at the recorded level, lifted above the
-  // table.
+  // table, its resting edges curled as recorded.
   const json meta = read_json(sample() / "meta.json");
   ASSERT_GE(meta["surface"]["level"].get<int>(), 1);
+  ASSERT_TRUE(meta["surface"]["edge_lift"]["enabled"].get<bool>());
   SurfaceParams surface;
   surface.level = meta["surface"]["level"];
   const SheetMesh raw = read_sheet_obj(s_dir->str("cylinder.obj"));
   const json& st = meta["stage"];
-  const SheetMesh mesh = lift_above_plane(refine_surface(raw, surface), Eigen::Vector3d(st["origin"][0], st["origin"][1], st["origin"][2]),
-                                          Eigen::Vector3d(st["up"][0], st["up"][1], st["up"][2]));
+  const RenderedSurface rendered = rendered_surface(raw, Eigen::Vector3d(st["origin"][0], st["origin"][1], st["origin"][2]),
+                                                    Eigen::Vector3d(st["up"][0], st["up"][1], st["up"][2]), surface,
+                                                    edge_lift_from_json(meta["surface"]));
+  const SheetMesh& mesh = rendered.surface;
   ASSERT_EQ(mesh.num_faces(), meta["surface"]["faces"].get<int>());
   const UvLocator locator(mesh);
   const Camera cam = camera_from_json(meta["camera"]);
   const ImageF uv = read_exr((sample() / "uv.exr").string(), {"R", "G", "B"});
   const ImageF xyz = read_exr((sample() / "coords.exr").string(), {"R", "G", "B"});
   const ImageF nrm = read_exr((sample() / "normal.exr").string(), {"R", "G", "B"});
-  const Eigen::MatrixX3d vn = carried_normals(raw, mesh);
+  const Eigen::MatrixX3d& vn = rendered.normals;
   std::vector<std::pair<int, int>> mask_pixels;
   for (int y = 0; y < uv.height; ++y)
     for (int x = 0; x < uv.width; ++x)

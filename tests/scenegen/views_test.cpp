@@ -13,6 +13,8 @@
 #include "scenegen/image_io.hpp"
 #include "scenegen/job.hpp"
 #include "scenegen/random.hpp"
+#include "scenegen/edge_lift.hpp"
+#include "scenegen/meta.hpp"
 #include "scenegen/smooth_surface.hpp"
 #include "test_support.hpp"
 
@@ -49,7 +51,8 @@ TEST(Views, FlippedUvIsTheMirrorAtTheSameMaterialPoint) {
   const json& st = meta["stage"];
   const Eigen::Vector3d origin(-st["origin"][0].get<double>(), st["origin"][1], st["origin"][2]);
   const Eigen::Vector3d up(-st["up"][0].get<double>(), st["up"][1], st["up"][2]);
-  const SheetMesh original = lift_above_plane(refine_surface(read_sheet_obj(o.mesh_path), sp), origin, up);
+  const SheetMesh original =
+      rendered_surface(read_sheet_obj(o.mesh_path), origin, up, sp, edge_lift_from_json(meta["surface"])).surface;
   const UvLocator loc(original);
   const ImageF uv = read_exr((dir.path() / "flipped" / "uv.exr").string(), {"R", "G", "B"});
   const ImageF xyz = read_exr((dir.path() / "flipped" / "coords.exr").string(), {"R", "G", "B"});
