@@ -9,7 +9,6 @@
 #include <fstream>
 #include <iostream>
 #include <nlohmann/json.hpp>
-#include <sstream>
 
 #include "scenegen/example_sheets.hpp"
 #include "scenegen/geometry.hpp"
@@ -28,13 +27,6 @@ EdgeLift curl(double amplitude, double width) {
   l.amplitude = amplitude;
   l.width = width;
   return l;
-}
-
-std::string slurp(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
 }
 
 TEST(EdgeLift, FlatSheetCurlsByTheProfileAlongEveryEdge) {
@@ -176,7 +168,7 @@ TEST(EdgeLift, SampleRendersRecordsAndReproducesTheDrawnCurl) {
   EXPECT_GE(e["width_m"].get<double>(), EDGE_LIFT_WIDTH_MIN);
   EXPECT_LT(e["width_m"].get<double>(), EDGE_LIFT_WIDTH_MAX);
   for (const char* f : {"sheet.obj", "sheet.inc", "shadow.inc", "contact.png", "sheet_normals.txt"})
-    EXPECT_EQ(slurp(dir.str("a/") + f), slurp(dir.str("b/") + f)) << f;
+    EXPECT_EQ(test::file_bytes(dir.str("a/") + f), test::file_bytes(dir.str("b/") + f)) << f;
 
   // sheet.obj (17 digits) is exactly the surface rebuilt from meta.json.
   const auto& st = meta["stage"];
