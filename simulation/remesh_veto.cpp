@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "collision/self_contact.hpp"
+#include "collision/shapes.hpp"
 #include "remesh/mesh_editor.hpp"
 
 namespace papersim::simulation {
@@ -69,6 +70,13 @@ RemeshVeto::RemeshVeto(std::vector<std::shared_ptr<const collision::Collider>> o
     collision::Aabb b = o->bounds(params.time);
     b.inflate(params.obstacle_gap);
     m_bounds.push_back(b);
+    const auto* analytic = dynamic_cast<const collision::AnalyticCollider*>(o.get());
+    if (!analytic) continue;
+    const collision::PolytopeFeatures local = collision::polytope_features(analytic->shape());
+    const Eigen::Affine3d pose = analytic->motion.pose(params.time);
+    const int first = static_cast<int>(m_corners.size());
+    for (const auto& c : local.corners) m_corners.push_back(pose * c);
+    for (const auto& e : local.edges) m_edges.push_back({first + e[0], first + e[1]});
   }
   if (params.self_gap <= 0) return;
   const Eigen::MatrixX3i F = mesh.faces();
@@ -129,6 +137,19 @@ bool RemeshVeto::near_obstacle(const Eigen::Vector3d& p) const {
   return false;
 }
 
+bool RemeshVeto::near_polytope_features(const Eigen::Matrix3d& t) const {
+  const double gap2 = m_params.obstacle_gap * m_params.obstacle_gap;
+  for (const auto& c : m_corners)
+    if (collision::point_triangle_distance_squared({c, t.row(0), t.row(1), t.row(2)}) < gap2) return true;
+  for (const auto& [i, j] : m_edges) {
+    const Eigen::Vector3d &p = m_corners[i], &q = m_corners[j];
+    if (segment_crosses_triangle(p, q, t)) return true;
+    for (int k = 0; k < 3; ++k)
+      if (collision::edge_edge_distance_squared({p, q, t.row(k), t.row((k + 1) % 3)}) < gap2) return true;
+  }
+  return false;
+}
+
 bool RemeshVeto::near_sheet(const remesh::EditProposal& edit, int f) const {
   const remesh::TriMesh& mesh = edit.editor->mesh();
   const Eigen::Matrix3d& tri = edit.world[f];
@@ -165,6 +186,7 @@ std::string RemeshVeto::operator()(const remesh::EditProposal& edit) const {
     if (near_obstacle(centroid)) return "obstacle";
     for (int k = 0; k < 3; ++k)
       if (near_obstacle(0.5 * (t.row(k) + t.row((k + 1) % 3)).transpose())) return "obstacle";
+    if (near_polytope_features(t)) return "obstacle";
   }
   if (m_params.self_gap > 0)
     for (size_t f = 0; f < edit.world.size(); ++f)

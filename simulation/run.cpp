@@ -330,6 +330,12 @@ std::string Run::check_remeshed(const remesh::SheetMesh& mesh, const SheetState&
   }
   if (!(terms.membrane->principal_stretches(state.positions).col(0).maxCoeff() < 1 + m_setup.material.strain_limit))
     return "stretch";
+  // The veto samples a new face at its corners, edge midpoints and centroid; an obstacle's edge
+  // or corner can still pass through the face between them (a gable's ridge under a large
+  // face). The contact barrier is finite on such a face, so the solver would keep it there.
+  if (terms.contact)
+    for (int o = 0; o < static_cast<int>(m_setup.obstacles.size()); ++o)
+      if (!(terms.contact->surface_distance(o, state.positions, state.time) > 0)) return "obstacle";
   return {};
 }
 

@@ -204,6 +204,67 @@ TEST(RemeshVeto, RefusesEditsThatBreakTheSolversInvariants) {
   EXPECT_EQ(far_sphere(editor.propose_split(bottom)), "");
 }
 
+// A gable's ridge can pass through a new face between the points sampled against its distance
+// field (corners, edge midpoints, centroid): a unit square bent by 0.02 rad about its diagonal
+// 1-2 (corners 0 and 3 70.7 um below it), over a 1.5 mm piece of ridge 10 um below the diagonal,
+// 1.5-3 mm from corner 1. The flip to diagonal 0-3 keeps the strain at 5e-5, but its face at
+// corner 1 sinks 10 um per mm towards 0-3, so the ridge pierces it from 1 mm on; the sampled
+// points are all beyond the ridge's end. The veto must refuse it, and allow it with the ridge
+// 40 um down (under the new face everywhere along its length).
+TEST(RemeshVeto, RefusesAFaceThatAPolytopesEdgePiercesBetweenTheSampledPoints) {
+  const double L = 0.01, phi = 0.01;
+  Eigen::MatrixX2d X(4, 2);
+  X << 0, 0, L, 0, 0, L, L, L;
+  Eigen::MatrixX3i F(2, 3);
+  F << 0, 1, 2, 1, 3, 2;
+  rm::SheetMesh mesh(X, F);
+  rm::RemeshState state;
+  state.positions.resize(4, 3);
+  const Eigen::Vector3d foot(L / 2, L / 2, 0), out = Eigen::Vector3d(-1, -1, 0).normalized();
+  const double r = L / std::sqrt(2.0);
+  state.positions.row(0) = foot + r * (std::cos(phi) * out - std::sin(phi) * Eigen::Vector3d::UnitZ());
+  state.positions.row(1) << L, 0, 0;
+  state.positions.row(2) << 0, L, 0;
+  state.positions.row(3) = foot + r * (-std::cos(phi) * out - std::sin(phi) * Eigen::Vector3d::UnitZ());
+  state.velocities = Eigen::MatrixX3d::Zero(4, 3);
+  rm::MeshEditor editor(mesh, state);
+  OpenMesh::EdgeHandle diagonal;
+  for (auto e : editor.mesh().edges())
+    if (!editor.mesh().is_boundary(e)) diagonal = e;
+  const rm::EditProposal flip = editor.propose_flip(diagonal);
+
+  // The gable: local x (ridge) along the diagonal from 1 towards 2, local z up.
+  papersim::collision::Shape gable;
+  gable.kind = papersim::collision::ShapeKind::gable;
+  gable.length = 1.5e-3;
+  gable.half_width = gable.height = 1e-3;
+  const Eigen::Vector3d along = Eigen::Vector3d(-1, 1, 0).normalized();
+  Eigen::Matrix3d R;
+  R.col(0) = along;
+  R.col(1) = Eigen::Vector3d::UnitZ().cross(along);
+  R.col(2) = Eigen::Vector3d::UnitZ();
+  const auto veto_with_ridge_at = [&](double depth) {
+    auto collider = std::make_shared<papersim::collision::AnalyticCollider>(gable);
+    papersim::collision::Keyframe k;
+    k.rotation = Eigen::Quaterniond(R);
+    k.translation = Eigen::Vector3d(L, 0, 0) + 2.25e-3 * along - (depth + gable.height) * Eigen::Vector3d::UnitZ();
+    collider->motion = papersim::collision::RigidMotion({k});
+    RemeshVetoParams p;
+    p.self_gap = 0;
+    p.obstacle_gap = 1e-6;
+    // Every point the distance field is asked about is clear of the gable.
+    for (size_t f = 0; f < flip.world.size(); ++f) {
+      const Eigen::Matrix3d& t = flip.world[f];
+      EXPECT_GT(collider->distance(t.colwise().mean().transpose(), 0.0), 1e-3);
+      for (int c = 0; c < 3; ++c)
+        EXPECT_GT(collider->distance(0.5 * (t.row(c) + t.row((c + 1) % 3)).transpose(), 0.0), 1e-3);
+    }
+    return RemeshVeto({collider}, mesh, state.positions, p)(flip);
+  };
+  EXPECT_EQ(veto_with_ridge_at(10e-6), "obstacle");
+  EXPECT_EQ(veto_with_ridge_at(40e-6), "");
+}
+
 // Remeshing inside a run: a 15 x 15 cm sheet on a 10 mm grid lifted at one point for 0.2 s
 // coarsens where it stays flat and refines where it bends; every pass keeps the sheet free of
 // self-intersections, off the ground and within the strain limit, the lifted point follows its
