@@ -1,6 +1,6 @@
 #pragma once
 /// Edge curl of the rendered surface. Cut paper never lies perfectly flat: along its edges and
-/// at its corners it curls up by a few tenths of a millimetre to about a millimetre, and the
+/// at its corners it curls up by a few tenths of a millimetre to a few millimetres, and the
 /// thin wedge of shadow under that curl is the soft dark line a photo shows where a sheet
 /// touches a table. Simulated sheets rest their flat parts exactly on the support plane, so
 /// scenegen draws such a curl and adds it to the surface it renders: where the sheet rests
@@ -26,12 +26,12 @@ struct EdgeLift {
 };
 
 /// Ranges of the drawn curl (office paper cut from a ream, lying on a table).
-constexpr double EDGE_LIFT_AMPLITUDE_MIN = 0.3e-3;  ///< [m]
-constexpr double EDGE_LIFT_AMPLITUDE_MAX = 1.0e-3;  ///< [m]
-constexpr double EDGE_LIFT_WIDTH_MIN = 5e-3;        ///< [m]
-constexpr double EDGE_LIFT_WIDTH_MAX = 12e-3;       ///< [m]
+constexpr double EDGE_LIFT_AMPLITUDE_MIN = 0.5e-3;  ///< [m]
+constexpr double EDGE_LIFT_AMPLITUDE_MAX = 2.0e-3;  ///< [m]
+constexpr double EDGE_LIFT_WIDTH_MIN = 10e-3;       ///< [m]
+constexpr double EDGE_LIFT_WIDTH_MAX = 25e-3;       ///< [m]
 
-/// Amplitude U[0.3, 1.0] mm, width U[5, 12] mm (two draws from `rng`, in that order).
+/// Amplitude U[0.5, 2.0] mm, width U[10, 25] mm (two draws from `rng`, in that order).
 EdgeLift draw_edge_lift(Rng& rng);
 
 /// `surface` with its edges curled as EdgeLift says (table plane through `origin`, unit normal
