@@ -72,6 +72,11 @@ RemeshVeto::RemeshVeto(std::vector<std::shared_ptr<const collision::Collider>> o
     m_bounds.push_back(b);
     const auto* analytic = dynamic_cast<const collision::AnalyticCollider*>(o.get());
     if (!analytic) continue;
+    if (analytic->shape().kind == collision::ShapeKind::sphere) {
+      const Eigen::Affine3d pose = analytic->motion.pose(params.time);
+      m_spheres.emplace_back(pose.translation(), analytic->shape().radius * pose.linear().col(0).norm());
+      continue;
+    }
     const collision::PolytopeFeatures local = collision::polytope_features(analytic->shape());
     const Eigen::Affine3d pose = analytic->motion.pose(params.time);
     const int first = static_cast<int>(m_corners.size());
@@ -150,6 +155,14 @@ bool RemeshVeto::near_polytope_features(const Eigen::Matrix3d& t) const {
   return false;
 }
 
+bool RemeshVeto::near_sphere(const Eigen::Matrix3d& t) const {
+  for (const auto& [centre, radius] : m_spheres) {
+    const double d2 = collision::point_triangle_distance_squared({centre, t.row(0), t.row(1), t.row(2)});
+    if (!(d2 >= (radius + m_params.obstacle_gap) * (radius + m_params.obstacle_gap))) return true;
+  }
+  return false;
+}
+
 bool RemeshVeto::near_sheet(const remesh::EditProposal& edit, int f) const {
   const remesh::TriMesh& mesh = edit.editor->mesh();
   const Eigen::Matrix3d& tri = edit.world[f];
@@ -186,7 +199,7 @@ std::string RemeshVeto::operator()(const remesh::EditProposal& edit) const {
     if (near_obstacle(centroid)) return "obstacle";
     for (int k = 0; k < 3; ++k)
       if (near_obstacle(0.5 * (t.row(k) + t.row((k + 1) % 3)).transpose())) return "obstacle";
-    if (near_polytope_features(t)) return "obstacle";
+    if (near_polytope_features(t) || near_sphere(t)) return "obstacle";
   }
   if (m_params.self_gap > 0)
     for (size_t f = 0; f < edit.world.size(); ++f)

@@ -10,8 +10,8 @@
 /// old ones with the same deformation gradient; only the new vertex can come close to a curved
 /// obstacle (the chord cuts into it). Flips and collapses move triangles: they are checked for
 /// strain, obstacles (centroid and edge midpoints against the distance field, and exactly
-/// against a polytope's corners and edges, which can pass between those points: a gable's
-/// ridge under a large new face) and the rest of the sheet. On a bent sheet a
+/// against a sphere and a polytope's corners and edges, which can pass between those points: a
+/// gable's ridge or a small sphere's top under a large new face) and the rest of the sheet. On a bent sheet a
 /// flip or a collapse makes triangles whose world shape differs from their material shape (a
 /// chord is shorter than its arc), and the stiff membrane turns even a small strain into a large
 /// energy (Eh = 5e5 N/m: 0.1% strain over 1 cm^2 stores 25 uJ, the order of a sheet's whole
@@ -21,6 +21,7 @@
 #include <memory>
 #include <string>
 #include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include "collision/collider.hpp"
@@ -52,6 +53,7 @@ class RemeshVeto {
   std::string stretch_reason(const remesh::EditProposal& edit) const;
   bool near_obstacle(const Eigen::Vector3d& p) const;
   bool near_polytope_features(const Eigen::Matrix3d& triangle) const;
+  bool near_sphere(const Eigen::Matrix3d& triangle) const;
   bool near_sheet(const remesh::EditProposal& edit, int face) const;
   std::vector<int> faces_near(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) const;
   long long cell_key(const Eigen::Vector3i& c) const;
@@ -61,6 +63,8 @@ class RemeshVeto {
   /// Corners and edges of the polytope obstacles (box, gable) at the pass's time [m].
   std::vector<Eigen::Vector3d> m_corners;
   std::vector<std::array<int, 2>> m_edges;  // indices into m_corners
+  /// Centres and radii of the sphere obstacles at the pass's time [m].
+  std::vector<std::pair<Eigen::Vector3d, double>> m_spheres;
   RemeshVetoParams m_params;
   double m_cell = 1.0;                    // grid cell size [m]
   std::unordered_map<long long, std::vector<int>> m_grid;  // faces of the starting mesh by cell

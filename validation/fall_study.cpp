@@ -52,13 +52,13 @@ int main(int argc, char** argv) {
   }
   std::printf("%-5s %-6s %-8s %-7s %-6s %-9s %-10s %-10s %-5s %-7s %-7s %-15s %-6s %-5s %-9s %s\n", "seed", "verts",
               "wall_s", "newton", "halved", "max_s1", "min_obst", "min_ground", "self", "contact", "self_c",
-              "v_start/max", "passes", "rollb", "e_jump", "verdict");
+              "v_start/max", "passes", "rollb", "e_jump", "verdict (rollbacks by reason)");
   std::ofstream out;
   if (!csv.empty()) {
     out.open(csv);
     out << "scenario,seed,vertices,wall_seconds,newton_iterations,failed_solves,max_stretch,min_obstacle,"
            "min_ground,self_intersections,contact_share,self_contact_share,vertices_start,vertices_max,"
-           "remesh_passes,remesh_rollbacks,max_energy_jump,max_energy_jump_relative,verdict\n";
+           "remesh_passes,remesh_rollbacks,max_energy_jump,max_energy_jump_relative,verdict,rollback_reasons\n";
   }
   int failures = 0;
   std::vector<double> walls, shares, jumps;
@@ -75,6 +75,7 @@ int main(int argc, char** argv) {
     double wall = 0, s1 = 0, obstacle = INFINITY, ground = INFINITY, share = 0, self_share = 0;
     int newton = 0, halved = 0, verts = 0, self = -1, verts_start = 0, verts_max = 0, passes = 0, rollbacks = 0;
     double jump = 0, jump_relative = 0;
+    std::string reasons;  // "obstacle 3 stretch 1"
     try {
       const ps::RunResult r = ps::run_scene(scene, {});
       const ps::RunQuality& q = r.quality;
@@ -89,6 +90,8 @@ int main(int argc, char** argv) {
         rollbacks = r.remesh->rollbacks;
         jump = r.remesh->max_energy_jump;
         jump_relative = r.remesh->max_energy_jump_relative;
+        for (const auto& [reason, n] : r.remesh->rollback_reasons)
+          reasons += (reasons.empty() ? "" : " ") + reason + " " + std::to_string(n);
       }
       s1 = q.max_principal_stretch;
       self = q.self_intersections;
@@ -106,15 +109,15 @@ int main(int argc, char** argv) {
     shares.push_back(share + self_share);
     jumps.push_back(jump_relative);
     const std::string counts = std::to_string(verts_start) + "/" + std::to_string(verts_max);
-    std::printf("%-5d %-6d %-8.2f %-7d %-6d %-9.6f %-10.3g %-10.3g %-5d %-7.3f %-7.3f %-15s %-6d %-5d %-9.3g %s\n",
+    std::printf("%-5d %-6d %-8.2f %-7d %-6d %-9.6f %-10.3g %-10.3g %-5d %-7.3f %-7.3f %-15s %-6d %-5d %-9.3g %s%s\n",
                 seed, verts, wall, newton, halved, s1, obstacle, ground, self, share, self_share, counts.c_str(),
-                passes, rollbacks, jump, verdict.c_str());
+                passes, rollbacks, jump, verdict.c_str(), reasons.empty() ? "" : (" (" + reasons + ")").c_str());
     std::fflush(stdout);
     if (out)
       out << name << ',' << seed << ',' << verts << ',' << wall << ',' << newton << ',' << halved << ',' << s1 << ','
           << obstacle << ',' << ground << ',' << self << ',' << share << ',' << self_share << ',' << verts_start << ','
           << verts_max << ',' << passes << ',' << rollbacks << ',' << jump << ',' << jump_relative << ',' << verdict
-          << '\n';
+          << ',' << reasons << '\n';
   }
   std::sort(walls.begin(), walls.end());
   if (size_min > 0)

@@ -204,14 +204,15 @@ TEST(RemeshVeto, RefusesEditsThatBreakTheSolversInvariants) {
   EXPECT_EQ(far_sphere(editor.propose_split(bottom)), "");
 }
 
-// A gable's ridge can pass through a new face between the points sampled against its distance
-// field (corners, edge midpoints, centroid): a unit square bent by 0.02 rad about its diagonal
-// 1-2 (corners 0 and 3 70.7 um below it), over a 1.5 mm piece of ridge 10 um below the diagonal,
-// 1.5-3 mm from corner 1. The flip to diagonal 0-3 keeps the strain at 5e-5, but its face at
-// corner 1 sinks 10 um per mm towards 0-3, so the ridge pierces it from 1 mm on; the sampled
-// points are all beyond the ridge's end. The veto must refuse it, and allow it with the ridge
-// 40 um down (under the new face everywhere along its length).
-TEST(RemeshVeto, RefusesAFaceThatAPolytopesEdgePiercesBetweenTheSampledPoints) {
+// A gable's ridge or a small sphere can pass through a new face between the points sampled
+// against its distance field (corners, edge midpoints, centroid): a unit square bent by
+// 0.02 rad about its diagonal 1-2 (corners 0 and 3 70.7 um below it), over a 1.5 mm piece of
+// ridge 10 um below the diagonal, 1.5-3 mm from corner 1, or a sphere of radius 0.5 mm whose
+// top is 10 um below the diagonal 2.25 mm from corner 1. The flip to diagonal 0-3 keeps the
+// strain at 5e-5, but its face at corner 1 sinks 10 um per mm towards 0-3, so the ridge and
+// the sphere pierce it; the sampled points are all more than a millimetre away. The veto must
+// refuse it, and allow it with the obstacle 40 um down (17.5 um or more under the new face).
+TEST(RemeshVeto, RefusesAFaceThatAPolytopesEdgeOrASpherePiercesBetweenTheSampledPoints) {
   const double L = 0.01, phi = 0.01;
   Eigen::MatrixX2d X(4, 2);
   X << 0, 0, L, 0, 0, L, L, L;
@@ -243,11 +244,16 @@ TEST(RemeshVeto, RefusesAFaceThatAPolytopesEdgePiercesBetweenTheSampledPoints) {
   R.col(0) = along;
   R.col(1) = Eigen::Vector3d::UnitZ().cross(along);
   R.col(2) = Eigen::Vector3d::UnitZ();
-  const auto veto_with_ridge_at = [&](double depth) {
-    auto collider = std::make_shared<papersim::collision::AnalyticCollider>(gable);
+  papersim::collision::Shape ball;
+  ball.kind = papersim::collision::ShapeKind::sphere;
+  ball.radius = 0.5e-3;
+  // The obstacle's top 2.25 mm from corner 1 along the diagonal, `depth` below it.
+  const auto veto_with_top_at = [&](const papersim::collision::Shape& shape, double depth) {
+    auto collider = std::make_shared<papersim::collision::AnalyticCollider>(shape);
     papersim::collision::Keyframe k;
     k.rotation = Eigen::Quaterniond(R);
-    k.translation = Eigen::Vector3d(L, 0, 0) + 2.25e-3 * along - (depth + gable.height) * Eigen::Vector3d::UnitZ();
+    const double top = shape.kind == papersim::collision::ShapeKind::gable ? shape.height : shape.radius;
+    k.translation = Eigen::Vector3d(L, 0, 0) + 2.25e-3 * along - (depth + top) * Eigen::Vector3d::UnitZ();
     collider->motion = papersim::collision::RigidMotion({k});
     RemeshVetoParams p;
     p.self_gap = 0;
@@ -261,8 +267,10 @@ TEST(RemeshVeto, RefusesAFaceThatAPolytopesEdgePiercesBetweenTheSampledPoints) {
     }
     return RemeshVeto({collider}, mesh, state.positions, p)(flip);
   };
-  EXPECT_EQ(veto_with_ridge_at(10e-6), "obstacle");
-  EXPECT_EQ(veto_with_ridge_at(40e-6), "");
+  EXPECT_EQ(veto_with_top_at(gable, 10e-6), "obstacle");
+  EXPECT_EQ(veto_with_top_at(gable, 40e-6), "");
+  EXPECT_EQ(veto_with_top_at(ball, 10e-6), "obstacle");
+  EXPECT_EQ(veto_with_top_at(ball, 40e-6), "");
 }
 
 // Remeshing inside a run: a 15 x 15 cm sheet on a 10 mm grid lifted at one point for 0.2 s
