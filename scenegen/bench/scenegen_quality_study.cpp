@@ -187,16 +187,39 @@ int main(int argc, char** argv) {
     }
     return 0;
   }
-  for (int i = 1; i + 1 < argc; i += 2) {
-    if (!std::strcmp(argv[i], "--size")) std::sscanf(argv[i + 1], "%dx%d", &width, &height);
-    else if (!std::strcmp(argv[i], "--seed")) seed = std::stoull(argv[i + 1]);
+  static const char* usage =
+      "usage: scenegen_quality_study [--size WxH] [--seed N] [--mesh fold|cylinder|bump|flat] [--subdivision L]\n"
+      "                              [--csv FILE] [--reference FILE.png] [--match TEXT]\n"
+      "       scenegen_quality_study --compare REFERENCE.png IMAGE.png\n"
+      "Renders the photo of one sample (scenegen example MESH, default fold, seed 1, 256x360, level 2) with a\n"
+      "converged reference setting and with candidate presets, and writes each preset's photo render time,\n"
+      "PSNR and SSIM against the reference to the CSV (default scenegen_quality.csv). --reference FILE reads\n"
+      "the reference from FILE if it exists, else renders it and writes it there; --match TEXT renders only\n"
+      "the presets whose name contains TEXT. --compare prints PSNR and SSIM of IMAGE against REFERENCE.\n";
+  for (int i = 1; i < argc; ++i)
+    if (!std::strcmp(argv[i], "--help") || !std::strcmp(argv[i], "-h")) {
+      std::fputs(usage, stdout);
+      return 0;
+    }
+  for (int i = 1; i < argc; i += 2) {
+    if (i + 1 >= argc) {
+      std::fprintf(stderr, "scenegen_quality_study: option '%s' needs a value\n%s", argv[i], usage);
+      return 2;
+    }
+    if (!std::strcmp(argv[i], "--size")) {
+      char rest = 0;
+      if (std::sscanf(argv[i + 1], "%dx%d%c", &width, &height, &rest) != 2 || width < 8 || height < 8) {
+        std::fprintf(stderr, "scenegen_quality_study: --size '%s' is not WIDTHxHEIGHT of at least 8x8\n", argv[i + 1]);
+        return 2;
+      }
+    } else if (!std::strcmp(argv[i], "--seed")) seed = std::stoull(argv[i + 1]);
     else if (!std::strcmp(argv[i], "--mesh")) kind = argv[i + 1];
     else if (!std::strcmp(argv[i], "--csv")) csv = argv[i + 1];
     else if (!std::strcmp(argv[i], "--subdivision")) level = std::atoi(argv[i + 1]);
     else if (!std::strcmp(argv[i], "--reference")) reference_png = argv[i + 1];
     else if (!std::strcmp(argv[i], "--match")) match = argv[i + 1];
     else {
-      std::fprintf(stderr, "scenegen_quality_study: unknown option '%s'\n", argv[i]);
+      std::fprintf(stderr, "scenegen_quality_study: unknown option '%s'\n%s", argv[i], usage);
       return 2;
     }
   }
