@@ -332,7 +332,8 @@ std::string Run::check_remeshed(const remesh::SheetMesh& mesh, const SheetState&
     return "stretch";
   // The veto samples a new face at its corners, edge midpoints and centroid; an obstacle's edge
   // or corner can still pass through the face between them (a gable's ridge under a large
-  // face). The contact barrier is finite on such a face, so the solver would keep it there.
+  // face; the veto checks spheres, boxes and gables exactly, this catches the other shapes).
+  // Against a polytope the barrier is finite on a pierced face, so the solver would keep it.
   if (terms.contact)
     for (int o = 0; o < static_cast<int>(m_setup.obstacles.size()); ++o)
       if (!(terms.contact->surface_distance(o, state.positions, state.time) > 0)) return "obstacle";
