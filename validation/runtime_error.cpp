@@ -17,7 +17,9 @@
 // is measured as the CPU time of the run (this process is single-threaded; on a loaded machine
 // CPU time is the steadier figure), wall time is recorded too. Each draw's reference is written to
 // DIR/seed_N/reference and reused by later runs from the same scene (draw, resolution, material,
-// solver settings: the whole scene file). --check-edge runs each draw once more, finer (DIR/seed_N/reference_check), and
+// solver settings: the whole scene file); each sweep run's result is written to
+// DIR/seed_N/runs/*.json and read back by a later study of the same scene and reference, so an
+// interrupted study resumes, and processes on different seeds can share DIR. --check-edge runs each draw once more, finer (DIR/seed_N/reference_check), and
 // compares it with its reference: a draw whose end state changes under refinement (a draped
 // sheet choosing another fold pattern) has no converged reference, so it is reported and left
 // out of the summary; when no draw holds, no setting is recommended and the exit status is 1.
@@ -32,11 +34,13 @@
 #include <filesystem>
 #include <set>
 #include <fstream>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
 
 #include <sys/resource.h>
+#include <unistd.h>
 
 #include "remesh/sheet_io.hpp"
 #include "simulation/scenario.hpp"
@@ -250,7 +254,7 @@ std::vector<Aggregate> aggregate(const std::vector<SeedResult>& draws) {
 
 /// Writes `text` to `path` through a temporary name, so a failure leaves no partial file.
 void write_file(const fs::path& path, const std::string& text) {
-  const fs::path tmp = path.string() + ".tmp";
+  const fs::path tmp = path.string() + "." + std::to_string(getpid()) + ".tmp";  // processes may share DIR
   {
     std::ofstream out(tmp);
     out << text;
@@ -332,6 +336,52 @@ void write_plot(const fs::path& dir, const std::vector<double>& steps, const std
   fs::rename(dir / "runtime_error.png.tmp", dir / "runtime_error.png");
 }
 
+void print_sample(long long seed, const Sample& s, const char* note) {
+  std::printf("%6lld %10s %8g %8g %8d %8d %7d %8ld %9.2f %9.2f %10.3f %10.3f %10.3f%s\n", seed, s.remesh.c_str(),
+              s.edge_mm, s.step_ms, s.vertices, s.vertices_max, s.steps, s.newton, s.wall, s.cpu, 1e3 * s.error.rms,
+              1e3 * s.error.max, 1e3 * s.error.hausdorff, note);
+  std::fflush(stdout);
+}
+
+/// A sweep run's result with the key (its scene and its reference's scene) it was made from.
+void write_sample(const fs::path& path, const nlohmann::json& key, const Sample& s) {
+  fs::create_directories(path.parent_path());
+  const nlohmann::json j = {{"key", key},
+                            {"remesh", s.remesh},
+                            {"edge_mm", s.edge_mm},
+                            {"step_ms", s.step_ms},
+                            {"vertices", s.vertices},
+                            {"vertices_max", s.vertices_max},
+                            {"steps", s.steps},
+                            {"newton_iterations", s.newton},
+                            {"wall_seconds", s.wall},
+                            {"cpu_seconds", s.cpu},
+                            {"rms_error_m", s.error.rms},
+                            {"max_error_m", s.error.max},
+                            {"hausdorff_m", s.error.hausdorff}};
+  write_file(path, j.dump(1) + "\n");
+}
+
+/// The result stored at `path` when it was made with `key`, else nothing.
+std::optional<Sample> read_sample(const fs::path& path, const nlohmann::json& key) {
+  std::ifstream in(path);
+  if (!in) return std::nullopt;
+  const nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
+  if (j.is_discarded() || !j.is_object() || !j.contains("key") || j["key"] != key) return std::nullopt;
+  try {
+    Sample s;
+    s.remesh = j.at("remesh").get<std::string>();
+    s.edge_mm = j.at("edge_mm"), s.step_ms = j.at("step_ms");
+    s.vertices = j.at("vertices"), s.vertices_max = j.at("vertices_max"), s.steps = j.at("steps");
+    s.newton = j.at("newton_iterations");
+    s.wall = j.at("wall_seconds"), s.cpu = j.at("cpu_seconds");
+    s.error.rms = j.at("rms_error_m"), s.error.max = j.at("max_error_m"), s.error.hausdorff = j.at("hausdorff_m");
+    return s;
+  } catch (const nlohmann::json::exception&) {
+    return std::nullopt;  // an older or damaged file: run again
+  }
+}
+
 /// One draw: reference (cached), optional check of the reference at a finer edge, and the sweep.
 SeedResult study_draw(const std::string& scenario, long long seed, const fs::path& dir,
                       const std::vector<double>& edges, const std::vector<double>& steps, double ref_edge,
@@ -360,7 +410,18 @@ SeedResult study_draw(const std::string& scenario, long long seed, const fs::pat
   }
   std::printf("%6s %10s %8s %8s %8s %8s %7s %8s %9s %9s %10s %10s %10s\n", "seed", "remesh", "edge_mm", "step_ms",
               "vertices", "max_vert", "steps", "newton", "wall_s", "cpu_s", "rms_mm", "max_mm", "hausd_mm");
+  const nlohmann::json reference_key = ps::scene_to_json(with_resolution(base, ref_edge, ref_step));
   const auto run_one = [&](const ps::Scene& scene, const std::string& remesh, double edge, double step) {
+    // A run already made from the same scene against the same reference (an interrupted study, or
+    // another process on other seeds or settings) is read back, not run again.
+    const fs::path cached = dir / "runs" / ("remesh_" + remesh + "_edge_" + format_number(edge) + "_step_" +
+                                            format_number(step) + ".json");
+    const nlohmann::json key = {{"scene", ps::scene_to_json(scene)}, {"reference", reference_key}};
+    if (const auto s = read_sample(cached, key)) {
+      d.samples.push_back(*s);
+      print_sample(seed, *s, " (reused)");
+      return;
+    }
     const double cpu0 = cpu_seconds();
     const ps::RunResult r = ps::run_scene(scene, progress_options("seed " + std::to_string(seed) + ", " +
         (remesh == "off" ? "edge " + format_number(edge) + " mm" : "remesh " + remesh) + ", step " +
@@ -376,10 +437,8 @@ SeedResult study_draw(const std::string& scenario, long long seed, const fs::pat
     s.wall = r.wall_seconds;
     s.error = pv::compare_sheets(reference, geometry_of(r.mesh, as_rows(r.state.positions)));
     d.samples.push_back(s);
-    std::printf("%6lld %10s %8g %8g %8d %8d %7d %8ld %9.2f %9.2f %10.3f %10.3f %10.3f\n", seed, remesh.c_str(), edge,
-                step, s.vertices, s.vertices_max, s.steps, s.newton, s.wall, s.cpu, 1e3 * s.error.rms,
-                1e3 * s.error.max, 1e3 * s.error.hausdorff);
-    std::fflush(stdout);
+    write_sample(cached, key, s);
+    print_sample(seed, s, "");
   };
   for (double e : edges)
     for (double h : steps) run_one(with_resolution(base, e, h), "off", e, h);
