@@ -3,6 +3,7 @@
 #include <tbb/parallel_for.h>
 
 #include <Eigen/Geometry>
+#include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -112,24 +113,46 @@ double one_sided_hausdorff(const SheetGeometry& from, const SheetGeometry& to) {
 
 }  // namespace
 
+void best_rigid_motion(const Eigen::MatrixX3d& p, const Eigen::MatrixX3d& q, Eigen::Matrix3d& R, Eigen::Vector3d& t) {
+  const Eigen::RowVector3d cp = p.colwise().mean(), cq = q.colwise().mean();
+  const Eigen::Matrix3d C = (p.rowwise() - cp).transpose() * (q.rowwise() - cq);  // sum p_i q_i^T, centred
+  Eigen::JacobiSVD<Eigen::Matrix3d> svd(C, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d D = Eigen::Matrix3d::Identity();
+  D(2, 2) = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0 ? -1.0 : 1.0;
+  R = svd.matrixV() * D * svd.matrixU().transpose();
+  t = cq.transpose() - R * cp.transpose();
+}
+
 SheetDifference compare_sheets(const SheetGeometry& reference, const SheetGeometry& test) {
   const MaterialLocator locator(reference);
   SheetDifference r;
-  double sum = 0;
-  int n = 0;
+  std::vector<Eigen::Vector3d> ref_points, test_points;
   for (Eigen::Index v = 0; v < test.material.rows(); ++v) {
     Eigen::Vector3d x;
     if (!locator.interpolate(test.material.row(v).transpose(), x)) {
       ++r.outside;
       continue;
     }
-    const double e = (x - test.positions.row(v).transpose()).norm();
-    sum += e * e;
-    r.max = std::max(r.max, e);
-    ++n;
+    ref_points.push_back(x);
+    test_points.push_back(test.positions.row(v).transpose());
   }
+  const int n = static_cast<int>(ref_points.size());
   if (n == 0) throw CompareError("compare_sheets: no vertex of the test sheet lies in the reference's material domain");
+  Eigen::MatrixX3d p(n, 3), q(n, 3);
+  for (int i = 0; i < n; ++i) p.row(i) = test_points[i].transpose(), q.row(i) = ref_points[i].transpose();
+  Eigen::Matrix3d R;
+  Eigen::Vector3d t;
+  best_rigid_motion(p, q, R, t);
+  double sum = 0, sum_aligned = 0;
+  for (int i = 0; i < n; ++i) {
+    const double e = (q.row(i) - p.row(i)).norm();
+    const double a = (q.row(i).transpose() - (R * p.row(i).transpose() + t)).norm();
+    sum += e * e, sum_aligned += a * a;
+    r.max = std::max(r.max, e);
+    r.max_aligned = std::max(r.max_aligned, a);
+  }
   r.rms = std::sqrt(sum / n);
+  r.rms_aligned = std::sqrt(sum_aligned / n);
   r.hausdorff = std::max(one_sided_hausdorff(reference, test), one_sided_hausdorff(test, reference));
   return r;
 }

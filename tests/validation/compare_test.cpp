@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 
 #include "remesh/sheet_generator.hpp"
@@ -78,4 +80,47 @@ TEST(CompareSheets, BentSheetAgainstItsLinearInterpolation) {
   // The coarse chords sag by up to (10 mm)^2 / 8 * 2 = 25 micrometres below the fine surface.
   EXPECT_GT(d.hausdorff, 0.5 * 1e-2 * 1e-2 / 4);
   EXPECT_LT(d.hausdorff, 1e-2 * 1e-2 / 4 + 1e-12);
+}
+
+TEST(CompareSheets, ARigidMotionLeavesTheShapeErrorZeroAndAShapeChangeSurvivesTheAlignment) {
+  // Reference: z = 5 x^2 (a curved sheet, so the alignment is unique). Test: the same surface on
+  // a coarser mesh, turned by 0.3 rad about a tilted axis and moved by (30, -20, 5) mm.
+  auto ref = flat(41, 21, papersim::remesh::Triangulation::alternating);
+  auto test = flat(11, 6, papersim::remesh::Triangulation::random);
+  const auto bend = [](pv::SheetGeometry& g) {
+    for (int v = 0; v < g.positions.rows(); ++v) g.positions(v, 2) = 5 * std::pow(g.positions(v, 0), 2);
+  };
+  bend(ref);
+  bend(test);
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  const Eigen::Vector3d t(0.03, -0.02, 0.005);
+  const Eigen::MatrixX3d original = test.positions;
+  for (int v = 0; v < test.positions.rows(); ++v)
+    test.positions.row(v) = (R * original.row(v).transpose() + t).transpose();
+  auto d = pv::compare_sheets(ref, test);
+  // The test's vertices lie on the reference's fine interpolation to within its chord error,
+  // (2.5 mm)^2 / 8 * 10 = 7.8 micrometres; the alignment undoes the motion to that level.
+  EXPECT_LT(d.rms_aligned, 8e-6);
+  EXPECT_LT(d.max_aligned, 2e-5);
+  EXPECT_GT(d.rms, 1e-2);  // the motion moves every point by centimetres
+  // Each point's position error is its displacement by the motion (to the chord error).
+  double worst = 0;
+  for (int v = 0; v < test.positions.rows(); ++v)
+    worst = std::max(worst, (test.positions.row(v) - original.row(v)).norm());
+  EXPECT_NEAR(d.max, worst, 1e-5);
+  // The best rigid motion of exact point sets is the motion itself.
+  Eigen::Matrix3d R_fit;
+  Eigen::Vector3d t_fit;
+  pv::best_rigid_motion(original, test.positions, R_fit, t_fit);
+  EXPECT_LT((R_fit - R).norm(), 1e-12);
+  EXPECT_LT((t_fit - t).norm(), 1e-12);
+  // A change of shape stays: a 1 mm step up on a quarter of the sheet (x in [50, 75] mm, no
+  // rigid motion fits it) keeps an RMS shape error of a good part of the step.
+  test = flat(11, 6, papersim::remesh::Triangulation::random);
+  bend(test);
+  for (int v = 0; v < test.positions.rows(); ++v)
+    if (test.positions(v, 0) > 0.05 - 1e-9 && test.positions(v, 0) < 0.075 + 1e-9) test.positions(v, 2) += 1e-3;
+  d = pv::compare_sheets(ref, test);
+  EXPECT_GT(d.rms_aligned, 0.25e-3);
+  EXPECT_LE(d.rms_aligned, d.rms + 1e-12);  // the alignment never adds error in the RMS sense
 }
