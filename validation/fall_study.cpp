@@ -31,7 +31,7 @@ int main(int argc, char** argv) {
   CLI::App app{"fall_study: a fall scenario over seeds, with its acceptance checks"};
   std::string name = "fall-sphere", csv;
   int seeds = 20, first = 0;
-  double size_min = 0, size_max = 100, start_edge = 0, angle = 0;
+  double size_min = 0, size_max = 100, start_edge = 0, angle = 0, step = 0;
   app.add_option("--scenario", name, "fall-cylinder, fall-gable, fall-sphere, fall-spheres or pull")
       ->check(CLI::IsMember({"fall-cylinder", "fall-gable", "fall-sphere", "fall-spheres", "pull"}));
   app.add_option("--remesh", size_min, "remesh with this remesh.size_min [mm] (0: the scenario's setting)")
@@ -42,6 +42,7 @@ int main(int argc, char** argv) {
       ->check(CLI::NonNegativeNumber);
   app.add_option("--start-edge", start_edge, "start mesh edge length [mm] (0: the scenario's)")
       ->check(CLI::NonNegativeNumber);
+  app.add_option("--step", step, "time step [ms] (0: the scenario's)")->check(CLI::NonNegativeNumber);
   app.add_option("--seeds", seeds, "number of seeds")->check(CLI::PositiveNumber);
   app.add_option("--first", first, "first seed (seeds first .. first + N - 1)")->check(CLI::NonNegativeNumber);
   app.add_option("--csv", csv, "also write the table as CSV");
@@ -65,6 +66,7 @@ int main(int argc, char** argv) {
   for (int seed = first; seed < first + seeds; ++seed) {
     ps::Scene scene = ps::make_scenario(name, seed);
     if (start_edge > 0) scene.sheet.edge_length = 1e-3 * start_edge;
+    if (step > 0) scene.time_step = 1e-3 * step;
     if (size_min > 0) {
       scene.remesh.enabled = true;
       scene.remesh.params.size_min = 1e-3 * size_min;
