@@ -295,7 +295,9 @@ void write_summary_csv(const fs::path& path, const std::vector<Aggregate>& setti
 /// gnuplot, from OUT/runtime_error_summary.csv: median CPU time against the worst (filled) and
 /// the median (open) RMS error over the draws, log-log, one colour per time step, circles for
 /// uniform meshes labelled by the edge length, triangles for remeshed runs labelled MIN:MAX.
-void write_plot(const fs::path& dir, const std::vector<double>& steps, const std::string& title) {
+/// `mark` (edge and step of a uniform setting, {0, 0}: none) is circled and labelled "old default".
+void write_plot(const fs::path& dir, const std::vector<double>& steps, const std::string& title,
+                std::pair<double, double> mark) {
   std::ostringstream gp;
   gp << "set terminal pngcairo size 900,600 font 'DejaVu Sans,11'\n"
      << "set output 'runtime_error.png.tmp'\n"
@@ -334,6 +336,10 @@ void write_plot(const fs::path& dir, const std::vector<double>& steps, const std
          << "'' every ::1 using " << pick << "$9*1e3 : 1/0):6:("
          << (remeshed ? "strcol(1)" : "sprintf('%g mm', $2)") << ") with labels offset 1.2,0.6 font ',9' notitle";
     }
+  if (mark.first > 0)
+    gp << ", \\\n     'runtime_error_summary.csv' every ::1 using (strcol(1) eq 'off' && $2==" << format_number(mark.first)
+       << " && $3==" << format_number(mark.second) << " ? $9*1e3 : 1/0):6 with points pt 4 ps 3.5 lc rgb 'black' "
+       << "title 'old default (" << format_number(mark.first) << " mm, " << format_number(mark.second) << " ms)'";
   gp << "\n";
   write_file(dir / "runtime_error.gp", gp.str());
   const std::string cmd = "cd '" + dir.string() + "' && gnuplot runtime_error.gp 2> gnuplot.log";
@@ -487,6 +493,8 @@ int main(int argc, char** argv) {
                  "in mm, refine_angle in rad; run at every --steps, from a uniform start mesh of --remesh-start)");
   app.add_option("--remesh-start", remesh_start, "edge length of the remeshed runs' start mesh [mm]")
       ->capture_default_str()->check(CLI::PositiveNumber);
+  std::string mark_text;
+  app.add_option("--mark", mark_text, "EDGE:STEP: circle this uniform setting on the plot as the old default (mm, ms)");
   bool replot = false;
   app.add_flag("--replot", replot, "only redraw OUT/runtime_error.png from OUT/runtime_error_summary.csv");
   CLI11_PARSE(app, argc, argv);
@@ -496,6 +504,16 @@ int main(int argc, char** argv) {
     const std::vector<double> edges = edges_text.empty() && !remeshes.empty() ? std::vector<double>{}
                                                                                 : parse_list(edges_text, "edges");
     const std::vector<double> steps = parse_list(steps_text, "steps");
+    std::pair<double, double> mark{0, 0};
+    if (!mark_text.empty()) {
+      const size_t colon = mark_text.find(':');
+      const std::vector<double> e = parse_list(mark_text.substr(0, colon), "mark");
+      const std::vector<double> h =
+          colon == std::string::npos ? std::vector<double>{} : parse_list(mark_text.substr(colon + 1), "mark");
+      if (e.size() != 1 || h.size() != 1)
+        throw std::runtime_error("--mark: '" + mark_text + "' is not EDGE:STEP (mm and ms, e.g. 10:2)");
+      mark = {e[0], h[0]};
+    }
     std::vector<long long> seeds;
     for (double x : parse_list(seeds_text, "seeds", true)) seeds.push_back(static_cast<long long>(x));
     // The plot's title names the draws it summarises (those whose reference holds).
@@ -509,7 +527,12 @@ int main(int argc, char** argv) {
       std::string header, row;
       if (!in || !std::getline(in, header) || !std::getline(in, row) || row.rfind(',') == std::string::npos)
         throw std::runtime_error("--replot: no summary rows in " + summary.string());
-      write_plot(out, steps, title(row.substr(row.rfind(',') + 1)));
+      // The draws used: column "seeds" of the summary (the 11th).
+      std::stringstream fields(row);
+      std::string used;
+      for (int k = 0; k < 11 && std::getline(fields, used, ','); ++k) {
+      }
+      write_plot(out, steps, title(used), mark);
       std::printf("wrote %s/runtime_error.png\n", out.c_str());
       return 0;
     }
@@ -530,8 +553,10 @@ int main(int argc, char** argv) {
     const int held = static_cast<int>(std::count_if(draws.begin(), draws.end(), [](const SeedResult& d) {
       return d.converged;
     }));
-    std::printf("\n%d of %zu draws have a reference that holds under refinement%s", held, draws.size(),
-                check_edge > 0 ? "" : " (not checked: no --check-edge)");
+    if (check_edge > 0)
+      std::printf("\n%d of %zu draws have a reference that holds under refinement", held, draws.size());
+    else
+      std::printf("\n%zu draws, their references not checked under refinement (no --check-edge)", draws.size());
     for (const SeedResult& d : draws)
       if (!d.converged) std::printf("%s seed %lld left out", held < static_cast<int>(draws.size()) ? ";" : "", d.seed);
     std::printf("\n");
@@ -540,7 +565,7 @@ int main(int argc, char** argv) {
       fs::remove(fs::path(out) / "runtime_error.png");
     } else {
       write_summary_csv(fs::path(out) / "runtime_error_summary.csv", settings);
-      write_plot(out, steps, title(settings.front().seeds));
+      write_plot(out, steps, title(settings.front().seeds), mark);
       std::printf("%10s %8s %8s %6s %14s %13s %9s %14s %13s %13s %16s %15s\n", "remesh", "edge_mm", "step_ms",
                   "draws", "median_wall_s", "median_cpu_s", "max_vert", "median_rms_mm", "worst_rms_mm",
                   "worst_max_mm", "median_shape_mm", "worst_shape_mm");
