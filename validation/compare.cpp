@@ -126,20 +126,21 @@ void best_rigid_motion(const Eigen::MatrixX3d& p, const Eigen::MatrixX3d& q, Eig
 SheetDifference compare_sheets(const SheetGeometry& reference, const SheetGeometry& test) {
   const MaterialLocator locator(reference);
   SheetDifference r;
-  std::vector<Eigen::Vector3d> ref_points, test_points;
+  // p: the test's vertices inside the reference's domain; q: the reference at the same points.
+  Eigen::MatrixX3d p(test.material.rows(), 3), q(test.material.rows(), 3);
+  int n = 0;
   for (Eigen::Index v = 0; v < test.material.rows(); ++v) {
     Eigen::Vector3d x;
     if (!locator.interpolate(test.material.row(v).transpose(), x)) {
       ++r.outside;
       continue;
     }
-    ref_points.push_back(x);
-    test_points.push_back(test.positions.row(v).transpose());
+    q.row(n) = x.transpose();
+    p.row(n++) = test.positions.row(v);
   }
-  const int n = static_cast<int>(ref_points.size());
   if (n == 0) throw CompareError("compare_sheets: no vertex of the test sheet lies in the reference's material domain");
-  Eigen::MatrixX3d p(n, 3), q(n, 3);
-  for (int i = 0; i < n; ++i) p.row(i) = test_points[i].transpose(), q.row(i) = ref_points[i].transpose();
+  p.conservativeResize(n, 3);
+  q.conservativeResize(n, 3);
   Eigen::Matrix3d R;
   Eigen::Vector3d t;
   best_rigid_motion(p, q, R, t);
