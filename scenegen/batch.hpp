@@ -18,7 +18,7 @@ struct RenderBatchOptions {
   int views = 4;                  ///< renders per mesh (>= 1)
   bool flip = false;              ///< odd views show the flipped sheet (u -> 1 - u, seen from the back)
   std::string size = "1024x1440"; ///< WIDTHxHEIGHT [pixels]
-  std::string quality = "final";  ///< draft | final
+  std::string quality = "final";  ///< draft | final | best
   std::string passes = "all";     ///< as scenegen render --passes
   std::string documents_dir;      ///< folder of pages to draw from (empty: built-in generator)
   std::string backgrounds_dir;    ///< folder of background images (empty: procedural only)

@@ -70,7 +70,7 @@ void add_render_batch_subcommand(CLI::App& app, RenderBatchCommand& c) {
       ->check(CLI::PositiveNumber)->capture_default_str();
   c.app->add_flag("--flip", c.render.flip, "odd views show the sheet turned over (u -> 1 - u, printed side up)");
   c.app->add_option("--size", c.render.size, "image size WIDTHxHEIGHT [pixels]")->capture_default_str();
-  c.app->add_option("--quality", c.render.quality, "draft | final")->capture_default_str();
+  c.app->add_option("--quality", c.render.quality, "draft | final | best (final with smooth penumbrae)")->capture_default_str();
   c.app->add_option("--passes", c.render.passes, "as scenegen render --passes")->capture_default_str();
   c.app->add_option("--documents", c.render.documents_dir, "folder of PNG/JPEG pages to draw from");
   c.app->add_option("--backgrounds", c.render.backgrounds_dir, "folder of PNG/JPEG background images");

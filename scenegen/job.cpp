@@ -339,6 +339,7 @@ void prepare_job(const SampleOptions& o, const std::string& job_dir) {
                                 {"dim_area_samples", scene.quality.dim_area_samples},
                                 {"antialias_method", scene.quality.antialias_method},
                                 {"area_adaptive", scene.quality.area_adaptive},
+                                {"area_jitter", scene.quality.area_jitter},
                                 {"antialias_threshold", scene.quality.antialias_threshold},
                                 {"antialias_depth", scene.quality.antialias_depth},
                                 {"bands", scene.quality.bands},

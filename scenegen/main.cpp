@@ -75,7 +75,7 @@ void add_sample_options(CLI::App* app, Cli& c) {
   app->add_option("--seed", c.sample.seed, "sample seed (camera, lights, background, paper, document, edge curl)")->capture_default_str()->check(digits_only());
   app->add_option("--size", c.size, "image size WIDTHxHEIGHT [pixels], 8 to 8192 per side")->capture_default_str();
   app->add_option("--passes", c.passes, "comma list of image,shading,albedo,uv,coords,normal,mask,backward, or all")->capture_default_str();
-  app->add_option("--quality", c.quality, "draft | final (photo and shading pass only)")->capture_default_str();
+  app->add_option("--quality", c.quality, "draft | final | best (final with smooth penumbrae; photo and shading pass only)")->capture_default_str();
   app->add_option("--rig", c.sample.rig, "light rig three-point|rim|softbox|natural (default: drawn)");
   app->add_option("--backward-grid", c.backward_grid, "backward map grid WIDTHxHEIGHT over the page, or 'full' (image size)")->capture_default_str();
   app->add_option("--ground-truth", c.ground_truth, "uv, coords, normal, mask: raycast (scenegen casts the pixel rays on the rendered triangles) | povray (emissive POV-Ray renders)")->capture_default_str();
@@ -96,7 +96,11 @@ void finalise(Cli& c) {
   parse_size(c.size, c.sample.width, c.sample.height, "--size", false, 8);
   parse_size(c.backward_grid, c.sample.backward.grid_width, c.sample.backward.grid_height, "--backward-grid", true, 2);
   c.sample.passes = sg::parse_passes(c.passes);
-  c.sample.quality = sg::parse_quality(c.quality);
+  try {
+    c.sample.quality = sg::parse_quality(c.quality);
+  } catch (const sg::InputError& e) {
+    throw sg::InputError(std::string("--quality: ") + e.what());
+  }
   c.sample.fine_passes = !c.exact16;
   c.sample.contact_shadow = !c.no_contact;
   c.sample.edge_lift = !c.no_edge_lift;

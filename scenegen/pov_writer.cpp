@@ -74,6 +74,7 @@ void write_lighting(std::ostream& out, const SceneDescription& s) {
       << "#declare SG_Sky = " << num(l.sky) << ";\n"
       << "#declare SG_Area_Samples = " << s.quality.area_samples << ";\n"
       << "#declare SG_Area_Adaptive = " << s.quality.area_adaptive << ";\n"
+      << "#declare SG_Area_Jitter = " << (s.quality.area_jitter ? 1 : 0) << ";\n"
       << "#macro SG_Lights()\n";
   double total = 0;
   for (const Light& light : l.lights) total += light.intensity;
@@ -145,7 +146,7 @@ void write_contact(std::ostream& out, const ContactShadowDecl& c) {
 
 QualitySettings quality_settings(Quality q) {
   QualitySettings s;
-  if (q == Quality::final) {
+  if (q == Quality::final || q == Quality::best) {
     // Chosen on scenegen_quality_study's front (docs/scenegen.md, "Render time against image
     // error"): the photo's error is mostly antialiasing, so a second antialiasing level where
     // neighbours differ by more than 0.8 buys more than 3 x 3 area-light samples cost.
@@ -163,6 +164,13 @@ QualitySettings quality_settings(Quality q) {
     s.antialias_threshold = 0.8;
     s.antialias_depth = 2;
     s.ambient = 0.0;
+    if (q == Quality::best) {
+      // Adaptive depth 0 starts from the grid's four corners, so lit and fully shadowed
+      // pixels cost what 2 x 2 cost; penumbrae get up to 9 jittered samples per light.
+      s.area_samples = 3;
+      s.area_adaptive = 0;
+      s.area_jitter = true;
+    }
   } else {
     s.area_samples = 2;
   }
@@ -172,10 +180,13 @@ QualitySettings quality_settings(Quality q) {
 Quality parse_quality(const std::string& name) {
   if (name == "draft") return Quality::draft;
   if (name == "final") return Quality::final;
-  throw InputError("unknown quality '" + name + "' (draft, final)");
+  if (name == "best") return Quality::best;
+  throw InputError("unknown quality '" + name + "' (draft, final, best)");
 }
 
-std::string quality_name(Quality q) { return q == Quality::final ? "final" : "draft"; }
+std::string quality_name(Quality q) {
+  return q == Quality::best ? "best" : q == Quality::final ? "final" : "draft";
+}
 
 void set_coords_encoding(SceneDescription& scene, const SheetMesh& mesh) {
   const Eigen::Vector3d lo = mesh.positions.colwise().minCoeff().transpose();

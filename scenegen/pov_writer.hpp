@@ -15,7 +15,10 @@
 namespace papersim::scenegen {
 
 /// Render quality of the lit passes (image, shading). Ground-truth passes ignore it.
-enum class Quality { draft, final };
+/// best: final with smooth penumbrae (3 x 3 jittered area-light samples at adaptive depth 0
+/// instead of 2 x 2, whose four hard shadow copies show as steps where a raised part shadows
+/// the table; docs/scenegen.md, "Penumbrae").
+enum class Quality { draft, final, best };
 
 /// Settings of the lit passes per quality.
 struct QualitySettings {
@@ -26,6 +29,9 @@ struct QualitySettings {
   double radiosity_pretrace_end = 0.02;  ///< pretrace_end (pretrace_start 0.08; each pass halves it)
   int area_samples = 1;            ///< area light samples per side (1: point lights)
   int area_adaptive = 1;           ///< adaptive depth of area lights
+  /// Jittered area-light samples (POV-Ray `jitter`): a smooth, slightly grainy penumbra instead
+  /// of area_samples^2 overlapping hard shadows; reproducible for a single-threaded render.
+  bool area_jitter = false;
   /// Lights whose intensity is below this share of the rig's summed intensity get
   /// `dim_area_samples` per side instead of `area_samples` (1: point light; 0: point light
   /// that casts no shadow, POV-Ray `shadowless`). 0: every light gets `area_samples`.
@@ -43,7 +49,7 @@ struct QualitySettings {
 };
 /// Settings used for a quality level.
 QualitySettings quality_settings(Quality q);
-/// "draft" / "final". @throw InputError for other names.
+/// "draft" / "final" / "best". @throw InputError for other names.
 Quality parse_quality(const std::string& name);
 std::string quality_name(Quality q);
 

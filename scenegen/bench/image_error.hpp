@@ -20,6 +20,7 @@ inline QualitySettings reference_quality() {
   q.radiosity_pretrace_end = 0.02;
   q.area_samples = 5;
   q.area_adaptive = 3;
+  q.area_jitter = false;
   q.dim_light_share = 0.0;
   q.antialias_method = 2;
   q.antialias_threshold = 0.02;
@@ -31,9 +32,9 @@ inline QualitySettings reference_quality() {
 /// One line describing the settings of the lit passes.
 inline std::string describe(const QualitySettings& q) {
   char buf[256];
-  std::snprintf(buf, sizeof buf, "radiosity %s count %d error %.2g, area %dx%d adaptive %d, AA %s %.2g depth %d, %d band(s)",
+  std::snprintf(buf, sizeof buf, "radiosity %s count %d error %.2g, area %dx%d adaptive %d%s, AA %s %.2g depth %d, %d band(s)",
                 q.radiosity ? "on" : "off", q.radiosity_count, q.radiosity_error, q.area_samples, q.area_samples,
-                q.area_adaptive, q.antialias ? "on" : "off", q.antialias_threshold, q.antialias_depth, q.bands);
+                q.area_adaptive, q.area_jitter ? " jitter" : "", q.antialias ? "on" : "off", q.antialias_threshold, q.antialias_depth, q.bands);
   return buf;
 }
 

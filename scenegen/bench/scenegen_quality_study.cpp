@@ -35,6 +35,7 @@ sg::QualitySettings previous_final() {
   sg::QualitySettings q = sg::quality_settings(sg::Quality::final);
   q.area_samples = 3;
   q.area_adaptive = 1;
+  q.area_jitter = false;
   q.antialias_threshold = 0.1;
   q.antialias_depth = 1;
   q.bands = 1;
@@ -47,6 +48,7 @@ sg::QualitySettings final_9b9e633() {
   sg::QualitySettings q = sg::quality_settings(sg::Quality::final);
   q.area_samples = 2;
   q.area_adaptive = 1;
+  q.area_jitter = false;
   q.dim_light_share = 0.0;
   q.antialias_method = 2;
   q.antialias_threshold = 0.9;
@@ -151,6 +153,11 @@ std::vector<Preset> presets() {
     std::snprintf(name, sizeof name, "radiosity nearest 1, pretrace to 0.04, AA %.1f", t);
     p.push_back({name, q});
   }
+  // Smooth penumbrae: the best preset, and its 3 x 3 grid at adaptive depth 0 without jitter.
+  p.push_back({"best", sg::quality_settings(sg::Quality::best)});
+  q = sg::quality_settings(sg::Quality::best);
+  q.area_jitter = false;
+  p.push_back({"best without jitter", q});
   return p;
 }
 
@@ -247,13 +254,13 @@ int main(int argc, char** argv) {
     }
     const std::string tmp = csv + ".partial";
     std::ofstream out(tmp);
-    out << "preset,seconds,psnr_db,ssim,radiosity,radiosity_count,radiosity_error,area_samples,area_adaptive,antialias,antialias_threshold,antialias_depth,bands,dim_light_share,dim_area_samples,antialias_method,radiosity_nearest,radiosity_pretrace_end\n";
+    out << "preset,seconds,psnr_db,ssim,radiosity,radiosity_count,radiosity_error,area_samples,area_adaptive,antialias,antialias_threshold,antialias_depth,bands,dim_light_share,dim_area_samples,antialias_method,radiosity_nearest,radiosity_pretrace_end,area_jitter\n";
     const auto row = [&](const std::string& name, const sg::QualitySettings& q, double sec, double p, double s) {
       out << '"' << name << "\"," << sec << ',' << p << ',' << s << ',' << q.radiosity << ',' << q.radiosity_count
           << ',' << q.radiosity_error << ',' << q.area_samples << ',' << q.area_adaptive << ',' << q.antialias
           << ',' << q.antialias_threshold << ',' << q.antialias_depth << ',' << q.bands << ',' << q.dim_light_share
           << ',' << q.dim_area_samples << ',' << q.antialias_method << ',' << q.radiosity_nearest << ','
-          << q.radiosity_pretrace_end << '\n';
+          << q.radiosity_pretrace_end << ',' << q.area_jitter << '\n';
       std::printf("%-28s %7.2f s  PSNR %6.2f dB  SSIM %.4f\n", name.c_str(), sec, p, s);
     };
     for (const Preset& p : presets()) {

@@ -8,6 +8,7 @@
 
 #include "scenegen/camera.hpp"
 #include "scenegen/document.hpp"
+#include "scenegen/errors.hpp"
 #include "scenegen/example_sheets.hpp"
 #include "scenegen/geometry.hpp"
 #include "scenegen/pov_writer.hpp"
@@ -71,6 +72,40 @@ TEST(Golden, SceneIncludeFinal) {
   s.contact.strength = 0.29;
   write_scene_inc(out, s);
   expect_golden("scene_final.inc", out.str());
+}
+
+TEST(Quality, BestIsFinalWithJitteredThreeByThreeAreaLightsAndNamesRoundTrip) {
+  const QualitySettings f = quality_settings(Quality::final), b = quality_settings(Quality::best);
+  EXPECT_EQ(f.area_samples, 2);
+  EXPECT_FALSE(f.area_jitter);
+  EXPECT_EQ(b.area_samples, 3);
+  EXPECT_EQ(b.area_adaptive, 0);
+  EXPECT_TRUE(b.area_jitter);
+  // Everything else is the final preset's.
+  QualitySettings rest = b;
+  rest.area_samples = f.area_samples;
+  rest.area_adaptive = f.area_adaptive;
+  rest.area_jitter = f.area_jitter;
+  std::ostringstream x, y;
+  write_pass_ini(x, RawPass::image, 64, 90, rest, 0);
+  write_pass_ini(y, RawPass::image, 64, 90, f, 0);
+  EXPECT_EQ(x.str(), y.str());
+  EXPECT_EQ(rest.radiosity_nearest, f.radiosity_nearest);
+  EXPECT_EQ(rest.bands, f.bands);
+  EXPECT_EQ(rest.ambient, f.ambient);
+  for (Quality q : {Quality::draft, Quality::final, Quality::best}) EXPECT_EQ(parse_quality(quality_name(q)), q);
+  try {
+    parse_quality("fine");
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("'fine'"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("best"), std::string::npos) << e.what();
+  }
+  std::ostringstream inc;
+  write_scene_inc(inc, fold_scene(Quality::best));
+  EXPECT_NE(inc.str().find("#declare SG_Area_Samples = 3;"), std::string::npos);
+  EXPECT_NE(inc.str().find("#declare SG_Area_Adaptive = 0;"), std::string::npos);
+  EXPECT_NE(inc.str().find("#declare SG_Area_Jitter = 1;"), std::string::npos);
 }
 
 TEST(Golden, PassInis) {

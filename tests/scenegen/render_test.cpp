@@ -223,6 +223,36 @@ TEST(Render, SameSeedIdenticalFilesDifferentSeedDifferentDraws) {
   EXPECT_NE(a["document"]["seed"], c["document"]["seed"]);
 }
 
+TEST(Render, BestQualityJittersItsAreaLightsReproduciblyAndChangesOnlyTheLitPasses) {
+  // Jittered area-light samples come from POV-Ray's own generator; each lit band is one
+  // single-threaded process, so the same job gives the same photo. The bump sheet's raised
+  // parts shadow the table and the sheet, so the penumbrae, and with them the photo, differ
+  // from the final preset's; the ground-truth passes do not depend on the quality.
+  test::TempDir dir("best");
+  SampleOptions o;
+  o.mesh_path = test::write_example(dir, "bump", "bump.obj");
+  o.seed = 5;
+  o.width = 96;
+  o.height = 136;
+  o.passes = {Pass::image, Pass::shading, Pass::uv};
+  o.document_dpi = 60;
+  o.quality = Quality::best;
+  render_sample(o, dir.str("a"), RunOptions{});
+  render_sample(o, dir.str("b"), RunOptions{});
+  o.quality = Quality::final;
+  render_sample(o, dir.str("final"), RunOptions{});
+  for (const char* f : {"image.png", "shading.png"}) {
+    EXPECT_TRUE(test::file_bytes(dir.path() / "a" / f) == test::file_bytes(dir.path() / "b" / f)) << f;
+    EXPECT_FALSE(test::file_bytes(dir.path() / "a" / f) == test::file_bytes(dir.path() / "final" / f)) << f;
+  }
+  EXPECT_TRUE(test::file_bytes(dir.path() / "a" / "uv.exr") == test::file_bytes(dir.path() / "final" / "uv.exr"));
+  const json meta = read_json(dir.path() / "a" / "meta.json");
+  EXPECT_EQ(meta["quality"], "best");
+  EXPECT_EQ(meta["quality_settings"]["area_samples"], 3);
+  EXPECT_EQ(meta["quality_settings"]["area_adaptive"], 0);
+  EXPECT_EQ(meta["quality_settings"]["area_jitter"], true);
+}
+
 TEST(Render, LitRendersInRowBandsAssembleToTheWholeImage) {
   // Without radiosity and antialiasing every pixel is traced alone, so a photo and a shading
   // pass rendered in 3 row bands (uneven: 136 rows) match the whole render. Not byte for byte:
