@@ -65,9 +65,9 @@ struct ReferenceSettings {
 /// 5 mm edges, 2.5 ms steps, checked at 3.5 mm; its error is set by the edge length, 7 mm edges
 /// at 20 / 10 / 5 ms differ by less than the 5 mm reference's own change under refinement).
 /// fall-cylinder: its study's references (docs/performance.md: 5 mm, 0.5 ms, a quarter of the
-/// 2 ms default it had then). The other fall scenarios have no study yet: the same edges (half
-/// their 10 mm default, as pull's 5 mm is 0.7 of its 7 mm) and a quarter of their default step
-/// (as pull's 2.5 ms is a quarter of 10 ms).
+/// 2 ms default it had then). The other fall scenarios: the same edges (half their 10 mm
+/// default, as pull's 5 mm is 0.7 of its 7 mm) and a quarter of their default step (as pull's
+/// 2.5 ms is a quarter of 10 ms), the settings their run-time studies then used.
 ReferenceSettings reference_settings(const std::string& scenario) {
   if (scenario == "fall-cylinder") return {5, 0.5, 3.5};
   if (scenario == "fall-gable" || scenario == "fall-sphere") return {5, 0.25, 3.5};
