@@ -44,6 +44,7 @@ StepStats& StepStats::operator+=(const StepStats& o) {
   substeps += o.substeps;
   failed_solves += o.failed_solves;
   projected_hessians += o.projected_hessians;
+  exact_skipped += o.exact_skipped;
   newton_iterations += o.newton_iterations;
   line_search_evaluations += o.line_search_evaluations;
   extrapolations += o.extrapolations;
@@ -121,9 +122,9 @@ void Integrator::assemble(const Eigen::VectorXd& x, Eigen::VectorXd& g, bool pro
 }
 
 bool Integrator::factor_newton_matrix(const StepContext& ctx, const Eigen::VectorXd& x, Eigen::VectorXd& g,
-                                      StepStats& stats) {
+                                      StepStats& stats, bool skip_exact) {
   auto t0 = std::chrono::steady_clock::now();
-  bool project = !m_params.exact_hessian_first;
+  bool project = !m_params.exact_hessian_first || skip_exact;
   assemble(x, g, project);
   stats.seconds_assembly += seconds_since(t0);
   t0 = std::chrono::steady_clock::now();
@@ -173,6 +174,7 @@ NewtonResult Integrator::solve(const StepContext& ctx, Eigen::VectorXd& x, StepS
   bool may_reuse = quiet;
   double residual_before = INF;  // residual of the iteration before the last
   bool factor_projected = false;  // the factorisation in use is of the projected Hessian
+  int skip_exact = 0, backoff = 1;  // NewtonParams::exact_retry_skip_max
   for (r.iterations = 1; r.iterations <= m_params.max_iterations; ++r.iterations) {
     auto t0 = std::chrono::steady_clock::now();
     update_pattern(x);
@@ -187,7 +189,17 @@ NewtonResult Integrator::solve(const StepContext& ctx, Eigen::VectorXd& x, StepS
       t0 = std::chrono::steady_clock::now();
     } else {
       m_reused = 0;
-      project = factor_projected = factor_newton_matrix(ctx, x, g, stats);
+      const bool skipped = skip_exact > 0;
+      project = factor_projected = factor_newton_matrix(ctx, x, g, stats, skipped);
+      if (skipped) {
+        --skip_exact;
+        ++stats.exact_skipped;
+      } else if (m_params.exact_retry_skip_max > 0 && m_params.exact_hessian_first && project) {
+        skip_exact = backoff;  // the exact Hessian was indefinite: skip it for a while
+        backoff = std::min(2 * backoff, m_params.exact_retry_skip_max);
+      } else {
+        backoff = 1;
+      }
       m_factor_h = ctx.h;
       t0 = std::chrono::steady_clock::now();
     }

@@ -24,6 +24,12 @@ struct NewtonParams {
   /// negative curvature of compressed, buckling regions, and Newton then converges linearly
   /// there (measured on the pull scenario: 4x the iterations).
   bool exact_hessian_first = true;
+  /// Within a time step, after the exact Hessian was found indefinite, factor the projected one
+  /// directly for the next 1, 2, 4, ... iterations, at most this many (doubling while the exact
+  /// one stays indefinite, back to 1 once it is definite), instead of assembling and trying the
+  /// exact one first in every iteration of a buckled phase. 0: try the exact Hessian first in
+  /// every iteration.
+  int exact_retry_skip_max = 0;
   /// After a full step taken with a projected Hessian, try 2, 4, ... up to this many times the
   /// step while the energy keeps falling (1: off). Projection replaces the negative curvature
   /// of a sheet escaping a saddle by inertia alone, so the projected step is too short there and
@@ -57,6 +63,9 @@ struct StepStats {
   int substeps = 0;
   int failed_solves = 0;   ///< solves that did not converge and were retried with h / 2
   int projected_hessians = 0;  ///< iterations whose exact Hessian was indefinite (projected)
+  /// iterations that factored the projected Hessian without trying the exact one
+  /// (NewtonParams::exact_retry_skip_max)
+  int exact_skipped = 0;
   int newton_iterations = 0;
   int line_search_evaluations = 0;
   int extrapolations = 0;  ///< Newton steps lengthened beyond the full step
@@ -108,10 +117,11 @@ class Integrator {
   void assemble(const Eigen::VectorXd& x, Eigen::VectorXd& g, bool project);
   /// Assembles at x and factors the Newton matrix: the exact Hessian first (when
   /// NewtonParams::exact_hessian_first), the projected one when that is not positive definite.
+  /// `skip_exact`: factor the projected Hessian without trying the exact one.
   /// @return true when the factored matrix is the projected Hessian
   /// @throw NumericError when even a shifted projected Hessian cannot be factored
   bool factor_newton_matrix(const StepContext& ctx, const Eigen::VectorXd& x, Eigen::VectorXd& g,
-                            StepStats& stats);
+                            StepStats& stats, bool skip_exact = false);
   /// Asks every term whether its dynamic pattern changed at x and rebuilds the matrix if so.
   void update_pattern(const Eigen::VectorXd& x);
   std::vector<std::unique_ptr<EnergyTerm>> m_terms;

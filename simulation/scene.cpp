@@ -350,6 +350,7 @@ Scene scene_from_json(const json& j, const std::string& source) {
     s.newton.max_extrapolation = n.integer("max_extrapolation", s.newton.max_extrapolation, 1, 1024);
     s.newton.max_factor_reuse = n.integer("max_factor_reuse", s.newton.max_factor_reuse, 0, 1000);
     s.newton.follow_obstacles = n.boolean("follow_obstacles", s.newton.follow_obstacles);
+    s.newton.exact_retry_skip_max = n.integer("exact_retry_skip_max", s.newton.exact_retry_skip_max, 0, 1000);
     n.finish();
   }
   s.remesh = read_remesh(r.child("remesh"));
@@ -487,7 +488,8 @@ json scene_to_json(const Scene& s) {
                  {"max_halvings", s.newton.max_halvings},
                  {"max_extrapolation", s.newton.max_extrapolation},
                  {"max_factor_reuse", s.newton.max_factor_reuse},
-                 {"follow_obstacles", s.newton.follow_obstacles}};
+                 {"follow_obstacles", s.newton.follow_obstacles},
+                 {"exact_retry_skip_max", s.newton.exact_retry_skip_max}};
   const remesh::RemeshParams& rp = s.remesh.params;
   j["remesh"] = {{"enabled", s.remesh.enabled},
                  {"every", s.remesh.every},

@@ -47,6 +47,7 @@ json meta_json(const Scene& scene, const RunResult& r, const json& extra) {
               {"failed_solves", t.failed_solves},
               {"newton_iterations", t.newton_iterations},
               {"projected_hessians", t.projected_hessians},
+              {"exact_skipped", t.exact_skipped},
               {"line_search_evaluations", t.line_search_evaluations},
               {"extrapolations", t.extrapolations},
               {"reused_factorizations", t.reused_factorizations},
