@@ -17,15 +17,15 @@
 
 namespace papersim::simulation {
 
-namespace {
-
-Eigen::Matrix3d rotation(const Eigen::Vector3d& deg) {
+Eigen::Matrix3d sheet_rotation(const Eigen::Vector3d& deg) {
   const Eigen::Vector3d a = deg * M_PI / 180;
   return (Eigen::AngleAxisd(a.z(), Eigen::Vector3d::UnitZ()) *
           Eigen::AngleAxisd(a.y(), Eigen::Vector3d::UnitY()) *
           Eigen::AngleAxisd(a.x(), Eigen::Vector3d::UnitX()))
       .toRotationMatrix();
 }
+
+namespace {
 
 bool inside(const Eigen::Vector4d& box, const Eigen::Vector2d& p) {
   return p.x() >= box[0] - 1e-12 && p.x() <= box[2] + 1e-12 && p.y() >= box[1] - 1e-12 &&
@@ -116,7 +116,7 @@ void initial_sheet(const Scene& scene, remesh::SheetMesh& mesh, SheetState& stat
     o.seed = scene.seed >= 0 ? static_cast<std::uint64_t>(scene.seed) : 0;
     mesh = remesh::make_rectangle(o);
     const Eigen::MatrixX2d X = mesh.material_coords();
-    const Eigen::Matrix3d R = rotation(sp.rotation_deg);
+    const Eigen::Matrix3d R = sheet_rotation(sp.rotation_deg);
     x.resize(X.rows(), 3);
     for (int v = 0; v < X.rows(); ++v) {
       const Eigen::Vector3d local(X(v, 0) - 0.5 * sp.width, X(v, 1) - 0.5 * sp.height, 0.0);

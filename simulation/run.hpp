@@ -43,6 +43,9 @@ class InitialPlacement {
   Eigen::VectorXd m_positions;
 };
 
+/// The rotation of SheetSpec::rotation_deg: x, y, z Euler angles [deg] applied in that order.
+Eigen::Matrix3d sheet_rotation(const Eigen::Vector3d& deg);
+
 /// The sheet of a scene in its initial pose.
 /// @throw SceneError, remesh::IoError, remesh::MeshError
 void initial_sheet(const Scene& scene, remesh::SheetMesh& mesh, SheetState& state);
