@@ -48,7 +48,7 @@ struct Options {
   double time_step = 0.0;     ///< [s]; 0: the scenario's
   double scale = 1.0;         ///< sheet size and cavity radii as a fraction of the scenario's
   double end_radius = 0.0;    ///< cavity radius at the end of each crumple [m]; 0: scale x 0.05
-  int max_iterations = 200;   ///< Newton iterations per step
+  int max_iterations = 0;     ///< Newton iterations per step; 0: the scenario's 200
   double spread = 0.8;        ///< corner targets as a fraction of the flat sheet's
   double lift = 0.02;         ///< height of the opened sheet's corners above the ground [m]
   double open_time = 1.5;     ///< handles pull until 2/3 of this and release at it [s]
@@ -146,7 +146,7 @@ ps::Scene crumple_scene(const Options& o, int k, const std::string& flat_path, c
   ps::Scene s = ps::make_scenario("crumple", static_cast<std::uint64_t>(o.seed));
   if (o.edge > 0) s.sheet.edge_length = o.edge;
   if (o.time_step > 0) s.time_step = o.time_step;
-  s.newton.max_iterations = o.max_iterations;
+  if (o.max_iterations > 0) s.newton.max_iterations = o.max_iterations;
   auto& cavity = s.obstacles.at(0);
   const Eigen::Vector3d centre = cavity.keyframes.front().translation;
   s.sheet.width *= o.scale;
@@ -274,9 +274,8 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0.1, 1.0));
   app.add_option("--end-radius", o.end_radius, "cavity radius at the end of each crumple [m] (0: 0.05 x --scale)")
       ->check(CLI::Range(0.0, 0.2));
-  app.add_option("--max-iterations", o.max_iterations, "Newton iterations per step (the scenario's 60 does not "
-                                                       "finish its 5 s)")
-      ->check(CLI::Range(1, 10000));
+  app.add_option("--max-iterations", o.max_iterations, "Newton iterations per step (0: the scenario's 200)")
+      ->check(CLI::Range(0, 10000));
   app.add_option("--spread", o.spread, "opened corners as a fraction of the flat sheet's corner positions")
       ->check(CLI::Range(0.3, 0.95));
   app.add_option("--lift", o.lift, "height of the opened corners (and of the ball's lowest point) [m]")
