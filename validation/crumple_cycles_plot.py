@@ -2,10 +2,11 @@
 """Pictures of a crumple-and-open cycles run (docs/crumple.md, "Crumple-and-open cycles").
 
     build/validation/papersim_crumple_cycles --out DIR ...
-    python3 validation/crumple_cycles_plot.py DIR --maps maps.png --growth growth.png
+    python3 validation/crumple_cycles_plot.py DIR --maps maps.png --heights heights.png --growth growth.png
 
 --maps: for each cycle, the opened sheet in material coordinates, every face coloured by its
-largest absolute principal plastic curvature (DIR/cycle_K_open.ply). --growth: the plastic
+largest absolute principal plastic curvature (DIR/cycle_K_open.ply). --heights: the opened sheets
+seen from above, every face coloured by its height above the ground. --growth: the plastic
 curvature integral and the plastic network length after each cycle against ln(cycle), with the
 least-squares line a + b ln k (DIR/cycles.csv). Needs numpy and matplotlib (Debian: python3-numpy,
 python3-matplotlib)."""
@@ -55,6 +56,46 @@ def maps(run, cycles, path):
     fig.savefig(path, dpi=120)
 
 
+def world_positions(path):
+    """World positions (#V x 3) of a binary sheet PLY of papersim."""
+    data = open(path, "rb").read()
+    end = data.index(b"end_header\n") + len(b"end_header\n")
+    header = data[:end].decode().split("\n")
+    nv = int(next(l for l in header if l.startswith("element vertex")).split()[-1])
+    start = header.index(next(l for l in header if l.startswith("element vertex"))) + 1
+    props = []
+    for l in header[start:]:
+        if not l.startswith("property double"):
+            break
+        props.append(l.split()[-1])
+    V = np.frombuffer(data, dtype="<f8", count=nv * len(props), offset=end).reshape(nv, len(props))
+    return V[:, [props.index("x"), props.index("y"), props.index("z")]]
+
+
+def heights(run, cycles, path):
+    fig, axes = plt.subplots(1, len(cycles), figsize=(2.0 * len(cycles) + 1.2, 3.4), squeeze=False,
+                             constrained_layout=True)
+    for ax, k in zip(axes[0], cycles):
+        ply = os.path.join(run, f"cycle_{k}_open.ply")
+        _, F, _ = read_ply(ply)
+        x = world_positions(ply) * 1e3
+        order = np.argsort(x[F][:, :, 2].mean(axis=1))  # lower faces first, so the top layer shows
+        pc = PolyCollection(x[F][order][:, :, :2], array=x[F][order][:, :, 2].mean(axis=1), cmap="magma",
+                            edgecolors="face", linewidths=0.2)
+        pc.set_clim(0, 30)
+        ax.add_collection(pc)
+        ax.set_xlim(x[:, 0].min(), x[:, 0].max())
+        ax.set_ylim(x[:, 1].min(), x[:, 1].max())
+        ax.set_aspect("equal")
+        ax.set_title(f"after cycle {k}", fontsize=9)
+        ax.set_xlabel("x [mm]", fontsize=8)
+        ax.tick_params(labelsize=7)
+    axes[0][0].set_ylabel("y [mm]", fontsize=8)
+    cb = fig.colorbar(pc, ax=list(axes[0]), shrink=0.8)
+    cb.set_label("height [mm]", fontsize=8)
+    fig.savefig(path, dpi=120)
+
+
 def growth(rows, path):
     k = np.array([int(r["cycle"]) for r in rows])
     fig, ax = plt.subplots(figsize=(5, 3.4))
@@ -75,6 +116,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("run", help="--out folder of papersim_crumple_cycles")
     ap.add_argument("--maps", help="write the plastic curvature maps to this PNG")
+    ap.add_argument("--heights", help="write the opened sheets' heights, seen from above, to this PNG")
     ap.add_argument("--growth", help="write the growth against ln(cycle) to this PNG")
     a = ap.parse_args()
     with open(os.path.join(a.run, "cycles.csv")) as f:
@@ -83,6 +125,8 @@ def main():
         sys.exit(f"{a.run}/cycles.csv: no finished cycle")
     if a.maps:
         maps(a.run, [int(r["cycle"]) for r in rows], a.maps)
+    if a.heights:
+        heights(a.run, [int(r["cycle"]) for r in rows], a.heights)
     if a.growth:
         growth(rows, a.growth)
 
