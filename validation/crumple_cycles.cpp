@@ -1,7 +1,7 @@
 // Crumple-and-unfold cycles (Gottesman, Andrejevic, Rycroft, Rubinstein 2018): the crumple
-// scenario's sheet is crumpled in the shrinking cavity, released, opened by its four corners and
-// laid on the ground, then crumpled again, K times; after each cycle the plastic crease network
-// of the opened sheet is measured. Gottesman et al. find the total crease length growing like
+// scenario's sheet is crumpled in the shrinking cavity, released, opened by its corners and edges
+// and laid on the ground, then crumpled again, K times; after each cycle the plastic crease
+// network of the opened sheet is measured. Gottesman et al. find the total crease length growing like
 // the logarithm of the number of cycles; Andresen et al. (2007) find ridge lengths log-normal.
 //
 // One cycle:
@@ -11,10 +11,11 @@
 //     opened sheet of the cycle before, turned upright by the scenario's pose about its centre and
 //     centred in the cavity, whose radius is enlarged when the sheet does not fit;
 //  2. open: no cavity, the ground at z = 0; the crumpled sheet, moved so its lowest point is
-//     --lift above the ground, is pulled by four handles at its corners (soft springs, so a
-//     tangle meets a spring and not a hard limit) to --spread times the flat sheet's corner
-//     positions at --lift, in the orientation (face up or down) closest to the ball's; released
-//     at --open-time, it settles on the ground until --open-time + --settle.
+//     --lift above the ground, is pulled by handles at its corners and edge midpoints
+//     (--open-points 8; 4: corners only; soft springs, so a tangle meets a spring and not a hard
+//     limit) to --spread times the flat sheet's positions of those points at --lift, in the
+//     orientation (face up or down) closest to the ball's; released at --open-time, it settles
+//     on the ground until --open-time + --settle.
 // Each phase is a run of its own scene whose sheet is the previous phase's state read back from
 // its PLY (plastic state and damage included, velocities zero): DIR/cycle_K_crumpled.ply and
 // DIR/cycle_K_open.ply. DIR/cycles.csv has one line per phase (rewritten after each).
@@ -49,7 +50,8 @@ struct Options {
   double scale = 1.0;         ///< sheet size and cavity radii as a fraction of the scenario's
   double end_radius = 0.0;    ///< cavity radius at the end of each crumple [m]; 0: scale x 0.05
   int max_iterations = 0;     ///< Newton iterations per step; 0: the scenario's 200
-  double spread = 0.8;        ///< corner targets as a fraction of the flat sheet's
+  int open_points = 8;        ///< handles that open the sheet: 4 (corners) or 8 (and edge midpoints)
+  double spread = 0.8;        ///< handle targets as a fraction of the flat sheet's positions
   double lift = 0.02;         ///< height of the opened sheet's corners above the ground [m]
   double open_time = 1.5;     ///< handles pull until 2/3 of this and release at it [s]
   double settle = 1.0;        ///< time on the ground after the release [s]
@@ -86,10 +88,6 @@ double plastic_integral(const papersim::remesh::SheetMesh& mesh) {
   return sum;
 }
 
-Eigen::MatrixX3d as_rows(const Eigen::VectorXd& x) {
-  return Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(x.data(), x.size() / 3, 3);
-}
-
 /// Runs `scene` to its end with progress lines; returns its figures and leaves the final state
 /// in `mesh` / `positions`.
 PhaseFigures run_phase(const ps::Scene& scene, int cycle, const std::string& phase, const Options& o,
@@ -122,7 +120,7 @@ PhaseFigures run_phase(const ps::Scene& scene, int cycle, const std::string& pha
   p.min_gap = INFINITY;
   for (double g : r.quality.min_obstacle_distance) p.min_gap = std::min(p.min_gap, g);
   mesh = run.mesh();
-  positions = as_rows(run.state().positions);
+  positions = run.state().positions_matrix();
   pv::MetricsOptions mo;
   mo.crease_angle_deg = o.crease_angle;
   mo.self_intersections = false;  // counted by the run
@@ -198,18 +196,17 @@ ps::Scene open_scene(const Options& o, const ps::Scene& crumple, const std::stri
   const std::string lowered = fs::path(crumpled_path).replace_extension(".lowered.ply").string();
   papersim::remesh::write_sheet_file(lowered, d.mesh, y, Eigen::MatrixX3d::Zero(y.rows(), 3), d.width, d.height);
   s.sheet.mesh_path = lowered;
-  // The corners' material points and world positions (they are vertices of every mesh).
+  // The handles' material points: the corners, and with --open-points 8 the edges' midpoints.
   const double w = s.sheet.width, h = s.sheet.height;
-  const std::vector<Eigen::Vector2d> corners = {{0, 0}, {w, 0}, {w, h}, {0, h}};
-  const Eigen::MatrixX2d X = mesh.material_coords();
+  std::vector<Eigen::Vector2d> points = {{0, 0}, {w, 0}, {w, h}, {0, h}};
+  if (o.open_points == 8)
+    for (const Eigen::Vector2d& m : {Eigen::Vector2d(0.5 * w, 0), Eigen::Vector2d(w, 0.5 * h),
+                                     Eigen::Vector2d(0.5 * w, h), Eigen::Vector2d(0, 0.5 * h)})
+      points.push_back(m);
+  const ps::InitialPlacement placement(mesh, ps::flatten(y));
   std::vector<Eigen::Vector3d> at;
-  for (const auto& m : corners) {
-    int best = 0;
-    for (int v = 1; v < X.rows(); ++v)
-      if ((X.row(v).transpose() - m).norm() < (X.row(best).transpose() - m).norm()) best = v;
-    at.push_back(y.row(best).transpose());
-  }
-  // The orientation of the ball's material axes, projected to the horizontal.
+  for (const auto& m : points) at.push_back(placement(m));
+  // The orientation of the ball's material axes (from the corners), projected to the horizontal.
   Eigen::Vector3d ax = (at[1] - at[0]) + (at[2] - at[3]), ay = (at[3] - at[0]) + (at[2] - at[1]);
   ax.z() = 0;
   if (ax.norm() < 1e-9) ax = Eigen::Vector3d::UnitX();
@@ -217,13 +214,13 @@ ps::Scene open_scene(const Options& o, const ps::Scene& crumple, const std::stri
   Eigen::Vector3d by = Eigen::Vector3d::UnitZ().cross(ax);
   if (by.dot(ay) < 0) by = -by;  // face down: (ax, by, -z) is right-handed
   const double t_pull = o.open_time * 2.0 / 3.0;
-  for (std::size_t i = 0; i < corners.size(); ++i) {
+  for (std::size_t i = 0; i < points.size(); ++i) {
     ps::HandleSpec hs;
-    hs.material_point = corners[i];
+    hs.material_point = points[i];
     hs.stiffness = 100.0;  // N/m: lags ~0.5 mm under the sheet's weight, yields to a tangle
     hs.release_time = o.open_time;
     const Eigen::Vector3d target =
-        o.spread * ((corners[i].x() - 0.5 * w) * ax + (corners[i].y() - 0.5 * h) * by) + Eigen::Vector3d(0, 0, o.lift);
+        o.spread * ((points[i].x() - 0.5 * w) * ax + (points[i].y() - 0.5 * h) * by) + Eigen::Vector3d(0, 0, o.lift);
     hs.keyframes = {{0.0, Eigen::Vector3d::Zero()}, {t_pull, target - at[i]}};
     s.handles.push_back(hs);
   }
@@ -276,7 +273,10 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0.0, 0.2));
   app.add_option("--max-iterations", o.max_iterations, "Newton iterations per step (0: the scenario's 200)")
       ->check(CLI::Range(0, 10000));
-  app.add_option("--spread", o.spread, "opened corners as a fraction of the flat sheet's corner positions")
+  app.add_option("--open-points", o.open_points, "handles that open the sheet: 4 (its corners) or 8 (and its edges' "
+                                                 "midpoints)")
+      ->check(CLI::IsMember({4, 8}));
+  app.add_option("--spread", o.spread, "opened handles' targets as a fraction of the flat sheet's positions")
       ->check(CLI::Range(0.3, 0.95));
   app.add_option("--lift", o.lift, "height of the opened corners (and of the ball's lowest point) [m]")
       ->check(CLI::Range(0.002, 0.2));
