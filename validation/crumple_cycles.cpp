@@ -14,8 +14,9 @@
 //     --lift above the ground, is pulled by handles at its corners and edge midpoints
 //     (--open-points 8; 4: corners only; soft springs, so a tangle meets a spring and not a hard
 //     limit) to --spread times the flat sheet's positions of those points at --lift, in the
-//     orientation (face up or down) closest to the ball's; released at --open-time, it settles
-//     on the ground until --open-time + --settle.
+//     orientation (face up or down) closest to the ball's, in 2/3 of --open-time; then they
+//     hold it there (or with --lay-down lower it to 1 mm above the ground) and let go at
+//     --open-time, and it settles on the ground until --open-time + --settle.
 // Each phase is a run of its own scene whose sheet is the previous phase's state read back from
 // its PLY (plastic state and damage included, velocities zero): DIR/cycle_K_crumpled.ply and
 // DIR/cycle_K_open.ply. DIR/cycles.csv has one line per phase (rewritten after each).
@@ -54,9 +55,11 @@ struct Options {
   double spread = 0.8;        ///< handle targets as a fraction of the flat sheet's positions
   double lift = 0.02;         ///< height of the opened sheet's corners above the ground [m]
   double open_time = 1.5;     ///< handles pull until 2/3 of this and release at it [s]
+  bool lay_down = false;      ///< lower the held points to the ground before the release
   double settle = 1.0;        ///< time on the ground after the release [s]
   double crease_angle = 30;   ///< [deg]
   double report = 0.5;        ///< simulated time between progress lines [s]
+  std::string open_only;      ///< a crumpled sheet (PLY) to open, instead of the cycles
   std::string out;
 };
 
@@ -193,7 +196,7 @@ ps::Scene open_scene(const Options& o, const ps::Scene& crumple, const std::stri
   const Eigen::Vector3d shift(-c.x(), -c.y(), o.lift - x.col(2).minCoeff());
   Eigen::MatrixX3d y = x.rowwise() + shift.transpose();
   const papersim::remesh::SheetData d = papersim::remesh::read_sheet(crumpled_path);
-  const std::string lowered = fs::path(crumpled_path).replace_extension(".lowered.ply").string();
+  const std::string lowered = (fs::path(o.out) / fs::path(crumpled_path).stem()).string() + ".lowered.ply";
   papersim::remesh::write_sheet_file(lowered, d.mesh, y, Eigen::MatrixX3d::Zero(y.rows(), 3), d.width, d.height);
   s.sheet.mesh_path = lowered;
   // The handles' material points: the corners, and with --open-points 8 the edges' midpoints.
@@ -213,7 +216,9 @@ ps::Scene open_scene(const Options& o, const ps::Scene& crumple, const std::stri
   ax.normalize();
   Eigen::Vector3d by = Eigen::Vector3d::UnitZ().cross(ax);
   if (by.dot(ay) < 0) by = -by;  // face down: (ax, by, -z) is right-handed
-  const double t_pull = o.open_time * 2.0 / 3.0;
+  // Pull out at --lift until 2/3 of the opening time, then hold, or with --lay-down lower the held
+  // points to 1 mm above the ground by 0.9 of it, so the sheet is laid down instead of dropped.
+  const double t_pull = o.open_time * 2.0 / 3.0, t_lower = 0.9 * o.open_time;
   for (std::size_t i = 0; i < points.size(); ++i) {
     ps::HandleSpec hs;
     hs.material_point = points[i];
@@ -222,6 +227,7 @@ ps::Scene open_scene(const Options& o, const ps::Scene& crumple, const std::stri
     const Eigen::Vector3d target =
         o.spread * ((points[i].x() - 0.5 * w) * ax + (points[i].y() - 0.5 * h) * by) + Eigen::Vector3d(0, 0, o.lift);
     hs.keyframes = {{0.0, Eigen::Vector3d::Zero()}, {t_pull, target - at[i]}};
+    if (o.lay_down) hs.keyframes.push_back({t_lower, target - at[i] - Eigen::Vector3d(0, 0, o.lift - 1e-3)});
     s.handles.push_back(hs);
   }
   return s;
@@ -280,11 +286,16 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0.3, 0.95));
   app.add_option("--lift", o.lift, "height of the opened corners (and of the ball's lowest point) [m]")
       ->check(CLI::Range(0.002, 0.2));
-  app.add_option("--open-time", o.open_time, "the corners are pulled for 2/3 of it, held, then released [s]")
+  app.add_option("--open-time", o.open_time, "the handles pull for 2/3 of it, hold the sheet (or lower it: "
+                                             "--lay-down), then let go [s]")
       ->check(CLI::Range(0.1, 10.0));
+  app.add_flag("--lay-down", o.lay_down, "lower the held sheet to 1 mm above the ground before letting go (default: "
+                                         "let go at --lift)");
   app.add_option("--settle", o.settle, "time on the ground after the release [s]")->check(CLI::Range(0.0, 10.0));
   app.add_option("--crease-angle", o.crease_angle, "crease threshold [deg]")->check(CLI::Range(0.1, 179.0));
   app.add_option("--report", o.report, "simulated time between progress lines [s]")->check(CLI::Range(1e-3, 100.0));
+  app.add_option("--open-only", o.open_only, "only open this crumpled sheet (a cycle_K_crumpled.ply) into DIR/open.ply")
+      ->check(CLI::ExistingFile);
   app.add_option("--out", o.out, "folder for each phase's sheet (PLY) and cycles.csv")->required();
   CLI11_PARSE(app, argc, argv);
   try {
@@ -319,6 +330,20 @@ int main(int argc, char** argv) {
       }
       papersim::common::write_text_atomically(fs::path(o.out) / "cycles.csv", csv);
     };
+    if (!o.open_only.empty()) {
+      const papersim::remesh::SheetData d = papersim::remesh::read_sheet(o.open_only);
+      mesh = d.mesh;
+      x = d.positions;
+      const ps::Scene crumple = crumple_scene(o, 1, "", x);
+      const ps::Scene open = open_scene(o, crumple, o.open_only, x, mesh);
+      PhaseFigures po = run_phase(open, 1, "open", o, mesh, x);
+      save(o.out, "open.ply", mesh, x, open);
+      print_figures(po);
+      check(po, open);
+      all.push_back(po);
+      write_csv();
+      o.cycles = 0;
+    }
     for (int k = 1; k <= o.cycles; ++k) {
       const ps::Scene crumple = crumple_scene(o, k, flat_path, x);
       PhaseFigures pc = run_phase(crumple, k, "crumple", o, mesh, x);
@@ -337,7 +362,7 @@ int main(int argc, char** argv) {
       plastic_length.push_back(po.creases.plastic_network_length);
       plastic_integral_open.push_back(po.plastic_integral);
     }
-    if (o.cycles >= 2) {
+    if (o.cycles >= 2 && o.open_only.empty()) {
       const Eigen::Vector3d a = log_fit(plastic_length), b = log_fit(plastic_integral_open);
       std::printf("plastic network length after cycle k = a + b ln k: a %.4f m, b %.4f m, R^2 %.3f\n", a(0), a(1), a(2));
       std::printf("plastic curvature integral after cycle k = a + b ln k: a %.4f m, b %.4f m, R^2 %.3f\n", b(0), b(1),
