@@ -33,27 +33,34 @@ def principal(K):
     return np.maximum(np.abs(mean + r), np.abs(mean - r))
 
 
-def maps(run, cycles, path):
+def panels(run, cycles, path, panel, cmap, clim, label):
+    """One map per cycle, side by side, with a shared colour bar. panel(ply) gives the 2D
+    polygons [mm], their values and the (x, y) extent [mm]."""
     fig, axes = plt.subplots(1, len(cycles), figsize=(2.0 * len(cycles) + 1.2, 3.4), squeeze=False,
                              constrained_layout=True)
-    top = None
     for ax, k in zip(axes[0], cycles):
-        X, F, K = read_ply(os.path.join(run, f"cycle_{k}_open.ply"))
-        kp = principal(K)
-        top = top or max(1.0, float(np.percentile(kp, 99.5)))
-        pc = PolyCollection(X[F] * 1e3, array=kp, cmap="viridis", edgecolors="face", linewidths=0.2)
-        pc.set_clim(0, top)
+        polygons, values, lo, hi = panel(os.path.join(run, f"cycle_{k}_open.ply"))
+        pc = PolyCollection(polygons, array=values, cmap=cmap, edgecolors="face", linewidths=0.2)
+        pc.set_clim(*(clim if clim else (0, max(1.0, float(np.percentile(values, 99.5))))))
+        clim = clim or pc.get_clim()  # the first panel's scale for all
         ax.add_collection(pc)
-        ax.set_xlim(X[:, 0].min() * 1e3, X[:, 0].max() * 1e3)
-        ax.set_ylim(X[:, 1].min() * 1e3, X[:, 1].max() * 1e3)
+        ax.set_xlim(lo[0], hi[0])
+        ax.set_ylim(lo[1], hi[1])
         ax.set_aspect("equal")
         ax.set_title(f"after cycle {k}", fontsize=9)
         ax.set_xlabel("x [mm]", fontsize=8)
         ax.tick_params(labelsize=7)
     axes[0][0].set_ylabel("y [mm]", fontsize=8)
     cb = fig.colorbar(pc, ax=list(axes[0]), shrink=0.8)
-    cb.set_label("plastic curvature [1/m]", fontsize=8)
+    cb.set_label(label, fontsize=8)
     fig.savefig(path, dpi=120)
+
+
+def plastic_panel(ply):
+    """The sheet in material coordinates, faces valued by their plastic curvature [1/m]."""
+    X, F, K = read_ply(ply)
+    X = X * 1e3
+    return X[F], principal(K), X.min(axis=0), X.max(axis=0)
 
 
 def world_positions(path):
@@ -72,28 +79,13 @@ def world_positions(path):
     return V[:, [props.index("x"), props.index("y"), props.index("z")]]
 
 
-def heights(run, cycles, path):
-    fig, axes = plt.subplots(1, len(cycles), figsize=(2.0 * len(cycles) + 1.2, 3.4), squeeze=False,
-                             constrained_layout=True)
-    for ax, k in zip(axes[0], cycles):
-        ply = os.path.join(run, f"cycle_{k}_open.ply")
-        _, F, _ = read_ply(ply)
-        x = world_positions(ply) * 1e3
-        order = np.argsort(x[F][:, :, 2].mean(axis=1))  # lower faces first, so the top layer shows
-        pc = PolyCollection(x[F][order][:, :, :2], array=x[F][order][:, :, 2].mean(axis=1), cmap="magma",
-                            edgecolors="face", linewidths=0.2)
-        pc.set_clim(0, 30)
-        ax.add_collection(pc)
-        ax.set_xlim(x[:, 0].min(), x[:, 0].max())
-        ax.set_ylim(x[:, 1].min(), x[:, 1].max())
-        ax.set_aspect("equal")
-        ax.set_title(f"after cycle {k}", fontsize=9)
-        ax.set_xlabel("x [mm]", fontsize=8)
-        ax.tick_params(labelsize=7)
-    axes[0][0].set_ylabel("y [mm]", fontsize=8)
-    cb = fig.colorbar(pc, ax=list(axes[0]), shrink=0.8)
-    cb.set_label("height [mm]", fontsize=8)
-    fig.savefig(path, dpi=120)
+def height_panel(ply):
+    """The sheet seen from above, faces valued by their height [mm], lower faces drawn first."""
+    _, F, _ = read_ply(ply)
+    x = world_positions(ply) * 1e3
+    z = x[F][:, :, 2].mean(axis=1)
+    order = np.argsort(z)
+    return x[F][order][:, :, :2], z[order], x[:, :2].min(axis=0), x[:, :2].max(axis=0)
 
 
 def growth(rows, path):
@@ -123,10 +115,11 @@ def main():
         rows = [r for r in csv.DictReader(f) if r["phase"] == "open"]
     if not rows:
         sys.exit(f"{a.run}/cycles.csv: no finished cycle")
+    cycles = [int(r["cycle"]) for r in rows]
     if a.maps:
-        maps(a.run, [int(r["cycle"]) for r in rows], a.maps)
+        panels(a.run, cycles, a.maps, plastic_panel, "viridis", None, "plastic curvature [1/m]")
     if a.heights:
-        heights(a.run, [int(r["cycle"]) for r in rows], a.heights)
+        panels(a.run, cycles, a.heights, height_panel, "magma", (0, 30), "height [mm]")
     if a.growth:
         growth(rows, a.growth)
 
