@@ -143,7 +143,8 @@ std::string save(const std::string& dir, const std::string& name, const papersim
 /// The crumple of cycle `k` (1-based): the scenario's scene; from cycle 2 on its sheet is the
 /// opened sheet `flat_path` (positions `x`), turned by the scenario's pose about its centroid
 /// into the cavity's centre; the cavity grows to hold it with a 10 mm margin when needed.
-ps::Scene crumple_scene(const Options& o, int k, const std::string& flat_path, const Eigen::MatrixX3d& x) {
+ps::Scene crumple_scene(const Options& o, int k, const std::string& flat_path,
+                        const papersim::remesh::SheetMesh& mesh, const Eigen::MatrixX3d& x) {
   ps::Scene s = ps::make_scenario("crumple", static_cast<std::uint64_t>(o.seed));
   if (o.edge > 0) s.sheet.edge_length = o.edge;
   if (o.time_step > 0) s.time_step = o.time_step;
@@ -167,9 +168,9 @@ ps::Scene crumple_scene(const Options& o, int k, const std::string& flat_path, c
       reach = std::max(reach, (y.row(v).transpose() - centre).norm());
     }
     radius = std::max(radius, reach + 0.01);
-    const papersim::remesh::SheetData d = papersim::remesh::read_sheet(flat_path);
     const std::string turned = fs::path(flat_path).replace_extension(".upright.ply").string();
-    papersim::remesh::write_sheet_file(turned, d.mesh, y, Eigen::MatrixX3d::Zero(y.rows(), 3), d.width, d.height);
+    papersim::remesh::write_sheet_file(turned, mesh, y, Eigen::MatrixX3d::Zero(y.rows(), 3), s.sheet.width,
+                                       s.sheet.height);
     s.sheet.mesh_path = turned;
   }
   cavity = papersim::collision::shrinking_cavity(centre, radius, t_hold, t_end, end_radius / radius,
@@ -195,9 +196,9 @@ ps::Scene open_scene(const Options& o, const ps::Scene& crumple, const std::stri
   const Eigen::Vector3d c = x.colwise().mean().transpose();
   const Eigen::Vector3d shift(-c.x(), -c.y(), o.lift - x.col(2).minCoeff());
   Eigen::MatrixX3d y = x.rowwise() + shift.transpose();
-  const papersim::remesh::SheetData d = papersim::remesh::read_sheet(crumpled_path);
   const std::string lowered = (fs::path(o.out) / fs::path(crumpled_path).stem()).string() + ".lowered.ply";
-  papersim::remesh::write_sheet_file(lowered, d.mesh, y, Eigen::MatrixX3d::Zero(y.rows(), 3), d.width, d.height);
+  papersim::remesh::write_sheet_file(lowered, mesh, y, Eigen::MatrixX3d::Zero(y.rows(), 3), s.sheet.width,
+                                     s.sheet.height);
   s.sheet.mesh_path = lowered;
   // The handles' material points: the corners, and with --open-points 8 the edges' midpoints.
   const double w = s.sheet.width, h = s.sheet.height;
@@ -334,7 +335,11 @@ int main(int argc, char** argv) {
       const papersim::remesh::SheetData d = papersim::remesh::read_sheet(o.open_only);
       mesh = d.mesh;
       x = d.positions;
-      const ps::Scene crumple = crumple_scene(o, 1, "", x);
+      const ps::Scene crumple = crumple_scene(o, 1, "", mesh, x);
+      if (std::abs(d.width - crumple.sheet.width) > 1e-9 || std::abs(d.height - crumple.sheet.height) > 1e-9)
+        throw std::runtime_error("--open-only " + o.open_only + ": the sheet is " + std::to_string(d.width) + " x " +
+                                 std::to_string(d.height) + " m, --scale gives " + std::to_string(crumple.sheet.width) +
+                                 " x " + std::to_string(crumple.sheet.height) + " m");
       const ps::Scene open = open_scene(o, crumple, o.open_only, x, mesh);
       PhaseFigures po = run_phase(open, 1, "open", o, mesh, x);
       save(o.out, "open.ply", mesh, x, open);
@@ -345,7 +350,7 @@ int main(int argc, char** argv) {
       o.cycles = 0;
     }
     for (int k = 1; k <= o.cycles; ++k) {
-      const ps::Scene crumple = crumple_scene(o, k, flat_path, x);
+      const ps::Scene crumple = crumple_scene(o, k, flat_path, mesh, x);
       PhaseFigures pc = run_phase(crumple, k, "crumple", o, mesh, x);
       const std::string crumpled_path = save(o.out, "cycle_" + std::to_string(k) + "_crumpled.ply", mesh, x, crumple);
       print_figures(pc);
