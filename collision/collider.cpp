@@ -237,8 +237,38 @@ double Collider::moving_segment_step(const Eigen::Vector3d& p, const Eigen::Vect
   return segment_step(p, d, t, limit, keep);
 }
 
+double Collider::convex_piece_step(const Eigen::Vector3d& q, const Eigen::Vector3d& d, double tq, double dt,
+                                   double length, double stop, double t_inside) const {
+  Eigen::Vector3d n;
+  const double phi = distance_at_pose(q, motion.pose(tq), &n);
+  if (!(phi > stop)) return 0.0;
+  const double rate = -n.dot(d - dt * motion.linear_velocity(t_inside));
+  return rate > 0 ? std::min(length, (phi - stop) / rate) : length;
+}
+
 // ---------------------------------------------------------------------------------------------
 // PlaneCollider
+
+bool PlaneCollider::moves_affinely(double t0, double t1) const {
+  for (double t = t0; t < t1; t = motion.next_keyframe_time(t)) {
+    if (motion.scale_rate(t) != 0) return false;
+    const Eigen::Vector3d omega = motion.angular_velocity(t);
+    if (omega.squaredNorm() == 0) continue;
+    const Eigen::Vector3d normal = motion.pose(t).linear().col(2).normalized();
+    if ((omega - omega.dot(normal) * normal).norm() > 1e-9 * omega.norm()) return false;
+  }
+  return true;
+}
+
+double PlaneCollider::moving_segment_step(const Eigen::Vector3d& p, const Eigen::Vector3d& d, double t, double dt,
+                                          double limit, double keep) const {
+  if (dt == 0) return segment_step(p, d, t, limit, keep);
+  if (dt < 0 || !moves_affinely(t, t + limit * dt)) return -1.0;
+  return step_over_pieces(p, d, t, dt, limit, keep,
+                          [&](const Eigen::Vector3d& q, double tq, double length, double stop, double t_inside) {
+                            return convex_piece_step(q, d, tq, dt, length, stop, t_inside);
+                          });
+}
 
 double PlaneCollider::local_distance(const Eigen::Vector3d& p, Eigen::Vector3d* gradient) const {
   if (gradient) *gradient = Eigen::Vector3d::UnitZ();

@@ -8,6 +8,7 @@
 /// property: the field of the scaled shape is s phi_local(X / s), again 1-Lipschitz.
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <memory>
 #include <vector>
 
@@ -157,6 +158,34 @@ class Collider {
   RigidMotion motion;     ///< world pose over time
 
  protected:
+  /// moving_segment_step's walk over the keyframe pieces of [t, t + limit dt], within each of
+  /// which translation and scale are linear in time: `piece(q, tq, length, stop, t_inside)` is
+  /// the largest step in [0, length] of the point q = p + a d, moving from time tq = t + a dt,
+  /// that keeps phi >= stop [m] (stop = keep phi(p, t)); t_inside is a time inside the piece.
+  template <class Piece>
+  double step_over_pieces(const Eigen::Vector3d& p, const Eigen::Vector3d& d, double t, double dt, double limit,
+                          double keep, Piece&& piece) const {
+    const double phi0 = distance(p, t);
+    if (!(phi0 > 0)) return 0.0;
+    const double stop = keep * phi0;
+    double a = 0;
+    for (double tk = motion.next_keyframe_time(t); a < limit; tk = motion.next_keyframe_time(tk)) {
+      const double end = std::min(limit, (tk - t) / dt);
+      if (end <= a) continue;
+      const double b = piece(p + a * d, t + a * dt, end - a, stop, t + 0.5 * (a + end) * dt);
+      if (b < end - a) return a + b;
+      a = end;
+    }
+    return limit;
+  }
+
+  /// One piece of step_over_pieces for a convex field whose frame translates within the piece
+  /// (it may also turn or scale in ways that leave the field unchanged): the field is convex
+  /// along the point's path relative to the frame, so it stays above its tangent at the start,
+  /// phi(a) >= phi + a n.r, r = d - dt c'(t_inside); exact for a plane.
+  double convex_piece_step(const Eigen::Vector3d& q, const Eigen::Vector3d& d, double tq, double dt, double length,
+                           double stop, double t_inside) const;
+
   /// Signed distance in the local frame; gradient (unit, local frame) when not null.
   virtual double local_distance(const Eigen::Vector3d& p, Eigen::Vector3d* gradient) const = 0;
   /// Local bounding box of the surface.
@@ -167,6 +196,12 @@ class Collider {
 class PlaneCollider : public Collider {
  public:
   bool is_convex() const override { return true; }
+  /// Translation, and any turn about the plane's normal (which leaves the field unchanged).
+  bool moves_affinely(double t0, double t1) const override;
+  /// Exact for these motions: the distance is linear along the joint motion within a keyframe
+  /// piece (a pressing plate, a moving floor).
+  double moving_segment_step(const Eigen::Vector3d& p, const Eigen::Vector3d& d, double t, double dt,
+                             double limit, double keep) const override;
 
  protected:
   double local_distance(const Eigen::Vector3d& p, Eigen::Vector3d* gradient) const override;

@@ -275,34 +275,20 @@ double AnalyticCollider::moving_segment_step(const Eigen::Vector3d& p, const Eig
                                              double dt, double limit, double keep) const {
   if (dt == 0) return segment_step(p, d, t, limit, keep);
   if (dt < 0 || !moves_affinely(t, t + limit * dt)) return -1.0;
-  const double phi0 = distance(p, t);
-  if (!(phi0 > 0)) return 0.0;
-  const double stop = keep * phi0;
-  double a = 0;
-  for (double tk = motion.next_keyframe_time(t); a < limit; tk = motion.next_keyframe_time(tk)) {
-    const double end = std::min(limit, (tk - t) / dt);
-    if (end <= a) continue;
-    const double b = piece_step(p + a * d, d, t + a * dt, dt, end - a, stop, t + 0.5 * (a + end) * dt);
-    if (b < end - a) return a + b;
-    a = end;
-  }
-  return limit;
+  return step_over_pieces(p, d, t, dt, limit, keep,
+                          [&](const Eigen::Vector3d& q, double tq, double length, double stop, double t_inside) {
+                            return piece_step(q, d, tq, dt, length, stop, t_inside);
+                          });
 }
 
 double AnalyticCollider::piece_step(const Eigen::Vector3d& p, const Eigen::Vector3d& d, double t, double dt,
                                     double length, double stop, double t_inside) const {
-  const Eigen::Affine3d pose = motion.pose(t);
-  Eigen::Vector3d n;
-  const double phi = distance_at_pose(p, pose, &n);
-  if (!(phi > stop)) return 0.0;
-  // The point's motion relative to the frame's origin, per unit a.
-  const Eigen::Vector3d r = d - dt * motion.linear_velocity(t_inside);
-  if (m_shape.kind != ShapeKind::inverted_sphere) {
-    const double rate = -n.dot(r);  // phi(a) >= phi + a n.r (convex along the relative segment)
-    return rate > 0 ? std::min(length, (phi - stop) / rate) : length;
-  }
+  if (m_shape.kind != ShapeKind::inverted_sphere) return convex_piece_step(p, d, t, dt, length, stop, t_inside);
   // phi(a) = s(a) R - |q + a r| with s linear in a: concave, so f(a) = |q + a r| - (s(a) R -
   // stop) is convex, negative at 0, and the admissible steps are [0, root].
+  const Eigen::Affine3d pose = motion.pose(t);
+  if (!(distance_at_pose(p, pose) > stop)) return 0.0;
+  const Eigen::Vector3d r = d - dt * motion.linear_velocity(t_inside);
   const double s0 = pose.linear().col(0).norm(), rate_s = motion.scale_rate(t_inside) * dt;
   const Eigen::Vector3d q = p - pose.translation();
   const auto f = [&](double a) { return (q + a * r).norm() - ((s0 + a * rate_s) * m_shape.radius - stop); };

@@ -1,6 +1,6 @@
 // Continuous collision detection of a point against an obstacle that moves during the step
 // (Collider::moving_segment_step): the joint motion p + a d, t + a dt, for the motions the
-// solver follows (a cylinder rolling along, a shrinking cavity).
+// solver follows (a cylinder rolling along, a shrinking cavity, a plate pressing down).
 #include "collision/collider_factory.hpp"
 #include "collision/shapes.hpp"
 
@@ -50,6 +50,21 @@ std::unique_ptr<pc::Collider> cavity() {
   k.time = 5.0;
   k.scale = 0.25;
   spec.keyframes.push_back(k);
+  return pc::make_collider(spec);
+}
+
+/// A pressing plate: the plane turned over (solid above, normal -z), at z = 0.04 m until 0.5 s,
+/// down to 0.005 m at 1.5 s, up again by 2 s.
+std::unique_ptr<pc::Collider> plate() {
+  pc::ColliderSpec spec;
+  spec.kind = pc::ColliderKind::plane;
+  pc::Keyframe k;
+  k.rotation = Eigen::Quaterniond(Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX()));
+  for (const auto& [t, z] : {std::pair{0.5, 0.04}, {1.5, 0.005}, {2.0, 0.04}}) {
+    k.time = t;
+    k.translation = Eigen::Vector3d(0.01, -0.02, z);
+    spec.keyframes.push_back(k);
+  }
   return pc::make_collider(spec);
 }
 
@@ -148,4 +163,53 @@ TEST(MovingCcd, ShrinkingCavityBoundIsExact) {
     }
   }
   EXPECT_GT(exact, 200);
+}
+
+// The pressing plate: its field is linear along the joint motion, so the bound is exact (the
+// point reaches 10% of its gap at the step returned, across the keyframe at 1.5 s too), a point
+// that moves with the plate is never held back, and a plate that tilts is not followed.
+TEST(MovingCcd, PressingPlateBoundIsExactAndATiltingPlateIsNotFollowed) {
+  const auto c = plate();
+  EXPECT_TRUE(c->moves_affinely(0.0, 3.0));
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::normal_distribution<double> n(0.0, 1.0);
+  int exact = 0;
+  for (int i = 0; i < 2000; ++i) {
+    const double t = 0.4 + 1.5 * u(rng), dt = 0.05 * u(rng);
+    const double top = c->motion.pose(t).translation().z();
+    const double gap = std::pow(10.0, -7 + 5 * u(rng));
+    const Eigen::Vector3d p(0.2 * (u(rng) - 0.5), 0.2 * (u(rng) - 0.5), top - gap);
+    ASSERT_NEAR(c->distance(p, t), gap, 1e-12);
+    const Eigen::Vector3d d = 0.01 * Eigen::Vector3d(n(rng), n(rng), n(rng));
+    const double a = c->moving_segment_step(p, d, t, dt, 1.0, 0.1);
+    ASSERT_GE(a, 0.0);
+    EXPECT_GE(smallest_relative_gap(*c, p, d, t, dt, a), 0.1 * (1 - 1e-6)) << "point " << i;
+    if (a < 1.0) {
+      ++exact;
+      EXPECT_NEAR(c->distance(p + a * d, t + a * dt) / c->distance(p, t), 0.1, 1e-6) << "point " << i;
+    }
+    // Carried down with the plate within its keyframe piece: the whole piece is allowed.
+    const Eigen::Vector3d with = dt * c->motion.linear_velocity(t);
+    EXPECT_GE(c->moving_segment_step(p, with, t, dt, 1.0, 0.1),
+              std::min(1.0, (c->motion.next_keyframe_time(t) - t) / dt) * (1 - 1e-12));
+  }
+  EXPECT_GT(exact, 200);
+  // A point at rest under the plate coming down at 0.035 m/s stops at 10% of its gap.
+  const Eigen::Vector3d rest(0, 0, 0.02);
+  const double phi0 = c->distance(rest, 1.0);
+  EXPECT_NEAR(c->moving_segment_step(rest, Eigen::Vector3d::Zero(), 1.0, 1.0, 1.0, 0.1), 0.9 * phi0 / 0.035, 1e-12);
+
+  // Turning about its normal leaves the plane where it is (followed); tilting does not.
+  pc::ColliderSpec spec;
+  spec.kind = pc::ColliderKind::plane;
+  pc::Keyframe a, b;
+  b.time = 1.0;
+  b.rotation = Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ()));
+  spec.keyframes = {a, b};
+  EXPECT_TRUE(pc::make_collider(spec)->moves_affinely(0.1, 0.2));
+  b.rotation = Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitX()));
+  spec.keyframes = {a, b};
+  EXPECT_FALSE(pc::make_collider(spec)->moves_affinely(0.1, 0.2));
+  EXPECT_LT(pc::make_collider(spec)->moving_segment_step(rest, Eigen::Vector3d::Zero(), 0.1, 0.1, 1.0, 0.1), 0.0);
 }
