@@ -16,10 +16,14 @@
 //     limit) to --spread times the flat sheet's positions of those points at --lift, in the
 //     orientation (face up or down) closest to the ball's, in 2/3 of --open-time; then they
 //     hold it there (or with --lay-down lower it to 1 mm above the ground) and let go at
-//     --open-time, and it settles on the ground until --open-time + --settle.
+//     --open-time, and it settles on the ground until --open-time + --settle;
+//  3. with --press GAP, press: a plate (a plane, solid above) comes down from 3 mm above the
+//     opened sheet to GAP above the ground in --press-time, holds 0.25 s, rises in 0.25 s,
+//     and the sheet settles for --settle, as crumpled paper is flattened by hand or between
+//     two plates before the next cycle (Gottesman et al.).
 // Each phase is a run of its own scene whose sheet is the previous phase's state read back from
 // its PLY (plastic state and damage included, velocities zero): DIR/cycle_K_crumpled.ply and
-// DIR/cycle_K_open.ply. DIR/cycles.csv has one line per phase (rewritten after each).
+// DIR/cycle_K_open.ply (and DIR/cycle_K_pressed.ply). DIR/cycles.csv has one line per phase (rewritten after each).
 #include <CLI/CLI.hpp>
 #include <Eigen/Geometry>
 #include <chrono>
@@ -51,15 +55,20 @@ struct Options {
   double scale = 1.0;         ///< sheet size and cavity radii as a fraction of the scenario's
   double end_radius = 0.0;    ///< cavity radius at the end of each crumple [m]; 0: scale x 0.05
   int max_iterations = 0;     ///< Newton iterations per step; 0: the scenario's 200
+  double strain_limit = 0;    ///< largest principal strain; 0: the scenario's
   int open_points = 8;        ///< handles that open the sheet: 4 (corners) or 8 (and edge midpoints)
   double spread = 0.8;        ///< handle targets as a fraction of the flat sheet's positions
   double lift = 0.02;         ///< height of the opened sheet's corners above the ground [m]
   double open_time = 1.5;     ///< handles pull until 2/3 of this and release at it [s]
   bool lay_down = false;      ///< lower the held points to the ground before the release
   double settle = 1.0;        ///< time on the ground after the release [s]
+  double press = 0.0;         ///< gap under the pressing plate [m]; 0: no pressing
+  double press_time = 1.0;    ///< the plate's way down [s]
+  double press_friction = 0;  ///< Coulomb coefficient between the plate and the sheet [-]
   double crease_angle = 30;   ///< [deg]
   double report = 0.5;        ///< simulated time between progress lines [s]
   std::string open_only;      ///< a crumpled sheet (PLY) to open, instead of the cycles
+  std::string press_only;     ///< an opened sheet (PLY) to press, instead of the cycles
   std::string out;
 };
 
@@ -72,6 +81,8 @@ struct PhaseFigures {
   double max_stretch = 0, min_gap = 0;
   pv::CreaseMetrics creases;
   double plastic_integral = 0;  ///< integral of the largest |principal plastic curvature| [m]
+  double height = 0;            ///< highest minus lowest point at the end [m]
+  double lowest_top = 0;        ///< lowest the highest point came during the phase [m]
 };
 
 /// Integral over the sheet (material area) of the largest absolute principal plastic curvature:
@@ -98,9 +109,10 @@ PhaseFigures run_phase(const ps::Scene& scene, int cycle, const std::string& pha
   const auto start = std::chrono::steady_clock::now();
   const auto wall = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
   ps::Run run(scene);
-  double next = o.report;
+  double next = o.report, lowest_top = INFINITY;
   while (!run.finished()) {
     run.step();
+    lowest_top = std::min(lowest_top, run.state().positions_matrix().col(2).maxCoeff());
     if (run.state().time + 1e-9 < next || run.finished()) continue;
     next += o.report;
     const double w = wall(), t = run.state().time;
@@ -129,6 +141,8 @@ PhaseFigures run_phase(const ps::Scene& scene, int cycle, const std::string& pha
   mo.self_intersections = false;  // counted by the run
   p.creases = pv::compute_metrics(mesh.material_coords(), positions, mesh.faces(), mesh.plastic_curvature(), mo).creases;
   p.plastic_integral = plastic_integral(mesh);
+  p.height = positions.col(2).maxCoeff() - positions.col(2).minCoeff();
+  p.lowest_top = lowest_top;
   return p;
 }
 
@@ -149,6 +163,7 @@ ps::Scene crumple_scene(const Options& o, int k, const std::string& flat_path,
   if (o.edge > 0) s.sheet.edge_length = o.edge;
   if (o.time_step > 0) s.time_step = o.time_step;
   if (o.max_iterations > 0) s.newton.max_iterations = o.max_iterations;
+  if (o.strain_limit > 0) s.sheet.material.strain_limit = o.strain_limit;
   auto& cavity = s.obstacles.at(0);
   const Eigen::Vector3d centre = cavity.keyframes.front().translation;
   s.sheet.width *= o.scale;
@@ -178,20 +193,27 @@ ps::Scene crumple_scene(const Options& o, int k, const std::string& flat_path,
   return s;
 }
 
-/// The opening of a crumpled sheet (`crumpled_path`, positions `x`) on the ground.
-ps::Scene open_scene(const Options& o, const ps::Scene& crumple, const std::string& crumpled_path,
-                     const Eigen::MatrixX3d& x, const papersim::remesh::SheetMesh& mesh) {
+/// A scene on the ground (friction 0.3) with the crumple's sheet, contact and solver settings
+/// and nothing else.
+ps::Scene ground_scene(const ps::Scene& crumple, const std::string& name) {
   ps::Scene s;
-  s.name = "crumple-open";
+  s.name = name;
   s.gravity = crumple.gravity;
   s.time_step = crumple.time_step;
-  s.duration = o.open_time + o.settle;
   s.sheet = crumple.sheet;
   s.ground = true;
   s.ground_friction = 0.3;
   s.contact = crumple.contact;
   s.self_contact = crumple.self_contact;
   s.newton = crumple.newton;
+  return s;
+}
+
+/// The opening of a crumpled sheet (`crumpled_path`, positions `x`) on the ground.
+ps::Scene open_scene(const Options& o, const ps::Scene& crumple, const std::string& crumpled_path,
+                     const Eigen::MatrixX3d& x, const papersim::remesh::SheetMesh& mesh) {
+  ps::Scene s = ground_scene(crumple, "crumple-open");
+  s.duration = o.open_time + o.settle;
   // Lowest point to --lift above the ground, centre over the origin.
   const Eigen::Vector3d c = x.colwise().mean().transpose();
   const Eigen::Vector3d shift(-c.x(), -c.y(), o.lift - x.col(2).minCoeff());
@@ -234,12 +256,37 @@ ps::Scene open_scene(const Options& o, const ps::Scene& crumple, const std::stri
   return s;
 }
 
+/// The pressing of an opened sheet (`open_path`, positions `x`) on the ground: a plate (the plane
+/// turned over, solid above) from 3 mm above the sheet's highest point (or above --press) down
+/// to --press above the ground in --press-time, held 0.25 s, raised in 0.25 s to 50 mm above
+/// its start, out of the sheet's reach; then --settle.
+ps::Scene press_scene(const Options& o, const ps::Scene& crumple, const std::string& open_path,
+                      const Eigen::MatrixX3d& x) {
+  ps::Scene s = ground_scene(crumple, "crumple-press");
+  s.sheet.mesh_path = open_path;
+  const double top = std::max(x.col(2).maxCoeff(), o.press) + 3e-3;
+  const double t_down = o.press_time, t_up = t_down + 0.5;
+  s.duration = t_up + o.settle;
+  papersim::collision::ColliderSpec plate;
+  plate.kind = papersim::collision::ColliderKind::plane;
+  plate.friction = o.press_friction;
+  papersim::collision::Keyframe k;
+  k.rotation = Eigen::Quaterniond(Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX()));
+  for (const auto& [t, z] : {std::pair{0.0, top}, {t_down, o.press}, {t_down + 0.25, o.press}, {t_up, top + 0.05}}) {
+    k.time = t;
+    k.translation = Eigen::Vector3d(0, 0, z);
+    plate.keyframes.push_back(k);
+  }
+  s.obstacles = {plate};
+  return s;
+}
+
 void print_figures(const PhaseFigures& p) {
   const auto& c = p.creases;
   std::printf("cycle %d %s: wall %.1f s, %d vertices, %d Newton, %d halved, %d intersecting pairs, max stretch %.5f, "
-              "min gap %.2e m\n",
+              "min gap %.2e m, height %.1f mm (top at least %.1f mm)\n",
               p.cycle, p.phase.c_str(), p.wall, p.vertices, p.newton, p.halved, p.self_intersections, p.max_stretch,
-              p.min_gap);
+              p.min_gap, 1e3 * p.height, 1e3 * p.lowest_top);
   std::printf("  creases (> %.0f deg): %d lines, %.4f m; plastic network: %d lines, %.4f m (mu %.3f sigma %.3f KS %.3f); "
               "plastic curvature integral %.4f m\n",
               c.threshold_deg, c.lines, c.total_length, c.plastic_network_lines, c.plastic_network_length,
@@ -280,6 +327,8 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0.0, 0.2));
   app.add_option("--max-iterations", o.max_iterations, "Newton iterations per step (0: the scenario's 200)")
       ->check(CLI::Range(0, 10000));
+  app.add_option("--strain-limit", o.strain_limit, "largest principal strain of the sheet (0: the scenario's 0.005)")
+      ->check(CLI::Range(0.0, 0.1));
   app.add_option("--open-points", o.open_points, "handles that open the sheet: 4 (its corners) or 8 (and its edges' "
                                                  "midpoints)")
       ->check(CLI::IsMember({4, 8}));
@@ -292,13 +341,29 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0.1, 10.0));
   app.add_flag("--lay-down", o.lay_down, "lower the held sheet to 1 mm above the ground before letting go (default: "
                                          "let go at --lift)");
-  app.add_option("--settle", o.settle, "time on the ground after the release [s]")->check(CLI::Range(0.0, 10.0));
+  app.add_option("--settle", o.settle, "time on the ground after the release (and after the press) [s]")
+      ->check(CLI::Range(0.0, 10.0));
+  app.add_option("--press", o.press, "after each opening, press the sheet flat under a plate down to this gap above "
+                                     "the ground [m] (0: no pressing)")
+      ->check(CLI::Range(0.0, 0.05));
+  app.add_option("--press-time", o.press_time, "the plate's way down [s]")->check(CLI::Range(0.05, 10.0));
+  app.add_option("--press-friction", o.press_friction, "friction coefficient between the plate and the sheet")
+      ->check(CLI::Range(0.0, 5.0));
   app.add_option("--crease-angle", o.crease_angle, "crease threshold [deg]")->check(CLI::Range(0.1, 179.0));
   app.add_option("--report", o.report, "simulated time between progress lines [s]")->check(CLI::Range(1e-3, 100.0));
-  app.add_option("--open-only", o.open_only, "only open this crumpled sheet (a cycle_K_crumpled.ply) into DIR/open.ply")
+  app.add_option("--open-only", o.open_only, "only open (and with --press press) this crumpled sheet (a cycle_K_crumpled.ply) into "
+                                                "DIR/open.ply (and DIR/pressed.ply)")
       ->check(CLI::ExistingFile);
+  app.add_option("--press-only", o.press_only, "only press this opened sheet (a cycle_K_open.ply) into DIR/pressed.ply "
+                                               "(needs --press)")
+      ->check(CLI::ExistingFile)
+      ->excludes("--open-only");
   app.add_option("--out", o.out, "folder for each phase's sheet (PLY) and cycles.csv")->required();
   CLI11_PARSE(app, argc, argv);
+  if (!o.press_only.empty() && o.press <= 0) {
+    std::fprintf(stderr, "papersim_crumple_cycles: --press-only needs --press GAP\n");
+    return 2;
+  }
   try {
     fs::create_directories(o.out);
     std::vector<PhaseFigures> all;
@@ -318,52 +383,53 @@ int main(int argc, char** argv) {
       std::string csv =
           "cycle,phase,wall_s,sim_time_s,vertices,newton,halved,self_intersections,max_stretch,min_gap_m,crease_lines,"
           "crease_length_m,plastic_lines,plastic_length_m,plastic_log_mu,plastic_log_sigma,plastic_ks,"
-          "plastic_curvature_integral_m\n";
+          "plastic_curvature_integral_m,height_m,lowest_top_m\n";
       for (const auto& p : all) {
-        char line[512];
+        char line[640];
         const auto& c = p.creases;
-        std::snprintf(line, sizeof line, "%d,%s,%.2f,%.4f,%d,%d,%d,%d,%.6f,%.4e,%d,%.5f,%d,%.5f,%.4f,%.4f,%.4f,%.5f\n",
+        std::snprintf(line, sizeof line, "%d,%s,%.2f,%.4f,%d,%d,%d,%d,%.6f,%.4e,%d,%.5f,%d,%.5f,%.4f,%.4f,%.4f,%.5f,%.5f,%.5f\n",
                       p.cycle, p.phase.c_str(), p.wall, p.sim_time, p.vertices, p.newton, p.halved,
                       p.self_intersections, p.max_stretch, p.min_gap, c.lines, c.total_length, c.plastic_network_lines,
                       c.plastic_network_length, c.plastic_network_log_length_mean, c.plastic_network_log_length_std,
-                      c.plastic_network_log_normal_ks, p.plastic_integral);
+                      c.plastic_network_log_normal_ks, p.plastic_integral, p.height, p.lowest_top);
         csv += line;
       }
       papersim::common::write_text_atomically(fs::path(o.out) / "cycles.csv", csv);
     };
-    if (!o.open_only.empty()) {
-      const papersim::remesh::SheetData d = papersim::remesh::read_sheet(o.open_only);
+    // Runs one phase, writes its sheet to DIR/`file` and its line of DIR/cycles.csv; returns
+    // the sheet's path.
+    const auto phase = [&](const ps::Scene& scene, int k, const std::string& name, const std::string& file) {
+      const PhaseFigures p = run_phase(scene, k, name, o, mesh, x);
+      const std::string written = save(o.out, file, mesh, x, scene);
+      print_figures(p);
+      check(p, scene);
+      all.push_back(p);
+      write_csv();
+      return written;
+    };
+    if (!o.open_only.empty() || !o.press_only.empty()) {
+      const std::string& path = o.open_only.empty() ? o.press_only : o.open_only;
+      const std::string option = o.open_only.empty() ? "--press-only " : "--open-only ";
+      const papersim::remesh::SheetData d = papersim::remesh::read_sheet(path);
       mesh = d.mesh;
       x = d.positions;
       const ps::Scene crumple = crumple_scene(o, 1, "", mesh, x);
       if (std::abs(d.width - crumple.sheet.width) > 1e-9 || std::abs(d.height - crumple.sheet.height) > 1e-9)
-        throw std::runtime_error("--open-only " + o.open_only + ": the sheet is " + std::to_string(d.width) + " x " +
+        throw std::runtime_error(option + path + ": the sheet is " + std::to_string(d.width) + " x " +
                                  std::to_string(d.height) + " m, --scale gives " + std::to_string(crumple.sheet.width) +
                                  " x " + std::to_string(crumple.sheet.height) + " m");
-      const ps::Scene open = open_scene(o, crumple, o.open_only, x, mesh);
-      PhaseFigures po = run_phase(open, 1, "open", o, mesh, x);
-      save(o.out, "open.ply", mesh, x, open);
-      print_figures(po);
-      check(po, open);
-      all.push_back(po);
-      write_csv();
+      std::string open_path = path;
+      if (!o.open_only.empty()) open_path = phase(open_scene(o, crumple, o.open_only, x, mesh), 1, "open", "open.ply");
+      if (o.press > 0) phase(press_scene(o, crumple, open_path, x), 1, "press", "pressed.ply");
       o.cycles = 0;
     }
     for (int k = 1; k <= o.cycles; ++k) {
+      const std::string cycle = "cycle_" + std::to_string(k);
       const ps::Scene crumple = crumple_scene(o, k, flat_path, mesh, x);
-      PhaseFigures pc = run_phase(crumple, k, "crumple", o, mesh, x);
-      const std::string crumpled_path = save(o.out, "cycle_" + std::to_string(k) + "_crumpled.ply", mesh, x, crumple);
-      print_figures(pc);
-      check(pc, crumple);
-      all.push_back(pc);
-      write_csv();
-      const ps::Scene open = open_scene(o, crumple, crumpled_path, x, mesh);
-      PhaseFigures po = run_phase(open, k, "open", o, mesh, x);
-      flat_path = save(o.out, "cycle_" + std::to_string(k) + "_open.ply", mesh, x, open);
-      print_figures(po);
-      check(po, open);
-      all.push_back(po);
-      write_csv();
+      const std::string crumpled_path = phase(crumple, k, "crumple", cycle + "_crumpled.ply");
+      flat_path = phase(open_scene(o, crumple, crumpled_path, x, mesh), k, "open", cycle + "_open.ply");
+      if (o.press > 0) flat_path = phase(press_scene(o, crumple, flat_path, x), k, "press", cycle + "_pressed.ply");
+      const PhaseFigures& po = all.back();
       plastic_length.push_back(po.creases.plastic_network_length);
       plastic_integral_open.push_back(po.plastic_integral);
     }

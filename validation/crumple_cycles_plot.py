@@ -5,8 +5,8 @@
     python3 validation/crumple_cycles_plot.py DIR --maps maps.png --heights heights.png --growth growth.png
 
 --maps: for each cycle, the opened sheet in material coordinates, every face coloured by its
-largest absolute principal plastic curvature (DIR/cycle_K_open.ply). --heights: the opened sheets
-seen from above, every face coloured by its height above the ground. --growth: the plastic
+largest absolute principal plastic curvature (DIR/cycle_K_open.ply, or DIR/cycle_K_pressed.ply
+when the run pressed each cycle). --heights: the opened (or pressed) sheets seen from above, every face coloured by its height above the ground. --growth: the plastic
 curvature integral and the plastic network length after each cycle against ln(cycle), with the
 least-squares line a + b ln k (DIR/cycles.csv). Needs numpy and matplotlib (Debian: python3-numpy,
 python3-matplotlib)."""
@@ -33,13 +33,13 @@ def principal(K):
     return np.maximum(np.abs(mean + r), np.abs(mean - r))
 
 
-def panels(run, cycles, path, panel, cmap, clim, label):
+def panels(run, cycles, path, panel, cmap, clim, label, last="open"):
     """One map per cycle, side by side, with a shared colour bar. panel(ply) gives the 2D
     polygons [mm], their values and the (x, y) extent [mm]."""
     fig, axes = plt.subplots(1, len(cycles), figsize=(2.0 * len(cycles) + 1.2, 3.4), squeeze=False,
                              constrained_layout=True)
     for ax, k in zip(axes[0], cycles):
-        polygons, values, lo, hi = panel(os.path.join(run, f"cycle_{k}_open.ply"))
+        polygons, values, lo, hi = panel(os.path.join(run, f"cycle_{k}_{last}.ply"))
         pc = PolyCollection(polygons, array=values, cmap=cmap, edgecolors="face", linewidths=0.2)
         pc.set_clim(*(clim if clim else (0, max(1.0, float(np.percentile(values, 99.5))))))
         clim = clim or pc.get_clim()  # the first panel's scale for all
@@ -98,7 +98,7 @@ def growth(rows, path):
         ax.plot(np.log(k), y, marker, label=f"{label}: {a:.3f} + {b:.3f} ln k")
         ax.plot(np.log(k), a + b * np.log(k), "-", color=ax.lines[-1].get_color(), lw=0.8)
     ax.set_xlabel("ln(cycle)")
-    ax.set_ylabel("after opening [m]")
+    ax.set_ylabel("after the cycle [m]")
     ax.legend(fontsize=7)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
@@ -112,14 +112,18 @@ def main():
     ap.add_argument("--growth", help="write the growth against ln(cycle) to this PNG")
     a = ap.parse_args()
     with open(os.path.join(a.run, "cycles.csv")) as f:
-        rows = [r for r in csv.DictReader(f) if r["phase"] == "open"]
+        all_rows = list(csv.DictReader(f))
+    # A cycle ends with its opening, or with its pressing when the run pressed (--press).
+    last = "press" if any(r["phase"] == "press" for r in all_rows) else "open"
+    rows = [r for r in all_rows if r["phase"] == last]
     if not rows:
         sys.exit(f"{a.run}/cycles.csv: no finished cycle")
     cycles = [int(r["cycle"]) for r in rows]
+    ply = {"open": "open", "press": "pressed"}[last]
     if a.maps:
-        panels(a.run, cycles, a.maps, plastic_panel, "viridis", None, "plastic curvature [1/m]")
+        panels(a.run, cycles, a.maps, plastic_panel, "viridis", None, "plastic curvature [1/m]", ply)
     if a.heights:
-        panels(a.run, cycles, a.heights, height_panel, "magma", (0, 30), "height [mm]")
+        panels(a.run, cycles, a.heights, height_panel, "magma", (0, 30), "height [mm]", ply)
     if a.growth:
         growth(rows, a.growth)
 
