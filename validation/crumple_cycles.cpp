@@ -65,6 +65,7 @@ struct Options {
   double press = 0.0;         ///< gap under the pressing plate [m]; 0: no pressing
   double press_time = 1.0;    ///< the plate's way down [s]
   double press_friction = 0;  ///< Coulomb coefficient between the plate and the sheet [-]
+  double press_stiffness = 1e4;  ///< contact and self-contact barrier pressure while pressing [Pa]
   double crease_angle = 30;   ///< [deg]
   double report = 0.5;        ///< simulated time between progress lines [s]
   std::string open_only;      ///< a crumpled sheet (PLY) to open, instead of the cycles
@@ -264,6 +265,10 @@ ps::Scene press_scene(const Options& o, const ps::Scene& crumple, const std::str
                       const Eigen::MatrixX3d& x) {
   ps::Scene s = ground_scene(crumple, "crumple-press");
   s.sheet.mesh_path = open_path;
+  // The crumple's soft barriers (400 Pa) let pressed layers close to micrometre gaps, where the
+  // self-contact's collision detection cuts every Newton step short and the press stalls.
+  s.contact.stiffness = o.press_stiffness;
+  s.self_contact.stiffness = o.press_stiffness;
   const double top = std::max(x.col(2).maxCoeff(), o.press) + 3e-3;
   const double t_down = o.press_time, t_up = t_down + 0.5;
   s.duration = t_up + o.settle;
@@ -349,6 +354,9 @@ int main(int argc, char** argv) {
   app.add_option("--press-time", o.press_time, "the plate's way down [s]")->check(CLI::Range(0.05, 10.0));
   app.add_option("--press-friction", o.press_friction, "friction coefficient between the plate and the sheet")
       ->check(CLI::Range(0.0, 5.0));
+  app.add_option("--press-stiffness", o.press_stiffness, "contact and self-contact barrier pressure while pressing "
+                                                         "[Pa] (the crumple's is 400)")
+      ->check(CLI::Range(1.0, 1e7));
   app.add_option("--crease-angle", o.crease_angle, "crease threshold [deg]")->check(CLI::Range(0.1, 179.0));
   app.add_option("--report", o.report, "simulated time between progress lines [s]")->check(CLI::Range(1e-3, 100.0));
   app.add_option("--open-only", o.open_only, "only open (and with --press press) this crumpled sheet (a cycle_K_crumpled.ply) into "
