@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <sstream>
+#include <string>
 
 #include "simulation/errors.hpp"
 
@@ -157,6 +158,24 @@ bool Integrator::factor_newton_matrix(const StepContext& ctx, const Eigen::Vecto
   return project;
 }
 
+void Integrator::debug_model(const Eigen::VectorXd& x, const Eigen::VectorXd& sol, bool project) {
+  // Each term's change along the full Newton step against its quadratic model (the Hessian
+  // with the same projection as the factorisation in use).
+  const Eigen::VectorXd dx = sol.head(x.size());
+  BlockSymmetricMatrix h = m_hessian;
+  std::fprintf(stderr, "  model:");
+  for (const auto& t : m_terms) {
+    Eigen::VectorXd gt = Eigen::VectorXd::Zero(x.size());
+    h.set_zero();
+    t->set_hessian_projection(project);
+    t->add_derivatives(x, gt, &h);
+    const double lin = gt.dot(dx), quad = 0.5 * sol.dot(h.multiply(sol));
+    const double actual = t->value(x + dx) - t->value(x);
+    std::fprintf(stderr, " %s %.3e/%.3e", t->name().c_str(), actual, lin + quad);
+  }
+  std::fprintf(stderr, "\n");
+}
+
 NewtonResult Integrator::solve(const StepContext& ctx, Eigen::VectorXd& x, StepStats& stats) {
   NewtonResult r;
   Eigen::VectorXd g(x.size());
@@ -207,12 +226,14 @@ NewtonResult Integrator::solve(const StepContext& ctx, Eigen::VectorXd& x, StepS
     // the right-hand side is zero; their part of the solution is dropped.
     Eigen::VectorXd rhs = Eigen::VectorXd::Zero(m_hessian.size());
     rhs.head(g.size()) = -g;
-    const Eigen::VectorXd dx = m_solver.solve(rhs).head(g.size());
+    const Eigen::VectorXd sol = m_solver.solve(rhs);
+    const Eigen::VectorXd dx = sol.head(g.size());
     stats.seconds_solve += seconds_since(t0);
     r.residual = max_vertex_norm(dx) / ctx.h;
+    if (std::getenv("PAPERSIM_DEBUG_MODEL")) debug_model(x, sol, project);
     if (std::getenv("PAPERSIM_DEBUG_NEWTON"))
-      std::fprintf(stderr, "t %.4f it %d E %.12g residual %.3e decrement %.3e\n", ctx.time_t0,
-                   r.iterations, e, r.residual, -g.dot(dx));
+      std::fprintf(stderr, "t %.4f it %d E %.12g residual %.3e decrement %.3e %s\n", ctx.time_t0,
+                   r.iterations, e, r.residual, -g.dot(dx), reuse ? "reused" : project ? "projected" : "exact");
     if (!dx.allFinite()) {
       r.failure = "NaN in the Newton direction";
       return r;

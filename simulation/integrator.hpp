@@ -124,6 +124,7 @@ class Integrator {
                             StepStats& stats, bool skip_exact = false);
   /// Asks every term whether its dynamic pattern changed at x and rebuilds the matrix if so.
   void update_pattern(const Eigen::VectorXd& x);
+  void debug_model(const Eigen::VectorXd& x, const Eigen::VectorXd& sol, bool project);
   std::vector<std::unique_ptr<EnergyTerm>> m_terms;
   NewtonParams m_params;
   std::vector<std::vector<int>> m_static_pattern;  // from add_pattern, built once

@@ -13,6 +13,7 @@ struct Material {
   double bending_stiffness = 4e-4;    ///< D = E h^3 / (12 (1 - nu^2)) [N m]
   double damping = 0.0;               ///< mass-proportional damping coefficient [1/s]
   double strain_limit = 0.005;        ///< largest principal stretch <= 1 + strain_limit [-]
+  double compression_limit = 0.0;     ///< smallest principal stretch >= 1 - compression_limit (0: none) [-]
   double thickness = 1e-4;            ///< physical thickness [m] (for reports and contact)
   double yield_curvature = 200.0;     ///< plastic yield curvature [1/m]
   double weakening = 1.0;             ///< D / (1 + weakening * damage) [-]

@@ -328,8 +328,11 @@ std::string Run::check_remeshed(const remesh::SheetMesh& mesh, const SheetState&
     // A term that cannot be built on the new mesh (a face too thin for the bending model).
     return "degenerate";
   }
-  if (!(terms.membrane->principal_stretches(state.positions).col(0).maxCoeff() < 1 + m_setup.material.strain_limit))
-    return "stretch";
+  const Eigen::MatrixX2d stretches = terms.membrane->principal_stretches(state.positions);
+  if (!(stretches.col(0).maxCoeff() < 1 + m_setup.material.strain_limit)) return "stretch";
+  if (m_setup.material.compression_limit > 0 &&
+      !(stretches.col(1).minCoeff() > 1 - m_setup.material.compression_limit))
+    return "compression";
   // The veto samples a new face at its corners, edge midpoints and centroid; an obstacle's edge
   // or corner can still pass through the face between them (a gable's ridge under a large
   // face; the veto checks spheres, boxes and gables exactly, this catches the other shapes).

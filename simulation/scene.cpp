@@ -171,6 +171,7 @@ Material read_material(Reader r) {
   m.bending_stiffness = r.number("bending_stiffness", m.bending_stiffness, 0, 1e3, true);
   m.damping = r.number("damping", m.damping, 0, 1e4);
   m.strain_limit = r.number("strain_limit", m.strain_limit, 0, 1);
+  m.compression_limit = r.number("compression_limit", m.compression_limit, 0, 0.5);
   m.thickness = r.number("thickness", m.thickness, 0, 0.1, true);
   m.yield_curvature = r.number("yield_curvature", m.yield_curvature, 0, 1e6, true);
   m.weakening = r.number("weakening", m.weakening, 0, 1e3);
@@ -448,6 +449,7 @@ json scene_to_json(const Scene& s) {
                   {"bending_stiffness", m.bending_stiffness},
                   {"damping", m.damping},
                   {"strain_limit", m.strain_limit},
+                  {"compression_limit", m.compression_limit},
                   {"thickness", m.thickness},
                   {"yield_curvature", m.yield_curvature},
                   {"weakening", m.weakening},

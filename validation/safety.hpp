@@ -34,13 +34,15 @@ inline ObstacleGaps obstacle_gaps(const simulation::Scene& scene, const simulati
 
 /// "PASS", or "FAIL" and the first check that failed: NaN in the positions, a gap to the ground
 /// or an obstacle that is not positive, a self-intersection, a principal stretch above
-/// 1 + strain_limit.
+/// 1 + strain_limit, or one below 1 - compression_limit when the scene sets that limit.
 inline std::string safety_verdict(const simulation::Scene& scene, const simulation::RunResult& r) {
   const ObstacleGaps g = obstacle_gaps(scene, r);
   if (!r.state.positions.allFinite()) return "FAIL nan";
   if (!(g.obstacles > 0) || !(g.ground > 0)) return "FAIL penetration";
   if (r.quality.self_intersections != 0) return "FAIL self-intersection";
   if (r.quality.max_principal_stretch > 1 + scene.sheet.material.strain_limit) return "FAIL stretch";
+  const double c = scene.sheet.material.compression_limit;
+  if (c > 0 && r.quality.min_principal_stretch < 1 - c) return "FAIL compression";
   return "PASS";
 }
 

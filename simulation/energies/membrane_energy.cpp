@@ -38,26 +38,37 @@ CFunction stvk(const Vec3& c, double lambda, double mu) {
   return r;
 }
 
-/// sum_i f(lambda_i(C)) with f(l) = kappa b(L - l, dhat): the strain-limit barrier.
-/// Hessian by the Daleckii-Krein formula for spectral functions.
-CFunction limit_barrier(const Vec3& c, double L, double dhat, double kappa) {
+/// The strain limits as barriers on the eigenvalues lambda_i of C (squared principal
+/// stretches): sum_i kappa b(L - lambda_i, dhat) keeps every lambda_i below L (stretch), and
+/// with Lc > 0 sum_i kappa b(lambda_i - Lc, dhat_c) keeps it above Lc (compression). Hessian by
+/// the Daleckii-Krein formula for spectral functions.
+CFunction limit_barrier(const Vec3& c, double L, double dhat, double Lc, double dhat_c, double kappa) {
   CFunction r;
   Eigen::Matrix2d C;
   C << c[0], c[2], c[2], c[1];
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> es(C);
   const Eigen::Vector2d lam = es.eigenvalues();
-  if (lam[1] < L - dhat) return r;  // inactive: both eigenvalues far from the limit
-  if (lam[1] >= L) {
+  const bool upper = L > 0 && lam[1] >= L - dhat, lower = Lc > 0 && lam[0] <= Lc + dhat_c;
+  if (!upper && !lower) return r;  // inactive: both eigenvalues far from the limits
+  if ((L > 0 && lam[1] >= L) || (Lc > 0 && lam[0] <= Lc)) {
     r.value = INF;
     return r;
   }
-  double f1[2], f2[2];
+  double f1[2] = {0, 0}, f2[2] = {0, 0};  // d/dlambda_i and d2/dlambda_i^2 of the barriers
   Vec3 a[2];
   for (int i = 0; i < 2; ++i) {
-    const double d = L - lam[i];
-    r.value += kappa * collision::barrier(d, dhat);
-    f1[i] = -kappa * collision::barrier_first_derivative(d, dhat);
-    f2[i] = kappa * collision::barrier_second_derivative(d, dhat);
+    if (upper) {
+      const double d = L - lam[i];
+      r.value += kappa * collision::barrier(d, dhat);
+      f1[i] -= kappa * collision::barrier_first_derivative(d, dhat);
+      f2[i] += kappa * collision::barrier_second_derivative(d, dhat);
+    }
+    if (lower) {
+      const double d = lam[i] - Lc;
+      r.value += kappa * collision::barrier(d, dhat_c);
+      f1[i] += kappa * collision::barrier_first_derivative(d, dhat_c);
+      f2[i] += kappa * collision::barrier_second_derivative(d, dhat_c);
+    }
     const Eigen::Vector2d v = es.eigenvectors().col(i);
     a[i] << v[0] * v[0], v[1] * v[1], 2 * v[0] * v[1];
     r.grad += f1[i] * a[i];
@@ -81,6 +92,10 @@ MembraneEnergy::MembraneEnergy(const Eigen::MatrixX2d& X, const Eigen::MatrixX3i
   m_mu = m.stretch_stiffness / (2 * (1 + nu));
   m_limit = m.strain_limit > 0 ? (1 + m.strain_limit) * (1 + m.strain_limit) : 0.0;
   m_dhat = m_limit > 0 ? m_limit - (1 + 0.5 * m.strain_limit) * (1 + 0.5 * m.strain_limit) : 0.0;
+  if (m.compression_limit > 0) {
+    m_limit_low = (1 - m.compression_limit) * (1 - m.compression_limit);
+    m_dhat_low = (1 - 0.5 * m.compression_limit) * (1 - 0.5 * m.compression_limit) - m_limit_low;
+  }
   m_kappa = m.stretch_stiffness;
   m_tris.reserve(F.rows());
   for (int f = 0; f < F.rows(); ++f) {
@@ -110,8 +125,8 @@ double MembraneEnergy::element(int f, const Eigen::Matrix<double, 9, 1>& xs,
   for (int i = 0; i < 3; ++i) F += xs.segment<3>(3 * i) * t.w.row(i);
   const Vec3 c(F.col(0).squaredNorm(), F.col(1).squaredNorm(), F.col(0).dot(F.col(1)));
   CFunction W = stvk(c, m_lambda, m_mu);
-  if (m_limit > 0) {
-    const CFunction B = limit_barrier(c, m_limit, m_dhat, m_kappa);
+  if (m_limit > 0 || m_limit_low > 0) {
+    const CFunction B = limit_barrier(c, m_limit, m_dhat, m_limit_low, m_dhat_low, m_kappa);
     if (!std::isfinite(B.value)) return INF;
     W.value += B.value;
     W.grad += B.grad;

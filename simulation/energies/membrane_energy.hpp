@@ -6,7 +6,10 @@
 ///
 /// Strain limit: E_limit = kappa A sum_i b(L - lambda_i(C)) with L = (1 + eps)^2 and b the IPC
 /// log barrier, active once a principal stretch exceeds 1 + eps/2. The energy is infinite at
-/// the limit, so a line search that rejects infinite energy never accepts a step past it. Being
+/// the limit, so a line search that rejects infinite energy never accepts a step past it.
+/// Compression limit (off by default): E_comp = kappa A sum_i b(lambda_i(C) - Lc) with
+/// Lc = (1 - eps_c)^2, active once a principal stretch falls below 1 - eps_c/2, convex in C for
+/// the same reason (b convex and decreasing, lambda_min concave). Being
 /// a sum of a convex function of the eigenvalues, it is convex in C (Davis 1957), so its
 /// Hessian in C is PSD and needs no projection; the geometric term uses dE/dC, which is PSD
 /// here too. For St. Venant-Kirchhoff the geometric term uses the positive part of the second
@@ -40,7 +43,7 @@ class MembraneEnergy : public EnergyTerm {
   double element(int f, const Eigen::Matrix<double, 9, 1>& xs, Eigen::Matrix<double, 9, 1>* g,
                  Eigen::Matrix<double, 9, 9>* H) const;
 
-  bool limit_enabled() const { return m_limit > 0; }
+  bool limit_enabled() const { return m_limit > 0 || m_limit_low > 0; }
   void set_hessian_projection(bool project) override { m_project = project; }
 
  private:
@@ -53,6 +56,8 @@ class MembraneEnergy : public EnergyTerm {
   double m_lambda, m_mu;   // plane-stress Lame parameters x thickness [N/m]
   double m_limit;          // L = (1 + eps)^2, 0 when disabled
   double m_dhat;           // barrier activation distance in lambda
+  double m_limit_low = 0;  // Lc = (1 - compression_limit)^2, 0 when disabled
+  double m_dhat_low = 0;   // its activation distance in lambda
   double m_kappa;          // barrier stiffness [J/m^2]
   bool m_project = true;   // element Hessians projected to PSD under compression
 };

@@ -54,6 +54,8 @@ TEST(Scene, ErrorsNameTheFileAndTheKey) {
   EXPECT_EQ(error_of({{"sheet", {{"materal", json::object()}}}}), "s.json: key 'sheet.materal': unknown key");
   EXPECT_NE(error_of({{"sheet", {{"material", {{"poisson", 0.7}}}}}}).find("'sheet.material.poisson'"),
             std::string::npos);
+  EXPECT_EQ(error_of({{"sheet", {{"material", {{"compression_limit", 0.6}}}}}}),
+            "s.json: key 'sheet.material.compression_limit': value 0.6 out of range [0, 0.5]");
   EXPECT_NE(error_of({{"duration", "long"}}).find("'duration': expected a number"), std::string::npos);
   EXPECT_NE(error_of({{"handles", {{{"point", {0.5, 0.1}}}}}}).find("'handles[0].point'"),
             std::string::npos);
@@ -402,4 +404,34 @@ TEST(Run, ReusedFactorisationsOfAnUnchangedMatrixSaveFactoringAndKeepTheResult) 
   // The sheet falls about 0.29 m; the same matrix gives the same steps up to round-off in the
   // solve (1e-12 relative), far below a nanometre.
   EXPECT_LT((plain.state.positions - reused.state.positions).cwiseAbs().maxCoeff(), 1e-9);
+}
+
+TEST(Run, CompressionLimitHoldsAFlatStripPressedEndToEnd) {
+  // A 10 x 2 cm strip between the ground and a frictionless plate 1.2 mm above it, its two
+  // short edges driven towards each other by 6 mm each in 50 ms (12% of its length). Buckles
+  // of at most ~0.5 mm on 5 mm edges take up about 1% of the length (a sine of wavelength
+  // 10 mm and amplitude A shortens by (pi A / 10 mm)^2), so the rest must go into the membrane.
+  // Without a compression limit the strip shortens in its plane by several percent; with a 5%
+  // limit its smallest principal stretch stays above 0.95 and the handles' springs take the rest.
+  const auto run = [](double compression_limit) {
+    json handles = json::array();
+    for (double y : {0.0, 0.01, 0.02})
+      for (double side : {0.0, 1.0})
+        handles.push_back({{"point", {0.1 * side, y}},
+                           {"keyframes", {{{"time", 0.0}, {"displacement", {0, 0, 0}}},
+                                          {{"time", 0.05}, {"displacement", {0.006 * (1 - 2 * side), 0, 0}}}}}});
+    const json plate = {{"kind", "plane"}, {"position", {0, 0, 0.0012}}, {"rotation_deg", {180, 0, 0}}, {"friction", 0}};
+    const json j = {{"sheet", {{"width", 0.1}, {"height", 0.02}, {"edge_length", 0.005}, {"position", {0, 0, 0.0006}},
+                               {"material", {{"compression_limit", compression_limit}}}}},
+                    {"gravity", {0, 0, 0}}, {"ground_friction", 0}, {"obstacles", {plate}},
+                    {"contact", {{"thickness", 2e-4}}}, {"duration", 0.06}, {"time_step", 0.002},
+                    {"self_contact", {{"enabled", false}}}, {"handles", handles}};
+    RunOptions quiet;
+    return run_scene(scene_from_json(j, "strip.json"), quiet).quality.min_principal_stretch;
+  };
+  const double free = run(0.0), limited = run(0.05);
+  std::printf("smallest principal stretch: %.4f without a limit, %.4f with a 5%% limit\n", free, limited);
+  EXPECT_LT(free, 0.95);
+  EXPECT_GT(limited, 0.95);
+  EXPECT_LT(limited, 0.975);  // the barrier acts (from 0.975 down), not a run that never pressed
 }
