@@ -6,7 +6,6 @@
 #include <cstdio>
 #include <cstdlib>
 #include <sstream>
-#include <string>
 
 #include "simulation/errors.hpp"
 

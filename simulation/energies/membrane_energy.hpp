@@ -6,15 +6,19 @@
 ///
 /// Strain limit: E_limit = kappa A sum_i b(L - lambda_i(C)) with L = (1 + eps)^2 and b the IPC
 /// log barrier, active once a principal stretch exceeds 1 + eps/2. The energy is infinite at
-/// the limit, so a line search that rejects infinite energy never accepts a step past it.
-/// Compression limit (off by default): E_comp = kappa A sum_i b(lambda_i(C) - Lc) with
-/// Lc = (1 - eps_c)^2, active once a principal stretch falls below 1 - eps_c/2, convex in C for
-/// the same reason (b convex and decreasing, lambda_min concave). Being
+/// the limit, so a line search that rejects infinite energy never accepts a step past it. Being
 /// a sum of a convex function of the eigenvalues, it is convex in C (Davis 1957), so its
-/// Hessian in C is PSD and needs no projection; the geometric term uses dE/dC, which is PSD
-/// here too. For St. Venant-Kirchhoff the geometric term uses the positive part of the second
-/// Piola-Kirchhoff stress (compressive stress clamped), which makes every element Hessian PSD
-/// without an eigen-decomposition of the 9x9 matrix.
+/// Hessian in C is PSD and needs no projection.
+///
+/// Compression limit (`compression_limit`, off by default): E_comp = kappa A sum_i
+/// b(lambda_i(C) - Lc) with Lc = (1 - eps_c)^2, active once a principal stretch falls below
+/// 1 - eps_c/2, infinite at 1 - eps_c; convex in C as well (b convex and decreasing of the
+/// concave lambda_min).
+///
+/// Element Hessians: J^T (d2W/dC2) J plus the geometric term (dW/dC contracted with the second
+/// derivatives of C), exact. The geometric term is indefinite where dW/dC is (compression, or
+/// the compression barrier's push); there the 9x9 element matrix is projected to PSD unless
+/// the integrator asks for the exact Hessian (set_hessian_projection).
 #include <array>
 #include <vector>
 
