@@ -92,7 +92,10 @@ double Integrator::energy(const Eigen::VectorXd& x) const {
   double e = 0;
   for (const auto& t : m_terms) {
     e += t->value(x);
-    if (!std::isfinite(e)) return INF;
+    if (!std::isfinite(e)) {
+      if (std::getenv("PAPERSIM_DEBUG_INF")) std::fprintf(stderr, "  infinite: %s\n", t->name().c_str());
+      return INF;
+    }
   }
   return e;
 }
@@ -103,8 +106,26 @@ double Integrator::start_energy(const SheetState& state, double h) {
   ctx.h = h;
   ctx.x_t0 = &state.positions;
   ctx.v_t0 = &state.velocities;
-  for (const auto& t : m_terms) t->begin_step(ctx, state.positions);
-  return energy(state.positions);
+  begin_step(ctx, state.positions);
+  const double e = energy(state.positions);
+  m_following.clear();
+  return e;
+}
+
+void Integrator::begin_step(const StepContext& ctx, const Eigen::VectorXd& x_t0) {
+  for (const auto& t : m_terms) t->begin_step(ctx, x_t0);
+  // Following moving obstacles: where an obstacle closes in on the sheet during the step, the
+  // step starts with the obstacles where they are at its start (where x_t0 is feasible) and
+  // moves them to its end inside the Newton solve (follow_obstacles).
+  m_following.clear();
+  bool can_follow = true;
+  for (const auto& t : m_terms) {
+    const auto motion = t->obstacle_motion();
+    if (motion == EnergyTerm::ObstacleMotion::unsupported) can_follow = false;
+    if (motion == EnergyTerm::ObstacleMotion::follow && t->obstacles_close_in(x_t0)) m_following.push_back(t.get());
+  }
+  if (!can_follow || !m_params.follow_obstacles) m_following.clear();
+  for (EnergyTerm* t : m_following) t->set_obstacle_time(ctx.time_t0);
 }
 
 void Integrator::assemble_gradient(const Eigen::VectorXd& x, Eigen::VectorXd& g) const {
@@ -396,19 +417,7 @@ bool Integrator::advance(SheetState& state, double h, int depth, StepStats& stat
   const Eigen::VectorXd x_t0 = state.positions, v_t0 = state.velocities;
   ctx.x_t0 = &x_t0;
   ctx.v_t0 = &v_t0;
-  for (const auto& t : m_terms) t->begin_step(ctx, x_t0);
-  // Following moving obstacles: where an obstacle closes in on the sheet during the step, the
-  // step starts with the obstacles where they are at its start (where x_t0 is feasible) and
-  // moves them to its end inside the Newton solve (follow_obstacles).
-  m_following.clear();
-  bool can_follow = true;
-  for (const auto& t : m_terms) {
-    const auto motion = t->obstacle_motion();
-    if (motion == EnergyTerm::ObstacleMotion::unsupported) can_follow = false;
-    if (motion == EnergyTerm::ObstacleMotion::follow && t->obstacles_close_in(x_t0)) m_following.push_back(t.get());
-  }
-  if (!can_follow || !m_params.follow_obstacles) m_following.clear();
-  for (EnergyTerm* t : m_following) t->set_obstacle_time(ctx.time_t0);
+  begin_step(ctx, x_t0);
   // Start from the explicit prediction x_t0 + h v_t0 when it is feasible (CCD-safe from x_t0
   // and finite energy): Newton then only corrects it, instead of producing the whole motion of
   // the step from rest (measured: about half the iterations on a falling sheet).

@@ -91,7 +91,9 @@ class Integrator {
 
   /// Begins a step of length h from `state` and returns the incremental potential at its start
   /// (+inf when the state is infeasible for some term): the check of a state the integrator has
-  /// not produced itself, such as a remeshed sheet.
+  /// not produced itself, such as a remeshed sheet. Obstacles that close in on the sheet during
+  /// the step are where they are at its start, as the step itself starts with them (a roller
+  /// pressing the sheet would otherwise overlap it at its end-of-step pose).
   double start_energy(const SheetState& state, double h);
   /// Total incremental potential at x for the step last begun (for tests and diagnostics).
   double energy(const Eigen::VectorXd& x) const;
@@ -110,6 +112,9 @@ class Integrator {
                         NewtonResult& r);
   /// Terms whose moving obstacles are followed in this step (empty: evaluated at the step's end).
   std::vector<EnergyTerm*> m_following;
+  /// Begins a step on every term and chooses the terms whose obstacles are followed
+  /// (m_following), those set to the step start.
+  void begin_step(const StepContext& ctx, const Eigen::VectorXd& x_t0);
   bool advance(SheetState& state, double h, int depth, StepStats& stats);
   /// The gradient of the incremental potential at x into g (no Hessian).
   void assemble_gradient(const Eigen::VectorXd& x, Eigen::VectorXd& g) const;

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 
 #include <Eigen/Geometry>
 
@@ -372,6 +374,10 @@ void Run::remesh_pass() {
     integrator = std::make_unique<Integrator>(mesh.num_vertices(), std::move(terms.list), m_scene.newton);
     if (!std::isfinite(integrator->start_energy(state, m_h))) failure = "infeasible";
   }
+  if (std::getenv("PAPERSIM_DEBUG_REMESH"))
+    std::fprintf(stderr, "remesh t %.6f: %d splits, %d flips, %d collapses -> %d vertices%s%s\n", m_state.time,
+                 st.splits, st.flips, st.collapses, mesh.num_vertices(), failure.empty() ? "" : ", undone: ",
+                 failure.c_str());
   if (!failure.empty()) {
     ++m_remesh.rollbacks;
     ++m_remesh.rollback_reasons[failure];

@@ -3,6 +3,8 @@
 
 #include "collision/collider_factory.hpp"
 #include "simulation/errors.hpp"
+#include "simulation/integrator.hpp"
+#include "simulation/run.hpp"
 #include "simulation/simulate.hpp"
 
 #include <cmath>
@@ -185,4 +187,30 @@ TEST(ObstacleContact, ShrinkingCavityIsFollowedWithinTheStep) {
   EXPECT_LT(gap, scene.contact.dhat);
   scene.newton.follow_obstacles = false;
   EXPECT_THROW(run_scene(scene, {}), NumericError);
+}
+
+// The check of a state the integrator has not produced (a remeshed sheet, Run::remesh_pass)
+// starts the step as a step does: an obstacle that closes in on the sheet during the step is
+// where it is at the step's start. Mid-run in the shrinking cavity, the sheet's corners rest
+// closer to the wall than it moves in a step: against the wall's end-of-step pose the state is
+// infeasible, so every remeshing pass while a roller or a cavity presses the sheet was undone.
+TEST(ObstacleContact, StartOfAStepIsFeasibleWhereAMovingObstacleClosesIn) {
+  using papersim::collision::ColliderKind;
+  const Scene scene = resting_on_scaled(ColliderKind::inverted_sphere, 0.5);
+  papersim::simulation::Run run(scene);
+  while (run.state().time < 0.1) run.step();  // the wall moves from t = 0.05 s on
+  const auto start = [&](bool follow) {
+    SheetState initial;
+    initial.positions = run.state().positions;
+    initial.velocities = Eigen::VectorXd::Zero(initial.positions.size());
+    const PhysicsSetup setup = physics_setup(scene, run.mesh(), initial);
+    Terms terms = build_terms(run.mesh(), setup);
+    NewtonParams params = scene.newton;
+    params.follow_obstacles = follow;
+    Integrator integrator(run.mesh().num_vertices(), std::move(terms.list), params);
+    return integrator.start_energy(run.state(), run.time_step());
+  };
+  EXPECT_TRUE(std::isfinite(start(true)));
+  // Evaluated against the wall where it is at the step's end, the same state is inside it.
+  EXPECT_FALSE(std::isfinite(start(false)));
 }
