@@ -2,10 +2,13 @@
 
 #include <cholmod.h>
 
+#include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <dlfcn.h>
+#include <iterator>
 #include <mutex>
 #include <string>
 
@@ -14,6 +17,45 @@
 namespace papersim::simulation {
 
 namespace {
+
+/// OpenBLAS picks its dense kernels by the CPU's model number; on a CPU it does not know (a
+/// virtual machine's "Intel Xeon Processor" with AVX-512, measured) it falls back to its
+/// Prescott (SSE3) kernels, which made CHOLMOD's supernodal factorisation, most of a Newton
+/// iteration, a quarter slower (docs/performance.md, "BLAS kernels"). When OPENBLAS_CORETYPE is
+/// not set and OpenBLAS chose a kernel set older than the CPU's instructions (the CPU and the
+/// OS support AVX-512 or AVX2 with FMA), its dynamic dispatch is re-run with SkylakeX or Haswell
+/// kernels, as OPENBLAS_CORETYPE would select them at start-up. Runs before the first BLAS call
+/// of the process (the first solver). Symbols looked up at run time: any other BLAS links and
+/// is left alone.
+void select_blas_kernels() {
+#if defined(__x86_64__) && defined(__GNUC__)
+  if (std::getenv("OPENBLAS_CORETYPE")) return;
+  using CoreName = char* (*)();
+  using Dispatch = void (*)();
+  const auto corename = reinterpret_cast<CoreName>(dlsym(RTLD_DEFAULT, "openblas_get_corename"));
+  const auto quit = reinterpret_cast<Dispatch>(dlsym(RTLD_DEFAULT, "gotoblas_dynamic_quit"));
+  const auto init = reinterpret_cast<Dispatch>(dlsym(RTLD_DEFAULT, "gotoblas_dynamic_init"));
+  if (!corename || !quit || !init || !corename()) return;
+  std::string current = corename();
+  for (char& c : current) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  static const char* const older[] = {"prescott", "core2",  "penryn", "dunnington",
+                                      "nehalem",  "atom",   "banias", "northwood",
+                                      "katmai",   "coppermine", "sandybridge"};
+  if (std::find(std::begin(older), std::end(older), current) == std::end(older)) return;
+  __builtin_cpu_init();
+  const char* wanted = nullptr;
+  if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512cd") && __builtin_cpu_supports("avx512bw") &&
+      __builtin_cpu_supports("avx512dq") && __builtin_cpu_supports("avx512vl"))
+    wanted = "SkylakeX";
+  else if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma"))
+    wanted = "Haswell";
+  if (!wanted) return;
+  setenv("OPENBLAS_CORETYPE", wanted, 1);
+  quit();
+  init();
+  unsetenv("OPENBLAS_CORETYPE");
+#endif
+}
 
 /// A multi-threaded BLAS (Debian's OpenBLAS pthreads build) spins its threads on the small
 /// supernodes of a sheet and competes with TBB and with the other simulations of a batch: it
@@ -59,6 +101,8 @@ struct LinearSolver::Impl {
     // CHOLMOD picks supernodal (BLAS on dense blocks) when the fill is large, which the wide
     // bending stencil makes it; BLAS runs on one thread (see limit_blas_threads) (measured: see
     // docs/performance.md).
+    static std::once_flag kernels;
+    std::call_once(kernels, select_blas_kernels);
     limit_blas_threads();
     limit_openmp_threads();
     common.supernodal = CHOLMOD_AUTO;
@@ -89,6 +133,13 @@ struct LinearSolver::Impl {
     return s;
   }
 };
+
+std::string blas_kernels() {
+  using CoreName = char* (*)();
+  const auto corename = reinterpret_cast<CoreName>(dlsym(RTLD_DEFAULT, "openblas_get_corename"));
+  const char* name = corename ? corename() : nullptr;
+  return name ? std::string(name) : std::string();
+}
 
 LinearSolver::LinearSolver() : m_impl(std::make_unique<Impl>()) {}
 LinearSolver::~LinearSolver() = default;

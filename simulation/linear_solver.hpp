@@ -4,10 +4,15 @@
 /// the sparsity pattern changes.
 #include <Eigen/Core>
 #include <memory>
+#include <string>
 
 #include "simulation/sparse_matrix.hpp"
 
 namespace papersim::simulation {
+
+/// The dense kernels the BLAS runs (OpenBLAS's core name, e.g. "SkylakeX"), empty for another
+/// BLAS; the kernels are chosen when the first LinearSolver is made (see the .cpp).
+std::string blas_kernels();
 
 class LinearSolver {
  public:

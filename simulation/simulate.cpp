@@ -13,6 +13,7 @@
 #include "remesh/errors.hpp"
 #include "remesh/sheet_io.hpp"
 #include "simulation/errors.hpp"
+#include "simulation/linear_solver.hpp"
 #include "simulation/output_files.hpp"
 #include "simulation/run.hpp"
 
@@ -31,6 +32,7 @@ json meta_json(const Scene& scene, const RunResult& r, const json& extra) {
   json m;
   m["program"] = "papersim";
   m["version"] = version();
+  if (const std::string k = blas_kernels(); !k.empty()) m["blas_kernels"] = k;
   m["scene"] = scene_to_json(scene);
   if (!scene.scenario.empty()) m["scenario"] = scene.scenario;
   if (scene.seed >= 0) m["seed"] = scene.seed;

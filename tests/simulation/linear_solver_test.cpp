@@ -5,6 +5,9 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <array>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
 #include <vector>
 
 #include "simulation/linear_solver.hpp"
@@ -108,4 +111,30 @@ TEST(LinearSolver, ShiftedFactorisationOvercomesRoundOff) {
   BlockSymmetricMatrix definite = spring(1.0, 1.0);
   EXPECT_EQ(solver.factorize_shifted(definite, 1), 0.0);
   EXPECT_DOUBLE_EQ(definite.diagonal()[0], 2.0);
+}
+
+// Where OpenBLAS does not know the CPU's model it falls back to kernels older than the CPU's
+// instructions (Prescott's SSE3 on a virtual AVX-512 Xeon); the first solver re-runs its
+// dispatch for the kernels the CPU supports, unless OPENBLAS_CORETYPE chose them. The
+// supernodal factorisation of a large grid then still solves to round-off.
+TEST(LinearSolver, BlasRunsKernelsForTheCpusInstructions) {
+  LinearSolver solver;
+  const std::string kernels = blas_kernels();
+  std::printf("BLAS kernels: %s\n", kernels.empty() ? "(not OpenBLAS)" : kernels.c_str());
+  BlockSymmetricMatrix A = grid(60, 60, 0.0);
+  ASSERT_TRUE(solver.factorize(A, 1));
+  const Eigen::VectorXd b = Eigen::VectorXd::LinSpaced(A.size(), -1, 1);
+  const Eigen::VectorXd x = solver.solve(b);
+  EXPECT_LT((A.multiply(x) - b).norm(), 1e-10 * b.norm());
+  if (kernels.empty() || std::getenv("OPENBLAS_CORETYPE")) GTEST_SKIP() << "not OpenBLAS, or kernels chosen by the user";
+#if defined(__x86_64__) && defined(__GNUC__)
+  __builtin_cpu_init();
+  const bool avx512 = __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512cd") &&
+                      __builtin_cpu_supports("avx512bw") && __builtin_cpu_supports("avx512dq") &&
+                      __builtin_cpu_supports("avx512vl");
+  if (avx512 || (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma"))) {
+    for (const char* old : {"Prescott", "Core2", "Penryn", "Dunnington", "Nehalem", "Atom", "Sandybridge"})
+      EXPECT_NE(kernels, old);
+  }
+#endif
 }
