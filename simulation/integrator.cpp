@@ -93,7 +93,8 @@ double Integrator::energy(const Eigen::VectorXd& x) const {
   for (const auto& t : m_terms) {
     e += t->value(x);
     if (!std::isfinite(e)) {
-      if (std::getenv("PAPERSIM_DEBUG_INF")) std::fprintf(stderr, "  infinite: %s\n", t->name().c_str());
+      static const bool debug = std::getenv("PAPERSIM_DEBUG_INF") != nullptr;
+      if (debug) std::fprintf(stderr, "  infinite: %s\n", t->name().c_str());
       return INF;
     }
   }

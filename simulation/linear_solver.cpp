@@ -16,12 +16,19 @@
 
 namespace papersim::simulation {
 
+std::string blas_kernels() {
+  using CoreName = char* (*)();
+  const auto corename = reinterpret_cast<CoreName>(dlsym(RTLD_DEFAULT, "openblas_get_corename"));
+  const char* name = corename ? corename() : nullptr;
+  return name ? std::string(name) : std::string();
+}
+
 namespace {
 
 /// OpenBLAS picks its dense kernels by the CPU's model number; on a CPU it does not know (a
 /// virtual machine's "Intel Xeon Processor" with AVX-512, measured) it falls back to its
 /// Prescott (SSE3) kernels, which made CHOLMOD's supernodal factorisation, most of a Newton
-/// iteration, a quarter slower (docs/performance.md, "BLAS kernels"). When OPENBLAS_CORETYPE is
+/// iteration, up to 1.4 times slower (docs/performance.md, "BLAS kernels"). When OPENBLAS_CORETYPE is
 /// not set and OpenBLAS chose a kernel set older than the CPU's instructions (the CPU and the
 /// OS support AVX-512 or AVX2 with FMA), its dynamic dispatch is re-run with SkylakeX or Haswell
 /// kernels, as OPENBLAS_CORETYPE would select them at start-up. Runs before the first BLAS call
@@ -30,13 +37,11 @@ namespace {
 void select_blas_kernels() {
 #if defined(__x86_64__) && defined(__GNUC__)
   if (std::getenv("OPENBLAS_CORETYPE")) return;
-  using CoreName = char* (*)();
   using Dispatch = void (*)();
-  const auto corename = reinterpret_cast<CoreName>(dlsym(RTLD_DEFAULT, "openblas_get_corename"));
   const auto quit = reinterpret_cast<Dispatch>(dlsym(RTLD_DEFAULT, "gotoblas_dynamic_quit"));
   const auto init = reinterpret_cast<Dispatch>(dlsym(RTLD_DEFAULT, "gotoblas_dynamic_init"));
-  if (!corename || !quit || !init || !corename()) return;
-  std::string current = corename();
+  std::string current = blas_kernels();
+  if (!quit || !init || current.empty()) return;
   for (char& c : current) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   static const char* const older[] = {"prescott", "core2",  "penryn", "dunnington",
                                       "nehalem",  "atom",   "banias", "northwood",
@@ -133,13 +138,6 @@ struct LinearSolver::Impl {
     return s;
   }
 };
-
-std::string blas_kernels() {
-  using CoreName = char* (*)();
-  const auto corename = reinterpret_cast<CoreName>(dlsym(RTLD_DEFAULT, "openblas_get_corename"));
-  const char* name = corename ? corename() : nullptr;
-  return name ? std::string(name) : std::string();
-}
 
 LinearSolver::LinearSolver() : m_impl(std::make_unique<Impl>()) {}
 LinearSolver::~LinearSolver() = default;
