@@ -7,7 +7,11 @@
 // sheet over that of a unit equilateral triangle, halved). Also the membrane's compression: the
 // smallest principal Green strain (F^T F - I) / 2 and the faces compressed by more than 1e-3.
 //   papersim_fold_sizing [--edge 8] [--remesh MIN:MAX] [--size 1:100] [--steps 1,2,50,100,160]
+//   papersim_fold_sizing --checkpoint DIR [--steps S1,S2] [--size MIN:MAX]
 // Sizes in mm; --size sets the sizing parameters of the report (and of the run with --remesh).
+// With --checkpoint the run is the checkpoint's scene resumed from its state (papersim run
+// --checkpoint): the report is made there and after the (absolute) steps listed, and the sizing
+// parameters are the scene's unless --size is given.
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
@@ -26,6 +30,8 @@
 #include "remesh/sheet_io.hpp"
 #include "remesh/sizing.hpp"
 #include "simulation/run.hpp"
+#include "simulation/scene.hpp"
+#include "simulation/simulate.hpp"
 #include "validation/fold_scene.hpp"
 
 namespace ps = papersim::simulation;
@@ -162,21 +168,30 @@ bool parse_pair(const std::string& text, double& lo, double& hi) {
 int main(int argc, char** argv) {
   CLI::App app{"papersim_fold_sizing: which sizing criterion refines the 180-degree fold"};
   double edge = 8;
-  std::string remesh_text, size_text = "1:100", steps_text = "1,2,50,100,160", dump;
+  std::string remesh_text, size_text = "1:100", steps_text = "1,2,50,100,160", dump, checkpoint;
   app.add_option("--edge", edge, "start edge length [mm]")->capture_default_str();
   app.add_option("--remesh", remesh_text, "remesh the run with MIN:MAX [mm] (default: uniform)");
   app.add_option("--size", size_text, "size_min:size_max [mm] of the report's sizing")->capture_default_str();
   app.add_option("--steps", steps_text, "steps after which to report, comma separated")->capture_default_str();
   app.add_option("--dump", dump, "write faces_STEP.csv (per face: material and world centroid [m], the edge each "
                  "criterion asks for [m], plastic curvature [1/m], longest edge [m]) into this directory");
+  CLI::Option* checkpoint_option =
+      app.add_option("--checkpoint", checkpoint, "report on the checkpoint in DIR (its scene and state) and "
+                     "after the steps listed")->check(CLI::ExistingDirectory);
+  checkpoint_option->excludes(app.get_option("--edge"))->excludes(app.get_option("--remesh"));
   CLI11_PARSE(app, argc, argv);
   try {
-    ps::Scene scene = papersim::validation::fold_180_scene(1e-3 * edge);
+    ps::Checkpoint cp;
+    if (!checkpoint.empty()) cp = ps::load_checkpoint(checkpoint);
+    ps::Scene scene = checkpoint.empty() ? papersim::validation::fold_180_scene(1e-3 * edge)
+                                         : ps::scene_from_json(cp.scene, checkpoint + "/checkpoint.json");
     double lo = 0, hi = 0;
     if (!parse_pair(size_text, lo, hi)) throw std::runtime_error("--size: '" + size_text + "' is not MIN:MAX");
     rm::RemeshParams p = scene.remesh.params;
-    p.size_min = 1e-3 * lo;
-    p.size_max = 1e-3 * hi;
+    if (checkpoint.empty() || app.count("--size")) {
+      p.size_min = 1e-3 * lo;
+      p.size_max = 1e-3 * hi;
+    }
     if (!remesh_text.empty()) {
       if (!parse_pair(remesh_text, lo, hi)) throw std::runtime_error("--remesh: '" + remesh_text + "' is not MIN:MAX");
       scene.remesh.enabled = true;
@@ -188,6 +203,11 @@ int main(int argc, char** argv) {
     std::string item;
     while (std::getline(in, item, ',')) at.insert(std::stoi(item));
     ps::Run run(scene);
+    if (!checkpoint.empty()) {
+      run.resume(cp.mesh, cp.state, cp.step);
+      report(run, p, dump);
+      at.insert(cp.step);
+    }
     if (at.count(0)) report(run, p, dump);
     const double c0 = cpu_seconds();
     while (!run.finished() && run.steps_done() < *at.rbegin()) {
@@ -199,7 +219,7 @@ int main(int argc, char** argv) {
       if (at.count(run.steps_done())) report(run, p, dump);
     }
     std::printf("total %.1f s CPU\n", cpu_seconds() - c0);
-    if (run.finished()) {  // the figures of papersim_fold_remesh
+    if (run.finished() && checkpoint.empty()) {  // the figures of papersim_fold_remesh
       const ps::RunResult r = run.result(0);
       const Eigen::VectorXd& x = r.state.positions;
       double zmin = INFINITY, zmax = -INFINITY;
