@@ -4,7 +4,8 @@
 // curvature, compression, velocity, obstacle), how many faces it alone would refine to
 // size_min, the shortest and median edge it asks for, the faces where it is the largest
 // criterion, and the vertex count the combined, clamped sizing implies (the metric area of the
-// sheet over that of a unit equilateral triangle, halved). Also the membrane's compression: the
+// sheet over that of a unit equilateral triangle, halved; also with the metrics averaged at the
+// vertices, as the remesher uses them). Also the membrane's compression: the
 // smallest principal Green strain (F^T F - I) / 2 and the faces compressed by more than 1e-3.
 //   papersim_fold_sizing [--edge 8] [--remesh MIN:MAX] [--size 1:100] [--steps 1,2,50,100,160]
 //   papersim_fold_sizing --checkpoint DIR [--steps S1,S2] [--size MIN:MAX]
@@ -141,6 +142,21 @@ void report(const ps::Run& run, const rm::RemeshParams& p, const std::string& du
   std::printf("  smallest principal Green strain %.3g; faces compressed beyond 1e-3: %d\n", green_min,
               compressed);
   std::printf("  implied by the clamped sizing: about %.0f vertices (%.0f faces)\n", 0.5 * implied, implied);
+  {
+    // What the remesher sees: face metrics averaged at the vertices (remesh::vertex_metrics), each
+    // face measured by the mean of its corners' metrics.
+    const std::vector<Eigen::Matrix2d> vm = rm::vertex_metrics(mesh, rm::sizing(mesh, rs, p));
+    double by_vertex = 0;
+    for (int i = 0; i < f.rows(); ++i) {
+      const Eigen::Vector2d a = mesh.material_coord(f(i, 0)), b = mesh.material_coord(f(i, 1)),
+                            c = mesh.material_coord(f(i, 2));
+      Eigen::Matrix2d dm;
+      dm << b - a, c - a;
+      const Eigen::Matrix2d m = (vm[f(i, 0)] + vm[f(i, 1)] + vm[f(i, 2)]) / 3;
+      by_vertex += 0.5 * std::abs(dm.determinant()) * std::sqrt(std::max(m.determinant(), 0.0)) / (std::sqrt(3.0) / 4);
+    }
+    std::printf("  implied by the metrics averaged at the vertices: about %.0f vertices\n", 0.5 * by_vertex);
+  }
   std::printf("  %-12s %8s %8s %10s %10s\n", "criterion", "finest", "largest", "min_l_mm", "median_mm");
   for (int k = 0; k < 5; ++k) {
     std::vector<double>& w = wanted[k];
