@@ -36,16 +36,25 @@ namespace fs = std::filesystem;
 
 namespace {
 
-/// Progress with an ETA on stderr: a redrawn line on a terminal, a line per 10% otherwise.
+/// Progress with an ETA on stderr: a redrawn line on a terminal; otherwise a line per 10%, and
+/// one every 5 minutes of wall time while a run's steps are slow (with the percent to a tenth).
 ps::ProgressFn progress_printer(const std::string& label) {
   const bool tty = isatty(fileno(stderr));
-  return [label, tty, last = -1](double f, double seconds) mutable {
+  return [label, tty, last = -1, printed = 0.0](double f, double seconds) mutable {
     const int percent = static_cast<int>(100 * f);
-    if (!tty && percent / 10 == last / 10 && percent != 100) return;
+    const bool slow = seconds - printed >= 300.0;
+    if (!tty && percent / 10 == last / 10 && percent != 100 && !slow) return;
+    const bool tenth = !tty && percent / 10 == last / 10 && percent != 100;  // a line for the time only
     last = percent;
+    printed = seconds;
     const double eta = f > 0 ? seconds * (1 - f) / f : 0;
-    std::fprintf(stderr, "%s%s %3d%%  elapsed %.1f s  ETA %.1f s%s", tty ? "\r" : "", label.c_str(),
-                 percent, seconds, eta, tty && percent < 100 ? "" : "\n");
+    char amount[16];
+    if (tenth)
+      std::snprintf(amount, sizeof amount, "%5.1f", 100 * f);
+    else
+      std::snprintf(amount, sizeof amount, "%3d", percent);
+    std::fprintf(stderr, "%s%s %s%%  elapsed %.1f s  ETA %.1f s%s", tty ? "\r" : "", label.c_str(),
+                 amount, seconds, eta, tty && percent < 100 ? "" : "\n");
     std::fflush(stderr);
   };
 }
@@ -182,7 +191,7 @@ int main(int argc, char** argv) {
       ->required()->check(non_empty());
   run->add_option("--frames", frames, "Write every K-th step to OUT/frames/ (0: none)")
       ->check(CLI::Range(0, 1 << 30));
-  run->add_flag("--quiet", quiet, "No progress on stderr");
+  run->add_flag("--quiet", quiet, "No progress on stderr (otherwise a redrawn line on a terminal, else a line per 10% of the steps and one every 5 minutes while they are slow)");
   CheckpointOptions checkpoint;
   add_checkpoint_options(run, checkpoint);
 
@@ -198,7 +207,7 @@ int main(int argc, char** argv) {
   scen->add_option("--out", out_dir, "Output folder")->required()->check(non_empty());
   scen->add_option("--frames", frames, "Write every K-th step to OUT/frames/ (0: none)")
       ->check(CLI::Range(0, 1 << 30));
-  scen->add_flag("--quiet", quiet, "No progress on stderr");
+  scen->add_flag("--quiet", quiet, "No progress on stderr (otherwise a redrawn line on a terminal, else a line per 10% of the steps and one every 5 minutes while they are slow)");
   add_checkpoint_options(scen, checkpoint);
   bool draw_only = false;
   scen->add_flag("--draw-only", draw_only, "Only write OUT/scene.json (edit it, then: papersim run)");

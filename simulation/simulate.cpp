@@ -175,6 +175,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
   if (staging.active() && frames_every > 0) fs::create_directories(staging.dir() / "frames");
   const int steps = run.steps_total();
   int last_percent = -1;
+  double last_report = 0.0;  // elapsed() at the last progress call
   const int first = run.steps_done();  // > 0 when resumed
   for (int k = first + 1; k <= steps; ++k) {
     run.step();
@@ -200,9 +201,10 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
     }
     const double fraction = double(k - first) / (steps - first);
     const int percent = static_cast<int>(100.0 * fraction);
-    if (options.progress && percent != last_percent) {
+    if (options.progress && (percent != last_percent || elapsed() - last_report >= options.progress_every)) {
       last_percent = percent;
-      options.progress(fraction, elapsed());
+      last_report = elapsed();
+      options.progress(fraction, last_report);
     }
   }
   RunResult r = run.result(elapsed());

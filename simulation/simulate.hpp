@@ -35,7 +35,10 @@ using StepObserver = std::function<void(const StepReport&)>;
 struct RunOptions {
   std::string out_dir;      ///< created if missing; files appear only when the run succeeds
   int frames_every = -1;    ///< overrides scene.output.frames_every when >= 0
-  ProgressFn progress;      ///< called about once per percent
+  /// Called about once per percent of the steps, and after a step at least every
+  /// `progress_every` seconds of wall time (so a run whose steps slow down still reports).
+  ProgressFn progress;
+  double progress_every = 30.0;  ///< [s]
   nlohmann::json extra_meta = nlohmann::json::object();  ///< merged into meta.json
   /// Called after every step (costs one energy evaluation per step; none when unset).
   StepObserver on_step;

@@ -149,13 +149,18 @@ int main(int argc, char** argv) {
     auto start = std::chrono::steady_clock::now();
     try {
       ps::RunOptions run_options;
-      // Progress on stderr every 10% of the simulated time, with the ETA of this seed.
-      run_options.progress = [seed, last = -1](double f, double seconds) mutable {
+      // Progress on stderr every 10% of the simulated time, and every 5 minutes of wall time
+      // while the steps are slow, with the ETA of this seed.
+      run_options.progress = [seed, last = -1, printed = 0.0](double f, double seconds) mutable {
         const int tenth = static_cast<int>(10 * f);
-        if (tenth == last) return;
+        if (tenth == last && seconds - printed < 300.0) return;
+        const double eta = f > 0 ? seconds * (1 - f) / f : 0.0;
+        if (tenth == last)
+          std::fprintf(stderr, "fold seed %d %5.1f%%  elapsed %.0f s  ETA %.0f s\n", seed, 100 * f, seconds, eta);
+        else
+          std::fprintf(stderr, "fold seed %d %3d%%  elapsed %.0f s  ETA %.0f s\n", seed, 10 * tenth, seconds, eta);
         last = tenth;
-        std::fprintf(stderr, "fold seed %d %3d%%  elapsed %.0f s  ETA %.0f s\n", seed, 10 * tenth,
-                     seconds, f > 0 ? seconds * (1 - f) / f : 0.0);
+        printed = seconds;
       };
       if (!keep.empty()) {
         run_options.out_dir = keep + "/seed_" + std::to_string(seed);

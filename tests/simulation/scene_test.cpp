@@ -359,6 +359,25 @@ TEST(Run, PublishesThisRunsFilesOnlyAndStopsWhenAsked) {
   fs::remove_all(dir);
 }
 
+TEST(Run, ReportsProgressPerPercentAndWhileStepsAreSlow) {
+  // 200 steps: a call per percent by default (the first step, at 0%, and every second one after
+  // it); with progress_every 0 the
+  // time rule applies after every step, so a run whose steps take minutes still reports.
+  Scene s = small_scene();
+  s.duration = 200 * s.time_step;
+  std::vector<double> fractions;
+  RunOptions o;
+  o.progress = [&fractions](double f, double) { fractions.push_back(f); };
+  run_scene(s, o);
+  EXPECT_EQ(fractions.size(), 101u);
+  EXPECT_DOUBLE_EQ(fractions.back(), 1.0);
+  fractions.clear();
+  o.progress_every = 0.0;
+  run_scene(s, o);
+  EXPECT_EQ(fractions.size(), 200u);
+  EXPECT_DOUBLE_EQ(fractions.front(), 1.0 / 200);
+}
+
 // `papersim run OUT/scene.json --out OUT` (the batch's and the scenario workflow's way): the run
 // replaces an earlier run's outputs but never removes the scene file it reads.
 TEST(Run, KeepsTheSceneFileItReadsInItsOutputFolder) {
