@@ -120,9 +120,54 @@ bool RigidMotion::is_static() const {
 }
 
 double RigidMotion::next_keyframe_time(double t) const {
-  for (const Keyframe& k : m_keyframes)
-    if (k.time > t) return k.time;
-  return std::numeric_limits<double>::infinity();
+  const auto it = std::upper_bound(m_keyframes.begin(), m_keyframes.end(), t,
+                                   [](double x, const Keyframe& k) { return x < k.time; });
+  return it == m_keyframes.end() ? std::numeric_limits<double>::infinity() : it->time;
+}
+
+Keyframe RigidMotion::keyframe_at(double t) const {
+  Keyframe k;
+  k.time = t;
+  if (m_keyframes.empty()) return k;
+  const int i = segment(t);
+  if (i < 0) {
+    const Keyframe& e = t >= m_keyframes.back().time ? m_keyframes.back() : m_keyframes.front();
+    k.translation = e.translation;
+    k.rotation = e.rotation;
+    k.scale = e.scale;
+    return k;
+  }
+  const Keyframe& a = m_keyframes[i];
+  const Keyframe& b = m_keyframes[i + 1];
+  const double s = (t - a.time) / (b.time - a.time);
+  k.translation = (1.0 - s) * a.translation + s * b.translation;
+  k.rotation = a.rotation.slerp(s, b.rotation);
+  k.scale = (1.0 - s) * a.scale + s * b.scale;
+  return k;
+}
+
+size_t RigidMotion::keyframe_index(double t, const RigidMotion& turning) {
+  constexpr double SAME = 1e-9;  // [s] keyframes this close count as one
+  const auto it = std::lower_bound(m_keyframes.begin(), m_keyframes.end(), t - SAME,
+                                   [](const Keyframe& k, double x) { return k.time < x; });
+  if (it != m_keyframes.end() && it->time <= t + SAME) return static_cast<size_t>(it - m_keyframes.begin());
+  const size_t i = static_cast<size_t>(it - m_keyframes.begin());
+  Keyframe k = turning.keyframe_at(t);
+  k.translation = pose(t).translation();
+  m_keyframes.insert(m_keyframes.begin() + static_cast<long>(i), k);
+  return i;
+}
+
+void RigidMotion::translate_from(double t0, double t1, const Eigen::Vector3d& delta, const RigidMotion& turning) {
+  if (!(t1 > t0))
+    throw std::invalid_argument("RigidMotion::translate_from: t1 = " + common::format_number(t1) +
+                                " must be after t0 = " + common::format_number(t0));
+  keyframe_index(t0, turning);
+  for (size_t i = keyframe_index(t1, turning); i < m_keyframes.size(); ++i) m_keyframes[i].translation += delta;
+}
+
+void RigidMotion::set_translation_at(double t, const Eigen::Vector3d& translation, const RigidMotion& turning) {
+  m_keyframes[keyframe_index(t, turning)].translation = translation;
 }
 
 bool RigidMotion::moves_during(double t0, double t1) const {

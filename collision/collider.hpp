@@ -78,10 +78,28 @@ class RigidMotion {
   double next_keyframe_time(double t) const;
   /// True when the placement changes at some time in [t0, t1) [s].
   bool moves_during(double t0, double t1) const;
+  /// The placement at time t [s] as a keyframe (translation and scale linear, rotation by slerp
+  /// between the keyframes around t).
+  Keyframe keyframe_at(double t) const;
+  /// Changes the motion from t0 on: before t0 [s] nothing changes, from t1 > t0 on the placement
+  /// is translated by `delta` [m] more than before, and in between the extra translation grows
+  /// linearly. Keyframes are inserted at t0 and t1 where none lies within 1e-9 s, with the
+  /// translation this motion has there and the rotation and scale `turning` has there: with
+  /// `turning` the motion before any translate_from, every keyframe's rotation and scale follow
+  /// from its time alone (a motion rebuilt from saved times and translations is the same to the
+  /// bit), and the placement between keyframes is the same as before to rounding.
+  /// @throw std::invalid_argument when t1 <= t0
+  void translate_from(double t0, double t1, const Eigen::Vector3d& delta, const RigidMotion& turning);
+  /// Sets the translation of the keyframe at time t [s] (inserted as translate_from does where
+  /// none lies within 1e-9 s): a motion saved as keyframe times and translations is rebuilt by
+  /// calling this for each on a copy of `turning`.
+  void set_translation_at(double t, const Eigen::Vector3d& translation, const RigidMotion& turning);
 
  private:
   /// Index i of the segment [t_i, t_i+1) holding t, or -1 outside the keyframe range.
   int segment(double t) const;
+  /// Index of the keyframe within 1e-9 s of t, inserted (translate_from) when there is none.
+  size_t keyframe_index(double t, const RigidMotion& turning);
 
  private:
   std::vector<Keyframe> m_keyframes;

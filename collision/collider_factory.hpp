@@ -28,6 +28,18 @@ enum class FieldKind {
 };
 
 /// A plain obstacle description; only the fields of its kind are read.
+/// An obstacle that yields upwards, as a weighted roller resting on a stop does: while the sheet
+/// pushes it up with more than `load` [N] (the barrier forces' world z component summed over its
+/// contacts, measured after every accepted step) it rises, at up to `speed` [m/s]; with less it
+/// sinks back to its keyframed path at up to `speed`, never below it. The rate is
+/// speed x clamp((F - load) / load, -1, 1) over the next step, so it settles where F = load.
+/// load = 0: the obstacle follows its keyframes exactly (the default).
+struct LiftSpec {
+  double load = 0.0;   ///< [N]
+  double speed = 0.1;  ///< [m/s]
+  bool enabled() const { return load > 0.0; }
+};
+
 struct ColliderSpec {
   ColliderKind kind = ColliderKind::plane;
   FieldKind field = FieldKind::automatic;
@@ -43,6 +55,7 @@ struct ColliderSpec {
   double friction = 0.3;     ///< Coulomb coefficient sheet-obstacle [-]
   /// Placement over time (rotation, translation, uniform scale of the shape); empty = identity.
   std::vector<Keyframe> keyframes;
+  LiftSpec lift;  ///< yield upwards under load (off by default)
 };
 
 /// A spherical cavity (inverted sphere) of `radius` [m] centred at `centre` [m] that holds its

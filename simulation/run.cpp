@@ -154,7 +154,11 @@ PhysicsSetup physics_setup(const Scene& scene, const remesh::SheetMesh& mesh, co
   }
   for (size_t i = 0; i < scene.obstacles.size(); ++i) {
     try {
-      s.obstacles.push_back(collision::make_collider(scene.obstacles[i]));
+      std::shared_ptr<collision::Collider> c = collision::make_collider(scene.obstacles[i]);
+      if (scene.obstacles[i].lift.enabled())
+        s.lifts.push_back({static_cast<int>(s.obstacles.size()), static_cast<int>(i), scene.obstacles[i].lift, c,
+                           c->motion});
+      s.obstacles.push_back(std::move(c));
     } catch (const collision::ColliderError& e) {
       throw SceneError((scene.source.empty() ? std::string("scene") : scene.source) +
                        ": key 'obstacles[" + std::to_string(i) + "]': " + e.what());
@@ -218,6 +222,7 @@ Run::Run(const Scene& scene) : m_scene(scene) {
   m_counts.vertices_start = m_counts.vertices_max = m_mesh.num_vertices();
   m_counts.faces_start = m_counts.faces_max = m_mesh.num_faces();
   m_quality.strain_limit = m_setup.material.strain_limit;
+  for (const PhysicsSetup::Lift& l : m_setup.lifts) m_quality.lifts.push_back({l.spec, 0.0, 0.0});
   track();
 }
 
@@ -238,7 +243,7 @@ void Run::check_state(const std::string& what) const {
                          (m_scene.ground ? " (0 is the ground)" : ""));
 }
 
-void Run::resume(const remesh::SheetMesh& mesh, const SheetState& state, int step) {
+void Run::resume(const remesh::SheetMesh& mesh, const SheetState& state, int step, const Scene* saved) {
   if (state.positions.size() != 3 * mesh.num_vertices() || state.velocities.size() != state.positions.size())
     throw SceneError("resume: the state has " + std::to_string(state.positions.size() / 3) +
                      " vertices, the mesh " + std::to_string(mesh.num_vertices()));
@@ -247,6 +252,18 @@ void Run::resume(const remesh::SheetMesh& mesh, const SheetState& state, int ste
   if (std::abs(state.time - step * m_h) > 1e-9 * std::max(1.0, m_scene.duration))
     throw SceneError("resume: the state's time does not match step " + std::to_string(step) +
                      " of this scene's time step (another time_step or duration?)");
+  if (saved) {
+    for (const PhysicsSetup::Lift& l : m_setup.lifts) {
+      if (l.spec >= static_cast<int>(saved->obstacles.size()) || !saved->obstacles[l.spec].lift.enabled()) continue;
+      // Times and translations as saved (exact in JSON), rotations and scales from the scene's
+      // motion at those times, as the run that saved them made them (RigidMotion::translate_from).
+      collision::RigidMotion m = l.keyframed;
+      for (const collision::Keyframe& k : saved->obstacles[l.spec].keyframes)
+        m.set_translation_at(k.time, k.translation, l.keyframed);
+      l.collider->motion = m;
+      m_scene.obstacles[l.spec].keyframes = m.keyframes();
+    }
+  }
   m_mesh = mesh;
   m_state = state;
   m_step = step;
@@ -256,6 +273,7 @@ void Run::resume(const remesh::SheetMesh& mesh, const SheetState& state, int ste
   m_counts.faces_start = m_counts.faces_max = m_mesh.num_faces();
   m_quality = RunQuality{};
   m_quality.strain_limit = m_setup.material.strain_limit;
+  for (const PhysicsSetup::Lift& l : m_setup.lifts) m_quality.lifts.push_back({l.spec, 0.0, 0.0});
   track();
 }
 
@@ -309,9 +327,33 @@ const StepStats& Run::step() {
     apply_plasticity(*m_terms.bending, m_state.positions, m_setup.material.yield_curvature, m_mesh);
   m_totals += m_last;
   ++m_step;
+  lift_obstacles();
   track();
   if (r.enabled && !finished() && (m_step == 1 || m_step % r.every == 0)) remesh_pass();
   return m_last;
+}
+
+void Run::lift_obstacles() {
+  for (size_t i = 0; i < m_setup.lifts.size(); ++i) {
+    const PhysicsSetup::Lift& l = m_setup.lifts[i];
+    const double t = m_state.time;
+    const Eigen::Vector3d force = m_terms.contact->obstacle_load(l.obstacle, m_state.positions);
+    const double load = force.z();
+    const double rise = l.collider->motion.pose(t).translation().z() - l.keyframed.pose(t).translation().z();
+    RunQuality::LiftExtremes& q = m_quality.lifts[i];
+    q.max_load = std::max(q.max_load, load);
+    q.max_rise = std::max(q.max_rise, rise);
+    // Up or down at speed x clamp((F - load) / load, -1, 1) over the next step, never below the
+    // keyframed path; changes below a nanometre are not made (they would only add keyframes).
+    const double rate = l.lift.speed * std::clamp((load - l.lift.load) / l.lift.load, -1.0, 1.0);
+    const double dz = std::max(rate * m_h, -std::max(rise, 0.0));
+    if (std::getenv("PAPERSIM_DEBUG_LIFT"))
+      std::fprintf(stderr, "t %.4f lift: obstacle %d force (%.4g, %.4g, %.4g) N, rise %.4g m, next %+.3g m\n", t,
+                   l.spec, force.x(), force.y(), force.z(), rise, dz);
+    if (std::abs(dz) < 1e-9) continue;
+    l.collider->motion.translate_from(t, t + m_h, Eigen::Vector3d(0, 0, dz), l.keyframed);
+    m_scene.obstacles[l.spec].keyframes = l.collider->motion.keyframes();
+  }
 }
 
 Eigen::VectorXd Run::vertex_obstacle_distance() const {

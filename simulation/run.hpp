@@ -68,6 +68,17 @@ struct PhysicsSetup {
   bool impact_rule = true;
   bool self_contact = false;
   SelfContactParams self_contact_params;  ///< dhat and stiffness resolved (> 0)
+  /// Obstacles that yield upwards (collision::LiftSpec). Their collider, shared with
+  /// `obstacles`, is the one part of the setup a run changes: it extends the collider's motion
+  /// after every step (Run::step).
+  struct Lift {
+    int obstacle = 0;  ///< index in `obstacles`
+    int spec = 0;      ///< index in Scene::obstacles
+    collision::LiftSpec lift;
+    std::shared_ptr<collision::Collider> collider;
+    collision::RigidMotion keyframed;  ///< the motion the scene gives it
+  };
+  std::vector<Lift> lifts;
 };
 
 /// The physics of a scene: obstacles built, contact stiffness resolved, handles anchored at the
@@ -117,6 +128,14 @@ struct RunQuality {
   std::vector<double> min_obstacle_distance;
   int self_intersections = 0;          ///< intersecting non-adjacent triangle pairs at the end
   std::optional<double> max_handle_error;  ///< [m], when the scene has handles
+  /// Per obstacle that yields upwards (PhysicsSetup::lifts, in that order): the largest upward
+  /// load the sheet pressed it with after a step [N] and the largest height it rose above its
+  /// keyframed path [m].
+  struct LiftExtremes {
+    int obstacle = 0;  ///< index in Scene::obstacles
+    double max_load = 0.0, max_rise = 0.0;
+  };
+  std::vector<LiftExtremes> lifts;
 };
 
 /// Vertex and face counts of the sheet over a run.
@@ -175,7 +194,9 @@ class Run {
   /// from here on. Checked like a start (outside every obstacle, free of self-intersection).
   /// @throw SceneError when the state does not fit the mesh, the step is out of range or its
   ///        time is not step x time_step, or the state fails a check
-  void resume(const remesh::SheetMesh& mesh, const SheetState& state, int step);
+  /// `saved`: the scene the checkpoint was saved with (Run::scene() of that run); obstacles that
+  /// yield upwards continue on the motion saved there.
+  void resume(const remesh::SheetMesh& mesh, const SheetState& state, int step, const Scene* saved = nullptr);
 
   /// Advance by one time step of the scene, remeshing before the first step, after it and then
   /// after every `remesh.every` steps when the scene remeshes.
@@ -186,6 +207,7 @@ class Run {
   int steps_total() const { return m_steps; }
   double time_step() const { return m_h; }
 
+  /// The scene; the keyframes of obstacles that yield upwards include their rises so far.
   const Scene& scene() const { return m_scene; }
   const remesh::SheetMesh& mesh() const { return m_mesh; }
   const SheetState& state() const { return m_state; }
@@ -206,6 +228,9 @@ class Run {
   ///        intersects itself (`what`: "starts" or "resumes")
   void check_state(const std::string& what) const;
   void track();
+  /// Moves each obstacle that yields upwards over the next step by the load the sheet presses it
+  /// with now (collision::LiftSpec).
+  void lift_obstacles();
   /// One remeshing pass: kept when the new mesh passes every check (no self-intersection,
   /// stretch within the limit, finite energy), undone otherwise.
   void remesh_pass();

@@ -279,6 +279,12 @@ collision::ColliderSpec read_obstacle(Reader r) {
   c.obj_scale = r.number("mesh_scale", c.obj_scale, 0, 1e6, true);
   c.level_set.voxel_size = r.number("voxel_size", c.level_set.voxel_size, 0, 1);
   c.friction = r.number("friction", c.friction, 0, 10);
+  if (r.has("lift")) {
+    Reader l = r.child("lift");
+    c.lift.load = l.number("load", c.lift.load, 0, 1e6, true);
+    c.lift.speed = l.number("speed", c.lift.speed, 0, 1e3, true);
+    l.finish();
+  }
   const Eigen::Vector3d t = r.vector<3>("position", Eigen::Vector3d::Zero());
   const Eigen::Vector3d rot = r.vector<3>("rotation_deg", Eigen::Vector3d::Zero());
   const double scale = r.number("scale", 1.0, 0, 1e6, true);
@@ -420,6 +426,7 @@ json obstacle_json(const collision::ColliderSpec& c) {
   o["mesh_scale"] = c.obj_scale;
   o["voxel_size"] = c.level_set.voxel_size;
   o["friction"] = c.friction;
+  if (c.lift.enabled()) o["lift"] = {{"load", c.lift.load}, {"speed", c.lift.speed}};
   json keys = json::array();
   for (const auto& k : c.keyframes) {
     const Eigen::Vector3d e = k.rotation.toRotationMatrix().eulerAngles(2, 1, 0) * 180 / M_PI;

@@ -89,6 +89,12 @@ json meta_json(const Scene& scene, const RunResult& r, const json& extra) {
                   {"min_obstacle_distance", q.min_obstacle_distance},
                   {"self_intersections", q.self_intersections}};
   if (q.max_handle_error) m["quality"]["max_handle_error"] = *q.max_handle_error;
+  if (!q.lifts.empty()) {
+    json lifts = json::array();
+    for (const auto& l : q.lifts)
+      lifts.push_back({{"obstacle", l.obstacle}, {"max_load", l.max_load}, {"max_rise", l.max_rise}});
+    m["quality"]["lifts"] = lifts;
+  }
   const EnergyBreakdown& e = r.energy;
   m["energy"] = {{"stretch", e.stretch}, {"bend", e.bend}, {"gravity", e.gravity}, {"kinetic", e.kinetic}};
   for (auto it = extra.begin(); it != extra.end(); ++it) m[it.key()] = it.value();
@@ -164,9 +170,10 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
   json resumed;
   if (!options.resume_from.empty()) {
     const Checkpoint c = load_checkpoint(options.resume_from);
-    run.resume(c.mesh, c.state, c.step);
+    const Scene saved = scene_from_json(c.scene, (fs::path(options.resume_from) / "checkpoint.json").string());
+    run.resume(c.mesh, c.state, c.step, &saved);
     json changes = json::array();
-    for (const auto& patch : json::diff(c.scene, scene_to_json(scene))) changes.push_back(patch.at("path"));
+    for (const auto& patch : json::diff(c.scene, scene_to_json(run.scene()))) changes.push_back(patch.at("path"));
     resumed = {{"from", options.resume_from}, {"step", c.step}, {"time", c.time}, {"scene_changes", changes}};
   }
   Staging staging(options.out_dir);
@@ -181,7 +188,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
     run.step();
     if (options.poll_stop) options.poll_stop();
     if (options.checkpoint_every > 0 && k % options.checkpoint_every == 0 && k < steps)
-      save_checkpoint(options.checkpoint_dir, scene, k, run.mesh(), run.state());
+      save_checkpoint(options.checkpoint_dir, run.scene(), k, run.mesh(), run.state());
     if (options.on_step) {
       StepReport report;
       report.step = k;

@@ -287,6 +287,74 @@ void ObstacleContactEnergy::update_bounds() {
   }
 }
 
+// Every barrier contact of the sheet at x against the obstacles at time t: f(fp, lambda, p, n)
+// with the contact's vertices and weights in fp (fp.obstacle set), its normal force lambda [N],
+// the contact point p on the sheet and the unit normal n pointing from the obstacle to the sheet.
+template <class F>
+void ObstacleContactEnergy::for_each_contact(const Eigen::VectorXd& x, double t, F&& visit) const {
+  const int nv = static_cast<int>(m_area.size());
+  for (int o = 0; o < num_obstacles(); ++o) {
+    const auto& obs = *m_obstacles[o];
+    if (m_mode[o] == Mode::sphere || m_mode[o] == Mode::search) {
+      const Eigen::Affine3d pose = obs.motion.pose(t);
+      for (int f = 0; f < m_faces.rows(); ++f) {
+        const auto r = face_contact(o, x, f, pose);
+        if (r.distance >= m_params.dhat || r.distance <= 0) continue;
+        FrictionPoint fp;
+        fp.count = 3;
+        fp.vertices = {m_faces(f, 0), m_faces(f, 1), m_faces(f, 2)};
+        fp.weights = r.barycentric;
+        fp.obstacle = o;
+        visit(fp, -face_kappa(f) * barrier_first_derivative(r.distance, m_params.dhat), contact_point(fp, x),
+              r.gradient);
+      }
+    }
+    if (!uses_vertices(o)) continue;
+    for (int v = 0; v < nv; ++v) {
+      const Eigen::Vector3d p = x.segment<3>(3 * v);
+      if (!near_bounds(o, p)) continue;
+      Eigen::Vector3d n;
+      const double d = obs.distance(p, t, &n);
+      if (d >= m_params.dhat || d <= 0) continue;
+      FrictionPoint fp;
+      fp.vertices[0] = v;
+      fp.obstacle = o;
+      visit(fp, -kappa(v) * barrier_first_derivative(d, m_params.dhat), p, n);
+    }
+  }
+  // Corner-triangle and edge-edge pairs of polyhedral obstacles: normal force of the mollified
+  // barrier, acting at the closest point on the sheet.
+  std::vector<WorldFeatures> at_t(m_obstacles.size());
+  for (int o = 0; o < num_obstacles(); ++o) at_t[o] = world_features(o, t);
+  for (const FeaturePair& p : feature_pairs(x, nullptr, m_params.dhat, at_t)) {
+    const collision::PairPoints pts = pair_points(p, x, at_t);
+    const collision::DistanceStencil s =
+        p.edge_edge ? collision::edge_edge_stencil(pts) : collision::point_triangle_stencil(pts);
+    const double d = std::sqrt(collision::distance_squared(s, pts));
+    if (d >= m_params.dhat || d <= 0) continue;
+    const double eps = pair_mollifier_eps(p, at_t);
+    const double m = p.edge_edge ? collision::edge_edge_mollifier(pts, eps, nullptr, nullptr) : 1.0;
+    const Eigen::Vector4d w = collision::closest_point_weights(s, pts);
+    FrictionPoint fp;
+    fp.obstacle = p.obstacle;
+    if (p.edge_edge) {  // r = sheet point - obstacle point
+      fp.count = 2;
+      fp.vertices = {m_edges(p.a, 0), m_edges(p.a, 1), -1};
+      fp.weights = Eigen::Vector3d(w[0], w[1], 0);
+    } else {  // r = corner - sheet point
+      fp.count = 3;
+      fp.vertices = {m_faces(p.b, 0), m_faces(p.b, 1), m_faces(p.b, 2)};
+      fp.weights = -w.tail<3>();
+    }
+    Eigen::Vector3d r = Eigen::Vector3d::Zero();
+    for (int k = 0; k < 4; ++k) r += w[k] * pts[k];
+    const double kappa_pair = m_stiffness / m_params.dhat * pair_weight(p);
+    // n from the obstacle to the sheet in both cases (friction depends only on its plane).
+    const Eigen::Vector3d n = p.edge_edge ? r.normalized() : Eigen::Vector3d(-r.normalized());
+    visit(fp, -kappa_pair * m * barrier_first_derivative(d, m_params.dhat), contact_point(fp, x), n);
+  }
+}
+
 void ObstacleContactEnergy::begin_step(const StepContext& ctx, const Eigen::VectorXd& x_t0) {
   ScopedTimer timer(m_stats->seconds);
   m_t0 = ctx.time_t0;
@@ -318,10 +386,9 @@ void ObstacleContactEnergy::begin_step(const StepContext& ctx, const Eigen::Vect
   // Lagged friction: normal force and tangent plane at the step start (IPC Sec. 5).
   m_friction.clear();
   m_normal_force = 0.0;
-  const int nv = static_cast<int>(m_area.size());
-  const auto add_friction = [&](FrictionPoint fp, const collision::Collider& obs, double lambda,
-                                const Eigen::Vector3d& p, const Eigen::Vector3d& n) {
+  const auto add_friction = [&](FrictionPoint fp, double lambda, const Eigen::Vector3d& p, const Eigen::Vector3d& n) {
     m_normal_force += lambda;
+    const collision::Collider& obs = *m_obstacles[fp.obstacle];
     if (obs.friction <= 0) return;
     fp.mu_lambda = obs.friction * lambda;
     const Eigen::Vector3d a = std::abs(n.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
@@ -330,71 +397,20 @@ void ObstacleContactEnergy::begin_step(const StepContext& ctx, const Eigen::Vect
     fp.origin = p + ctx.h * obs.velocity(p, ctx.time_t0);
     m_friction.push_back(fp);
   };
-  for (int o = 0; o < num_obstacles(); ++o) {
-    const auto& obs = *m_obstacles[o];
-    if (m_mode[o] == Mode::sphere || m_mode[o] == Mode::search) {
-      const Eigen::Affine3d pose = obs.motion.pose(ctx.time_t0);
-      for (int f = 0; f < m_faces.rows(); ++f) {
-        const auto r = face_contact(o, x_t0, f, pose);
-        if (r.distance >= m_params.dhat || r.distance <= 0) continue;
-        FrictionPoint fp;
-        fp.count = 3;
-        fp.vertices = {m_faces(f, 0), m_faces(f, 1), m_faces(f, 2)};
-        fp.weights = r.barycentric;
-        fp.obstacle = o;
-        add_friction(fp, obs, -face_kappa(f) * barrier_first_derivative(r.distance, m_params.dhat),
-                     contact_point(fp, x_t0), r.gradient);
-      }
-    }
-    if (!uses_vertices(o)) continue;
-    for (int v = 0; v < nv; ++v) {
-      const Eigen::Vector3d p = x_t0.segment<3>(3 * v);
-      if (!near_bounds(o, p)) continue;
-      Eigen::Vector3d n;
-      const double d = obs.distance(p, ctx.time_t0, &n);
-      if (d >= m_params.dhat || d <= 0) continue;
-      FrictionPoint fp;
-      fp.vertices[0] = v;
-      fp.obstacle = o;
-      add_friction(fp, obs, -kappa(v) * barrier_first_derivative(d, m_params.dhat), p, n);
-    }
-  }
-  // Corner-triangle and edge-edge pairs of polyhedral obstacles: normal force of the mollified
-  // barrier, acting at the closest point on the sheet.
   m_features.assign(m_obstacles.size(), {});
-  std::vector<WorldFeatures> at_t0(m_obstacles.size());
-  for (int o = 0; o < num_obstacles(); ++o) {
-    m_features[o] = world_features(o, m_time);
-    at_t0[o] = world_features(o, ctx.time_t0);
-  }
-  for (const FeaturePair& p : feature_pairs(x_t0, nullptr, m_params.dhat, at_t0)) {
-    const collision::PairPoints pts = pair_points(p, x_t0, at_t0);
-    const collision::DistanceStencil s =
-        p.edge_edge ? collision::edge_edge_stencil(pts) : collision::point_triangle_stencil(pts);
-    const double d = std::sqrt(collision::distance_squared(s, pts));
-    if (d >= m_params.dhat || d <= 0) continue;
-    const double eps = pair_mollifier_eps(p, at_t0);
-    const double m = p.edge_edge ? collision::edge_edge_mollifier(pts, eps, nullptr, nullptr) : 1.0;
-    const Eigen::Vector4d w = collision::closest_point_weights(s, pts);
-    FrictionPoint fp;
-    fp.obstacle = p.obstacle;
-    if (p.edge_edge) {  // r = sheet point - obstacle point
-      fp.count = 2;
-      fp.vertices = {m_edges(p.a, 0), m_edges(p.a, 1), -1};
-      fp.weights = Eigen::Vector3d(w[0], w[1], 0);
-    } else {  // r = corner - sheet point
-      fp.count = 3;
-      fp.vertices = {m_faces(p.b, 0), m_faces(p.b, 1), m_faces(p.b, 2)};
-      fp.weights = -w.tail<3>();
-    }
-    Eigen::Vector3d r = Eigen::Vector3d::Zero();
-    for (int k = 0; k < 4; ++k) r += w[k] * pts[k];
-    const double kappa_pair = m_stiffness / m_params.dhat * pair_weight(p);
-    add_friction(fp, *m_obstacles[p.obstacle], -kappa_pair * m * barrier_first_derivative(d, m_params.dhat),
-                 contact_point(fp, x_t0), r.normalized());
-  }
+  for (int o = 0; o < num_obstacles(); ++o) m_features[o] = world_features(o, m_time);
+  for_each_contact(x_t0, ctx.time_t0, add_friction);
   m_stats->max_friction_points = std::max(m_stats->max_friction_points, active_friction());
   m_stats->max_normal_force = std::max(m_stats->max_normal_force, m_normal_force);
+}
+
+Eigen::Vector3d ObstacleContactEnergy::obstacle_load(int o, const Eigen::VectorXd& x) const {
+  Eigen::Vector3d load = Eigen::Vector3d::Zero();
+  for_each_contact(x, m_time, [&](const FrictionPoint& fp, double lambda, const Eigen::Vector3d&,
+                                  const Eigen::Vector3d& n) {
+    if (fp.obstacle == o) load -= lambda * n;
+  });
+  return load;
 }
 
 namespace {

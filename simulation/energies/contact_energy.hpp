@@ -130,6 +130,10 @@ class ObstacleContactEnergy : public EnergyTerm {
   /// Sum of normal contact force magnitudes at the step start [N].
   double normal_force() const { return m_normal_force; }
   int num_obstacles() const { return static_cast<int>(m_obstacles.size()); }
+  /// The force the sheet at x presses obstacle o with through the contact barriers (vertex,
+  /// face and feature-pair contacts), the obstacles where they are at the current step's end
+  /// [N]. Friction is not included.
+  Eigen::Vector3d obstacle_load(int o, const Eigen::VectorXd& x) const;
   /// Smallest signed distance from the sheet's surface to obstacle o at time t [m]: over the
   /// vertices, and with face contact over the faces (spheres, searched fields) or the corner-
   /// triangle and edge-edge pairs (polyhedra) too, so a ridge between vertices counts.
@@ -165,6 +169,10 @@ class ObstacleContactEnergy : public EnergyTerm {
   };
 
   bool near_bounds(int o, const Eigen::Vector3d& p) const;
+  /// Calls visit(FrictionPoint fp, double lambda, Vector3d p, Vector3d n) for every barrier
+  /// contact of the sheet at x with the obstacles at time t (see the .cpp).
+  template <class F>
+  void for_each_contact(const Eigen::VectorXd& x, double t, F&& visit) const;
   /// Bounds of the field at m_time, inflated by the thickness (m_bounds).
   void update_bounds();
   /// Largest step along dx for obstacle o held at m_time (vertices and faces; not the pairs).

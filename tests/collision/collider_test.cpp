@@ -89,6 +89,45 @@ TEST(RigidMotion, InterpolatesTranslationAndSlerp) {
   EXPECT_TRUE(pc::RigidMotion({keyframe(0, {1, 2, 3}, rot_z(1))}).is_static());
 }
 
+// translate_from: nothing changes before t0, the placement moves by delta from t1 on and by a
+// linear part of it in between; the rest of the motion keeps its placement; inserted keyframes
+// take rotation and scale from the motion given, so rebuilding from their times is exact.
+TEST(RigidMotion, TranslateFromMovesThePlacementFromATimeOn) {
+  const pc::RigidMotion before({keyframe(1.0, {0, 0, 0}, rot_z(0.0)), keyframe(3.0, {2, 4, 0}, rot_z(M_PI / 2))});
+  pc::RigidMotion m = before;
+  const Eigen::Vector3d delta(0, 0, 0.5);
+  m.translate_from(1.5, 2.0, delta, before);
+  EXPECT_EQ(m.keyframes().size(), 4u);
+  for (double t : {0.0, 1.0, 1.2, 1.5}) EXPECT_NEAR((m.pose(t).matrix() - before.pose(t).matrix()).norm(), 0.0, 1e-14) << t;
+  for (double t : {2.0, 2.5, 3.0, 7.0}) {
+    EXPECT_NEAR((m.pose(t).translation() - before.pose(t).translation() - delta).norm(), 0.0, 1e-14) << t;
+    EXPECT_NEAR((m.pose(t).linear() - before.pose(t).linear()).norm(), 0.0, 1e-14) << t;
+  }
+  EXPECT_NEAR((m.pose(1.75).translation() - before.pose(1.75).translation() - 0.5 * delta).norm(), 0.0, 1e-14);
+  EXPECT_NEAR((m.linear_velocity(1.75) - before.linear_velocity(1.75) - delta / 0.5).norm(), 0.0, 1e-13);
+  EXPECT_NEAR((m.angular_velocity(1.75) - before.angular_velocity(1.75)).norm(), 0.0, 1e-13);
+  // A second change from the keyframe at 2.0 (within 1e-9 s: no new keyframe there), and one
+  // beyond the last keyframe, where the motion was held.
+  m.translate_from(2.0 + 1e-12, 2.25, -delta, before);
+  EXPECT_EQ(m.keyframes().size(), 5u);
+  EXPECT_NEAR((m.pose(2.5).translation() - before.pose(2.5).translation()).norm(), 0.0, 1e-14);
+  m.translate_from(5.0, 6.0, delta, before);
+  EXPECT_EQ(m.keyframes().size(), 7u);
+  EXPECT_NEAR((m.pose(5.0).translation() - Eigen::Vector3d(2, 4, 0)).norm(), 0.0, 1e-14);
+  EXPECT_NEAR((m.pose(8.0).translation() - Eigen::Vector3d(2, 4, 0.5)).norm(), 0.0, 1e-14);
+  // Rebuilt from the keyframe times and translations alone: the same keyframes to the bit.
+  pc::RigidMotion rebuilt = before;
+  for (const pc::Keyframe& k : m.keyframes()) rebuilt.set_translation_at(k.time, k.translation, before);
+  ASSERT_EQ(rebuilt.keyframes().size(), m.keyframes().size());
+  for (size_t i = 0; i < m.keyframes().size(); ++i) {
+    const pc::Keyframe &a = rebuilt.keyframes()[i], &b = m.keyframes()[i];
+    EXPECT_TRUE(a.time == b.time && a.translation == b.translation && a.rotation.coeffs() == b.rotation.coeffs() &&
+                a.scale == b.scale)
+        << i;
+  }
+  EXPECT_THROW(m.translate_from(2.0, 2.0, delta, before), std::invalid_argument);
+}
+
 TEST(RigidMotion, SlerpTakesShortArc) {
   // -q is the same rotation as q: interpolation must not swing the long way round.
   Eigen::Quaterniond q = rot_z(0.2);

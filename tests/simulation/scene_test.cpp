@@ -118,6 +118,31 @@ TEST(Scene, ObstacleScaleIsReadCheckedAndRoundTrips) {
   }
 }
 
+TEST(Scene, ObstacleLiftIsReadCheckedAndRoundTrips) {
+  const Scene s = scene_from_json(
+      {{"obstacles", {{{"kind", "cylinder"}, {"lift", {{"load", 5.0}, {"speed", 0.2}}}}, {{"kind", "sphere"}}}}},
+      "s.json");
+  ASSERT_EQ(s.obstacles.size(), 2u);
+  EXPECT_EQ(s.obstacles[0].lift.load, 5.0);
+  EXPECT_EQ(s.obstacles[0].lift.speed, 0.2);
+  EXPECT_TRUE(s.obstacles[0].lift.enabled());
+  EXPECT_FALSE(s.obstacles[1].lift.enabled());  // off by default
+  EXPECT_EQ(scene_to_json(scene_from_json(scene_to_json(s), "again")), scene_to_json(s));
+  EXPECT_FALSE(scene_to_json(s)["obstacles"][1].contains("lift"));
+  for (const json& bad : {json(0.0), json(-1.0), json("big")}) {
+    EXPECT_NE(error_of({{"obstacles", {{{"kind", "sphere"}, {"lift", {{"load", bad}}}}}}}).find("'obstacles[0].lift.load'"),
+              std::string::npos)
+        << bad;
+    EXPECT_NE(error_of({{"obstacles", {{{"kind", "sphere"}, {"lift", {{"load", 1.0}, {"speed", bad}}}}}}})
+                  .find("'obstacles[0].lift.speed'"),
+              std::string::npos)
+        << bad;
+  }
+  EXPECT_NE(error_of({{"obstacles", {{{"kind", "sphere"}, {"lift", {{"load", 1.0}, {"sped", 1.0}}}}}}})
+                .find("'obstacles[0].lift.sped'"),
+            std::string::npos);
+}
+
 // crumple: the same seed draws the same scene, the cavity holds at 0.2 m until 1 s and shrinks
 // to 0.05 m at 5 s, the material is SCENARIOS.md's, and every draw starts with the whole sheet
 // inside the cavity (every corner at least 5 mm from its wall).
