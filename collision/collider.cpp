@@ -55,21 +55,10 @@ int RigidMotion::segment(double t) const {
 }
 
 Eigen::Affine3d RigidMotion::pose(double t) const {
+  const Keyframe k = keyframe_at(t);
   Eigen::Affine3d x = Eigen::Affine3d::Identity();
-  if (m_keyframes.empty()) return x;
-  const Keyframe* k = &m_keyframes.front();
-  if (t >= m_keyframes.back().time) k = &m_keyframes.back();
-  const int i = segment(t);
-  if (i < 0) {
-    x.linear() = k->scale * k->rotation.toRotationMatrix();
-    x.translation() = k->translation;
-    return x;
-  }
-  const Keyframe& a = m_keyframes[i];
-  const Keyframe& b = m_keyframes[i + 1];
-  const double s = (t - a.time) / (b.time - a.time);
-  x.linear() = ((1.0 - s) * a.scale + s * b.scale) * a.rotation.slerp(s, b.rotation).toRotationMatrix();
-  x.translation() = (1.0 - s) * a.translation + s * b.translation;
+  x.linear() = k.scale * k.rotation.toRotationMatrix();
+  x.translation() = k.translation;
   return x;
 }
 

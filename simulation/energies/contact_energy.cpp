@@ -287,13 +287,15 @@ void ObstacleContactEnergy::update_bounds() {
   }
 }
 
-// Every barrier contact of the sheet at x against the obstacles at time t: f(fp, lambda, p, n)
-// with the contact's vertices and weights in fp (fp.obstacle set), its normal force lambda [N],
-// the contact point p on the sheet and the unit normal n pointing from the obstacle to the sheet.
+// Every barrier contact of the sheet at x against the obstacles at time t (only obstacle `only`
+// when >= 0): visit(fp, lambda, p, n) with the contact's vertices and weights in fp (fp.obstacle
+// set), its normal force lambda [N], the contact point p on the sheet and the unit normal n
+// pointing from the obstacle to the sheet.
 template <class F>
-void ObstacleContactEnergy::for_each_contact(const Eigen::VectorXd& x, double t, F&& visit) const {
+void ObstacleContactEnergy::for_each_contact(const Eigen::VectorXd& x, double t, F&& visit, int only) const {
   const int nv = static_cast<int>(m_area.size());
   for (int o = 0; o < num_obstacles(); ++o) {
+    if (only >= 0 && o != only) continue;
     const auto& obs = *m_obstacles[o];
     if (m_mode[o] == Mode::sphere || m_mode[o] == Mode::search) {
       const Eigen::Affine3d pose = obs.motion.pose(t);
@@ -327,6 +329,7 @@ void ObstacleContactEnergy::for_each_contact(const Eigen::VectorXd& x, double t,
   std::vector<WorldFeatures> at_t(m_obstacles.size());
   for (int o = 0; o < num_obstacles(); ++o) at_t[o] = world_features(o, t);
   for (const FeaturePair& p : feature_pairs(x, nullptr, m_params.dhat, at_t)) {
+    if (only >= 0 && p.obstacle != only) continue;
     const collision::PairPoints pts = pair_points(p, x, at_t);
     const collision::DistanceStencil s =
         p.edge_edge ? collision::edge_edge_stencil(pts) : collision::point_triangle_stencil(pts);
@@ -406,10 +409,9 @@ void ObstacleContactEnergy::begin_step(const StepContext& ctx, const Eigen::Vect
 
 Eigen::Vector3d ObstacleContactEnergy::obstacle_load(int o, const Eigen::VectorXd& x) const {
   Eigen::Vector3d load = Eigen::Vector3d::Zero();
-  for_each_contact(x, m_time, [&](const FrictionPoint& fp, double lambda, const Eigen::Vector3d&,
-                                  const Eigen::Vector3d& n) {
-    if (fp.obstacle == o) load -= lambda * n;
-  });
+  for_each_contact(
+      x, m_time, [&](const FrictionPoint&, double lambda, const Eigen::Vector3d&, const Eigen::Vector3d& n) { load -= lambda * n; },
+      o);
   return load;
 }
 

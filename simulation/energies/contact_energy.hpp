@@ -170,9 +170,10 @@ class ObstacleContactEnergy : public EnergyTerm {
 
   bool near_bounds(int o, const Eigen::Vector3d& p) const;
   /// Calls visit(FrictionPoint fp, double lambda, Vector3d p, Vector3d n) for every barrier
-  /// contact of the sheet at x with the obstacles at time t (see the .cpp).
+  /// contact of the sheet at x with the obstacles (only obstacle `only` when >= 0) at time t
+  /// (see the .cpp).
   template <class F>
-  void for_each_contact(const Eigen::VectorXd& x, double t, F&& visit) const;
+  void for_each_contact(const Eigen::VectorXd& x, double t, F&& visit, int only = -1) const;
   /// Bounds of the field at m_time, inflated by the thickness (m_bounds).
   void update_bounds();
   /// Largest step along dx for obstacle o held at m_time (vertices and faces; not the pairs).
