@@ -34,9 +34,15 @@ enum class FieldKind {
 /// sinks back to its keyframed path at up to `speed`, never below it. The rate is
 /// speed x clamp((F - load) / load, -1, 1) over the next step, so it settles where F = load.
 /// load = 0: the obstacle follows its keyframes exactly (the default).
+/// coupled: instead of that rule the obstacle is a body of weight `load` (mass load / |g|) whose
+/// height above its keyframed path is an unknown of every time step, solved with the sheet: its
+/// inertia, its weight and a barrier that keeps it above the path are terms of the incremental
+/// potential and the sheet's contact pushes it up within the step (simulation::LiftBodyEnergy).
+/// `speed` is not used then.
 struct LiftSpec {
   double load = 0.0;   ///< [N]
   double speed = 0.1;  ///< [m/s]
+  bool coupled = false;
   bool enabled() const { return load > 0.0; }
 };
 

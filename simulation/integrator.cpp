@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <sstream>
 
+#include "remesh/errors.hpp"
 #include "simulation/errors.hpp"
 
 namespace papersim::simulation {
@@ -58,9 +59,12 @@ StepStats& StepStats::operator+=(const StepStats& o) {
 }
 
 Integrator::Integrator(int num_vertices, std::vector<std::unique_ptr<EnergyTerm>> terms,
-                       const NewtonParams& params)
-    : m_terms(std::move(terms)), m_params(params) {
-  int blocks = num_vertices;
+                       const NewtonParams& params, int rigid_blocks)
+    : m_terms(std::move(terms)),
+      m_params(params),
+      m_rigid_x(Eigen::VectorXd::Zero(3 * rigid_blocks)),
+      m_rigid_v(Eigen::VectorXd::Zero(3 * rigid_blocks)) {
+  int blocks = num_vertices + rigid_blocks;
   for (const auto& t : m_terms) {
     t->set_auxiliary_offset(blocks);
     blocks += t->auxiliary_blocks();
@@ -69,6 +73,20 @@ Integrator::Integrator(int num_vertices, std::vector<std::unique_ptr<EnergyTerm>
   for (const auto& t : m_terms) t->add_pattern(pattern);
   m_static_pattern = pattern.finish();
   m_hessian = BlockSymmetricMatrix(m_static_pattern);
+}
+
+void Integrator::set_rigid_state(const Eigen::VectorXd& positions, const Eigen::VectorXd& velocities) {
+  PAPERSIM_ASSERT(positions.size() == m_rigid_x.size() && velocities.size() == m_rigid_v.size(),
+                  "Integrator::set_rigid_state: wrong number of rigid unknowns");
+  m_rigid_x = positions;
+  m_rigid_v = velocities;
+}
+
+Eigen::VectorXd Integrator::with_rigid(const Eigen::VectorXd& sheet, const Eigen::VectorXd& rigid) const {
+  if (rigid.size() == 0) return sheet;
+  Eigen::VectorXd x(sheet.size() + rigid.size());
+  x << sheet, rigid;
+  return x;
 }
 
 void Integrator::update_pattern(const Eigen::VectorXd& x) {
@@ -105,10 +123,11 @@ double Integrator::start_energy(const SheetState& state, double h) {
   StepContext ctx;
   ctx.time_t0 = state.time;
   ctx.h = h;
-  ctx.x_t0 = &state.positions;
-  ctx.v_t0 = &state.velocities;
-  begin_step(ctx, state.positions);
-  const double e = energy(state.positions);
+  const Eigen::VectorXd x_t0 = with_rigid(state.positions, m_rigid_x), v_t0 = with_rigid(state.velocities, m_rigid_v);
+  ctx.x_t0 = &x_t0;
+  ctx.v_t0 = &v_t0;
+  begin_step(ctx, x_t0);
+  const double e = energy(x_t0);
   m_following.clear();
   return e;
 }
@@ -415,7 +434,7 @@ bool Integrator::advance(SheetState& state, double h, int depth, StepStats& stat
   StepContext ctx;
   ctx.time_t0 = state.time;
   ctx.h = h;
-  const Eigen::VectorXd x_t0 = state.positions, v_t0 = state.velocities;
+  const Eigen::VectorXd x_t0 = with_rigid(state.positions, m_rigid_x), v_t0 = with_rigid(state.velocities, m_rigid_v);
   ctx.x_t0 = &x_t0;
   ctx.v_t0 = &v_t0;
   begin_step(ctx, x_t0);
@@ -455,8 +474,11 @@ bool Integrator::advance(SheetState& state, double h, int depth, StepStats& stat
     }
     return advance(state, 0.5 * h, depth + 1, stats) && advance(state, 0.5 * h, depth + 1, stats);
   }
-  state.velocities = (x - x_t0) / h;
-  state.positions = x;
+  const Eigen::Index n = state.positions.size(), nr = m_rigid_x.size();
+  state.velocities = (x.head(n) - x_t0.head(n)) / h;
+  state.positions = x.head(n);
+  m_rigid_v = (x.tail(nr) - x_t0.tail(nr)) / h;
+  m_rigid_x = x.tail(nr);
   state.time += h;
   ++stats.substeps;
   if (!state.positions.allFinite()) throw NumericError("NaN in the positions after a step");

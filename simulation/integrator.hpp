@@ -82,8 +82,18 @@ struct StepStats {
 class Integrator {
  public:
   /// @param terms the incremental potential; the integrator owns them.
+  /// @param rigid_blocks unknowns of bodies solved with the sheet (a coupled lifting obstacle's
+  ///        displacement, LiftBodyEnergy): blocks num_vertices .. num_vertices + rigid_blocks - 1
+  ///        of the Newton system, and the entries after the sheet's 3N of the x every term sees.
+  ///        Their positions and velocities are kept here (rigid_positions) and advance with the
+  ///        sheet, over split steps too.
   Integrator(int num_vertices, std::vector<std::unique_ptr<EnergyTerm>> terms,
-             const NewtonParams& params = {});
+             const NewtonParams& params = {}, int rigid_blocks = 0);
+
+  /// Positions and velocities of the rigid blocks (3 per block) from which the next step starts.
+  void set_rigid_state(const Eigen::VectorXd& positions, const Eigen::VectorXd& velocities);
+  const Eigen::VectorXd& rigid_positions() const { return m_rigid_x; }
+  const Eigen::VectorXd& rigid_velocities() const { return m_rigid_v; }
 
   /// Advance `state` by h [s].
   /// @throw NumericError when the step fails even after max_halvings splits, or NaN appears.
@@ -130,8 +140,11 @@ class Integrator {
   /// Asks every term whether its dynamic pattern changed at x and rebuilds the matrix if so.
   void update_pattern(const Eigen::VectorXd& x);
   void debug_model(const Eigen::VectorXd& x, const Eigen::VectorXd& sol, bool project);
+  /// The sheet's positions (or velocities) followed by the rigid blocks'.
+  Eigen::VectorXd with_rigid(const Eigen::VectorXd& sheet, const Eigen::VectorXd& rigid) const;
   std::vector<std::unique_ptr<EnergyTerm>> m_terms;
   NewtonParams m_params;
+  Eigen::VectorXd m_rigid_x, m_rigid_v;  // rigid blocks (3 per block)
   std::vector<std::vector<int>> m_static_pattern;  // from add_pattern, built once
   BlockSymmetricMatrix m_hessian;
   LinearSolver m_solver;

@@ -198,6 +198,14 @@ Terms build_terms(const remesh::SheetMesh& mesh, const PhysicsSetup& setup, Term
     t.list.push_back(std::move(h));
   }
   add_contact_terms(mesh, setup, statistics, t);
+  for (const PhysicsSetup::Lift& l : setup.lifts) {
+    if (!l.lift.coupled) continue;
+    const int block = mesh.num_vertices() + static_cast<int>(t.lift_bodies.size());
+    t.contact->set_rigid_block(l.obstacle, block);
+    auto body = std::make_unique<LiftBodyEnergy>(block, l.lift.load, setup.gravity);
+    t.lift_bodies.push_back(body.get());
+    t.list.push_back(std::move(body));
+  }
   return t;
 }
 
@@ -293,7 +301,32 @@ void add_counts(Map& into, const Map& from) {
 void Run::rebuild() {
   if (m_integrator) m_pattern_changes_done += m_integrator->pattern_id();
   m_terms = build_terms(m_mesh, m_setup, &m_term_stats);
-  m_integrator = std::make_unique<Integrator>(m_mesh.num_vertices(), std::move(m_terms.list), m_scene.newton);
+  m_integrator =
+      std::make_unique<Integrator>(m_mesh.num_vertices(), std::move(m_terms.list), m_scene.newton, coupled_lifts());
+}
+
+int Run::coupled_lifts() const {
+  return static_cast<int>(std::count_if(m_setup.lifts.begin(), m_setup.lifts.end(),
+                                        [](const PhysicsSetup::Lift& l) { return l.lift.coupled; }));
+}
+
+double Run::rise(const PhysicsSetup::Lift& l, double t) {
+  return l.collider->motion.pose(t).translation().z() - l.keyframed.pose(t).translation().z();
+}
+
+void Run::begin_lift_bodies(Terms& terms, Integrator& integrator) const {
+  if (terms.lift_bodies.empty()) return;
+  const double t = m_state.time;
+  Eigen::VectorXd v = Eigen::VectorXd::Zero(3 * static_cast<int>(terms.lift_bodies.size()));
+  size_t k = 0;
+  for (const PhysicsSetup::Lift& l : m_setup.lifts) {
+    if (!l.lift.coupled) continue;
+    terms.lift_bodies[k]->set_rise(rise(l, t));
+    // The last step's vertical velocity: the motion moves linearly over each step.
+    if (t >= m_h) v[3 * k + 2] = (rise(l, t) - rise(l, t - m_h)) / m_h;
+    ++k;
+  }
+  integrator.set_rigid_state(Eigen::VectorXd::Zero(v.size()), v);
 }
 
 void Run::track() {
@@ -321,28 +354,48 @@ const StepStats& Run::step() {
   PAPERSIM_ASSERT(!finished(), "Run::step: the run is finished");
   const RemeshSpec& r = m_scene.remesh;
   if (r.enabled && m_step == 0) remesh_pass();
+  begin_lift_bodies(m_terms, *m_integrator);
+  const double t0 = m_state.time;
   m_last = m_integrator->step(m_state, m_h);
   // Plastic return mapping on the accepted step (simulation/plasticity.hpp).
   if (plasticity_enabled(m_setup.material))
     apply_plasticity(*m_terms.bending, m_state.positions, m_setup.material.yield_curvature, m_mesh);
   m_totals += m_last;
   ++m_step;
-  lift_obstacles();
+  lift_obstacles(t0);
   track();
   if (r.enabled && !finished() && (m_step == 1 || m_step % r.every == 0)) remesh_pass();
   return m_last;
 }
 
-void Run::lift_obstacles() {
+void Run::lift_obstacles(double step_start) {
+  int body = 0;
   for (size_t i = 0; i < m_setup.lifts.size(); ++i) {
     const PhysicsSetup::Lift& l = m_setup.lifts[i];
     const double t = m_state.time;
+    if (l.lift.coupled) {
+      // The step moved it with the sheet: its motion takes the displacement over the step.
+      const double dz = m_integrator->rigid_positions()[3 * body++ + 2];
+      if (std::getenv("PAPERSIM_DEBUG_LIFT"))
+        std::fprintf(stderr, "t %.4f lift: obstacle %d moved by %.6g m in the step, rise before %.6g\n", t, l.spec, dz,
+                     Run::rise(l, t));
+      if (std::abs(dz) >= 1e-12) {
+        l.collider->motion.translate_from(step_start, t, Eigen::Vector3d(0, 0, dz), l.keyframed);
+        m_scene.obstacles[l.spec].keyframes = l.collider->motion.keyframes();
+      }
+    }
     const Eigen::Vector3d force = m_terms.contact->obstacle_load(l.obstacle, m_state.positions);
     const double load = force.z();
-    const double rise = l.collider->motion.pose(t).translation().z() - l.keyframed.pose(t).translation().z();
+    const double rise = Run::rise(l, t);
     RunQuality::LiftExtremes& q = m_quality.lifts[i];
     q.max_load = std::max(q.max_load, load);
     q.max_rise = std::max(q.max_rise, rise);
+    if (l.lift.coupled) {
+      if (std::getenv("PAPERSIM_DEBUG_LIFT"))
+        std::fprintf(stderr, "t %.4f lift: obstacle %d force (%.4g, %.4g, %.4g) N, rise %.4g m (coupled)\n", t,
+                     l.spec, force.x(), force.y(), force.z(), rise);
+      continue;
+    }
     // Up or down at speed x clamp((F - load) / load, -1, 1) over the next step, never below the
     // keyframed path; changes below a nanometre are not made (they would only add keyframes).
     const double rate = l.lift.speed * std::clamp((load - l.lift.load) / l.lift.load, -1.0, 1.0);
@@ -413,7 +466,9 @@ void Run::remesh_pass() {
   std::string failure = check_remeshed(mesh, state, terms);
   std::unique_ptr<Integrator> integrator;
   if (failure.empty()) {
-    integrator = std::make_unique<Integrator>(mesh.num_vertices(), std::move(terms.list), m_scene.newton);
+    integrator = std::make_unique<Integrator>(mesh.num_vertices(), std::move(terms.list), m_scene.newton,
+                                              coupled_lifts());
+    begin_lift_bodies(terms, *integrator);
     if (!std::isfinite(integrator->start_energy(state, m_h))) failure = "infeasible";
   }
   if (std::getenv("PAPERSIM_DEBUG_REMESH"))

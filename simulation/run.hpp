@@ -18,6 +18,7 @@
 #include "simulation/energies/bending_energy.hpp"
 #include "simulation/energies/contact_energy.hpp"
 #include "simulation/energies/handle_energy.hpp"
+#include "simulation/energies/lift_body_energy.hpp"
 #include "simulation/energies/membrane_energy.hpp"
 #include "simulation/energies/self_contact_energy.hpp"
 #include "simulation/integrator.hpp"
@@ -101,6 +102,9 @@ struct Terms {
   HandleEnergy* handles = nullptr;                 ///< null without handles or clamps
   ObstacleContactEnergy* contact = nullptr;        ///< null without obstacles
   SelfContactEnergy* self_contact = nullptr;       ///< null when self-contact is off
+  /// Coupled lifting obstacles (collision::LiftSpec::coupled), in the order of PhysicsSetup::lifts
+  /// that are coupled; the k-th is rigid block #V + k of the integrator.
+  std::vector<LiftBodyEnergy*> lift_bodies;
 };
 
 /// Builds the terms (inertia, damping, gravity, stretching with the strain limit, bending,
@@ -229,8 +233,17 @@ class Run {
   void check_state(const std::string& what) const;
   void track();
   /// Moves each obstacle that yields upwards over the next step by the load the sheet presses it
-  /// with now (collision::LiftSpec).
-  void lift_obstacles();
+  /// with now (collision::LiftSpec); a coupled one by the displacement the step solved for
+  /// (`step_start`: the time the step began [s]). Records the loads and rises.
+  void lift_obstacles(double step_start);
+  /// Rise of lift l above its keyframed path at time t [m].
+  static double rise(const PhysicsSetup::Lift& l, double t);
+  /// Readies the coupled lifting obstacles of `terms` for a step from the current state: their
+  /// rises, and their displacement (zero: the motion holds it) and vertical velocity (that of
+  /// the last step) as the integrator's rigid state.
+  void begin_lift_bodies(Terms& terms, Integrator& integrator) const;
+  /// Number of coupled lifting obstacles (rigid blocks of the integrator).
+  int coupled_lifts() const;
   /// One remeshing pass: kept when the new mesh passes every check (no self-intersection,
   /// stretch within the limit, finite energy), undone otherwise.
   void remesh_pass();

@@ -283,6 +283,7 @@ collision::ColliderSpec read_obstacle(Reader r) {
     Reader l = r.child("lift");
     c.lift.load = l.number("load", c.lift.load, 0, 1e6, true);
     c.lift.speed = l.number("speed", c.lift.speed, 0, 1e3, true);
+    c.lift.coupled = l.boolean("coupled", c.lift.coupled);
     l.finish();
   }
   const Eigen::Vector3d t = r.vector<3>("position", Eigen::Vector3d::Zero());
@@ -426,7 +427,7 @@ json obstacle_json(const collision::ColliderSpec& c) {
   o["mesh_scale"] = c.obj_scale;
   o["voxel_size"] = c.level_set.voxel_size;
   o["friction"] = c.friction;
-  if (c.lift.enabled()) o["lift"] = {{"load", c.lift.load}, {"speed", c.lift.speed}};
+  if (c.lift.enabled()) o["lift"] = {{"load", c.lift.load}, {"speed", c.lift.speed}, {"coupled", c.lift.coupled}};
   json keys = json::array();
   for (const auto& k : c.keyframes) {
     const Eigen::Vector3d e = k.rotation.toRotationMatrix().eulerAngles(2, 1, 0) * 180 / M_PI;

@@ -21,6 +21,7 @@ ObstacleContactEnergy::ObstacleContactEnergy(
     : m_area(std::move(vertex_areas)), m_obstacles(std::move(obstacles)), m_params(params),
       m_stiffness(params.stiffness) {
   m_mode.assign(m_obstacles.size(), Mode::vertices);
+  m_rigid.assign(m_obstacles.size(), -1);
   m_sphere_radius.assign(m_obstacles.size(), 0.0);
   // The minimum over a triangle is resolved to a tenth of the contact thickness, and triangles
   // farther than the thickness are not refined (their barrier is zero).
@@ -73,7 +74,20 @@ void ObstacleContactEnergy::set_faces(const Eigen::MatrixX3i& faces, const Eigen
   }
 }
 
+void ObstacleContactEnergy::set_rigid_block(int o, int block) {
+  if (m_mode[o] != Mode::vertices)
+    throw SceneError("contact: a coupled lifting obstacle needs vertex contact (contact.faces false)");
+  m_rigid[o] = block;
+}
+
 void ObstacleContactEnergy::add_pattern(SparsityBuilder& pattern) const {
+  for (int o = 0; o < num_obstacles(); ++o) {
+    if (m_rigid[o] < 0) continue;
+    for (int v = 0; v < m_area.size(); ++v) {
+      const int c[2] = {v, m_rigid[o]};
+      pattern.add_clique(c, 2);
+    }
+  }
   for (int f = 0; f < m_faces.rows(); ++f) {
     const int v[3] = {m_faces(f, 0), m_faces(f, 1), m_faces(f, 2)};
     pattern.add_clique(v, 3);
@@ -312,11 +326,12 @@ void ObstacleContactEnergy::for_each_contact(const Eigen::VectorXd& x, double t,
       }
     }
     if (!uses_vertices(o)) continue;
+    const Eigen::Vector3d lift = lift_of(o, x);
     for (int v = 0; v < nv; ++v) {
       const Eigen::Vector3d p = x.segment<3>(3 * v);
-      if (!near_bounds(o, p)) continue;
+      if (!near_bounds(o, p - lift)) continue;
       Eigen::Vector3d n;
-      const double d = obs.distance(p, t, &n);
+      const double d = obs.distance(p - lift, t, &n);
       if (d >= m_params.dhat || d <= 0) continue;
       FrictionPoint fp;
       fp.vertices[0] = v;
@@ -448,8 +463,9 @@ double ObstacleContactEnergy::value(const Eigen::VectorXd& x) const {
       }
     }
     if (!uses_vertices(o)) continue;
+    const Eigen::Vector3d lift = lift_of(o, x);
     for (int v = 0; v < nv; ++v) {
-      const Eigen::Vector3d p = x.segment<3>(3 * v);
+      const Eigen::Vector3d p = x.segment<3>(3 * v) - lift;
       if (!near_bounds(o, p)) continue;
       const double d = m_obstacles[o]->distance(p, m_time);
       if (d <= 0) return INF;
@@ -530,14 +546,18 @@ void ObstacleContactEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::Vec
       }
     }
     if (!uses_vertices(o)) continue;
+    const int rigid = m_rigid[o];
+    const Eigen::Vector3d lift = lift_of(o, x);
+    const bool coupled = rigid >= 0 && g.size() >= 3 * rigid + 3;  // g has the body's entries
     for (int v = 0; v < nv; ++v) {
-      const Eigen::Vector3d p = x.segment<3>(3 * v);
+      const Eigen::Vector3d p = x.segment<3>(3 * v) - lift;
       if (!near_bounds(o, p)) continue;
       Eigen::Vector3d n;
       const double d = m_obstacles[o]->distance(p, m_time, &n);
       if (d >= dhat || d <= 0) continue;
       const double b1 = barrier_first_derivative(d, dhat);
       g.segment<3>(3 * v) += kappa(v) * b1 * n;
+      if (coupled) g[3 * rigid + 2] -= kappa(v) * b1 * n.z();
       if (H) {
         Eigen::Matrix3d local = kappa(v) * barrier_second_derivative(d, dhat) * n * n.transpose();
         // The curvature term b' Hess phi where the collider provides Hess phi (see the header).
@@ -546,7 +566,16 @@ void ObstacleContactEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::Vec
           local += kappa(v) * b1 * curvature;
           if (m_project) local = project_psd(local);
         }
-        H->add_element<1>({v}, local);
+        if (!coupled) {
+          H->add_element<1>({v}, local);
+          continue;
+        }
+        // (p, q) -> r = p - E q, E = e_z e_z^T: the Hessian in (p, q) is P^T local P with
+        // P = [I, -E] (PSD when local is).
+        Eigen::Matrix<double, 3, 6> P = Eigen::Matrix<double, 3, 6>::Zero();
+        P.leftCols<3>().setIdentity();
+        P(2, 5) = -1;
+        H->add_element<2>({v, rigid}, P.transpose() * local * P);
       }
     }
   }
@@ -592,8 +621,9 @@ double ObstacleContactEnergy::obstacle_max_step(int o, const Eigen::VectorXd& x,
   // Faces against a convex obstacle cover their vertices (below); otherwise the vertices of
   // the terms are traced.
   const bool trace_vertices = uses_vertices(o) || (m_mode[o] == Mode::search && !obs.is_convex());
+  const Eigen::Vector3d lift = lift_of(o, x), dlift = lift_of(o, dx);  // relative to a coupled body
   for (int v = 0; v < nv && trace_vertices; ++v) {
-    const Eigen::Vector3d p = x.segment<3>(3 * v), d = dx.segment<3>(3 * v);
+    const Eigen::Vector3d p = x.segment<3>(3 * v) - lift, d = dx.segment<3>(3 * v) - dlift;
     const double len = d.norm();
     if (len == 0) continue;
     Eigen::Vector3d n;
@@ -739,8 +769,9 @@ bool ObstacleContactEnergy::obstacles_close_in(const Eigen::VectorXd& x) const {
     const auto& obs = *m_obstacles[o];
     collision::Aabb swept = obs.swept_bounds(m_t0, m_t1);
     swept.inflate(dhat);
+    const Eigen::Vector3d lift = lift_of(o, x);
     for (int v = 0; v < m_area.size(); ++v) {
-      const Eigen::Vector3d p = x.segment<3>(3 * v);
+      const Eigen::Vector3d p = x.segment<3>(3 * v) - lift;
       if (swept.distance_to(p) > 0) continue;
       const double before = obs.distance(p, m_t0), after = obs.distance(p, m_t1);
       if (after < 0.5 * std::min(before, dhat)) return true;
@@ -761,14 +792,18 @@ void ObstacleContactEnergy::add_obstacle_motion_gradient(const Eigen::VectorXd& 
   for (int o = 0; o < num_obstacles(); ++o) {
     if (!m_moving[o]) continue;
     const auto& obs = *m_obstacles[o];
+    const Eigen::Vector3d lift = lift_of(o, x);
     for (int v = 0; v < m_area.size(); ++v) {
-      const Eigen::Vector3d p = x.segment<3>(3 * v);
+      const Eigen::Vector3d p = x.segment<3>(3 * v) - lift;
       if (!near_bounds(o, p)) continue;
       Eigen::Vector3d n;
       const double d = obs.distance(p, m_time, &n);
       if (d >= dhat || d <= 0) continue;
       const double phi_t = -n.dot(obs.velocity(p, m_time));
-      g.segment<3>(3 * v) += kappa(v) * barrier_second_derivative(d, dhat) * phi_t * dt * n;
+      const double change = kappa(v) * barrier_second_derivative(d, dhat) * phi_t * dt;
+      g.segment<3>(3 * v) += change * n;
+      // A coupled body takes the reaction (dr/dq = -e_z e_z^T, set_rigid_block).
+      if (m_rigid[o] >= 0 && g.size() >= 3 * m_rigid[o] + 3) g[3 * m_rigid[o] + 2] -= change * n.z();
     }
   }
 }
@@ -785,8 +820,9 @@ double ObstacleContactEnergy::max_step_with_obstacles(const Eigen::VectorXd& x, 
     const auto& obs = *m_obstacles[o];
     collision::Aabb swept = obs.swept_bounds(m_time, m_time + dt);
     swept.inflate(m_params.dhat);
+    const Eigen::Vector3d lift = lift_of(o, x), dlift = lift_of(o, dx);
     for (int v = 0; v < m_area.size(); ++v) {
-      const Eigen::Vector3d p = x.segment<3>(3 * v), d = dx.segment<3>(3 * v);
+      const Eigen::Vector3d p = x.segment<3>(3 * v) - lift, d = dx.segment<3>(3 * v) - dlift;
       collision::Aabb path;
       path.extend(p);
       path.extend(Eigen::Vector3d(p + alpha * d));
@@ -803,7 +839,8 @@ double ObstacleContactEnergy::surface_distance(int o, const Eigen::VectorXd& x, 
   ScopedTimer timer(m_stats->seconds);
   const collision::Collider& obs = *m_obstacles[o];
   double m = INF;
-  for (int v = 0; v < m_area.size(); ++v) m = std::min(m, obs.distance(x.segment<3>(3 * v), t));
+  const Eigen::Vector3d lift = lift_of(o, x);
+  for (int v = 0; v < m_area.size(); ++v) m = std::min(m, obs.distance(x.segment<3>(3 * v) - lift, t));
   if (m_mode[o] == Mode::vertices || !(m > 0)) return m;
   const Eigen::Affine3d pose = obs.motion.pose(t);
   const auto face_box = [&](int f) {

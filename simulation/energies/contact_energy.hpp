@@ -114,6 +114,16 @@ class ObstacleContactEnergy : public EnergyTerm {
   /// (collision::Collider::moving_segment_step, exact for the affine motions supported).
   double max_step_with_obstacles(const Eigen::VectorXd& x, const Eigen::VectorXd& dx, double dt) const override;
 
+  /// Makes obstacle o a body of the step (collision::LiftSpec::coupled, LiftBodyEnergy): its
+  /// vertical displacement q_z is entry 3 block + 2 of x (when x is that long; otherwise 0), the
+  /// obstacle is evaluated raised by q_z, and each vertex barrier couples the vertex with the
+  /// block: with r = p - q_z e_z the point relative to the raised obstacle, E = kappa b(phi(r)),
+  /// whose gradient and Hessian in (p, q) are those in r through dr/dp = I, dr/dq = -e_z e_z^T.
+  /// Friction keeps the obstacle's keyframed velocity (the lift's vertical motion is along the
+  /// normal where the sheet presses it from below). Vertex contact only.
+  /// @throw SceneError when o touches the sheet by faces (ContactParams::faces)
+  void set_rigid_block(int o, int block);
+
   /// Switches obstacles other than planes to face contact (see above).
   /// @param faces #F by 3 vertex indices; @param material_coords #V by 2 flat sheet
   /// coordinates [m] (face areas and rest edge lengths)
@@ -169,6 +179,12 @@ class ObstacleContactEnergy : public EnergyTerm {
   };
 
   bool near_bounds(int o, const Eigen::Vector3d& p) const;
+  /// The rigid displacement of obstacle o held in v (x or dx; set_rigid_block): (0, 0, v_z of
+  /// its block), zero when o has none or v holds only the sheet.
+  Eigen::Vector3d lift_of(int o, const Eigen::VectorXd& v) const {
+    const int b = m_rigid[o];
+    return b >= 0 && v.size() >= 3 * b + 3 ? Eigen::Vector3d(0, 0, v[3 * b + 2]) : Eigen::Vector3d::Zero();
+  }
   /// Calls visit(FrictionPoint fp, double lambda, Vector3d p, Vector3d n) for every barrier
   /// contact of the sheet at x with the obstacles (only obstacle `only` when >= 0) at time t
   /// (see the .cpp).
@@ -219,6 +235,7 @@ class ObstacleContactEnergy : public EnergyTerm {
   std::vector<collision::Aabb> m_bounds;  // at the step end, inflated by dhat
   std::vector<FrictionPoint> m_friction;
   std::vector<Mode> m_mode;               // per obstacle
+  std::vector<int> m_rigid;               // per obstacle: its rigid block, or -1 (set_rigid_block)
   std::vector<double> m_sphere_radius;    // per obstacle (sphere mode), at scale 1 [m]
   std::vector<WorldFeatures> m_features;  // per obstacle at the step end (polytope mode)
   Eigen::MatrixX3i m_faces;

@@ -29,7 +29,7 @@ double InertiaEnergy::value(const Eigen::VectorXd& x) const {
 
 void InertiaEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd& g,
                                     BlockSymmetricMatrix* H) const {
-  Eigen::VectorXd d(x.size());
+  Eigen::VectorXd d(3 * m_mass.size());  // the sheet's entries (x may hold rigid blocks after them)
   for (int v = 0; v < m_mass.size(); ++v) {
     const double k = m_mass[v] / (m_h * m_h);
     g.segment<3>(3 * v) += k * (x.segment<3>(3 * v) - m_x_pred.segment<3>(3 * v));
@@ -52,7 +52,7 @@ double DampingEnergy::value(const Eigen::VectorXd& x) const {
 
 void DampingEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd& g,
                                     BlockSymmetricMatrix* H) const {
-  Eigen::VectorXd d(x.size());
+  Eigen::VectorXd d(3 * m_mass.size());  // the sheet's entries (x may hold rigid blocks after them)
   for (int v = 0; v < m_mass.size(); ++v) {
     const double k = m_c * m_mass[v] / m_h;
     g.segment<3>(3 * v) += k * (x.segment<3>(3 * v) - m_x_t0.segment<3>(3 * v));

@@ -214,3 +214,56 @@ TEST(ObstacleContact, StartOfAStepIsFeasibleWhereAMovingObstacleClosesIn) {
   // Evaluated against the wall where it is at the step's end, the same state is inside it.
   EXPECT_FALSE(std::isfinite(start(false)));
 }
+
+// A coupled body (ObstacleContactEnergy::set_rigid_block): the sheet's contact depends on the
+// body's vertical displacement q_z (x's entries after the sheet's) through r = p - q_z e_z. Under
+// the flat bottom of a box the field's gradient is constant, so the term's Hessian is exact; the
+// gradient and the Hessian in (vertices, q) match central differences of the value, and collision
+// detection stops a body coming down before any vertex gap closes.
+TEST(ObstacleContact, CoupledBodyDerivativesMatchFiniteDifferences) {
+  collision::ColliderSpec spec;
+  spec.kind = collision::ColliderKind::box;
+  spec.half_extents = Eigen::Vector3d::Constant(0.05);  // bottom face at z = -0.05
+  spec.friction = 0.0;
+  std::vector<std::shared_ptr<const collision::Collider>> obstacles{collision::make_collider(spec)};
+  ContactParams params;  // dhat 0.3 mm
+  const int nv = 3, block = nv;
+  ObstacleContactEnergy e(Eigen::Vector3d(1e-4, 2e-4, 1.5e-4), obstacles, params);
+  e.set_rigid_block(0, block);
+  Eigen::VectorXd x(3 * (nv + 1));
+  x << 0.01, 0.0, -0.0502, -0.01, 0.01, -0.05015, 0.0, -0.02, -0.05026, 0.0, 0.0, -2e-5;
+  StepContext ctx;
+  ctx.h = 1e-2;
+  const Eigen::VectorXd v0 = Eigen::VectorXd::Zero(x.size());
+  ctx.x_t0 = &x;
+  ctx.v_t0 = &v0;
+  e.begin_step(ctx, x);
+  SparsityBuilder pattern(nv + 1);
+  e.add_pattern(pattern);
+  BlockSymmetricMatrix H(pattern.finish());
+  Eigen::VectorXd g = Eigen::VectorXd::Zero(x.size());
+  e.add_derivatives(x, g, &H);
+  ASSERT_LT(g[3 * block + 2], 0.0);  // the sheet below pushes the body up
+  const double step = 1e-9;
+  for (int i = 0; i < x.size(); ++i) {
+    Eigen::VectorXd a = x, b = x;
+    a[i] += step;
+    b[i] -= step;
+    const double fd = (e.value(a) - e.value(b)) / (2 * step);
+    EXPECT_NEAR(g[i], fd, 1e-5 * std::abs(g[i]) + 1e-9) << "gradient entry " << i;
+    Eigen::VectorXd ga = Eigen::VectorXd::Zero(x.size()), gb = Eigen::VectorXd::Zero(x.size());
+    e.add_derivatives(a, ga, nullptr);
+    e.add_derivatives(b, gb, nullptr);
+    const Eigen::VectorXd column = (ga - gb) / (2 * step);
+    const Eigen::VectorXd unit = Eigen::VectorXd::Unit(x.size(), i);
+    const Eigen::VectorXd h = H.multiply(unit);
+    EXPECT_LT((h - column).norm(), 1e-4 * column.norm() + 1e-6) << "Hessian column " << i;
+  }
+  // The body coming down by 1 mm while the sheet holds still: stopped short of every gap.
+  Eigen::VectorXd dx = Eigen::VectorXd::Zero(x.size());
+  dx[3 * block + 2] = -1e-3;
+  const double alpha = e.max_step(x, dx);
+  EXPECT_GT(alpha, 0.0);
+  EXPECT_TRUE(std::isfinite(e.value(x + alpha * dx)));
+  EXPECT_LT(alpha * 1e-3, 0.05026 - 0.05 - 2e-5);  // within the smallest gap (0.04 mm)
+}
