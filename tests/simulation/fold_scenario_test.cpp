@@ -204,6 +204,30 @@ TEST(FoldRun, GripGivesWayToTheRollerOverTheHeldPoint) {
   EXPECT_THROW(run_scene(crossing(1e6, fold.contact.stiffness), {}), NumericError);
 }
 
+namespace {
+
+/// Runs s with a checkpoint at step 65 (t = 0.65 s, a crossing roller up over the held point),
+/// resumes from it, and expects the resumed run, the checkpointed run and `r` (the same scene run
+/// step by step) to end in the same state to the bit.
+void expect_resumes_to_the_bit(const Scene& s, const RunResult& r, const char* folder) {
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / folder;
+  std::filesystem::remove_all(dir);
+  RunOptions stop;
+  stop.checkpoint_dir = dir.string();
+  stop.checkpoint_every = 65;
+  const RunResult whole = run_scene(s, stop);
+  ASSERT_EQ(load_checkpoint(dir.string()).step, 65);
+  RunOptions resume;
+  resume.resume_from = dir.string();
+  const RunResult continued = run_scene(s, resume);
+  EXPECT_EQ((continued.state.positions - whole.state.positions).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_EQ((continued.state.velocities - whole.state.velocities).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_EQ((whole.state.positions - r.state.positions).cwiseAbs().maxCoeff(), 0.0);
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+
 // A roller that yields to a load (collision::LiftSpec) rises over what it cannot press down: over
 // the point held 2 cm up by a rigid grip, where a rigid roller fails (above), it rises by the
 // held height less its own 7 mm clearance, pressing with about its load, and sinks back to its
@@ -244,21 +268,7 @@ TEST(FoldRun, RollerThatYieldsToALoadRisesOverARigidlyHeldPoint) {
   EXPECT_LT(r.quality.max_principal_stretch, 1.0 + s.sheet.material.strain_limit);
   // Without the lift the same crossing fails (FoldRun.GripGivesWayToTheRollerOverTheHeldPoint).
 
-  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "papersim_fold_lift_checkpoint";
-  std::filesystem::remove_all(dir);
-  RunOptions stop;
-  stop.checkpoint_dir = dir.string();
-  stop.checkpoint_every = 65;  // t = 0.65 s: the roller is up over the point
-  const RunResult whole = run_scene(s, stop);
-  const Checkpoint c = load_checkpoint(dir.string());
-  ASSERT_EQ(c.step, 65);
-  RunOptions resume;
-  resume.resume_from = dir.string();
-  const RunResult continued = run_scene(s, resume);
-  EXPECT_EQ((continued.state.positions - whole.state.positions).cwiseAbs().maxCoeff(), 0.0);
-  EXPECT_EQ((continued.state.velocities - whole.state.velocities).cwiseAbs().maxCoeff(), 0.0);
-  EXPECT_EQ((whole.state.positions - r.state.positions).cwiseAbs().maxCoeff(), 0.0);
-  std::filesystem::remove_all(dir);
+  expect_resumes_to_the_bit(s, r, "papersim_fold_lift_checkpoint");
 }
 
 // A coupled lifting obstacle (collision::LiftSpec::coupled: a body of the step, its height solved
@@ -303,16 +313,5 @@ TEST(FoldRun, CoupledRollerRidesOverARigidlyHeldPointUnderItsWeight) {
   EXPECT_GT(r.quality.min_obstacle_distance.at(1), 0.0);
   EXPECT_LT(r.quality.max_principal_stretch, 1.0 + s.sheet.material.strain_limit);
 
-  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "papersim_fold_coupled_checkpoint";
-  std::filesystem::remove_all(dir);
-  RunOptions stop;
-  stop.checkpoint_dir = dir.string();
-  stop.checkpoint_every = 65;  // t = 0.65 s: the roller is up over the point
-  const RunResult whole = run_scene(s, stop);
-  RunOptions resume;
-  resume.resume_from = dir.string();
-  const RunResult continued = run_scene(s, resume);
-  EXPECT_EQ((continued.state.positions - whole.state.positions).cwiseAbs().maxCoeff(), 0.0);
-  EXPECT_EQ((whole.state.positions - r.state.positions).cwiseAbs().maxCoeff(), 0.0);
-  std::filesystem::remove_all(dir);
+  expect_resumes_to_the_bit(s, r, "papersim_fold_coupled_checkpoint");
 }
