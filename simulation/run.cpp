@@ -155,6 +155,10 @@ PhysicsSetup physics_setup(const Scene& scene, const remesh::SheetMesh& mesh, co
   for (size_t i = 0; i < scene.obstacles.size(); ++i) {
     try {
       std::shared_ptr<collision::Collider> c = collision::make_collider(scene.obstacles[i]);
+      const collision::LiftSpec& lift = scene.obstacles[i].lift;
+      if (lift.enabled() && lift.coupled && (scene.contact.faces || !(scene.gravity.norm() > 0)))
+        throw collision::ColliderError(std::string("lift.coupled needs ") +
+                                       (scene.contact.faces ? "vertex contact (contact.faces false)" : "gravity"));
       if (scene.obstacles[i].lift.enabled())
         s.lifts.push_back({static_cast<int>(s.obstacles.size()), static_cast<int>(i), scene.obstacles[i].lift, c,
                            c->motion});
@@ -373,14 +377,12 @@ void Run::lift_obstacles(double step_start) {
   for (size_t i = 0; i < m_setup.lifts.size(); ++i) {
     const PhysicsSetup::Lift& l = m_setup.lifts[i];
     const double t = m_state.time;
+    double moved = 0;  // a coupled body's displacement over the step [m]
     if (l.lift.coupled) {
       // The step moved it with the sheet: its motion takes the displacement over the step.
-      const double dz = m_integrator->rigid_positions()[3 * body++ + 2];
-      if (std::getenv("PAPERSIM_DEBUG_LIFT"))
-        std::fprintf(stderr, "t %.4f lift: obstacle %d moved by %.6g m in the step, rise before %.6g\n", t, l.spec, dz,
-                     Run::rise(l, t));
-      if (std::abs(dz) >= 1e-12) {
-        l.collider->motion.translate_from(step_start, t, Eigen::Vector3d(0, 0, dz), l.keyframed);
+      moved = m_integrator->rigid_positions()[3 * body++ + 2];
+      if (std::abs(moved) >= 1e-12) {
+        l.collider->motion.translate_from(step_start, t, Eigen::Vector3d(0, 0, moved), l.keyframed);
         m_scene.obstacles[l.spec].keyframes = l.collider->motion.keyframes();
       }
     }
@@ -392,8 +394,8 @@ void Run::lift_obstacles(double step_start) {
     q.max_rise = std::max(q.max_rise, rise);
     if (l.lift.coupled) {
       if (std::getenv("PAPERSIM_DEBUG_LIFT"))
-        std::fprintf(stderr, "t %.4f lift: obstacle %d force (%.4g, %.4g, %.4g) N, rise %.4g m (coupled)\n", t,
-                     l.spec, force.x(), force.y(), force.z(), rise);
+        std::fprintf(stderr, "t %.4f lift: obstacle %d force (%.4g, %.4g, %.4g) N, rise %.4g m (coupled, %+.3g m in the step)\n",
+                     t, l.spec, force.x(), force.y(), force.z(), rise, moved);
       continue;
     }
     // Up or down at speed x clamp((F - load) / load, -1, 1) over the next step, never below the

@@ -9,7 +9,7 @@
 namespace papersim::simulation {
 
 LiftBodyEnergy::LiftBodyEnergy(int block, double weight, const Eigen::Vector3d& gravity)
-    : m_block(block), m_weight(weight), m_gravity(gravity) {
+    : m_block(block), m_gravity(gravity) {
   PAPERSIM_ASSERT(weight > 0 && gravity.norm() > 0, "LiftBodyEnergy: weight and gravity must be non-zero");
   m_mass = weight / gravity.norm();
   m_stop_kappa = weight / -collision::barrier_first_derivative(REST, STOP);

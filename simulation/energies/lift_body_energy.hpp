@@ -31,7 +31,7 @@ class LiftBodyEnergy : public EnergyTerm {
   /// The stop: q_z may close 90% of its gap to the path.
   double max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const override;
 
-  /// Rise of the obstacle above its keyframed path at the start of the run's step [m] (>= 0).
+  /// Rise of the obstacle above its keyframed path at the start of the run's step [m] (> -REST).
   void set_rise(double rise) { m_rise = rise; }
   static constexpr double STOP = 1e-3;  ///< s, the stop barrier's activation distance [m]
   static constexpr double REST = 1e-5;  ///< c, the gap to the stop on the keyframed path [m]
@@ -39,7 +39,7 @@ class LiftBodyEnergy : public EnergyTerm {
  private:
   double gap(const Eigen::VectorXd& x) const { return m_rise + x[3 * m_block + 2] + REST; }
   int m_block;
-  double m_mass, m_weight, m_stop_kappa;
+  double m_mass, m_stop_kappa;
   Eigen::Vector3d m_gravity;
   Eigen::Vector3d m_pred = Eigen::Vector3d::Zero();
   double m_h = 1e-3, m_rise = 0.0;

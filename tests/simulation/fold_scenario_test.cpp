@@ -315,3 +315,25 @@ TEST(FoldRun, CoupledRollerRidesOverARigidlyHeldPointUnderItsWeight) {
 
   expect_resumes_to_the_bit(s, r, "papersim_fold_coupled_checkpoint");
 }
+
+// A coupled body touches the sheet by its vertices and has a weight: a scene with face contact or
+// without gravity is refused by name.
+TEST(FoldRun, CoupledRollerNeedsVertexContactAndGravity) {
+  const Scene fold = make_scenario("fold", 0);
+  Scene s = crossing(1e6, fold.contact.stiffness);
+  s.obstacles.at(0).lift.load = 2.0;
+  s.obstacles.at(0).lift.coupled = true;
+  Scene faces = s;
+  faces.contact.faces = true;
+  Scene weightless = s;
+  weightless.gravity.setZero();
+  for (const Scene& bad : {faces, weightless}) {
+    try {
+      simulation::Run run(bad);
+      ADD_FAILURE() << "accepted";
+    } catch (const SceneError& e) {
+      EXPECT_NE(std::string(e.what()).find("'obstacles[0]'"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("lift.coupled needs"), std::string::npos) << e.what();
+    }
+  }
+}
