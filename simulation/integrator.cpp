@@ -142,7 +142,7 @@ void Integrator::begin_step(const StepContext& ctx, const Eigen::VectorXd& x_t0)
   for (const auto& t : m_terms) {
     const auto motion = t->obstacle_motion();
     if (motion == EnergyTerm::ObstacleMotion::unsupported) can_follow = false;
-    if (motion == EnergyTerm::ObstacleMotion::follow && t->obstacles_close_in(x_t0, ctx.time_t0)) m_following.push_back(t.get());
+    if (motion == EnergyTerm::ObstacleMotion::follow && t->obstacles_close_in(x_t0)) m_following.push_back(t.get());
   }
   if (!can_follow || !m_params.follow_obstacles) m_following.clear();
   for (EnergyTerm* t : m_following) t->set_obstacle_time(ctx.time_t0);
@@ -379,20 +379,6 @@ bool Integrator::follow_obstacles(const StepContext& ctx, Eigen::VectorXd& x, do
   Eigen::VectorXd g(x.size());
   m_reuse_next = false;
   while (tau < t1) {
-    // Once the obstacles' remaining motion no longer closes in on the sheet (begin_step's
-    // criterion for following them), they move to the step's end at once where the energy stays
-    // finite, and Newton finishes the step. Otherwise a joint step cut short by another term
-    // (the strain limit) would advance tau by that fraction only, and tau approach t1
-    // geometrically.
-    if (tau > ctx.time_t0) {
-      bool close = false;
-      for (EnergyTerm* term : m_following) close = close || term->obstacles_close_in(x, tau);
-      if (!close) {
-        set_time(t1);
-        if (std::isfinite(energy(x))) break;
-        set_time(tau);
-      }
-    }
     if (r.iterations >= m_params.max_iterations) {
       std::ostringstream s;
       s << "the obstacles could not be moved with the sheet to the step's end (stopped at t = " << tau << " s)";

@@ -761,19 +761,19 @@ EnergyTerm::ObstacleMotion ObstacleContactEnergy::obstacle_motion() const {
   return motion;
 }
 
-bool ObstacleContactEnergy::obstacles_close_in(const Eigen::VectorXd& x, double from) const {
+bool ObstacleContactEnergy::obstacles_close_in(const Eigen::VectorXd& x) const {
   ScopedTimer timer(m_stats->seconds);
   const double dhat = m_params.dhat;
   for (int o = 0; o < num_obstacles(); ++o) {
     if (!m_moving[o]) continue;
     const auto& obs = *m_obstacles[o];
-    collision::Aabb swept = obs.swept_bounds(from, m_t1);
+    collision::Aabb swept = obs.swept_bounds(m_t0, m_t1);
     swept.inflate(dhat);
     const Eigen::Vector3d lift = lift_of(o, x);
     for (int v = 0; v < m_area.size(); ++v) {
       const Eigen::Vector3d p = x.segment<3>(3 * v) - lift;
       if (swept.distance_to(p) > 0) continue;
-      const double before = obs.distance(p, from), after = obs.distance(p, m_t1);
+      const double before = obs.distance(p, m_t0), after = obs.distance(p, m_t1);
       if (after < 0.5 * std::min(before, dhat)) return true;
     }
   }

@@ -104,7 +104,7 @@ class ObstacleContactEnergy : public EnergyTerm {
   /// Some vertex within the contact thickness of a moving obstacle at the step start, or
   /// reached by one, ends the step closer to it than half its gap and half the thickness, with
   /// the sheet held where it is.
-  bool obstacles_close_in(const Eigen::VectorXd& x, double from) const override;
+  bool obstacles_close_in(const Eigen::VectorXd& x) const override;
   void set_obstacle_time(double t) override;
   /// Vertex barriers: d/dt (kappa b'(phi) n) ~ kappa b''(phi) (d phi / dt) n with
   /// d phi / dt = -n . (velocity of the obstacle at the vertex), the change of n dropped as the

@@ -75,10 +75,9 @@ class EnergyTerm {
     unsupported ///< it does, but cannot be evaluated with them part-way
   };
   virtual ObstacleMotion obstacle_motion() const { return ObstacleMotion::none; }
-  /// True when, from x at time `from` [s] (the step start, or a time within the step), an
-  /// obstacle closes in on the sheet before the step's end by more than the sheet can be
-  /// trusted to get out of its way in one solve.
-  virtual bool obstacles_close_in(const Eigen::VectorXd& /*x*/, double /*from*/) const { return false; }
+  /// True when, from x at the step start, an obstacle closes in on the sheet during the step by
+  /// more than the sheet can be trusted to get out of its way in one solve.
+  virtual bool obstacles_close_in(const Eigen::VectorXd& /*x*/) const { return false; }
   /// Evaluates the moving obstacles at time t [s] (within the current step) from now on.
   virtual void set_obstacle_time(double /*t*/) {}
   /// Adds (d gradient / d t) dt at x to `gradient`: how the gradient changes when the

@@ -189,35 +189,6 @@ void MembraneEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd& 
   }
 }
 
-double MembraneEnergy::max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const {
-  if (!(m_limit > 0)) return 1.0;
-  // Largest eigenvalue of the 2x2 C = G^T G of a 3x2 G, in closed form.
-  const auto largest = [](const Eigen::Matrix<double, 3, 2>& G) {
-    const double a = G.col(0).squaredNorm(), b = G.col(1).squaredNorm(), c = G.col(0).dot(G.col(1));
-    return 0.5 * (a + b) + std::sqrt(0.25 * (a - b) * (a - b) + c * c);
-  };
-  double alpha = 1.0;
-  for (const auto& t : m_tris) {
-    Eigen::Matrix<double, 3, 2> F = Eigen::Matrix<double, 3, 2>::Zero(), dF = F;
-    for (int i = 0; i < 3; ++i) {
-      F += x.segment<3>(3 * t.v[i]) * t.w.row(i);
-      dF += dx.segment<3>(3 * t.v[i]) * t.w.row(i);
-    }
-    if (largest(F + dF) < m_limit) continue;  // the full step leaves it below L (convexity)
-    const double start = largest(F);
-    if (!(start < m_limit)) return 0.0;  // already at the limit: no step is feasible
-    const double target = m_limit - 0.1 * (m_limit - start);
-    if (largest(F + alpha * dF) <= target) continue;  // its cut is at alpha or beyond
-    double lo = 0, hi = alpha;  // lambda_max(lo) <= target < lambda_max(hi)
-    for (int it = 0; it < 40 && hi - lo > 1e-6 * alpha; ++it) {
-      const double mid = 0.5 * (lo + hi);
-      (largest(F + mid * dF) <= target ? lo : hi) = mid;
-    }
-    alpha = lo;
-  }
-  return alpha;
-}
-
 Eigen::MatrixX2d MembraneEnergy::principal_stretches(const Eigen::VectorXd& x) const {
   Eigen::MatrixX2d s(m_tris.size(), 2);
   for (int f = 0; f < static_cast<int>(m_tris.size()); ++f) {

@@ -39,13 +39,6 @@ class MembraneEnergy : public EnergyTerm {
   double value(const Eigen::VectorXd& x) const override;
   void add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd& gradient,
                        BlockSymmetricMatrix* hessian) const override;
-  /// The largest step along dx that keeps every face below the strain limit: the step is cut
-  /// where the first of the faces that the full step takes to L or past it has closed 90% of
-  /// its gap L - lambda_max(C) (bisection: lambda_max of C(a) = (F + a dF)^T (F + a dF) is
-  /// convex in a, a maximum of convex quadratics |F(a) u|^2). Faces that the full step leaves
-  /// below L do not limit it, so a feasible step is not shortened. The compression limit is
-  /// left to the line search (lambda_min(C(a)) is not concave).
-  double max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const override;
 
   /// Principal stretches (s1 >= s2) of every face at x, #F by 2.
   Eigen::MatrixX2d principal_stretches(const Eigen::VectorXd& x) const;
