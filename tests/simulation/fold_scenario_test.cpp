@@ -65,6 +65,9 @@ TEST(FoldScenario, RollerRollsAcrossPerpendicularToTheFoldDirection) {
     EXPECT_EQ(spec.radius, 0.05);
     EXPECT_EQ(spec.length, 0.5);
     EXPECT_EQ(spec.friction, 2.0);
+    // A 20 N body whose height is solved with the sheet, resting on the keyframed path below.
+    EXPECT_EQ(spec.lift.load, 20.0);
+    EXPECT_TRUE(spec.lift.coupled);
     const auto roller = collision::make_collider(spec);
     const Eigen::Vector2d p = s.handles[0].material_point;
     const Eigen::Vector2d c2 = Eigen::Vector2d(0.5 * s.sheet.width, 0.5 * s.sheet.height) - p;
