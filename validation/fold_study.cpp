@@ -12,7 +12,9 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <iomanip>
 #include <sstream>
 #include <string>
@@ -68,23 +70,76 @@ CreaseFound find_crease(const ps::Scene& scene, const papersim::remesh::SheetMes
   return f;
 }
 
-/// --measure: the crease of finished runs (DIR/scene.json and DIR/sheet.ply).
+/// The study's verdict: the safety verdict, and a crease along at least half the fitted line.
+std::string crease_verdict(const std::string& safety, const CreaseFound& f) {
+  if (safety == "PASS" && f.crease.longest < 0.5 * f.line.chord) return "FAIL no plastic crease along the fold";
+  return safety;
+}
+
+/// The quality figures of a finished run's meta.json (`quality`).
+ps::RunQuality quality_from_meta(const nlohmann::json& q) {
+  ps::RunQuality r;
+  r.max_principal_stretch = q.at("max_principal_stretch").get<double>();
+  r.min_principal_stretch = q.at("min_principal_stretch").get<double>();
+  r.min_obstacle_distance = q.at("min_obstacle_distance").get<std::vector<double>>();
+  r.self_intersections = q.at("self_intersections").get<int>();
+  return r;
+}
+
+/// --measure: the crease of finished runs (DIR/sheet.ply, and the scene from DIR/scene.json or
+/// else DIR/meta.json); with DIR/meta.json also the run's figures and the study's verdict.
+/// Returns 1 when a verdict is FAIL.
 int measure(const std::vector<std::string>& dirs, double crease_angle) {
-  std::printf("%-5s %-6s %-9s %-9s %-9s %-9s %-8s %-8s %-9s %-8s %s\n", "seed", "lines",
-              "longest_m", "creased_m", "line_m", "rest_deg", "mean_deg", "network", "offset_mm",
-              "turn_deg", "run");
+  std::printf("%-5s %-8s %-7s %-9s %-10s %-10s %-5s %-6s %-9s %-9s %-9s %-9s %-8s %-8s %-9s %-8s %-24s %s\n",
+              "seed", "wall_s", "newton", "max_s1", "min_roller", "min_ground", "self", "lines", "longest_m",
+              "creased_m", "line_m", "rest_deg", "mean_deg", "network", "offset_mm", "turn_deg", "run",
+              "verdict");
+  int failures = 0;
   for (const std::string& dir : dirs) {
-    const ps::Scene scene = ps::load_scene(dir + "/scene.json");
-    if (scene.handles.empty())
-      throw std::runtime_error(dir + "/scene.json: not a fold scene (no handle)");
+    nlohmann::json meta;
+    const bool has_meta = std::filesystem::exists(dir + "/meta.json");
+    if (has_meta) {
+      std::ifstream in(dir + "/meta.json");
+      try {
+        meta = nlohmann::json::parse(in);
+      } catch (const std::exception& e) {
+        throw std::runtime_error(dir + "/meta.json: " + e.what());
+      }
+    }
+    const ps::Scene scene = std::filesystem::exists(dir + "/scene.json") || !has_meta
+                                ? ps::load_scene(dir + "/scene.json")
+                                : ps::scene_from_json(meta.at("scene"), dir + "/meta.json");
+    if (scene.handles.empty()) throw std::runtime_error(dir + ": not a fold scene (no handle)");
     const papersim::remesh::SheetData sheet = papersim::remesh::read_sheet(dir + "/sheet.ply");
     const CreaseFound f = find_crease(scene, sheet.mesh, sheet.positions, crease_angle);
-    std::printf("%-5lld %-6d %-9.4f %-9.4f %-9.4f %-9.1f %-8.1f %-8d %-9.1f %-8.2f %s\n",
-                scene.seed, f.crease.lines, f.crease.longest, f.crease.creased, f.line.chord,
-                f.crease.angle * 180 / M_PI, f.crease.mean_all * 180 / M_PI, f.network,
-                f.offset * 1e3, f.turn, dir.c_str());
+    std::string wall = "-", newton = "-", s1 = "-", roller = "-", ground = "-", self = "-", verdict = "-";
+    if (has_meta) {
+      try {
+        const ps::RunQuality q = quality_from_meta(meta.at("quality"));
+        const pv::ObstacleGaps gaps = pv::obstacle_gaps(scene, q);
+        char b[64];
+        std::snprintf(b, sizeof b, "%.1f", meta.at("run").at("wall_seconds").get<double>());
+        wall = b;
+        newton = std::to_string(meta.at("run").at("newton_iterations").get<int>());
+        std::snprintf(b, sizeof b, "%.6f", q.max_principal_stretch);
+        s1 = b;
+        std::snprintf(b, sizeof b, "%.3g", gaps.obstacles);
+        roller = b;
+        std::snprintf(b, sizeof b, "%.3g", gaps.ground);
+        ground = b;
+        self = std::to_string(q.self_intersections);
+        verdict = crease_verdict(pv::safety_verdict(scene, q, sheet.positions.allFinite()), f);
+      } catch (const nlohmann::json::exception& e) {
+        throw std::runtime_error(dir + "/meta.json: " + e.what());
+      }
+      if (verdict != "PASS") ++failures;
+    }
+    std::printf("%-5lld %-8s %-7s %-9s %-10s %-10s %-5s %-6d %-9.4f %-9.4f %-9.4f %-9.1f %-8.1f %-8d %-9.1f %-8.2f %-24s %s\n",
+                scene.seed, wall.c_str(), newton.c_str(), s1.c_str(), roller.c_str(), ground.c_str(), self.c_str(),
+                f.crease.lines, f.crease.longest, f.crease.creased, f.line.chord, f.crease.angle * 180 / M_PI,
+                f.crease.mean_all * 180 / M_PI, f.network, f.offset * 1e3, f.turn, dir.c_str(), verdict.c_str());
   }
-  return 0;
+  return failures == 0 ? 0 : 1;
 }
 
 }  // namespace
@@ -109,8 +164,10 @@ int main(int argc, char** argv) {
                  "write each seed's outputs (sheet.ply with the plastic state, meta.json, "
                  "scene.json) to DIR/seed_N");
   app.add_option("--measure", measure_dirs,
-                 "only measure the crease of finished runs (each DIR with scene.json and "
-                 "sheet.ply, e.g. from --keep or papersim scenario fold) and stop")
+                 "only measure finished runs and stop: each DIR with sheet.ply and the scene "
+                 "(scene.json, or else meta.json), e.g. from --keep, papersim scenario fold or "
+                 "papersim run; with meta.json also the run's safety checks and the verdict "
+                 "(exit status 1 when one is FAIL)")
       ->check(CLI::ExistingDirectory);
   CLI11_PARSE(app, argc, argv);
   if (!measure_dirs.empty()) {
@@ -180,9 +237,7 @@ int main(int argc, char** argv) {
       ground = q.min_obstacle_distance.at(0);
       roller = q.min_obstacle_distance.at(1);
       found = find_crease(scene, r.mesh, r.state.positions_matrix(), crease_angle);
-      verdict = pv::safety_verdict(scene, r);
-      if (verdict == "PASS" && found.crease.longest < 0.5 * found.line.chord)
-        verdict = "FAIL no plastic crease along the fold";
+      verdict = crease_verdict(pv::safety_verdict(scene, r), found);
     } catch (const std::exception& e) {
       // Wall time up to the failure.
       wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
