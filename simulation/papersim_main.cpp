@@ -100,8 +100,9 @@ void add_checkpoint_options(CLI::App* app, CheckpointOptions& c) {
       ->needs(dir);
   dir->check(non_empty());
   app->add_option("--resume", c.resume,
-                  "Continue from the checkpoint in DIR (same time step and duration; other scene "
-                  "keys may differ, listed in meta.json's `resumed`)")
+                  "Continue from the checkpoint in DIR (same duration; another time step only if "
+                  "the checkpoint's time is a whole number of its steps; other scene keys may "
+                  "differ, listed in meta.json's `resumed`)")
       ->check(CLI::ExistingDirectory);
 }
 

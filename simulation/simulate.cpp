@@ -171,10 +171,14 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
   if (!options.resume_from.empty()) {
     const Checkpoint c = load_checkpoint(options.resume_from);
     const Scene saved = scene_from_json(c.scene, (fs::path(options.resume_from) / "checkpoint.json").string());
-    run.resume(c.mesh, c.state, c.step, &saved);
+    // Another time step continues from the step at the checkpoint's time (Run::resume refuses
+    // a time that is not a whole number of the scene's steps).
+    const int step = saved.time_step == scene.time_step ? c.step
+                                                         : static_cast<int>(std::lround(c.time / run.time_step()));
+    run.resume(c.mesh, c.state, step, &saved);
     json changes = json::array();
     for (const auto& patch : json::diff(c.scene, scene_to_json(run.scene()))) changes.push_back(patch.at("path"));
-    resumed = {{"from", options.resume_from}, {"step", c.step}, {"time", c.time}, {"scene_changes", changes}};
+    resumed = {{"from", options.resume_from}, {"step", step}, {"time", c.time}, {"scene_changes", changes}};
   }
   Staging staging(options.out_dir);
   if (!scene.source.empty()) staging.protect(scene.source);
