@@ -39,6 +39,20 @@ fs::path fresh_dir(const std::string& name) {
   return d;
 }
 
+/// Options that save a checkpoint in `dir` every 10 steps, or resume from it.
+RunOptions saving_to(const fs::path& dir) {
+  RunOptions o;
+  o.checkpoint_dir = dir.string();
+  o.checkpoint_every = 10;
+  return o;
+}
+
+RunOptions resuming_from(const fs::path& dir) {
+  RunOptions o;
+  o.resume_from = dir.string();
+  return o;
+}
+
 }  // namespace
 
 // The checkpoint holds every number the next steps read (positions, velocities, time, the
@@ -47,10 +61,7 @@ fs::path fresh_dir(const std::string& name) {
 TEST(Checkpoint, ResumedRunEndsInTheSameStateToTheBit) {
   const Scene scene = lifted_corner();
   const fs::path dir = fresh_dir("resume");
-  RunOptions with_checkpoints;
-  with_checkpoints.checkpoint_dir = dir.string();
-  with_checkpoints.checkpoint_every = 10;
-  const RunResult whole = run_scene(scene, with_checkpoints);
+  const RunResult whole = run_scene(scene, saving_to(dir));
   ASSERT_EQ(whole.steps, 30);
   EXPECT_TRUE(fs::exists(dir / "checkpoint.json"));
   EXPECT_TRUE(fs::exists(dir / "checkpoint_00000020.ply"));
@@ -59,9 +70,7 @@ TEST(Checkpoint, ResumedRunEndsInTheSameStateToTheBit) {
   EXPECT_EQ(c.step, 20);
   EXPECT_NEAR(c.time, 0.04, 1e-12);
 
-  RunOptions resume;
-  resume.resume_from = dir.string();
-  const RunResult continued = run_scene(scene, resume);
+  const RunResult continued = run_scene(scene, resuming_from(dir));
   EXPECT_EQ(continued.steps, 30);
   EXPECT_EQ(continued.state.time, whole.state.time);
   ASSERT_EQ(continued.state.positions.size(), whole.state.positions.size());
@@ -80,15 +89,10 @@ TEST(Checkpoint, ResumedRunEndsInTheSameStateToTheBit) {
 TEST(Checkpoint, ResumesAtAnotherTimeStepThatDividesItsTime) {
   const Scene scene = lifted_corner();
   const fs::path dir = fresh_dir("other_step");
-  RunOptions save;
-  save.checkpoint_dir = dir.string();
-  save.checkpoint_every = 10;
-  const RunResult whole = run_scene(scene, save);
+  const RunResult whole = run_scene(scene, saving_to(dir));
   Scene finer = scene;
   finer.time_step = 0.001;
-  RunOptions resume;
-  resume.resume_from = dir.string();
-  const RunResult continued = run_scene(finer, resume);
+  const RunResult continued = run_scene(finer, resuming_from(dir));
   EXPECT_EQ(continued.steps, 60);
   EXPECT_NEAR(continued.state.time, 0.06, 1e-12);
   EXPECT_EQ(continued.totals.substeps, 20);
@@ -101,8 +105,7 @@ TEST(Checkpoint, ResumesAtAnotherTimeStepThatDividesItsTime) {
 
 TEST(Checkpoint, ACheckpointThatDoesNotFitIsRefusedByName) {
   const fs::path dir = fresh_dir("refuse");
-  RunOptions resume;
-  resume.resume_from = dir.string();
+  const RunOptions resume = resuming_from(dir);
   try {
     run_scene(lifted_corner(), resume);
     FAIL() << "a missing checkpoint was accepted";
@@ -110,12 +113,9 @@ TEST(Checkpoint, ACheckpointThatDoesNotFitIsRefusedByName) {
     EXPECT_NE(std::string(e.what()).find("checkpoint.json"), std::string::npos) << e.what();
   }
 
-  RunOptions save;
-  save.checkpoint_dir = dir.string();
-  save.checkpoint_every = 10;
-  run_scene(lifted_corner(), save);
+  run_scene(lifted_corner(), saving_to(dir));
   Scene other_step = lifted_corner();
-  other_step.time_step = 0.003;
+  other_step.time_step = 0.003;  // 0.04 s is not a whole number of 3 ms steps
   try {
     run_scene(other_step, resume);
     FAIL() << "a checkpoint of another time step was accepted";
