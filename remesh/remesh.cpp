@@ -33,6 +33,12 @@ constexpr double FLIP_THRESHOLD = 1e-2;
 constexpr int FLIP_SWEEPS_MAX = 100;
 /// Bound on the local flip rounds after a split or a collapse.
 constexpr int LOCAL_FLIP_ROUNDS_MAX = 8;
+/// A face thinner than this fraction of aspect_min is a sliver: no metric asks for it (the
+/// metric's own aspect floor is aspect_min), and the Morley plate's curvature on it grows as one
+/// over its height. Midpoint splits make them next to the boundary, where no flip can repair them.
+constexpr double SLIVER_FRACTION = 0.5;
+/// Bound on the sweeps of the sliver phase.
+constexpr int SLIVER_SWEEPS_MAX = 10;
 
 VertexPair key(VertexHandle a, VertexHandle b) {
   return std::minmax(a.idx(), b.idx());
@@ -108,6 +114,69 @@ MeshEditor::EditCheck collapse_check(const MeshEditor& ed, VertexHandle survivor
         return "too thin";
     return "";
   };
+}
+
+/// Material aspect ratio of face f of the working mesh.
+double face_aspect(const MeshEditor& ed, OpenMesh::FaceHandle f) {
+  Eigen::Vector2d x[3];
+  int k = 0;
+  for (auto v : ed.mesh().fv_range(f)) x[k++] = ed.material(v);
+  return aspect_ratio(x[0], x[1], x[2]);
+}
+
+/// Accepts an edit only when its thinnest new face is thicker than the thinnest face it removes
+/// ("no better"): every sliver repair strictly raises the local minimum aspect ratio.
+MeshEditor::EditCheck improves_check(const MeshEditor& ed) {
+  return [&ed](const EditProposal& p) -> std::string {
+    double before = 1.0, after = 1.0;
+    for (int f : p.removed_faces) before = std::min(before, face_aspect(ed, OpenMesh::FaceHandle(f)));
+    for (const auto& x : p.material)
+      after = std::min(after, aspect_ratio(x.row(0).transpose(), x.row(1).transpose(),
+                                           x.row(2).transpose()));
+    return after > before ? std::string() : std::string("no better");
+  };
+}
+
+/// Repairs sliver f by a collapse: the vertex opposite its longest edge into the nearer end of
+/// that edge, else into the farther end, else either end into the opposite vertex; the first
+/// collapse that makes the neighbourhood less thin wins. No flip: the Delaunay flips have had their
+/// say, and a sliver next to the boundary has no edge to flip.
+bool repair_sliver(MeshEditor& ed, OpenMesh::FaceHandle f) {
+  const TriMesh& m = ed.mesh();
+  HalfedgeHandle longest;
+  double l2 = -1;
+  for (auto h : m.fh_range(f)) {
+    const double l = (ed.material(m.to_vertex_handle(h)) - ed.material(m.from_vertex_handle(h)))
+                         .squaredNorm();
+    if (l > l2) l2 = l, longest = h;
+  }
+  VertexHandle a = m.from_vertex_handle(longest), b = m.to_vertex_handle(longest);
+  const VertexHandle p = m.to_vertex_handle(m.next_halfedge_handle(longest));
+  if ((ed.material(b) - ed.material(p)).squaredNorm() < (ed.material(a) - ed.material(p)).squaredNorm())
+    std::swap(a, b);
+  for (auto [removed, survivor] : {std::pair{p, a}, std::pair{p, b}, std::pair{a, p}, std::pair{b, p}}) {
+    const HalfedgeHandle h = m.find_halfedge(removed, survivor);
+    if (h.is_valid() && ed.collapse(h, improves_check(ed))) return true;
+  }
+  return false;
+}
+
+/// Repairs every face thinner than SLIVER_FRACTION * aspect_min, sweep after sweep, while a
+/// repair succeeds. The repairs ignore the metric's lengths: an edge they lengthen is split at its
+/// midpoint by the next pass, which does not make the sliver again.
+void sliver_phase(MeshEditor& ed, const RemeshParams& params) {
+  const double threshold = SLIVER_FRACTION * params.aspect_min;
+  for (int sweep = 0; sweep < SLIVER_SWEEPS_MAX; ++sweep) {
+    std::vector<OpenMesh::FaceHandle> slivers;
+    for (auto f : ed.mesh().faces())
+      if (face_aspect(ed, f) < threshold) slivers.push_back(f);
+    bool repaired = false;
+    for (auto f : slivers)
+      if (!ed.mesh().status(f).deleted() && face_aspect(ed, f) < threshold &&
+          repair_sliver(ed, f))
+        repaired = true;
+    if (!repaired) return;
+  }
 }
 
 /// Flips the edges of the faces around v to the anisotropic Delaunay condition.
@@ -234,6 +303,7 @@ RemeshStats remesh(SheetMesh& mesh, RemeshState& state, const RemeshParams& para
     flip_phase(ed, params);
     collapse_phase(ed, params);
     flip_phase(ed, params);
+    sliver_phase(ed, params);
     ed.finish();
     stats = ed.stats();
   }

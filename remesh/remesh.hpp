@@ -7,7 +7,9 @@
 /// (M the mean of its end vertices' metrics) and wants splitting when l^2 > 1. One pass of
 /// remesh() splits every edge that is too long (longest first), flips edges to the anisotropic
 /// Delaunay condition, collapses edges wherever the result has no edge longer than 0.9 under the
-/// metric, and flips again. Every edit goes through one MeshEditor (mesh_editor.hpp), which
+/// metric, flips again, and repairs slivers (faces thinner than half of aspect_min, which midpoint
+/// splits next to the boundary leave: no flip can reach them there) by a collapse that makes the
+/// neighbourhood less thin. Every edit goes through one MeshEditor (mesh_editor.hpp), which
 /// carries every attribute across it and hands each proposed edit to a caller's veto first.
 #include <array>
 #include <functional>
@@ -93,7 +95,8 @@ using EditVeto = std::function<std::string(const EditProposal&)>;
 /// (a new face with aspect ratio below EDIT_ASPECT_MIN = 0.01, mesh_editor.hpp); of the remesh
 /// loop: "crease" (a flip across, or making, a hinge sharper than flip_angle_max), "too long" (a
 /// collapse would make an edge longer than 0.9 under the metric), "too thin" (a collapse would
-/// make a face with aspect below aspect_min); of the caller: "veto: <reason>". Counts are per
+/// make a face with aspect below aspect_min), "no better" (a sliver repair whose thinnest new face
+/// is no thicker than the thinnest face it removes); of the caller: "veto: <reason>". Counts are per
 /// attempt: the loop tries to collapse every short edge both ways, so "too long" and "boundary"
 /// run into the thousands on a 1,300-vertex sheet.
 struct RemeshStats {
@@ -101,7 +104,7 @@ struct RemeshStats {
   std::map<std::string, int> refusals;
 };
 
-/// One remeshing pass (split, flip, collapse, flip) of `mesh` and `state`. Vertices and faces are
+/// One remeshing pass (split, flip, collapse, flip, sliver repair) of `mesh` and `state`. Vertices and faces are
 /// renumbered (garbage collected); material coordinates are exact (new vertices at edge
 /// midpoints, boundary vertices stay on the boundary, corners stay); positions, velocities and
 /// obstacle distances are linear on split, kept on collapse; plastic curvature and damage are
