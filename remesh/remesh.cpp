@@ -129,10 +129,11 @@ double face_aspect(const MeshEditor& ed, OpenMesh::FaceHandle f) {
 MeshEditor::EditCheck improves_check(const MeshEditor& ed) {
   return [&ed](const EditProposal& p) -> std::string {
     double before = 1.0, after = 1.0;
-    for (int f : p.removed_faces) before = std::min(before, face_aspect(ed, OpenMesh::FaceHandle(f)));
+    for (int f : p.removed_faces)
+      before = std::min(before, face_aspect(ed, OpenMesh::FaceHandle(f)));
     for (const auto& x : p.material)
-      after = std::min(after, aspect_ratio(x.row(0).transpose(), x.row(1).transpose(),
-                                           x.row(2).transpose()));
+      after = std::min(
+          after, aspect_ratio(x.row(0).transpose(), x.row(1).transpose(), x.row(2).transpose()));
     return after > before ? std::string() : std::string("no better");
   };
 }
@@ -146,15 +147,17 @@ bool repair_sliver(MeshEditor& ed, OpenMesh::FaceHandle f) {
   HalfedgeHandle longest;
   double l2 = -1;
   for (auto h : m.fh_range(f)) {
-    const double l = (ed.material(m.to_vertex_handle(h)) - ed.material(m.from_vertex_handle(h)))
-                         .squaredNorm();
+    const double l =
+        (ed.material(m.to_vertex_handle(h)) - ed.material(m.from_vertex_handle(h))).squaredNorm();
     if (l > l2) l2 = l, longest = h;
   }
   VertexHandle a = m.from_vertex_handle(longest), b = m.to_vertex_handle(longest);
   const VertexHandle p = m.to_vertex_handle(m.next_halfedge_handle(longest));
-  if ((ed.material(b) - ed.material(p)).squaredNorm() < (ed.material(a) - ed.material(p)).squaredNorm())
+  if ((ed.material(b) - ed.material(p)).squaredNorm() <
+      (ed.material(a) - ed.material(p)).squaredNorm())
     std::swap(a, b);
-  for (auto [removed, survivor] : {std::pair{p, a}, std::pair{p, b}, std::pair{a, p}, std::pair{b, p}}) {
+  for (auto [removed, survivor] :
+       {std::pair{p, a}, std::pair{p, b}, std::pair{a, p}, std::pair{b, p}}) {
     const HalfedgeHandle h = m.find_halfedge(removed, survivor);
     if (h.is_valid() && ed.collapse(h, improves_check(ed))) return true;
   }
@@ -162,8 +165,8 @@ bool repair_sliver(MeshEditor& ed, OpenMesh::FaceHandle f) {
 }
 
 /// Repairs every face thinner than SLIVER_FRACTION * aspect_min, sweep after sweep, while a
-/// repair succeeds. The repairs ignore the metric's lengths: an edge they lengthen is split at its
-/// midpoint by the next pass, which does not make the sliver again.
+/// repair succeeds. The repairs ignore the metric's lengths: an edge they make too long is split by
+/// the next pass.
 void sliver_phase(MeshEditor& ed, const RemeshParams& params) {
   const double threshold = SLIVER_FRACTION * params.aspect_min;
   for (int sweep = 0; sweep < SLIVER_SWEEPS_MAX; ++sweep) {
@@ -172,8 +175,7 @@ void sliver_phase(MeshEditor& ed, const RemeshParams& params) {
       if (face_aspect(ed, f) < threshold) slivers.push_back(f);
     bool repaired = false;
     for (auto f : slivers)
-      if (!ed.mesh().status(f).deleted() && face_aspect(ed, f) < threshold &&
-          repair_sliver(ed, f))
+      if (!ed.mesh().status(f).deleted() && face_aspect(ed, f) < threshold && repair_sliver(ed, f))
         repaired = true;
     if (!repaired) return;
   }

@@ -89,24 +89,24 @@ struct EditProposal {
 /// then leaves its inputs untouched.
 using EditVeto = std::function<std::string(const EditProposal&)>;
 
-/// Edits applied and refused in one pass. Refusal reasons of the editor: "topology" (OpenMesh
-/// link condition), "boundary" (would move a boundary vertex off the boundary or remove a corner
-/// of the sheet), "inverted" (a new face with non-positive area in material space), "degenerate"
-/// (a new face with aspect ratio below EDIT_ASPECT_MIN = 0.01, mesh_editor.hpp); of the remesh
-/// loop: "crease" (a flip across, or making, a hinge sharper than flip_angle_max), "too long" (a
-/// collapse would make an edge longer than 0.9 under the metric), "too thin" (a collapse would
-/// make a face with aspect below aspect_min), "no better" (a sliver repair whose thinnest new face
-/// is no thicker than the thinnest face it removes); of the caller: "veto: <reason>". Counts are per
-/// attempt: the loop tries to collapse every short edge both ways, so "too long" and "boundary"
-/// run into the thousands on a 1,300-vertex sheet.
+/// Edits applied and refused in one pass. Refusal reasons of the editor: "topology" (OpenMesh link
+/// condition), "boundary" (would move a boundary vertex off the boundary or remove a corner of the
+/// sheet), "inverted" (a new face with non-positive area in material space), "degenerate" (a new
+/// face with aspect ratio below EDIT_ASPECT_MIN = 0.01, mesh_editor.hpp); of the remesh loop:
+/// "crease" (a flip across, or making, a hinge sharper than flip_angle_max), "too long" (a collapse
+/// would make an edge longer than 0.9 under the metric), "too thin" (a collapse would make a face
+/// with aspect below aspect_min), "no better" (a sliver repair whose thinnest new face is no
+/// thicker than the thinnest face it removes); of the caller: "veto: <reason>". Counts are per
+/// attempt: the loop tries to collapse every short edge both ways, so "too long" and "boundary" run
+/// into the thousands on a 1,300-vertex sheet.
 struct RemeshStats {
   int splits = 0, flips = 0, collapses = 0;
   std::map<std::string, int> refusals;
 };
 
-/// One remeshing pass (split, flip, collapse, flip, sliver repair) of `mesh` and `state`. Vertices and faces are
-/// renumbered (garbage collected); material coordinates are exact (new vertices at edge
-/// midpoints, boundary vertices stay on the boundary, corners stay); positions, velocities and
+/// One remeshing pass (split, flip, collapse, flip, sliver repair) of `mesh` and `state`. Vertices
+/// and faces are renumbered (garbage collected); material coordinates are exact (new vertices at
+/// edge midpoints, boundary vertices stay on the boundary, corners stay); positions, velocities and
 /// obstacle distances are linear on split, kept on collapse; plastic curvature and damage are
 /// transferred by material area so their area integrals are conserved.
 /// @throw ParameterError when a parameter is out of range (the message names it).
