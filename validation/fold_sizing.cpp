@@ -5,7 +5,8 @@
 // size_min, the shortest and median edge it asks for, the faces where it is the largest
 // criterion, and the vertex count the combined, clamped sizing implies (the metric area of the
 // sheet over that of a unit equilateral triangle, halved; also with the metrics averaged at the
-// vertices, as the remesher uses them). Also the membrane's compression: the
+// vertices, as the remesher uses them) and the percentiles of the edges' lengths under those
+// metrics (a pass splits above 1 and collapses below 0.9). Also the membrane's compression: the
 // smallest principal Green strain (F^T F - I) / 2 and the faces compressed by more than 1e-3.
 //   papersim_fold_sizing [--edge 8] [--remesh MIN:MAX] [--size 1:100] [--steps 1,2,50,100,160]
 //   papersim_fold_sizing --checkpoint DIR [--steps S1,S2] [--size MIN:MAX]
@@ -156,6 +157,24 @@ void report(const ps::Run& run, const rm::RemeshParams& p, const std::string& du
       by_vertex += 0.5 * std::abs(dm.determinant()) * std::sqrt(std::max(m.determinant(), 0.0)) / (std::sqrt(3.0) / 4);
     }
     std::printf("  implied by the metrics averaged at the vertices: about %.0f vertices\n", 0.5 * by_vertex);
+    // Edge lengths under the metric the remesher uses (mean of the end vertices' metrics): a pass
+    // splits above 1 and collapses only where no new edge exceeds 0.9.
+    std::set<std::pair<int, int>> edges;
+    for (int i = 0; i < f.rows(); ++i)
+      for (int k = 0; k < 3; ++k) edges.insert(std::minmax(f(i, k), f(i, (k + 1) % 3)));
+    std::vector<double> sizes;
+    for (const auto& [a, b] : edges) {
+      const Eigen::Vector2d u = mesh.material_coord(b) - mesh.material_coord(a);
+      sizes.push_back(std::sqrt(u.dot(0.5 * (vm[a] + vm[b]) * u)));
+    }
+    std::sort(sizes.begin(), sizes.end());
+    const auto pct = [&](double q) {
+      return sizes[std::min(sizes.size() - 1, static_cast<size_t>(q * sizes.size()))];
+    };
+    std::printf(
+        "  edge lengths under the metric: 10%% %.2f, 25%% %.2f, median %.2f, 75%% %.2f, "
+        "90%% %.2f\n",
+        pct(0.1), pct(0.25), pct(0.5), pct(0.75), pct(0.9));
   }
   std::printf("  %-12s %8s %8s %10s %10s\n", "criterion", "finest", "largest", "min_l_mm", "median_mm");
   for (int k = 0; k < 5; ++k) {
