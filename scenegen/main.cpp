@@ -75,7 +75,7 @@ void add_sample_options(CLI::App* app, Cli& c) {
   app->add_option("--seed", c.sample.seed, "sample seed (camera, lights, background, paper, document, edge curl)")->capture_default_str()->check(digits_only());
   app->add_option("--size", c.size, "image size WIDTHxHEIGHT [pixels], 8 to 8192 per side")->capture_default_str();
   app->add_option("--passes", c.passes, "comma list of image,shading,albedo,uv,coords,normal,mask,backward, or all")->capture_default_str();
-  app->add_option("--quality", c.quality, "draft | final | best (final with smooth penumbrae; photo and shading pass only)")->capture_default_str();
+  app->add_option("--quality", c.quality, "draft | final | best (final with 3 x 3 instead of 2 x 2 jittered area-light samples: less grainy penumbrae; photo and shading pass only)")->capture_default_str();
   app->add_option("--rig", c.sample.rig, "light rig three-point|rim|softbox|natural (default: drawn)");
   app->add_option("--backward-grid", c.backward_grid, "backward map grid WIDTHxHEIGHT over the page, or 'full' (image size)")->capture_default_str();
   app->add_option("--ground-truth", c.ground_truth, "uv, coords, normal, mask: raycast (scenegen casts the pixel rays on the rendered triangles) | povray (emissive POV-Ray renders)")->capture_default_str();

@@ -158,18 +158,23 @@ QualitySettings quality_settings(Quality q) {
     s.radiosity = true;
     s.radiosity_nearest = 1;
     s.radiosity_pretrace_end = 0.04;
+    // 2 x 2 jittered area-light samples: without jitter they give four overlapping hard
+    // shadows (a raised part's penumbra in three bands); jittered over the drawn light (the
+    // axes shortened in lights.inc) the penumbra is a smooth, slightly grainy ramp at the
+    // same number of shadow rays (docs/scenegen.md, "Penumbrae").
     s.area_samples = 2;
     s.area_adaptive = 1;
+    s.area_jitter = true;
     s.antialias = true;
     s.antialias_threshold = 0.8;
     s.antialias_depth = 2;
     s.ambient = 0.0;
     if (q == Quality::best) {
       // Adaptive depth 0 starts from the grid's four corners, so lit and fully shadowed
-      // pixels cost what 2 x 2 cost; penumbrae get up to 9 jittered samples per light.
+      // pixels cost what 2 x 2 cost; penumbrae get up to 9 jittered samples per light (less
+      // grain than final's 4).
       s.area_samples = 3;
       s.area_adaptive = 0;
-      s.area_jitter = true;
     }
   } else {
     s.area_samples = 2;

@@ -29,8 +29,9 @@ struct QualitySettings {
   double radiosity_pretrace_end = 0.02;  ///< pretrace_end (pretrace_start 0.08; each pass halves it)
   int area_samples = 1;            ///< area light samples per side (1: point lights)
   int area_adaptive = 1;           ///< adaptive depth of area lights
-  /// Jittered area-light samples (POV-Ray `jitter`): a smooth, slightly grainy penumbra instead
-  /// of area_samples^2 overlapping hard shadows; reproducible for a single-threaded render.
+  /// Jittered area-light samples (POV-Ray `jitter`, over the drawn light: lights.inc shortens
+  /// the axes by (n - 1) / n): a smooth, slightly grainy penumbra instead of area_samples^2
+  /// overlapping hard shadows; reproducible for a single-threaded render.
   bool area_jitter = false;
   /// Lights whose intensity is below this share of the rig's summed intensity get
   /// `dim_area_samples` per side instead of `area_samples` (1: point light; 0: point light
