@@ -76,6 +76,10 @@ std::vector<Preset> presets() {
   p.push_back({"final (9b9e633)", final_9b9e633()});
   p.push_back({"final (4731a3c)", final_4731a3c()});
   p.push_back({"final (new)", sg::quality_settings(sg::Quality::final)});
+  // The final preset before its area lights were jittered (commit 4939aeb): 2 x 2 samples on a grid.
+  sg::QualitySettings grid = sg::quality_settings(sg::Quality::final);
+  grid.area_jitter = false;
+  p.push_back({"final (4939aeb)", grid});
   sg::QualitySettings q = old;
   q.antialias = false;
   p.push_back({"180441f, no antialiasing", q});
