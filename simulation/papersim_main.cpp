@@ -102,7 +102,7 @@ void add_checkpoint_options(CLI::App* app, CheckpointOptions& c) {
   app->add_option("--resume", c.resume,
                   "Continue from the checkpoint in DIR (same duration; another time step only if "
                   "the checkpoint's time is a whole number of its steps; other scene keys may "
-                  "differ, listed in meta.json's `resumed`)")
+                  "differ, listed in meta.json's `resumed`); meta.json reports the whole run")
       ->check(CLI::ExistingDirectory);
 }
 

@@ -255,7 +255,8 @@ void Run::check_state(const std::string& what) const {
                          (m_scene.ground ? " (0 is the ground)" : ""));
 }
 
-void Run::resume(const remesh::SheetMesh& mesh, const SheetState& state, int step, const Scene* saved) {
+void Run::resume(const remesh::SheetMesh& mesh, const SheetState& state, int step, const Scene* saved,
+                 const RunTally* tally) {
   if (state.positions.size() != 3 * mesh.num_vertices() || state.velocities.size() != state.positions.size())
     throw SceneError("resume: the state has " + std::to_string(state.positions.size() / 3) +
                      " vertices, the mesh " + std::to_string(mesh.num_vertices()));
@@ -287,6 +288,32 @@ void Run::resume(const remesh::SheetMesh& mesh, const SheetState& state, int ste
   m_quality.strain_limit = m_setup.material.strain_limit;
   for (const PhysicsSetup::Lift& l : m_setup.lifts) m_quality.lifts.push_back({l.spec, 0.0, 0.0});
   track();
+  if (!tally) return;
+  const RunQuality& q = tally->quality;
+  if (q.min_obstacle_distance.size() != m_quality.min_obstacle_distance.size() || q.lifts.size() != m_quality.lifts.size())
+    throw SceneError("resume: the saved run figures are for " + std::to_string(q.min_obstacle_distance.size()) +
+                     " obstacles (" + std::to_string(q.lifts.size()) + " lifting), this scene has " +
+                     std::to_string(m_quality.min_obstacle_distance.size()) + " (" +
+                     std::to_string(m_quality.lifts.size()) + ")");
+  m_totals = tally->totals;
+  m_pattern_changes_done = tally->pattern_changes;
+  m_counts.vertices_start = tally->sheet.vertices_start;
+  m_counts.faces_start = tally->sheet.faces_start;
+  m_counts.vertices_max = std::max(m_counts.vertices_max, tally->sheet.vertices_max);
+  m_counts.faces_max = std::max(m_counts.faces_max, tally->sheet.faces_max);
+  m_term_stats = tally->terms;  // in place: the terms count into these
+  m_quality.max_principal_stretch = std::max(m_quality.max_principal_stretch, q.max_principal_stretch);
+  m_quality.min_principal_stretch = std::min(m_quality.min_principal_stretch, q.min_principal_stretch);
+  m_quality.max_speed = std::max(m_quality.max_speed, q.max_speed);
+  for (size_t o = 0; o < q.min_obstacle_distance.size(); ++o)
+    m_quality.min_obstacle_distance[o] = std::min(m_quality.min_obstacle_distance[o], q.min_obstacle_distance[o]);
+  for (size_t l = 0; l < q.lifts.size(); ++l) {
+    m_quality.lifts[l].max_load = std::max(m_quality.lifts[l].max_load, q.lifts[l].max_load);
+    m_quality.lifts[l].max_rise = std::max(m_quality.lifts[l].max_rise, q.lifts[l].max_rise);
+  }
+  m_remesh = tally->remesh;
+  m_energy_min = std::min(m_energy_min, tally->energy_min);
+  m_energy_max = std::max(m_energy_max, tally->energy_max);
 }
 
 namespace {
@@ -500,6 +527,20 @@ void Run::remesh_pass() {
   m_counts.vertices_max = std::max(m_counts.vertices_max, m_mesh.num_vertices());
   m_counts.faces_max = std::max(m_counts.faces_max, m_mesh.num_faces());
   m_remesh.seconds_rebuild += seconds_since(t0);
+}
+
+RunTally Run::tally(double wall_seconds) const {
+  RunTally t;
+  t.totals = m_totals;
+  t.pattern_changes = m_pattern_changes_done + m_integrator->pattern_id();
+  t.sheet = m_counts;
+  t.terms = m_term_stats;
+  t.quality = m_quality;
+  t.remesh = m_remesh;
+  t.energy_min = m_energy_min;
+  t.energy_max = m_energy_max;
+  t.wall_seconds = wall_seconds;
+  return t;
 }
 
 RunResult Run::result(double wall_seconds) const {

@@ -181,6 +181,21 @@ struct RunResult {
   std::optional<RemeshTotals> remesh;  ///< when the scene remeshes
 };
 
+/// What a run has counted and measured over its steps so far: the sums and running extremes of
+/// RunResult, without the figures measured at the end (self-intersections, handle error,
+/// energies). Saved with a checkpoint (save_checkpoint) so that a run continued from it reports
+/// the whole run.
+struct RunTally {
+  StepStats totals;
+  long pattern_changes = 0;
+  MeshCounts sheet;  ///< at the start and at most
+  TermStatistics terms;
+  RunQuality quality;  ///< the running extremes
+  RemeshTotals remesh;
+  double energy_min = INF, energy_max = -INF;  ///< mechanical energy's range over the run [J]
+  double wall_seconds = 0.0;                   ///< wall time of the run so far [s]
+};
+
 /// One run of a scene, advanced a step at a time.
 class Run {
  public:
@@ -194,13 +209,16 @@ class Run {
 
   /// Continue from a saved state (a checkpoint of a run of this scene): the mesh with its
   /// plastic state, positions, velocities and time after `step` steps. The handles keep their
-  /// anchors from the scene's initial sheet; the run's statistics and quality extremes count
-  /// from here on. Checked like a start (outside every obstacle, free of self-intersection).
+  /// anchors from the scene's initial sheet. The run's statistics and quality extremes continue
+  /// from `tally` (what the saved run had counted, Run::tally), else they count from here on.
+  /// Checked like a start (outside every obstacle, free of self-intersection).
   /// @throw SceneError when the state does not fit the mesh, the step is out of range or its
-  ///        time is not step x time_step, or the state fails a check
+  ///        time is not step x time_step, the state fails a check, or `tally` is for another
+  ///        number of obstacles
   /// `saved`: the scene the checkpoint was saved with (Run::scene() of that run); obstacles that
   /// yield upwards continue on the motion saved there.
-  void resume(const remesh::SheetMesh& mesh, const SheetState& state, int step, const Scene* saved = nullptr);
+  void resume(const remesh::SheetMesh& mesh, const SheetState& state, int step, const Scene* saved = nullptr,
+              const RunTally* tally = nullptr);
 
   /// Advance by one time step of the scene, remeshing before the first step, after it and then
   /// after every `remesh.every` steps when the scene remeshes.
@@ -224,6 +242,8 @@ class Run {
 
   /// The result so far (final figures measured at the current state).
   RunResult result(double wall_seconds) const;
+  /// The counts and extremes so far, with `wall_seconds` of wall time (the run's so far).
+  RunTally tally(double wall_seconds) const;
 
  private:
   /// Builds the terms and the integrator for the current mesh.

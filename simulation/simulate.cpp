@@ -107,8 +107,132 @@ constexpr const char* CHECKPOINT_FORMAT = "papersim checkpoint 1";
 
 }  // namespace
 
+namespace {
+
+/// A number that may be infinite (an extreme not met yet): null in JSON.
+json finite_or_null(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
+double number_or(const json& v, double missing) { return v.is_null() ? missing : v.get<double>(); }
+
+}  // namespace
+
+json tally_to_json(const RunTally& t) {
+  const StepStats& s = t.totals;
+  json distances = json::array();
+  for (double d : t.quality.min_obstacle_distance) distances.push_back(finite_or_null(d));
+  json lifts = json::array();
+  for (const auto& l : t.quality.lifts)
+    lifts.push_back({{"obstacle", l.obstacle}, {"max_load", l.max_load}, {"max_rise", l.max_rise}});
+  const RemeshTotals& r = t.remesh;
+  return {{"wall_seconds", t.wall_seconds},
+          {"totals",
+           {{"substeps", s.substeps},
+            {"failed_solves", s.failed_solves},
+            {"projected_hessians", s.projected_hessians},
+            {"exact_skipped", s.exact_skipped},
+            {"newton_iterations", s.newton_iterations},
+            {"line_search_evaluations", s.line_search_evaluations},
+            {"extrapolations", s.extrapolations},
+            {"reused_factorizations", s.reused_factorizations},
+            {"following_iterations", s.following_iterations},
+            {"seconds_assembly", s.seconds_assembly},
+            {"seconds_solve", s.seconds_solve},
+            {"seconds_line_search", s.seconds_line_search},
+            {"residual", s.residual}}},
+          {"pattern_changes", t.pattern_changes},
+          {"sheet",
+           {{"vertices_start", t.sheet.vertices_start},
+            {"faces_start", t.sheet.faces_start},
+            {"vertices_max", t.sheet.vertices_max},
+            {"faces_max", t.sheet.faces_max}}},
+          {"contact",
+           {{"seconds", t.terms.contact.seconds},
+            {"max_friction_points", t.terms.contact.max_friction_points},
+            {"max_normal_force", t.terms.contact.max_normal_force}}},
+          {"self_contact",
+           {{"seconds", t.terms.self_contact.seconds},
+            {"max_active_pairs", t.terms.self_contact.max_active_pairs},
+            {"pattern_changes", t.terms.self_contact.pattern_changes}}},
+          {"quality",
+           {{"max_principal_stretch", t.quality.max_principal_stretch},
+            {"min_principal_stretch", t.quality.min_principal_stretch},
+            {"max_speed", t.quality.max_speed},
+            {"min_obstacle_distance", distances},
+            {"lifts", lifts}}},
+          {"remesh",
+           {{"passes", r.passes},
+            {"rollbacks", r.rollbacks},
+            {"rollback_reasons", r.rollback_reasons},
+            {"splits", r.splits},
+            {"flips", r.flips},
+            {"collapses", r.collapses},
+            {"refusals", r.refusals},
+            {"seconds_remesh", r.seconds_remesh},
+            {"seconds_rebuild", r.seconds_rebuild},
+            {"max_energy_jump", r.max_energy_jump},
+            {"max_energy_jump_relative", r.max_energy_jump_relative}}},
+          {"energy_min", finite_or_null(t.energy_min)},
+          {"energy_max", finite_or_null(t.energy_max)}};
+}
+
+RunTally tally_from_json(const json& j) {
+  RunTally t;
+  t.wall_seconds = j.at("wall_seconds").get<double>();
+  const json& s = j.at("totals");
+  StepStats& o = t.totals;
+  o.substeps = s.at("substeps").get<int>();
+  o.failed_solves = s.at("failed_solves").get<int>();
+  o.projected_hessians = s.at("projected_hessians").get<int>();
+  o.exact_skipped = s.at("exact_skipped").get<int>();
+  o.newton_iterations = s.at("newton_iterations").get<int>();
+  o.line_search_evaluations = s.at("line_search_evaluations").get<int>();
+  o.extrapolations = s.at("extrapolations").get<int>();
+  o.reused_factorizations = s.at("reused_factorizations").get<int>();
+  o.following_iterations = s.at("following_iterations").get<int>();
+  o.seconds_assembly = s.at("seconds_assembly").get<double>();
+  o.seconds_solve = s.at("seconds_solve").get<double>();
+  o.seconds_line_search = s.at("seconds_line_search").get<double>();
+  o.residual = s.at("residual").get<double>();
+  t.pattern_changes = j.at("pattern_changes").get<long>();
+  const json& m = j.at("sheet");
+  t.sheet.vertices_start = m.at("vertices_start").get<int>();
+  t.sheet.faces_start = m.at("faces_start").get<int>();
+  t.sheet.vertices_max = m.at("vertices_max").get<int>();
+  t.sheet.faces_max = m.at("faces_max").get<int>();
+  const json& c = j.at("contact");
+  t.terms.contact.seconds = c.at("seconds").get<double>();
+  t.terms.contact.max_friction_points = c.at("max_friction_points").get<int>();
+  t.terms.contact.max_normal_force = c.at("max_normal_force").get<double>();
+  const json& sc = j.at("self_contact");
+  t.terms.self_contact.seconds = sc.at("seconds").get<double>();
+  t.terms.self_contact.max_active_pairs = sc.at("max_active_pairs").get<int>();
+  t.terms.self_contact.pattern_changes = sc.at("pattern_changes").get<int>();
+  const json& q = j.at("quality");
+  t.quality.max_principal_stretch = q.at("max_principal_stretch").get<double>();
+  t.quality.min_principal_stretch = q.at("min_principal_stretch").get<double>();
+  t.quality.max_speed = q.at("max_speed").get<double>();
+  for (const json& d : q.at("min_obstacle_distance")) t.quality.min_obstacle_distance.push_back(number_or(d, INF));
+  for (const json& l : q.at("lifts"))
+    t.quality.lifts.push_back({l.at("obstacle").get<int>(), l.at("max_load").get<double>(), l.at("max_rise").get<double>()});
+  const json& r = j.at("remesh");
+  RemeshTotals& x = t.remesh;
+  x.passes = r.at("passes").get<int>();
+  x.rollbacks = r.at("rollbacks").get<int>();
+  x.rollback_reasons = r.at("rollback_reasons").get<std::map<std::string, int>>();
+  x.splits = r.at("splits").get<int>();
+  x.flips = r.at("flips").get<int>();
+  x.collapses = r.at("collapses").get<int>();
+  x.refusals = r.at("refusals").get<std::map<std::string, int>>();
+  x.seconds_remesh = r.at("seconds_remesh").get<double>();
+  x.seconds_rebuild = r.at("seconds_rebuild").get<double>();
+  x.max_energy_jump = r.at("max_energy_jump").get<double>();
+  x.max_energy_jump_relative = r.at("max_energy_jump_relative").get<double>();
+  t.energy_min = number_or(j.at("energy_min"), INF);
+  t.energy_max = number_or(j.at("energy_max"), -INF);
+  return t;
+}
+
 void save_checkpoint(const std::string& dir, const Scene& scene, int step, const remesh::SheetMesh& mesh,
-                     const SheetState& state) {
+                     const SheetState& state, const RunTally* tally) {
   const fs::path d(dir);
   std::error_code ec;
   fs::create_directories(d, ec);
@@ -122,8 +246,9 @@ void save_checkpoint(const std::string& dir, const Scene& scene, int step, const
   name << "checkpoint_" << std::setw(8) << std::setfill('0') << step << ".ply";
   remesh::write_sheet_file((d / name.str()).string(), mesh, state.positions_matrix(), state.velocities_matrix(),
                            scene.sheet.width, scene.sheet.height);
-  const json j = {{"format", CHECKPOINT_FORMAT}, {"step", step},        {"time", state.time},
-                  {"sheet", name.str()},         {"version", version()}, {"scene", scene_to_json(scene)}};
+  json j = {{"format", CHECKPOINT_FORMAT}, {"step", step},        {"time", state.time},
+            {"sheet", name.str()},         {"version", version()}, {"scene", scene_to_json(scene)}};
+  if (tally) j["run"] = tally_to_json(*tally);
   common::write_text_atomically(d / "checkpoint.json", j.dump(1) + "\n");
   if (!previous.empty() && previous != name.str() && previous.find('/') == std::string::npos)
     fs::remove(d / previous, ec);
@@ -144,6 +269,13 @@ Checkpoint load_checkpoint(const std::string& dir) {
     c.time = j.at("time").get<double>();
     sheet = j.at("sheet").get<std::string>();
     c.scene = j.at("scene");
+    if (j.contains("run")) {
+      try {
+        c.tally = tally_from_json(j.at("run"));
+      } catch (const json::exception& e) {
+        throw SceneError(where + "key 'run': " + e.what());
+      }
+    }
   } catch (const json::exception& e) {
     throw SceneError(where + e.what());
   }
@@ -166,6 +298,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
   const auto elapsed = [&] {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
   };
+  double wall_before = 0.0;  // wall time of the run before the checkpoint it continues from [s]
   Run run(scene);
   json resumed;
   if (!options.resume_from.empty()) {
@@ -175,10 +308,12 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
     // a time that is not a whole number of the scene's steps).
     const int step = saved.time_step == scene.time_step ? c.step
                                                          : static_cast<int>(std::lround(c.time / run.time_step()));
-    run.resume(c.mesh, c.state, step, &saved);
+    run.resume(c.mesh, c.state, step, &saved, c.tally ? &*c.tally : nullptr);
+    if (c.tally) wall_before = c.tally->wall_seconds;
     json changes = json::array();
     for (const auto& patch : json::diff(c.scene, scene_to_json(run.scene()))) changes.push_back(patch.at("path"));
-    resumed = {{"from", options.resume_from}, {"step", step}, {"time", c.time}, {"scene_changes", changes}};
+    resumed = {{"from", options.resume_from}, {"step", step}, {"time", c.time}, {"scene_changes", changes},
+               {"whole_run", c.tally.has_value()}};
   }
   Staging staging(options.out_dir);
   if (!scene.source.empty()) staging.protect(scene.source);
@@ -191,8 +326,10 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
   for (int k = first + 1; k <= steps; ++k) {
     run.step();
     if (options.poll_stop) options.poll_stop();
-    if (options.checkpoint_every > 0 && k % options.checkpoint_every == 0 && k < steps)
-      save_checkpoint(options.checkpoint_dir, run.scene(), k, run.mesh(), run.state());
+    if (options.checkpoint_every > 0 && k % options.checkpoint_every == 0 && k < steps) {
+      const RunTally tally = run.tally(wall_before + elapsed());
+      save_checkpoint(options.checkpoint_dir, run.scene(), k, run.mesh(), run.state(), &tally);
+    }
     if (options.on_step) {
       StepReport report;
       report.step = k;
@@ -218,7 +355,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
       options.progress(fraction, last_report);
     }
   }
-  RunResult r = run.result(elapsed());
+  RunResult r = run.result(wall_before + elapsed());
   if (staging.active()) {
     write_outputs(staging.dir(), scene, r.mesh, r.state);
     for (const auto& [name, text] : options.extra_files)

@@ -3,6 +3,7 @@
 /// write sheet.obj, sheet.ply, meta.json (and frames) into an output folder.
 #include <functional>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -60,14 +61,16 @@ struct RunOptions {
 };
 
 /// A saved state of a run: DIR/checkpoint.json (format, step, time, the sheet file's name, the
-/// scene) and the sheet file it names (PLY, doubles: positions, velocities, material
-/// coordinates, plastic curvature, damage), so a continued run starts from the same numbers.
+/// scene, what the run had counted) and the sheet file it names (PLY, doubles: positions,
+/// velocities, material coordinates, plastic curvature, damage), so a continued run starts from
+/// the same numbers and reports the whole run.
 struct Checkpoint {
   int step = 0;
   double time = 0.0;  ///< [s]
   remesh::SheetMesh mesh;
   SheetState state;
   nlohmann::json scene;  ///< scene_to_json of the run that saved it
+  std::optional<RunTally> tally;  ///< absent in checkpoints that do not have `run`
 };
 
 /// Writes the checkpoint atomically: the sheet file under a new name, then checkpoint.json
@@ -75,7 +78,12 @@ struct Checkpoint {
 /// complete checkpoint (the new or the previous one).
 /// @throw common::OutputError when a file cannot be written
 void save_checkpoint(const std::string& dir, const Scene& scene, int step, const remesh::SheetMesh& mesh,
-                     const SheetState& state);
+                     const SheetState& state, const RunTally* tally = nullptr);
+
+/// The checkpoint's `run` object, and back (non-finite extremes are written as null).
+/// @throw nlohmann::json::exception for a malformed object
+nlohmann::json tally_to_json(const RunTally& t);
+RunTally tally_from_json(const nlohmann::json& j);
 
 /// @throw SceneError naming the file and what is wrong (missing, not a checkpoint, bad sheet)
 Checkpoint load_checkpoint(const std::string& dir);

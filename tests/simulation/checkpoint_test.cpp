@@ -1,6 +1,7 @@
 // Checkpoints (RunOptions::checkpoint_dir, resume_from): a run continued from a checkpoint ends
 // in the state of the run that was not interrupted, and a checkpoint that does not fit the
-// scene is refused with a message that names what is wrong.
+// scene is refused with a message that names what is wrong. The checkpoint carries what the run
+// had counted, so the continued run reports the whole run.
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -76,9 +77,85 @@ TEST(Checkpoint, ResumedRunEndsInTheSameStateToTheBit) {
   ASSERT_EQ(continued.state.positions.size(), whole.state.positions.size());
   EXPECT_EQ((continued.state.positions - whole.state.positions).cwiseAbs().maxCoeff(), 0.0);
   EXPECT_EQ((continued.state.velocities - whole.state.velocities).cwiseAbs().maxCoeff(), 0.0);
-  // Only the last 10 steps were simulated.
-  EXPECT_LT(continued.totals.newton_iterations, whole.totals.newton_iterations);
+  // Only the last 10 steps were simulated, but the checkpoint carried what the first 20
+  // counted: the continued run reports the whole run (the same steps, so the same counts and
+  // extremes to the bit), and its wall time includes the saved run's 20 steps.
+  EXPECT_EQ(continued.totals.newton_iterations, whole.totals.newton_iterations);
+  EXPECT_EQ(continued.totals.substeps, whole.totals.substeps);
+  EXPECT_EQ(continued.totals.line_search_evaluations, whole.totals.line_search_evaluations);
+  EXPECT_EQ(continued.sheet.vertices_start, whole.sheet.vertices_start);
+  EXPECT_EQ(continued.quality.max_principal_stretch, whole.quality.max_principal_stretch);
+  EXPECT_EQ(continued.quality.min_principal_stretch, whole.quality.min_principal_stretch);
+  EXPECT_EQ(continued.quality.max_speed, whole.quality.max_speed);
+  EXPECT_EQ(continued.quality.min_obstacle_distance, whole.quality.min_obstacle_distance);
+  ASSERT_TRUE(continued.contact && whole.contact);
+  EXPECT_EQ(continued.contact->max_normal_force, whole.contact->max_normal_force);
+  ASSERT_TRUE(c.tally.has_value());
+  EXPECT_EQ(c.tally->totals.substeps, 20);
+  EXPECT_GT(c.tally->totals.newton_iterations, 0);
+  EXPECT_LT(c.tally->totals.newton_iterations, whole.totals.newton_iterations);
+  EXPECT_GE(continued.wall_seconds, c.tally->wall_seconds);
+
+  // A checkpoint without the run's figures (as written before they were saved) still
+  // continues, counting from the checkpoint on.
+  nlohmann::json j = nlohmann::json::parse(std::ifstream(dir / "checkpoint.json"));
+  j.erase("run");
+  std::ofstream(dir / "checkpoint.json") << j.dump(1);
+  const RunResult counted_from_there = run_scene(scene, resuming_from(dir));
+  EXPECT_EQ((counted_from_there.state.positions - whole.state.positions).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_EQ(counted_from_there.totals.substeps, 10);
+  EXPECT_EQ(counted_from_there.totals.newton_iterations + c.tally->totals.newton_iterations,
+            whole.totals.newton_iterations);
   fs::remove_all(dir);
+}
+
+// The run figures survive the trip through checkpoint.json, infinite extremes (an obstacle not
+// met yet, an energy range not begun) included.
+TEST(Checkpoint, RunFiguresRoundTripThroughJson) {
+  RunTally t;
+  t.wall_seconds = 12.5;
+  t.totals.substeps = 7;
+  t.totals.newton_iterations = 31;
+  t.totals.seconds_solve = 0.25;
+  t.totals.residual = 3e-5;
+  t.pattern_changes = 4;
+  t.sheet = {96, 150, 0, 0, 120, 200};
+  t.terms.contact.max_normal_force = 1.5;
+  t.terms.self_contact.max_active_pairs = 9;
+  t.quality.max_principal_stretch = 1.004;
+  t.quality.min_principal_stretch = 0.97;
+  t.quality.min_obstacle_distance = {2e-7, INF};
+  t.quality.lifts = {{1, 20.5, 3e-3}};
+  t.remesh.passes = 5;
+  t.remesh.refusals = {{"too long", 12}, {"veto: strain", 3}};
+  t.remesh.rollback_reasons = {{"obstacle", 1}};
+  t.remesh.max_energy_jump_relative = 0.04;
+  const RunTally u = tally_from_json(nlohmann::json::parse(tally_to_json(t).dump()));
+  EXPECT_EQ(u.wall_seconds, 12.5);
+  EXPECT_EQ(u.totals.substeps, 7);
+  EXPECT_EQ(u.totals.newton_iterations, 31);
+  EXPECT_EQ(u.totals.seconds_solve, 0.25);
+  EXPECT_EQ(u.totals.residual, 3e-5);
+  EXPECT_EQ(u.pattern_changes, 4);
+  EXPECT_EQ(u.sheet.vertices_start, 96);
+  EXPECT_EQ(u.sheet.faces_start, 150);
+  EXPECT_EQ(u.sheet.vertices_max, 120);
+  EXPECT_EQ(u.sheet.faces_max, 200);
+  EXPECT_EQ(u.terms.contact.max_normal_force, 1.5);
+  EXPECT_EQ(u.terms.self_contact.max_active_pairs, 9);
+  EXPECT_EQ(u.quality.max_principal_stretch, 1.004);
+  EXPECT_EQ(u.quality.min_principal_stretch, 0.97);
+  EXPECT_EQ(u.quality.min_obstacle_distance, t.quality.min_obstacle_distance);
+  ASSERT_EQ(u.quality.lifts.size(), 1u);
+  EXPECT_EQ(u.quality.lifts[0].obstacle, 1);
+  EXPECT_EQ(u.quality.lifts[0].max_load, 20.5);
+  EXPECT_EQ(u.quality.lifts[0].max_rise, 3e-3);
+  EXPECT_EQ(u.remesh.passes, 5);
+  EXPECT_EQ(u.remesh.refusals, t.remesh.refusals);
+  EXPECT_EQ(u.remesh.rollback_reasons, t.remesh.rollback_reasons);
+  EXPECT_EQ(u.remesh.max_energy_jump_relative, 0.04);
+  EXPECT_EQ(u.energy_min, INF);
+  EXPECT_EQ(u.energy_max, -INF);
 }
 
 // A checkpoint continues at another time step when its time is a whole number of the new steps
@@ -95,7 +172,7 @@ TEST(Checkpoint, ResumesAtAnotherTimeStepThatDividesItsTime) {
   const RunResult continued = run_scene(finer, resuming_from(dir));
   EXPECT_EQ(continued.steps, 60);
   EXPECT_NEAR(continued.state.time, 0.06, 1e-12);
-  EXPECT_EQ(continued.totals.substeps, 20);
+  EXPECT_EQ(continued.totals.substeps, 20 + 20);  // the checkpoint's 20 of 2 ms, then 20 of 1 ms
   const double moved = (continued.state.positions - whole.state.positions).cwiseAbs().maxCoeff();
   std::printf("1 ms from the 2 ms run's checkpoint at 0.04 s: end state %.3g m from the 2 ms run's\n", moved);
   EXPECT_GT(moved, 0.0);
@@ -121,6 +198,17 @@ TEST(Checkpoint, ACheckpointThatDoesNotFitIsRefusedByName) {
     FAIL() << "a checkpoint of another time step was accepted";
   } catch (const SceneError& e) {
     EXPECT_NE(std::string(e.what()).find("time step"), std::string::npos) << e.what();
+  }
+
+  nlohmann::json j = nlohmann::json::parse(std::ifstream(dir / "checkpoint.json"));
+  j["run"].erase("totals");
+  std::ofstream(dir / "checkpoint.json") << j.dump(1);
+  try {
+    run_scene(lifted_corner(), resume);
+    FAIL() << "a checkpoint with incomplete run figures was accepted";
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("'run'"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("totals"), std::string::npos) << e.what();
   }
 
   std::ofstream(dir / "checkpoint.json") << R"({"format": "something else", "step": 1})";
