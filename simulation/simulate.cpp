@@ -28,157 +28,34 @@ using nlohmann::json;
 
 const char* version() { return PAPERSIM_VERSION_STRING; }
 
-json meta_json(const Scene& scene, const RunResult& r, const json& extra) {
-  json m;
-  m["program"] = "papersim";
-  m["version"] = version();
-  if (const std::string k = blas_kernels(); !k.empty()) m["blas_kernels"] = k;
-  m["scene"] = scene_to_json(scene);
-  if (!scene.scenario.empty()) m["scenario"] = scene.scenario;
-  if (scene.seed >= 0) m["seed"] = scene.seed;
-  const MeshCounts& c = r.sheet;
-  m["sheet"] = {{"width", scene.sheet.width},      {"height", scene.sheet.height},
-                {"vertices", c.vertices},          {"faces", c.faces},
-                {"vertices_start", c.vertices_start}, {"faces_start", c.faces_start},
-                {"vertices_max", c.vertices_max},  {"faces_max", c.faces_max}};
-  const StepStats& t = r.totals;
-  m["run"] = {{"wall_seconds", r.wall_seconds},
-              {"steps", r.steps},
-              {"time_step", r.time_step},
-              {"substeps", t.substeps},
-              {"failed_solves", t.failed_solves},
-              {"newton_iterations", t.newton_iterations},
-              {"projected_hessians", t.projected_hessians},
-              {"exact_skipped", t.exact_skipped},
-              {"line_search_evaluations", t.line_search_evaluations},
-              {"extrapolations", t.extrapolations},
-              {"reused_factorizations", t.reused_factorizations},
-              {"following_iterations", t.following_iterations},
-              {"seconds_assembly", t.seconds_assembly},
-              {"seconds_solve", t.seconds_solve},
-              {"seconds_line_search", t.seconds_line_search},
-              {"pattern_changes", r.pattern_changes}};
-  if (r.contact)
-    m["run"]["contact"] = {{"seconds", r.contact->seconds},
-                           {"max_friction_points", r.contact->max_friction_points},
-                           {"max_normal_force", r.contact->max_normal_force}};
-  if (r.self_contact)
-    m["run"]["self_contact"] = {{"seconds", r.self_contact->seconds},
-                                {"max_active_pairs", r.self_contact->max_active_pairs},
-                                {"pattern_changes", r.self_contact->pattern_changes}};
-  if (r.remesh) {
-    const RemeshTotals& rm = *r.remesh;
-    m["run"]["remesh"] = {{"passes", rm.passes},
-                          {"rollbacks", rm.rollbacks},
-                          {"rollback_reasons", rm.rollback_reasons},
-                          {"splits", rm.splits},
-                          {"flips", rm.flips},
-                          {"collapses", rm.collapses},
-                          {"refusals", rm.refusals},
-                          {"seconds_remesh", rm.seconds_remesh},
-                          {"seconds_rebuild", rm.seconds_rebuild},
-                          {"share_of_wall_time", r.wall_seconds > 0 ? (rm.seconds_remesh + rm.seconds_rebuild) / r.wall_seconds : 0.0},
-                          {"max_energy_jump", rm.max_energy_jump},
-                          {"max_energy_jump_relative", rm.max_energy_jump_relative}};
-  }
-  const RunQuality& q = r.quality;
-  m["quality"] = {{"max_principal_stretch", q.max_principal_stretch},
-                  {"min_principal_stretch", q.min_principal_stretch},
-                  {"strain_limit", q.strain_limit},
-                  {"max_speed", q.max_speed},
-                  {"min_obstacle_distance", q.min_obstacle_distance},
-                  {"self_intersections", q.self_intersections}};
-  if (q.max_handle_error) m["quality"]["max_handle_error"] = *q.max_handle_error;
-  if (!q.lifts.empty()) {
-    json lifts = json::array();
-    for (const auto& l : q.lifts)
-      lifts.push_back({{"obstacle", l.obstacle}, {"max_load", l.max_load}, {"max_rise", l.max_rise}});
-    m["quality"]["lifts"] = lifts;
-  }
-  const EnergyBreakdown& e = r.energy;
-  m["energy"] = {{"stretch", e.stretch}, {"bend", e.bend}, {"gravity", e.gravity}, {"kinetic", e.kinetic}};
-  for (auto it = extra.begin(); it != extra.end(); ++it) m[it.key()] = it.value();
-  return m;
-}
-
 namespace {
 
 constexpr const char* CHECKPOINT_FORMAT = "papersim checkpoint 1";
 
-}  // namespace
-
-namespace {
+// One writer and one reader per record, shared by meta.json and a checkpoint's `run`.
 
 /// A number that may be infinite (an extreme not met yet): null in JSON.
 json finite_or_null(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
 double number_or(const json& v, double missing) { return v.is_null() ? missing : v.get<double>(); }
 
-}  // namespace
-
-json tally_to_json(const RunTally& t) {
-  const StepStats& s = t.totals;
-  json distances = json::array();
-  for (double d : t.quality.min_obstacle_distance) distances.push_back(finite_or_null(d));
-  json lifts = json::array();
-  for (const auto& l : t.quality.lifts)
-    lifts.push_back({{"obstacle", l.obstacle}, {"max_load", l.max_load}, {"max_rise", l.max_rise}});
-  const RemeshTotals& r = t.remesh;
-  return {{"wall_seconds", t.wall_seconds},
-          {"totals",
-           {{"substeps", s.substeps},
-            {"failed_solves", s.failed_solves},
-            {"projected_hessians", s.projected_hessians},
-            {"exact_skipped", s.exact_skipped},
-            {"newton_iterations", s.newton_iterations},
-            {"line_search_evaluations", s.line_search_evaluations},
-            {"extrapolations", s.extrapolations},
-            {"reused_factorizations", s.reused_factorizations},
-            {"following_iterations", s.following_iterations},
-            {"seconds_assembly", s.seconds_assembly},
-            {"seconds_solve", s.seconds_solve},
-            {"seconds_line_search", s.seconds_line_search},
-            {"residual", s.residual}}},
-          {"pattern_changes", t.pattern_changes},
-          {"sheet",
-           {{"vertices_start", t.sheet.vertices_start},
-            {"faces_start", t.sheet.faces_start},
-            {"vertices_max", t.sheet.vertices_max},
-            {"faces_max", t.sheet.faces_max}}},
-          {"contact",
-           {{"seconds", t.terms.contact.seconds},
-            {"max_friction_points", t.terms.contact.max_friction_points},
-            {"max_normal_force", t.terms.contact.max_normal_force}}},
-          {"self_contact",
-           {{"seconds", t.terms.self_contact.seconds},
-            {"max_active_pairs", t.terms.self_contact.max_active_pairs},
-            {"pattern_changes", t.terms.self_contact.pattern_changes}}},
-          {"quality",
-           {{"max_principal_stretch", t.quality.max_principal_stretch},
-            {"min_principal_stretch", t.quality.min_principal_stretch},
-            {"max_speed", t.quality.max_speed},
-            {"min_obstacle_distance", distances},
-            {"lifts", lifts}}},
-          {"remesh",
-           {{"passes", r.passes},
-            {"rollbacks", r.rollbacks},
-            {"rollback_reasons", r.rollback_reasons},
-            {"splits", r.splits},
-            {"flips", r.flips},
-            {"collapses", r.collapses},
-            {"refusals", r.refusals},
-            {"seconds_remesh", r.seconds_remesh},
-            {"seconds_rebuild", r.seconds_rebuild},
-            {"max_energy_jump", r.max_energy_jump},
-            {"max_energy_jump_relative", r.max_energy_jump_relative}}},
-          {"energy_min", finite_or_null(t.energy_min)},
-          {"energy_max", finite_or_null(t.energy_max)}};
+json step_stats_json(const StepStats& s) {
+  return {{"substeps", s.substeps},
+          {"failed_solves", s.failed_solves},
+          {"projected_hessians", s.projected_hessians},
+          {"exact_skipped", s.exact_skipped},
+          {"newton_iterations", s.newton_iterations},
+          {"line_search_evaluations", s.line_search_evaluations},
+          {"extrapolations", s.extrapolations},
+          {"reused_factorizations", s.reused_factorizations},
+          {"following_iterations", s.following_iterations},
+          {"seconds_assembly", s.seconds_assembly},
+          {"seconds_solve", s.seconds_solve},
+          {"seconds_line_search", s.seconds_line_search},
+          {"residual", s.residual}};
 }
 
-RunTally tally_from_json(const json& j) {
-  RunTally t;
-  t.wall_seconds = j.at("wall_seconds").get<double>();
-  const json& s = j.at("totals");
-  StepStats& o = t.totals;
+StepStats step_stats_from_json(const json& s) {
+  StepStats o;
   o.substeps = s.at("substeps").get<int>();
   o.failed_solves = s.at("failed_solves").get<int>();
   o.projected_hessians = s.at("projected_hessians").get<int>();
@@ -192,29 +69,49 @@ RunTally tally_from_json(const json& j) {
   o.seconds_solve = s.at("seconds_solve").get<double>();
   o.seconds_line_search = s.at("seconds_line_search").get<double>();
   o.residual = s.at("residual").get<double>();
-  t.pattern_changes = j.at("pattern_changes").get<long>();
-  const json& m = j.at("sheet");
-  t.sheet.vertices_start = m.at("vertices_start").get<int>();
-  t.sheet.faces_start = m.at("faces_start").get<int>();
-  t.sheet.vertices_max = m.at("vertices_max").get<int>();
-  t.sheet.faces_max = m.at("faces_max").get<int>();
-  const json& c = j.at("contact");
-  t.terms.contact.seconds = c.at("seconds").get<double>();
-  t.terms.contact.max_friction_points = c.at("max_friction_points").get<int>();
-  t.terms.contact.max_normal_force = c.at("max_normal_force").get<double>();
-  const json& sc = j.at("self_contact");
-  t.terms.self_contact.seconds = sc.at("seconds").get<double>();
-  t.terms.self_contact.max_active_pairs = sc.at("max_active_pairs").get<int>();
-  t.terms.self_contact.pattern_changes = sc.at("pattern_changes").get<int>();
-  const json& q = j.at("quality");
-  t.quality.max_principal_stretch = q.at("max_principal_stretch").get<double>();
-  t.quality.min_principal_stretch = q.at("min_principal_stretch").get<double>();
-  t.quality.max_speed = q.at("max_speed").get<double>();
-  for (const json& d : q.at("min_obstacle_distance")) t.quality.min_obstacle_distance.push_back(number_or(d, INF));
-  for (const json& l : q.at("lifts"))
-    t.quality.lifts.push_back({l.at("obstacle").get<int>(), l.at("max_load").get<double>(), l.at("max_rise").get<double>()});
-  const json& r = j.at("remesh");
-  RemeshTotals& x = t.remesh;
+  return o;
+}
+
+json contact_json(const ContactStatistics& c) {
+  return {{"seconds", c.seconds}, {"max_friction_points", c.max_friction_points}, {"max_normal_force", c.max_normal_force}};
+}
+
+ContactStatistics contact_from_json(const json& c) {
+  ContactStatistics o;
+  o.seconds = c.at("seconds").get<double>();
+  o.max_friction_points = c.at("max_friction_points").get<int>();
+  o.max_normal_force = c.at("max_normal_force").get<double>();
+  return o;
+}
+
+json self_contact_json(const SelfContactStatistics& c) {
+  return {{"seconds", c.seconds}, {"max_active_pairs", c.max_active_pairs}, {"pattern_changes", c.pattern_changes}};
+}
+
+SelfContactStatistics self_contact_from_json(const json& c) {
+  SelfContactStatistics o;
+  o.seconds = c.at("seconds").get<double>();
+  o.max_active_pairs = c.at("max_active_pairs").get<int>();
+  o.pattern_changes = c.at("pattern_changes").get<int>();
+  return o;
+}
+
+json remesh_json(const RemeshTotals& r) {
+  return {{"passes", r.passes},
+          {"rollbacks", r.rollbacks},
+          {"rollback_reasons", r.rollback_reasons},
+          {"splits", r.splits},
+          {"flips", r.flips},
+          {"collapses", r.collapses},
+          {"refusals", r.refusals},
+          {"seconds_remesh", r.seconds_remesh},
+          {"seconds_rebuild", r.seconds_rebuild},
+          {"max_energy_jump", r.max_energy_jump},
+          {"max_energy_jump_relative", r.max_energy_jump_relative}};
+}
+
+RemeshTotals remesh_from_json(const json& r) {
+  RemeshTotals x;
   x.passes = r.at("passes").get<int>();
   x.rollbacks = r.at("rollbacks").get<int>();
   x.rollback_reasons = r.at("rollback_reasons").get<std::map<std::string, int>>();
@@ -226,6 +123,111 @@ RunTally tally_from_json(const json& j) {
   x.seconds_rebuild = r.at("seconds_rebuild").get<double>();
   x.max_energy_jump = r.at("max_energy_jump").get<double>();
   x.max_energy_jump_relative = r.at("max_energy_jump_relative").get<double>();
+  return x;
+}
+
+json lifts_json(const std::vector<RunQuality::LiftExtremes>& lifts) {
+  json a = json::array();
+  for (const auto& l : lifts) a.push_back({{"obstacle", l.obstacle}, {"max_load", l.max_load}, {"max_rise", l.max_rise}});
+  return a;
+}
+
+/// The running extremes of RunQuality (not the figures measured at the end).
+json quality_extremes_json(const RunQuality& q) {
+  json distances = json::array();
+  for (double d : q.min_obstacle_distance) distances.push_back(finite_or_null(d));
+  return {{"max_principal_stretch", q.max_principal_stretch},
+          {"min_principal_stretch", q.min_principal_stretch},
+          {"max_speed", q.max_speed},
+          {"min_obstacle_distance", distances},
+          {"lifts", lifts_json(q.lifts)}};
+}
+
+RunQuality quality_extremes_from_json(const json& q) {
+  RunQuality o;
+  o.max_principal_stretch = q.at("max_principal_stretch").get<double>();
+  o.min_principal_stretch = q.at("min_principal_stretch").get<double>();
+  o.max_speed = q.at("max_speed").get<double>();
+  for (const json& d : q.at("min_obstacle_distance")) o.min_obstacle_distance.push_back(number_or(d, INF));
+  for (const json& l : q.at("lifts"))
+    o.lifts.push_back({l.at("obstacle").get<int>(), l.at("max_load").get<double>(), l.at("max_rise").get<double>()});
+  return o;
+}
+
+}  // namespace
+
+json meta_json(const Scene& scene, const RunResult& r, const json& extra) {
+  json m;
+  m["program"] = "papersim";
+  m["version"] = version();
+  if (const std::string k = blas_kernels(); !k.empty()) m["blas_kernels"] = k;
+  m["scene"] = scene_to_json(scene);
+  if (!scene.scenario.empty()) m["scenario"] = scene.scenario;
+  if (scene.seed >= 0) m["seed"] = scene.seed;
+  const MeshCounts& c = r.sheet;
+  m["sheet"] = {{"width", scene.sheet.width},      {"height", scene.sheet.height},
+                {"vertices", c.vertices},          {"faces", c.faces},
+                {"vertices_start", c.vertices_start}, {"faces_start", c.faces_start},
+                {"vertices_max", c.vertices_max},  {"faces_max", c.faces_max}};
+  json& run = m["run"] = step_stats_json(r.totals);
+  run["wall_seconds"] = r.wall_seconds;
+  run["steps"] = r.steps;
+  run["time_step"] = r.time_step;
+  run["pattern_changes"] = r.pattern_changes;
+  if (r.contact) run["contact"] = contact_json(*r.contact);
+  if (r.self_contact) run["self_contact"] = self_contact_json(*r.self_contact);
+  if (r.remesh) {
+    const RemeshTotals& rm = *r.remesh;
+    run["remesh"] = remesh_json(rm);
+    run["remesh"]["share_of_wall_time"] =
+        r.wall_seconds > 0 ? (rm.seconds_remesh + rm.seconds_rebuild) / r.wall_seconds : 0.0;
+  }
+  const RunQuality& q = r.quality;
+  m["quality"] = {{"max_principal_stretch", q.max_principal_stretch},
+                  {"min_principal_stretch", q.min_principal_stretch},
+                  {"strain_limit", q.strain_limit},
+                  {"max_speed", q.max_speed},
+                  {"min_obstacle_distance", q.min_obstacle_distance},
+                  {"self_intersections", q.self_intersections}};
+  if (q.max_handle_error) m["quality"]["max_handle_error"] = *q.max_handle_error;
+  if (!q.lifts.empty()) m["quality"]["lifts"] = lifts_json(q.lifts);
+  const EnergyBreakdown& e = r.energy;
+  m["energy"] = {{"stretch", e.stretch}, {"bend", e.bend}, {"gravity", e.gravity}, {"kinetic", e.kinetic}};
+  for (auto it = extra.begin(); it != extra.end(); ++it) m[it.key()] = it.value();
+  return m;
+}
+
+json tally_to_json(const RunTally& t) {
+  return {{"wall_seconds", t.wall_seconds},
+          {"totals", step_stats_json(t.totals)},
+          {"pattern_changes", t.pattern_changes},
+          {"sheet",
+           {{"vertices_start", t.sheet.vertices_start},
+            {"faces_start", t.sheet.faces_start},
+            {"vertices_max", t.sheet.vertices_max},
+            {"faces_max", t.sheet.faces_max}}},
+          {"contact", contact_json(t.terms.contact)},
+          {"self_contact", self_contact_json(t.terms.self_contact)},
+          {"quality", quality_extremes_json(t.quality)},
+          {"remesh", remesh_json(t.remesh)},
+          {"energy_min", finite_or_null(t.energy_min)},
+          {"energy_max", finite_or_null(t.energy_max)}};
+}
+
+RunTally tally_from_json(const json& j) {
+  RunTally t;
+  t.wall_seconds = j.at("wall_seconds").get<double>();
+  t.totals = step_stats_from_json(j.at("totals"));
+  t.pattern_changes = j.at("pattern_changes").get<long>();
+  const json& m = j.at("sheet");
+  t.sheet.vertices_start = m.at("vertices_start").get<int>();
+  t.sheet.faces_start = m.at("faces_start").get<int>();
+  t.sheet.vertices_max = m.at("vertices_max").get<int>();
+  t.sheet.faces_max = m.at("faces_max").get<int>();
+  t.terms.contact = contact_from_json(j.at("contact"));
+  t.terms.self_contact = self_contact_from_json(j.at("self_contact"));
+  t.quality = quality_extremes_from_json(j.at("quality"));
+  t.remesh = remesh_from_json(j.at("remesh"));
   t.energy_min = number_or(j.at("energy_min"), INF);
   t.energy_max = number_or(j.at("energy_max"), -INF);
   return t;
