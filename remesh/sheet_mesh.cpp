@@ -133,6 +133,13 @@ void SheetMesh::set_damage(const Eigen::VectorXd& d) {
   for (auto f : m_mesh.faces()) m_mesh.property(m_damage, f) = d(f.idx());
 }
 
+SheetMesh SheetMesh::rebuilt() const {
+  SheetMesh m(material_coords(), faces());
+  m.set_plastic_curvature(plastic_curvature());
+  m.set_damage(damage());
+  return m;
+}
+
 Eigen::Vector4d SheetMesh::material_bounds() const {
   const Eigen::MatrixX2d m = material_coords();
   return {m.col(0).minCoeff(), m.col(1).minCoeff(), m.col(0).maxCoeff(), m.col(1).maxCoeff()};

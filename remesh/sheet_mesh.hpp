@@ -49,6 +49,13 @@ class SheetMesh {
   Eigen::VectorXd damage() const;
   void set_damage(const Eigen::VectorXd& d);
 
+  /// The same sheet built afresh from its arrays (material coordinates, faces, plastic state),
+  /// as reading it back from a file builds it: vertices and faces keep their indices, edges are
+  /// numbered in the order the faces first meet them. Sums over edges then run in the same
+  /// order in a mesh that was remeshed and in its copy read from a checkpoint.
+  /// @throw MeshError as the constructor does
+  SheetMesh rebuilt() const;
+
   /// Axis-aligned extent of the material coordinates: (min x, min y, max x, max y) [m].
   Eigen::Vector4d material_bounds() const;
 

@@ -145,3 +145,51 @@ TEST(SheetGenerator, RotatedLatticeKeepsRequestedLinesOfVertices) {
   o.lines_x = {0.07};
   EXPECT_THROW(make_rotated_lattice(o), MeshError);
 }
+
+namespace {
+/// An edge across a cell of the lattice (its ends differ in both material coordinates): the
+/// two triangles beside it make a convex quadrilateral, so flipping it leaves valid faces.
+bool diagonal(const SheetMesh& m, TriMesh::EdgeHandle e) {
+  if (m.mesh().is_boundary(e)) return false;
+  const auto h = m.mesh().halfedge_handle(e, 0);
+  const Eigen::Vector2d a = m.material_coord(m.mesh().from_vertex_handle(h).idx());
+  const Eigen::Vector2d b = m.material_coord(m.mesh().to_vertex_handle(h).idx());
+  const Eigen::Vector2d d = (b - a).cwiseAbs();
+  return d.x() > 0.03 && d.y() > 0.03;
+}
+}  // namespace
+
+// rebuilt() numbers edges as building from the arrays does (as reading a checkpoint does), and
+// keeps vertices, faces and plastic state where they were, after edits that renumber nothing.
+TEST(SheetMesh, RebuiltIsTheMeshReadBackFromItsArrays) {
+  RectangleOptions o;
+  o.nx = 5;
+  o.ny = 6;
+  o.triangulation = Triangulation::random;
+  o.seed = 2;
+  o.jitter = 0.2;
+  SheetMesh m = make_rectangle(o);
+  Eigen::MatrixX3d k = Eigen::MatrixX3d::Random(m.num_faces(), 3);
+  Eigen::VectorXd d = Eigen::VectorXd::LinSpaced(m.num_faces(), 0.0, 1.0);
+  m.set_plastic_curvature(k);
+  m.set_damage(d);
+  // Flip a few interior edges: connectivity changes, the edge numbering stays the editor's.
+  int flips = 0;
+  for (auto e : m.mesh().edges())
+    if (flips < 4 && diagonal(m, e) && m.mesh().is_flip_ok(e)) {
+      m.mesh().flip(e);
+      ++flips;
+    }
+  ASSERT_EQ(flips, 4);
+  const SheetMesh r = m.rebuilt();
+  EXPECT_EQ(r.material_coords(), m.material_coords());
+  EXPECT_EQ(r.plastic_curvature(), k);
+  EXPECT_EQ(r.damage(), d);
+  EXPECT_EQ(interior_hinges(r).faces.rows(), interior_hinges(m).faces.rows());
+  // The same faces (each may start at another corner) and, read back, the same edge numbering.
+  const SheetMesh read(r.material_coords(), r.faces());
+  EXPECT_EQ(read.faces(), r.faces());
+  EXPECT_EQ(interior_hinges(read).vertices, interior_hinges(r).vertices);
+  EXPECT_EQ(r.rebuilt().faces(), r.faces());
+  EXPECT_NE(interior_hinges(m).vertices, interior_hinges(r).vertices);  // the flips' order is gone
+}
