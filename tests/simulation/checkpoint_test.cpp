@@ -199,7 +199,15 @@ TEST(Checkpoint, ResumesAtAnotherTimeStepThatDividesItsTime) {
   const RunResult whole = run_scene(scene, saving_to(dir));
   Scene finer = scene;
   finer.time_step = 0.001;
-  const RunResult continued = run_scene(finer, resuming_from(dir));
+  RunOptions resume = resuming_from(dir);
+  const fs::path out = fresh_dir("other_step_out");
+  resume.out_dir = out.string();
+  const RunResult continued = run_scene(finer, resume);
+  // meta.json names the changed key, and only it.
+  const nlohmann::json resumed = nlohmann::json::parse(std::ifstream(out / "meta.json")).at("resumed");
+  EXPECT_EQ(resumed.at("scene_changes"), nlohmann::json::array({"/time_step"}));
+  EXPECT_EQ(resumed.at("step"), 40);
+  fs::remove_all(out);
   EXPECT_EQ(continued.steps, 60);
   EXPECT_NEAR(continued.state.time, 0.06, 1e-12);
   EXPECT_EQ(continued.totals.substeps, 20 + 20);  // the checkpoint's 20 of 2 ms, then 20 of 1 ms
