@@ -56,13 +56,6 @@ double seconds_since(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
 }
 
-std::string safe_name(const std::string& key) {
-  std::string s = key;
-  for (char& c : s)
-    if (c == '/' || c == ' ') c = '_';
-  return s;
-}
-
 /// An flock on ROOT/.locks/<task>.lock; released when every copy of the descriptor is closed
 /// (the child running the task holds a copy, so a lock outlives a killed batch only as long
 /// as its child).
@@ -546,5 +539,12 @@ void write_file_atomically(const fs::path& path, const std::string& text) {
 }
 
 fs::path self_executable() { return fs::read_symlink("/proc/self/exe"); }
+
+std::string safe_name(const std::string& key) {
+  std::string s = key;
+  for (char& c : s)
+    if (c == '/' || c == ' ') c = '_';
+  return s;
+}
 
 }  // namespace papersim::batch

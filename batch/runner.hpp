@@ -121,6 +121,9 @@ std::vector<nlohmann::json> read_json_lines(const std::filesystem::path& path);
 /// @throw std::runtime_error naming the file when it cannot be written
 void write_file_atomically(const std::filesystem::path& path, const std::string& text);
 
+/// A task key as one file name ('/' and ' ' become '_'), as in ROOT/.locks/<name>.lock.
+std::string safe_name(const std::string& key);
+
 /// The path of the running executable (/proc/self/exe).
 std::filesystem::path self_executable();
 

@@ -81,6 +81,14 @@ double number_or(const json& j, const char* key, double fallback) {
   return j.contains(key) && j[key].is_number() ? j[key].get<double>() : fallback;
 }
 
+/// The whole file, or "" when it cannot be read.
+std::string read_text_file(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return in ? text.str() : std::string();
+}
+
 json read_json_file(const fs::path& path) {
   std::ifstream in(path);
   if (!in) throw std::runtime_error("cannot read '" + path.string() + "'");
@@ -230,7 +238,34 @@ json mesh_manifest_fields(const fs::path& dir) {
   return row;
 }
 
-batch::BatchSpec mesh_batch_spec(const fs::path& root, const fs::path& papersim, bool with_metrics) {
+fs::path checkpoint_folder(const fs::path& root, const batch::Task& task) {
+  return root / ".checkpoints" / batch::safe_name(task.key);
+}
+
+namespace {
+
+/// The scene a checkpoint folder was started with (written by the batch beside the
+/// checkpoint), compared as text with the sample's scene.json.
+constexpr const char* CHECKPOINT_SCENE = "batch_scene.json";
+
+/// Whether `cdir` holds a checkpoint of this very scene.json; removes the folder's contents
+/// otherwise, so the run starts over and saves its own.
+bool usable_checkpoint(const fs::path& cdir, const fs::path& scene_file) {
+  const bool usable = fs::exists(cdir / "checkpoint.json") && fs::exists(cdir / CHECKPOINT_SCENE) &&
+                      read_text_file(cdir / CHECKPOINT_SCENE) == read_text_file(scene_file);
+  if (!usable) {
+    std::error_code ec;
+    fs::remove_all(cdir, ec);
+    fs::create_directories(cdir);
+    batch::write_file_atomically(cdir / CHECKPOINT_SCENE, read_text_file(scene_file));
+  }
+  return usable;
+}
+
+}  // namespace
+
+batch::BatchSpec mesh_batch_spec(const fs::path& root, const fs::path& papersim, bool with_metrics,
+                                 int checkpoint_every) {
   batch::BatchSpec spec;
   spec.root = root;
   spec.prepare = [](const batch::Task& t, const fs::path& stage) {
@@ -242,16 +277,22 @@ batch::BatchSpec mesh_batch_spec(const fs::path& root, const fs::path& papersim,
     text << std::setw(2) << scene_to_json(scene) << '\n';
     batch::write_file_atomically(stage / "out" / "scene.json", text.str());
   };
-  spec.commands = [papersim, with_metrics](const batch::Task&, const fs::path& stage) {
+  spec.commands = [papersim, with_metrics, checkpoint_every, root](const batch::Task& t, const fs::path& stage) {
     const fs::path out = stage / "out";
     std::vector<batch::Command> c{{{papersim.string(), "run", (out / "scene.json").string(), "--out",
                                     out.string(), "--quiet"}, {}}};
+    if (checkpoint_every > 0) {
+      const fs::path cdir = checkpoint_folder(root, t);
+      std::vector<std::string>& run = c[0].argv;
+      if (usable_checkpoint(cdir, out / "scene.json")) run.insert(run.end(), {"--resume", cdir.string()});
+      run.insert(run.end(), {"--checkpoint", cdir.string(), "--checkpoint-every", std::to_string(checkpoint_every)});
+    }
     if (with_metrics)
       c.push_back({{papersim.string(), "metrics", (out / "sheet.ply").string(), "--json"},
                    stage / "metrics.json"});
     return c;
   };
-  spec.finalize = [with_metrics](const batch::Task&, const batch::Attempt& a) {
+  spec.finalize = [with_metrics, checkpoint_every, root](const batch::Task& t, const batch::Attempt& a) {
     const fs::path out = a.stage / "out";
     for (const char* f : {"scene.json", "sheet.obj", "sheet.ply", "meta.json"})
       if (!fs::exists(out / f)) throw std::runtime_error(std::string("missing ") + f);
@@ -262,6 +303,10 @@ batch::BatchSpec mesh_batch_spec(const fs::path& root, const fs::path& papersim,
       std::ostringstream text;
       text << std::setw(2) << m << '\n';
       batch::write_file_atomically(out / "metrics.json", text.str());
+    }
+    if (checkpoint_every > 0) {  // the sample is whole: its checkpoint is not needed again
+      std::error_code ec;
+      fs::remove_all(checkpoint_folder(root, t), ec);
     }
     return out;
   };

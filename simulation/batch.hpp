@@ -71,8 +71,19 @@ std::vector<batch::Task> mesh_tasks(const std::vector<SampleDraw>& draws);
 /// `papersim metrics --json` into metrics.json when with_metrics), the manifest row carries
 /// the run and quality figures of meta.json and metrics.json.
 /// @param papersim the papersim executable the children run
+/// @param checkpoint_every > 0: each run saves a checkpoint every this many steps in
+///        ROOT/.checkpoints/<task>/ (checkpoint_folder), and an attempt of a sample whose
+///        checkpoint is there continues from it when the sample's scene.json is the one the
+///        checkpoint was started with (else the checkpoint is discarded and the run starts
+///        over); the folder is removed once the sample's outputs passed their checks. A run
+///        continued so ends in the uninterrupted run's state to the bit (remeshed runs too), so
+///        the sample's files equal an uninterrupted one's but for meta.json's wall times and its
+///        `resumed` record.
 batch::BatchSpec mesh_batch_spec(const std::filesystem::path& root, const std::filesystem::path& papersim,
-                                 bool with_metrics);
+                                 bool with_metrics, int checkpoint_every = 0);
+
+/// ROOT/.checkpoints/<task key as a file name>/: where a mesh batch keeps a sample's checkpoint.
+std::filesystem::path checkpoint_folder(const std::filesystem::path& root, const batch::Task& task);
 
 /// The manifest fields of a finished sample folder: vertices, Newton iterations, steps,
 /// simulation wall time, largest stretch, closest obstacle distance, self-intersections and,

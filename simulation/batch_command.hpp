@@ -19,6 +19,7 @@ struct BatchCommand {
   CLI::App* stats = nullptr;
   std::string out, scenarios, mix, seeds;
   std::vector<std::string> set;
+  int checkpoint_every = 0;  ///< steps between a sample's checkpoints (0: none)
   batch::BatchCliOptions common;
   std::string dataset, plots;
 };
