@@ -11,6 +11,7 @@
 #include "batch/cli.hpp"
 #include "simulation/errors.hpp"
 #include "simulation/scenario.hpp"
+#include "simulation/simulate.hpp"
 
 namespace papersim::simulation {
 namespace fs = std::filesystem;
@@ -248,11 +249,19 @@ namespace {
 /// checkpoint), compared as text with the sample's scene.json.
 constexpr const char* CHECKPOINT_SCENE = "batch_scene.json";
 
-/// Whether `cdir` holds a checkpoint of this very scene.json; removes the folder's contents
-/// otherwise, so the run starts over and saves its own.
+/// Whether `cdir` holds a readable checkpoint of this very scene.json; removes the folder's
+/// contents otherwise (another scene, or a checkpoint a crash left unreadable), so the run
+/// starts over and saves its own.
 bool usable_checkpoint(const fs::path& cdir, const fs::path& scene_file) {
-  const bool usable = fs::exists(cdir / "checkpoint.json") && fs::exists(cdir / CHECKPOINT_SCENE) &&
-                      read_text_file(cdir / CHECKPOINT_SCENE) == read_text_file(scene_file);
+  bool usable = fs::exists(cdir / "checkpoint.json") && fs::exists(cdir / CHECKPOINT_SCENE) &&
+                read_text_file(cdir / CHECKPOINT_SCENE) == read_text_file(scene_file);
+  if (usable) {
+    try {
+      load_checkpoint(cdir.string());  // the sheet file read whole (milliseconds)
+    } catch (const std::exception&) {
+      usable = false;
+    }
+  }
   if (!usable) {
     std::error_code ec;
     fs::remove_all(cdir, ec);

@@ -208,7 +208,7 @@ void kill_after_a_checkpoint(const std::vector<std::string>& argv, const fs::pat
 
 // --checkpoint-every: a sample killed mid-run continues from its checkpoint when the batch runs
 // again, and ends with the uninterrupted sample's mesh to the byte (the run remeshes); a
-// checkpoint of another scene is not used.
+// checkpoint of another scene, or one cut short, is not used.
 TEST(PapersimBatch, AKilledSampleContinuesFromItsCheckpointToTheSameMesh) {
   const fs::path ref = work_dir() / "ckpt_ref", d = work_dir() / "ckpt";
   ASSERT_EQ(run(fold_batch_argv(ref, {}), work_dir() / "ckpt_ref.log"), 0) << pt::read_text(work_dir() / "ckpt_ref.log");
@@ -244,6 +244,16 @@ TEST(PapersimBatch, AKilledSampleContinuesFromItsCheckpointToTheSameMesh) {
   ASSERT_EQ(run(fold_batch_argv(e, other), work_dir() / "ckpt_other.log"), 0) << pt::read_text(work_dir() / "ckpt_other.log");
   EXPECT_FALSE(json::parse(pt::read_text(e / sample / "meta.json")).contains("resumed"));
   EXPECT_FALSE(fs::exists(edir));
+
+  // A checkpoint whose sheet file a crash cut short is not used either: the sample starts over.
+  const fs::path g = work_dir() / "ckpt_cut";
+  const fs::path gdir = g / ".checkpoints" / "meshes_fold_0_3";
+  kill_after_a_checkpoint(fold_batch_argv(g, every5), gdir, work_dir() / "ckpt_kill3.log");
+  const std::string ply = json::parse(pt::read_text(gdir / "checkpoint.json")).at("sheet").get<std::string>();
+  fs::resize_file(gdir / ply, fs::file_size(gdir / ply) / 2);
+  ASSERT_EQ(run(fold_batch_argv(g, every5), work_dir() / "ckpt_cut.log"), 0) << pt::read_text(work_dir() / "ckpt_cut.log");
+  EXPECT_FALSE(json::parse(pt::read_text(g / sample / "meta.json")).contains("resumed"));
+  EXPECT_EQ(pt::read_text(g / sample / "sheet.ply"), pt::read_text(ref / sample / "sheet.ply"));
 }
 
 TEST(PapersimBatch, BadOptionsAreNamedAndNothingRuns) {
