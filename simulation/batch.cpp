@@ -156,7 +156,9 @@ Scene apply_overrides(const Scene& scene, const json& overrides, const std::stri
 }
 
 std::vector<SampleDraw> draw_samples(const MeshBatchSelection& sel) {
-  if (sel.last_seed < sel.first_seed) throw SceneError("--seeds: the last seed is below the first");
+  if (sel.seeds.empty()) throw SceneError("--seeds: no seed given");
+  for (const auto& [first, last] : sel.seeds)
+    if (last < first) throw SceneError("--seeds: the last seed is below the first");
   if (sel.scenarios.empty() == sel.mix_path.empty())
     throw SceneError("give either --scenarios or --mix");
   Mix mix;
@@ -178,7 +180,7 @@ std::vector<SampleDraw> draw_samples(const MeshBatchSelection& sel) {
   }
   std::vector<SampleDraw> draws;
   std::set<std::size_t> checked;
-  for (std::uint64_t seed = sel.first_seed;; ++seed) {
+  const auto draw_seed = [&](std::uint64_t seed) {
     std::vector<std::size_t> picks;
     if (sel.mix_path.empty()) {
       for (std::size_t i = 0; i < mix.scenarios.size(); ++i) picks.push_back(i);
@@ -192,8 +194,12 @@ std::vector<SampleDraw> draw_samples(const MeshBatchSelection& sel) {
                         sel.mix_path.empty() ? "--set" : sel.mix_path + " / --set");
       draws.push_back({mix.scenarios[i], seed, merged[i]});
     }
-    if (seed == sel.last_seed) break;
-  }
+  };
+  for (const auto& [first, last] : sel.seeds)
+    for (std::uint64_t seed = first;; ++seed) {  // to `last` inclusive, which may be the largest seed
+      draw_seed(seed);
+      if (seed == last) break;
+    }
   return draws;
 }
 
@@ -343,6 +349,26 @@ std::pair<std::uint64_t, std::uint64_t> parse_seed_range(const std::string& text
   const std::uint64_t first = std::stoull(a), last = std::stoull(b);
   if (last < first) throw SceneError("--seeds '" + text + "': the last seed is below the first");
   return {first, last};
+}
+
+std::vector<std::pair<std::uint64_t, std::uint64_t>> parse_seeds(const std::string& text) {
+  std::vector<std::pair<std::uint64_t, std::uint64_t>> ranges;
+  std::size_t start = 0;
+  while (true) {
+    const std::size_t comma = text.find(',', start);
+    const std::string part = text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+    try {
+      ranges.push_back(parse_seed_range(part));
+    } catch (const SceneError&) {
+      throw SceneError("--seeds '" + text + "': '" + part + "' is not A-B or A (non-negative integers, B >= A)");
+    }
+    for (std::size_t i = 0; i + 1 < ranges.size(); ++i)
+      if (ranges[i].first <= ranges.back().second && ranges.back().first <= ranges[i].second)
+        throw SceneError("--seeds '" + text + "': '" + part + "' overlaps an earlier part");
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  return ranges;
 }
 
 }  // namespace papersim::simulation

@@ -55,7 +55,8 @@ Scene apply_overrides(const Scene& scene, const nlohmann::json& overrides, const
 struct MeshBatchSelection {
   std::vector<std::string> scenarios;  ///< every scenario for every seed (when no mix)
   std::string mix_path;                ///< or one scenario per seed from this mix file
-  std::uint64_t first_seed = 0, last_seed = 0;  ///< inclusive
+  /// Inclusive seed ranges, drawn in this order (parse_seeds); none may overlap another.
+  std::vector<std::pair<std::uint64_t, std::uint64_t>> seeds;
   nlohmann::json overrides = nlohmann::json::object();  ///< --set, over the mix's
 };
 
@@ -94,5 +95,9 @@ nlohmann::json mesh_manifest_fields(const std::filesystem::path& sample_dir);
 /// Parse "A-B" or "A" into an inclusive seed range.
 /// @throw SceneError naming --seeds when the text is not of that form or B < A
 std::pair<std::uint64_t, std::uint64_t> parse_seed_range(const std::string& text);
+
+/// Parse a comma list of "A-B" or "A" (e.g. "3,7,12-13") into inclusive seed ranges, in order.
+/// @throw SceneError naming --seeds when a part is not of that form or two parts overlap
+std::vector<std::pair<std::uint64_t, std::uint64_t>> parse_seeds(const std::string& text);
 
 }  // namespace papersim::simulation

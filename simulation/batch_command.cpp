@@ -40,7 +40,7 @@ int run_mesh_batch(const BatchCommand& c, bool with_metrics, std::ostream& out, 
   MeshBatchSelection sel;
   sel.scenarios = split_commas(c.scenarios);
   sel.mix_path = c.mix;
-  std::tie(sel.first_seed, sel.last_seed) = parse_seed_range(c.seeds);
+  sel.seeds = parse_seeds(c.seeds);
   sel.overrides = parse_overrides(c.set);
   const std::vector<SampleDraw> draws = draw_samples(sel);  // checks every option first
   if (!c.common.shard.empty()) batch::parse_shard(c.common.shard, "--shard");
@@ -79,7 +79,7 @@ void add_batch_subcommands(CLI::App& app, BatchCommand& c) {
   c.batch->add_option("--scenarios", c.scenarios, "comma list of scenarios; every one for every seed ("
                       + [] { std::string s; for (const auto& n : scenario_names()) s += (s.empty() ? "" : ", ") + n; return s; }() + ")");
   c.batch->add_option("--mix", c.mix, "JSON mix file instead: {\"scenarios\": {NAME: WEIGHT or {\"weight\": W, \"set\": {...}}}, \"set\": {...}}; each seed draws one scenario");
-  c.batch->add_option("--seeds", c.seeds, "seed range A-B (inclusive) or one seed A")->required();
+  c.batch->add_option("--seeds", c.seeds, "seeds: a range A-B (inclusive), one seed A, or a comma list of both (e.g. 3,7,12-13)")->required();
   c.batch->add_option("--set", c.set, "scene override KEY=VALUE after the draw (dotted scene keys, e.g. duration=0.2 sheet.edge_length=0.02); repeatable");
   c.batch->add_option("--checkpoint-every", c.checkpoint_every,
                       "save each sample's state every K steps in DATASET/.checkpoints/ (0: never); a sample "

@@ -77,7 +77,7 @@ TEST(Mix, DrawsScenariosInProportionToTheirWeights) {
 TEST(Selection, ProductOfScenariosAndSeedsWithFoldersPerSeed) {
   ps::MeshBatchSelection sel;
   sel.scenarios = {"pull", "fall-gable"};
-  std::tie(sel.first_seed, sel.last_seed) = ps::parse_seed_range("998-1001");
+  sel.seeds = {ps::parse_seed_range("998-1001")};
   const auto draws = ps::draw_samples(sel);
   ASSERT_EQ(draws.size(), 8u);
   EXPECT_EQ(draws[1].scenario, "fall-gable");
@@ -87,6 +87,27 @@ TEST(Selection, ProductOfScenariosAndSeedsWithFoldersPerSeed) {
   EXPECT_EQ(tasks[7].final_dir, fs::path("meshes/fall-gable/1/1001"));
   for (const char* bad : {"5-1", "a-3", "-3", "1-", ""})
     EXPECT_NE(scene_error([&] { ps::parse_seed_range(bad); }).find("--seeds"), std::string::npos) << bad;
+}
+
+TEST(Selection, SeedListsDrawTheirSeedsInOrderAndRefuseOverlaps) {
+  using Ranges = std::vector<std::pair<std::uint64_t, std::uint64_t>>;
+  EXPECT_EQ(ps::parse_seeds("3,7,12-13"), (Ranges{{3, 3}, {7, 7}, {12, 13}}));
+  EXPECT_EQ(ps::parse_seeds("0-999999"), (Ranges{{0, 999999}}));
+  ps::MeshBatchSelection sel;
+  sel.scenarios = {"pull"};
+  sel.seeds = ps::parse_seeds("12-13,3");
+  const auto draws = ps::draw_samples(sel);
+  ASSERT_EQ(draws.size(), 3u);
+  EXPECT_EQ(draws[0].seed, 12u);
+  EXPECT_EQ(draws[1].seed, 13u);
+  EXPECT_EQ(draws[2].seed, 3u);
+  // Each refusal names the option and the part at fault.
+  for (const auto& [bad, part] : std::vector<std::pair<std::string, std::string>>{
+           {"3,,7", "''"}, {"3,7-5", "'7-5'"}, {"1-10,5", "'5'"}, {"4,2-4", "'2-4'"}, {"3,x", "'x'"}}) {
+    const std::string e = scene_error([&] { ps::parse_seeds(bad); });
+    EXPECT_NE(e.find("--seeds"), std::string::npos) << bad << ": " << e;
+    EXPECT_NE(e.find(part), std::string::npos) << bad << ": " << e;
+  }
 }
 
 TEST(DatasetStats, CountsLatestStatePerSampleAndQuantiles) {
