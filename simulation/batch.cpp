@@ -307,7 +307,7 @@ batch::BatchSpec mesh_batch_spec(const fs::path& root, const fs::path& papersim,
                    stage / "metrics.json"});
     return c;
   };
-  spec.finalize = [with_metrics, checkpoint_every, root](const batch::Task& t, const batch::Attempt& a) {
+  spec.finalize = [with_metrics, root](const batch::Task& t, const batch::Attempt& a) {
     const fs::path out = a.stage / "out";
     for (const char* f : {"scene.json", "sheet.obj", "sheet.ply", "meta.json"})
       if (!fs::exists(out / f)) throw std::runtime_error(std::string("missing ") + f);
@@ -319,10 +319,10 @@ batch::BatchSpec mesh_batch_spec(const fs::path& root, const fs::path& papersim,
       text << std::setw(2) << m << '\n';
       batch::write_file_atomically(out / "metrics.json", text.str());
     }
-    if (checkpoint_every > 0) {  // the sample is whole: its checkpoint is not needed again
-      std::error_code ec;
-      fs::remove_all(checkpoint_folder(root, t), ec);
-    }
+    // The sample is whole: its checkpoint (also one left by an earlier run with checkpoints,
+    // when this one has none) is not needed again.
+    std::error_code ec;
+    fs::remove_all(checkpoint_folder(root, t), ec);
     return out;
   };
   spec.manifest_row = [](const batch::Task&, const fs::path& dir, double wall) {

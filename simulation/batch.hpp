@@ -76,7 +76,8 @@ std::vector<batch::Task> mesh_tasks(const std::vector<SampleDraw>& draws);
 ///        ROOT/.checkpoints/<task>/ (checkpoint_folder), and an attempt of a sample whose
 ///        checkpoint is there continues from it when the sample's scene.json is the one the
 ///        checkpoint was started with (else the checkpoint is discarded and the run starts
-///        over); the folder is removed once the sample's outputs passed their checks. A run
+///        over); the folder is removed once the sample's outputs passed their checks (with or
+///        without checkpoint_every, so one an earlier run left does not stay). A run
 ///        continued so ends in the uninterrupted run's state to the bit (remeshed runs too), so
 ///        the sample's files equal an uninterrupted one's but for meta.json's wall times and its
 ///        `resumed` record.
