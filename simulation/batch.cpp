@@ -195,8 +195,9 @@ std::vector<SampleDraw> draw_samples(const MeshBatchSelection& sel) {
       draws.push_back({mix.scenarios[i], seed, merged[i]});
     }
   };
+  // Each range to `last` inclusive, which may be the largest seed.
   for (const auto& [first, last] : sel.seeds)
-    for (std::uint64_t seed = first;; ++seed) {  // to `last` inclusive, which may be the largest seed
+    for (std::uint64_t seed = first;; ++seed) {
       draw_seed(seed);
       if (seed == last) break;
     }
@@ -292,15 +293,18 @@ batch::BatchSpec mesh_batch_spec(const fs::path& root, const fs::path& papersim,
     text << std::setw(2) << scene_to_json(scene) << '\n';
     batch::write_file_atomically(stage / "out" / "scene.json", text.str());
   };
-  spec.commands = [papersim, with_metrics, checkpoint_every, root](const batch::Task& t, const fs::path& stage) {
+  spec.commands = [papersim, with_metrics, checkpoint_every, root](const batch::Task& t,
+                                                                   const fs::path& stage) {
     const fs::path out = stage / "out";
     std::vector<batch::Command> c{{{papersim.string(), "run", (out / "scene.json").string(), "--out",
                                     out.string(), "--quiet"}, {}}};
     if (checkpoint_every > 0) {
       const fs::path cdir = checkpoint_folder(root, t);
       std::vector<std::string>& run = c[0].argv;
-      if (usable_checkpoint(cdir, out / "scene.json")) run.insert(run.end(), {"--resume", cdir.string()});
-      run.insert(run.end(), {"--checkpoint", cdir.string(), "--checkpoint-every", std::to_string(checkpoint_every)});
+      if (usable_checkpoint(cdir, out / "scene.json"))
+        run.insert(run.end(), {"--resume", cdir.string()});
+      run.insert(run.end(), {"--checkpoint", cdir.string(), "--checkpoint-every",
+                             std::to_string(checkpoint_every)});
     }
     if (with_metrics)
       c.push_back({{papersim.string(), "metrics", (out / "sheet.ply").string(), "--json"},
@@ -356,11 +360,13 @@ std::vector<std::pair<std::uint64_t, std::uint64_t>> parse_seeds(const std::stri
   std::size_t start = 0;
   while (true) {
     const std::size_t comma = text.find(',', start);
-    const std::string part = text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+    const std::string part =
+        text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
     try {
       ranges.push_back(parse_seed_range(part));
     } catch (const SceneError&) {
-      throw SceneError("--seeds '" + text + "': '" + part + "' is not A-B or A (non-negative integers, B >= A)");
+      throw SceneError("--seeds '" + text + "': '" + part +
+                       "' is not A-B or A (non-negative integers, B >= A)");
     }
     for (std::size_t i = 0; i + 1 < ranges.size(); ++i)
       if (ranges[i].first <= ranges.back().second && ranges.back().first <= ranges[i].second)

@@ -81,8 +81,9 @@ std::vector<batch::Task> mesh_tasks(const std::vector<SampleDraw>& draws);
 ///        continued so ends in the uninterrupted run's state to the bit (remeshed runs too), so
 ///        the sample's files equal an uninterrupted one's but for meta.json's wall times and its
 ///        `resumed` record.
-batch::BatchSpec mesh_batch_spec(const std::filesystem::path& root, const std::filesystem::path& papersim,
-                                 bool with_metrics, int checkpoint_every = 0);
+batch::BatchSpec mesh_batch_spec(const std::filesystem::path& root,
+                                 const std::filesystem::path& papersim, bool with_metrics,
+                                 int checkpoint_every = 0);
 
 /// ROOT/.checkpoints/<task key as a file name>/: where a mesh batch keeps a sample's checkpoint.
 std::filesystem::path checkpoint_folder(const std::filesystem::path& root, const batch::Task& task);

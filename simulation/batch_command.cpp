@@ -30,7 +30,8 @@ std::vector<std::string> shard_command(const BatchCommand& c) {
   if (!c.scenarios.empty()) cmd.insert(cmd.end(), {"--scenarios", c.scenarios});
   if (!c.mix.empty()) cmd.insert(cmd.end(), {"--mix", fs::absolute(c.mix).string()});
   for (const auto& s : c.set) cmd.insert(cmd.end(), {"--set", s});
-  if (c.checkpoint_every > 0) cmd.insert(cmd.end(), {"--checkpoint-every", std::to_string(c.checkpoint_every)});
+  if (c.checkpoint_every > 0)
+    cmd.insert(cmd.end(), {"--checkpoint-every", std::to_string(c.checkpoint_every)});
   if (c.common.time_limit > 0) cmd.insert(cmd.end(), {"--time-limit", std::to_string(c.common.time_limit)});
   if (c.common.retry_failed) cmd.push_back("--retry-failed");
   return cmd;
@@ -51,7 +52,8 @@ int run_mesh_batch(const BatchCommand& c, bool with_metrics, std::ostream& out, 
         << "\na task that died: sbatch --array=I " << script.string() << "  (it resumes shard I)\n";
     return 0;
   }
-  const batch::BatchSpec spec = mesh_batch_spec(c.out, batch::self_executable(), with_metrics, c.checkpoint_every);
+  const batch::BatchSpec spec =
+      mesh_batch_spec(c.out, batch::self_executable(), with_metrics, c.checkpoint_every);
   const batch::BatchSummary s = batch::run_cli_batch(mesh_tasks(draws), spec, c.common, err, "papersim batch");
   out << batch::summary_line(s, c.out, spec) << '\n';
   if (s.interrupted) return 130;
@@ -79,13 +81,20 @@ void add_batch_subcommands(CLI::App& app, BatchCommand& c) {
   c.batch->add_option("--scenarios", c.scenarios, "comma list of scenarios; every one for every seed ("
                       + [] { std::string s; for (const auto& n : scenario_names()) s += (s.empty() ? "" : ", ") + n; return s; }() + ")");
   c.batch->add_option("--mix", c.mix, "JSON mix file instead: {\"scenarios\": {NAME: WEIGHT or {\"weight\": W, \"set\": {...}}}, \"set\": {...}}; each seed draws one scenario");
-  c.batch->add_option("--seeds", c.seeds, "seeds: a range A-B (inclusive), one seed A, or a comma list of both (e.g. 3,7,12-13)")->required();
+  c.batch
+      ->add_option(
+          "--seeds", c.seeds,
+          "seeds: a range A-B (inclusive), one seed A, or a comma list of both (e.g. 3,7,12-13)")
+      ->required();
   c.batch->add_option("--set", c.set, "scene override KEY=VALUE after the draw (dotted scene keys, e.g. duration=0.2 sheet.edge_length=0.02); repeatable");
-  c.batch->add_option("--checkpoint-every", c.checkpoint_every,
-                      "save each sample's state every K steps in DATASET/.checkpoints/ (0: never); a sample "
-                      "stopped by an interruption, --time-limit or a killed job continues from it when run "
-                      "again (with --retry-failed for a recorded failure), to the same mesh")
-      ->check(CLI::NonNegativeNumber)->capture_default_str();
+  c.batch
+      ->add_option(
+          "--checkpoint-every", c.checkpoint_every,
+          "save each sample's state every K steps in DATASET/.checkpoints/ (0: never); a sample "
+          "stopped by an interruption, --time-limit or a killed job continues from it when run "
+          "again (with --retry-failed for a recorded failure), to the same mesh")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
   batch::add_batch_cli_options(c.batch, c.common);
   c.stats = app.add_subcommand("dataset-stats", "Counts per scenario, failure rate by reason, run-time and quality "
                                                 "distributions of a dataset, from its manifests (no mesh is opened).");

@@ -74,7 +74,9 @@ StepStats step_stats_from_json(const json& s) {
 }
 
 json contact_json(const ContactStatistics& c) {
-  return {{"seconds", c.seconds}, {"max_friction_points", c.max_friction_points}, {"max_normal_force", c.max_normal_force}};
+  return {{"seconds", c.seconds},
+          {"max_friction_points", c.max_friction_points},
+          {"max_normal_force", c.max_normal_force}};
 }
 
 ContactStatistics contact_from_json(const json& c) {
@@ -86,7 +88,9 @@ ContactStatistics contact_from_json(const json& c) {
 }
 
 json self_contact_json(const SelfContactStatistics& c) {
-  return {{"seconds", c.seconds}, {"max_active_pairs", c.max_active_pairs}, {"pattern_changes", c.pattern_changes}};
+  return {{"seconds", c.seconds},
+          {"max_active_pairs", c.max_active_pairs},
+          {"pattern_changes", c.pattern_changes}};
 }
 
 SelfContactStatistics self_contact_from_json(const json& c) {
@@ -129,7 +133,8 @@ RemeshTotals remesh_from_json(const json& r) {
 
 json lifts_json(const std::vector<RunQuality::LiftExtremes>& lifts) {
   json a = json::array();
-  for (const auto& l : lifts) a.push_back({{"obstacle", l.obstacle}, {"max_load", l.max_load}, {"max_rise", l.max_rise}});
+  for (const auto& l : lifts)
+    a.push_back({{"obstacle", l.obstacle}, {"max_load", l.max_load}, {"max_rise", l.max_rise}});
   return a;
 }
 
@@ -149,9 +154,11 @@ RunQuality quality_extremes_from_json(const json& q) {
   o.max_principal_stretch = q.at("max_principal_stretch").get<double>();
   o.min_principal_stretch = q.at("min_principal_stretch").get<double>();
   o.max_speed = q.at("max_speed").get<double>();
-  for (const json& d : q.at("min_obstacle_distance")) o.min_obstacle_distance.push_back(number_or(d, INF));
+  for (const json& d : q.at("min_obstacle_distance"))
+    o.min_obstacle_distance.push_back(number_or(d, INF));
   for (const json& l : q.at("lifts"))
-    o.lifts.push_back({l.at("obstacle").get<int>(), l.at("max_load").get<double>(), l.at("max_rise").get<double>()});
+    o.lifts.push_back({l.at("obstacle").get<int>(), l.at("max_load").get<double>(),
+                       l.at("max_rise").get<double>()});
   return o;
 }
 

@@ -174,10 +174,25 @@ TEST(PapersimBatch, ASampleOverTheTimeLimitIsRecordedAndTheOthersFinish) {
 namespace {
 
 /// A remeshed fold sample of 50 steps of 10 ms (about 2 s): seed 3, coarse.
-std::vector<std::string> fold_batch_argv(const fs::path& out, const std::vector<std::string>& extra) {
-  std::vector<std::string> argv{PAPERSIM, "batch", "--out", out.string(), "--scenarios", "fold", "--seeds", "3",
-                                "--jobs", "1", "--quiet", "--set", "duration=0.5", "--set", "sheet.edge_length=0.03",
-                                "--set", "remesh.size_min=0.015"};
+std::vector<std::string> fold_batch_argv(const fs::path& out,
+                                         const std::vector<std::string>& extra) {
+  std::vector<std::string> argv{PAPERSIM,
+                                "batch",
+                                "--out",
+                                out.string(),
+                                "--scenarios",
+                                "fold",
+                                "--seeds",
+                                "3",
+                                "--jobs",
+                                "1",
+                                "--quiet",
+                                "--set",
+                                "duration=0.5",
+                                "--set",
+                                "sheet.edge_length=0.03",
+                                "--set",
+                                "remesh.size_min=0.015"};
   argv.insert(argv.end(), extra.begin(), extra.end());
   return argv;
 }
@@ -190,12 +205,14 @@ int checkpoint_step(const fs::path& cdir) {
 
 /// Start a checkpointing batch and SIGKILL it once its sample saved a checkpoint at step 10 or
 /// later; fails the test when the batch ends first.
-void kill_after_a_checkpoint(const std::vector<std::string>& argv, const fs::path& cdir, const fs::path& log) {
+void kill_after_a_checkpoint(const std::vector<std::string>& argv, const fs::path& cdir,
+                             const fs::path& log) {
   const pid_t pid = pt::start(argv, log);
   int status = 0;
   while (checkpoint_step(cdir) < 10) {
     if (waitpid(pid, &status, WNOHANG) == pid) {
-      ADD_FAILURE() << "the batch ended before it saved a checkpoint at step 10: " << pt::read_text(log);
+      ADD_FAILURE() << "the batch ended before it saved a checkpoint at step 10: "
+                    << pt::read_text(log);
       return;
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(2));
@@ -211,15 +228,18 @@ void kill_after_a_checkpoint(const std::vector<std::string>& argv, const fs::pat
 // checkpoint of another scene, or one cut short, is not used.
 TEST(PapersimBatch, AKilledSampleContinuesFromItsCheckpointToTheSameMesh) {
   const fs::path ref = work_dir() / "ckpt_ref", d = work_dir() / "ckpt";
-  ASSERT_EQ(run(fold_batch_argv(ref, {}), work_dir() / "ckpt_ref.log"), 0) << pt::read_text(work_dir() / "ckpt_ref.log");
+  ASSERT_EQ(run(fold_batch_argv(ref, {}), work_dir() / "ckpt_ref.log"), 0)
+      << pt::read_text(work_dir() / "ckpt_ref.log");
   const std::vector<std::string> every5{"--checkpoint-every", "5"};
-  const fs::path cdir = d / ".checkpoints" / "meshes_fold_0_3", sample = fs::path("meshes") / "fold" / "0" / "3";
+  const fs::path cdir = d / ".checkpoints" / "meshes_fold_0_3",
+                 sample = fs::path("meshes") / "fold" / "0" / "3";
   kill_after_a_checkpoint(fold_batch_argv(d, every5), cdir, work_dir() / "ckpt_kill.log");
   ASSERT_FALSE(fs::exists(d / sample)) << "the sample finished before the kill";
   const int saved = checkpoint_step(cdir);
   ASSERT_GE(saved, 10);
 
-  ASSERT_EQ(run(fold_batch_argv(d, every5), work_dir() / "ckpt_resume.log"), 0) << pt::read_text(work_dir() / "ckpt_resume.log");
+  ASSERT_EQ(run(fold_batch_argv(d, every5), work_dir() / "ckpt_resume.log"), 0)
+      << pt::read_text(work_dir() / "ckpt_resume.log");
   const json meta = json::parse(pt::read_text(d / sample / "meta.json"));
   ASSERT_TRUE(meta.contains("resumed")) << "the sample started over";
   EXPECT_EQ(meta["resumed"]["step"].get<int>(), saved);
@@ -232,7 +252,8 @@ TEST(PapersimBatch, AKilledSampleContinuesFromItsCheckpointToTheSameMesh) {
   EXPECT_EQ(meta["run"]["remesh"]["passes"], ref_meta["run"]["remesh"]["passes"]);
   EXPECT_GT(meta["run"]["remesh"]["passes"].get<int>(), 10);
   for (const char* f : {"sheet.ply", "sheet.obj"})
-    EXPECT_EQ(pt::read_text(d / sample / f), pt::read_text(ref / sample / f)) << f << " differs from the uninterrupted sample's";
+    EXPECT_EQ(pt::read_text(d / sample / f), pt::read_text(ref / sample / f))
+        << f << " differs from the uninterrupted sample's";
   EXPECT_FALSE(fs::exists(cdir)) << "the finished sample's checkpoint was left";
 
   // Killed again in a fresh dataset, then run with another scene: the checkpoint is discarded.
@@ -241,7 +262,8 @@ TEST(PapersimBatch, AKilledSampleContinuesFromItsCheckpointToTheSameMesh) {
   kill_after_a_checkpoint(fold_batch_argv(e, every5), edir, work_dir() / "ckpt_kill2.log");
   std::vector<std::string> other = every5;
   other.insert(other.end(), {"--set", "remesh.size_max=0.05"});
-  ASSERT_EQ(run(fold_batch_argv(e, other), work_dir() / "ckpt_other.log"), 0) << pt::read_text(work_dir() / "ckpt_other.log");
+  ASSERT_EQ(run(fold_batch_argv(e, other), work_dir() / "ckpt_other.log"), 0)
+      << pt::read_text(work_dir() / "ckpt_other.log");
   EXPECT_FALSE(json::parse(pt::read_text(e / sample / "meta.json")).contains("resumed"));
   EXPECT_FALSE(fs::exists(edir));
 
@@ -249,9 +271,11 @@ TEST(PapersimBatch, AKilledSampleContinuesFromItsCheckpointToTheSameMesh) {
   const fs::path g = work_dir() / "ckpt_cut";
   const fs::path gdir = g / ".checkpoints" / "meshes_fold_0_3";
   kill_after_a_checkpoint(fold_batch_argv(g, every5), gdir, work_dir() / "ckpt_kill3.log");
-  const std::string ply = json::parse(pt::read_text(gdir / "checkpoint.json")).at("sheet").get<std::string>();
+  const std::string ply =
+      json::parse(pt::read_text(gdir / "checkpoint.json")).at("sheet").get<std::string>();
   fs::resize_file(gdir / ply, fs::file_size(gdir / ply) / 2);
-  ASSERT_EQ(run(fold_batch_argv(g, every5), work_dir() / "ckpt_cut.log"), 0) << pt::read_text(work_dir() / "ckpt_cut.log");
+  ASSERT_EQ(run(fold_batch_argv(g, every5), work_dir() / "ckpt_cut.log"), 0)
+      << pt::read_text(work_dir() / "ckpt_cut.log");
   EXPECT_FALSE(json::parse(pt::read_text(g / sample / "meta.json")).contains("resumed"));
   EXPECT_EQ(pt::read_text(g / sample / "sheet.ply"), pt::read_text(ref / sample / "sheet.ply"));
 }
@@ -279,8 +303,11 @@ TEST(PapersimBatch, BadOptionsAreNamedAndNothingRuns) {
 
 TEST(PapersimBatch, SlurmWritesAJobArrayAndRunsNothing) {
   const fs::path d = work_dir() / "slurm";
-  ASSERT_EQ(run({PAPERSIM, "batch", "--out", d.string(), "--mix", tiny_mix().string(), "--seeds", "1-10", "--slurm", "3",
-                 "--slurm-cpus", "2", "--slurm-time", "00:10:00", "--checkpoint-every", "25"}, work_dir() / "slurm.log"), 0)
+  ASSERT_EQ(run({PAPERSIM, "batch", "--out", d.string(), "--mix", tiny_mix().string(), "--seeds",
+                 "1-10", "--slurm", "3", "--slurm-cpus", "2", "--slurm-time", "00:10:00",
+                 "--checkpoint-every", "25"},
+                work_dir() / "slurm.log"),
+            0)
       << pt::read_text(work_dir() / "slurm.log");
   const std::string script = pt::read_text(d / "slurm" / "papersim-batch.sbatch");
   EXPECT_NE(script.find("#SBATCH --array=0-2\n"), std::string::npos) << script;

@@ -102,8 +102,12 @@ TEST(Selection, SeedListsDrawTheirSeedsInOrderAndRefuseOverlaps) {
   EXPECT_EQ(draws[1].seed, 13u);
   EXPECT_EQ(draws[2].seed, 3u);
   // Each refusal names the option and the part at fault.
-  for (const auto& [bad, part] : std::vector<std::pair<std::string, std::string>>{
-           {"3,,7", "''"}, {"3,7-5", "'7-5'"}, {"1-10,5", "'5'"}, {"4,2-4", "'2-4'"}, {"3,x", "'x'"}}) {
+  for (const auto& [bad, part] :
+       std::vector<std::pair<std::string, std::string>>{{"3,,7", "''"},
+                                                        {"3,7-5", "'7-5'"},
+                                                        {"1-10,5", "'5'"},
+                                                        {"4,2-4", "'2-4'"},
+                                                        {"3,x", "'x'"}}) {
     const std::string e = scene_error([&] { ps::parse_seeds(bad); });
     EXPECT_NE(e.find("--seeds"), std::string::npos) << bad << ": " << e;
     EXPECT_NE(e.find(part), std::string::npos) << bad << ": " << e;

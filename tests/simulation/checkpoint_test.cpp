@@ -120,16 +120,17 @@ TEST(Checkpoint, RemeshedRunResumesToTheBit) {
   scene.remesh.params.size_min = 0.002;
   scene.remesh.params.size_max = 0.03;
   scene.remesh.params.refine_angle = 0.05;
-  scene.handles[0].keyframes = {{0.0, Eigen::Vector3d::Zero()}, {0.04, Eigen::Vector3d(-0.03, -0.02, 0.03)}};
+  scene.handles[0].keyframes = {{0.0, Eigen::Vector3d::Zero()},
+                                {0.04, Eigen::Vector3d(-0.03, -0.02, 0.03)}};
   const fs::path dir = fresh_dir("remeshed");
   const RunResult whole = run_scene(scene, saving_to(dir));
   ASSERT_TRUE(whole.remesh.has_value());
   // The mesh changed before the checkpoint (coarsened from its start) and after it.
   EXPECT_LT(whole.sheet.vertices, whole.sheet.vertices_start);
   EXPECT_GT(whole.remesh->passes, 3);
-  std::printf("remeshed run: %d passes, %d splits, %d flips, %d collapses, %d -> %d vertices\n", whole.remesh->passes,
-              whole.remesh->splits, whole.remesh->flips, whole.remesh->collapses, whole.sheet.vertices_start,
-              whole.sheet.vertices);
+  std::printf("remeshed run: %d passes, %d splits, %d flips, %d collapses, %d -> %d vertices\n",
+              whole.remesh->passes, whole.remesh->splits, whole.remesh->flips,
+              whole.remesh->collapses, whole.sheet.vertices_start, whole.sheet.vertices);
   const RunResult continued = run_scene(scene, resuming_from(dir));
   ASSERT_EQ(continued.state.positions.size(), whole.state.positions.size());
   EXPECT_EQ(continued.mesh.faces(), whole.mesh.faces());
@@ -204,7 +205,8 @@ TEST(Checkpoint, ResumesAtAnotherTimeStepThatDividesItsTime) {
   resume.out_dir = out.string();
   const RunResult continued = run_scene(finer, resume);
   // meta.json names the changed key, and only it.
-  const nlohmann::json resumed = nlohmann::json::parse(std::ifstream(out / "meta.json")).at("resumed");
+  const nlohmann::json resumed =
+      nlohmann::json::parse(std::ifstream(out / "meta.json")).at("resumed");
   EXPECT_EQ(resumed.at("scene_changes"), nlohmann::json::array({"/time_step"}));
   EXPECT_EQ(resumed.at("step"), 40);
   fs::remove_all(out);
