@@ -1,8 +1,9 @@
 #include "batch/cli.hpp"
 
-#include <CLI/CLI.hpp>
 #include <unistd.h>
 
+#include <CLI/CLI.hpp>
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <ostream>
@@ -51,7 +52,12 @@ ProgressFn progress_printer(std::ostream& out, bool tty, const std::string& labe
                   label.c_str(), p.done, p.total, p.failed, p.running,
                   p.waiting > 0 ? ("  held elsewhere " + std::to_string(p.waiting)).c_str() : "",
                   p.per_hour, duration_text(p.eta).c_str());
-    out << (tty ? "\r\033[K" : "") << line << (tty ? "" : "\n") << std::flush;
+    std::string shares;  // "  running at 41%, 17%": the first four running tasks that tell it
+    for (std::size_t i = 0; i < p.running_done.size() && i < 4; ++i)
+      shares +=
+          (i ? ", " : "  running at ") + std::to_string(std::lround(100 * p.running_done[i])) + "%";
+    if (p.running_done.size() > 4) shares += ", ...";
+    out << (tty ? "\r\033[K" : "") << line << shares << (tty ? "" : "\n") << std::flush;
   };
 }
 

@@ -434,6 +434,10 @@ void Runner::report(bool force) {
     const long long left = p.total - p.done - p.failed;
     p.eta = static_cast<double>(left) * p.elapsed / static_cast<double>(ended_now);
   }
+  if (m_spec.running_share)
+    for (const auto& s : m_slots)
+      if (const double share = m_spec.running_share(m_tasks[s->task]); share >= 0)
+        p.running_done.push_back(share);
   m_spec.progress(p);
 }
 

@@ -61,6 +61,8 @@ struct Progress {
   double elapsed = 0.0;    ///< wall seconds since this run started [s]
   double per_hour = 0.0;   ///< samples finished by this run per hour of wall time
   double eta = -1.0;       ///< seconds to finish the rest at that rate, -1 when unknown [s]
+  /// Per running task whose share done is known (BatchSpec::running_share), that share [0-1].
+  std::vector<double> running_done;
 };
 using ProgressFn = std::function<void(const Progress&)>;
 
@@ -90,6 +92,9 @@ struct BatchSpec {
   /// means "exit status N".
   std::function<std::string(int exit_status, const std::string& last_line)> failure_reason;
   ProgressFn progress;                     ///< called every progress_every and at the end
+  /// Optional: the share of a running task done so far (0-1), negative when unknown; asked for
+  /// every running task before each progress call (Progress::running_done).
+  std::function<double(const Task&)> running_share;
 };
 
 /// What a batch run did.

@@ -329,6 +329,16 @@ batch::BatchSpec mesh_batch_spec(const fs::path& root, const fs::path& papersim,
     fs::remove_all(checkpoint_folder(root, t), ec);
     return out;
   };
+  if (checkpoint_every > 0)
+    spec.running_share = [root](const batch::Task& t) {  // the time of the last checkpoint
+      try {
+        const json c = json::parse(read_text_file(checkpoint_folder(root, t) / "checkpoint.json"));
+        const double duration = c.at("scene").at("duration").get<double>();
+        return duration > 0 ? std::clamp(c.at("time").get<double>() / duration, 0.0, 1.0) : -1.0;
+      } catch (const json::exception&) {  // no checkpoint yet, or not one of ours
+        return -1.0;
+      }
+    };
   spec.manifest_row = [](const batch::Task&, const fs::path& dir, double wall) {
     json row = mesh_manifest_fields(dir);
     row["wall_seconds"] = wall >= 0 ? wall : row["sim_wall_seconds"].get<double>();

@@ -114,6 +114,28 @@ TEST(Selection, SeedListsDrawTheirSeedsInOrderAndRefuseOverlaps) {
   }
 }
 
+// With checkpoints, a running sample's share done is its last checkpoint's time over the
+// scene's duration; without one (or without checkpoints) it is unknown.
+TEST(MeshBatch, ARunningSamplesShareIsItsLastCheckpointsTime) {
+  const fs::path root = fs::temp_directory_path() / ("papersim_share_" + std::to_string(getpid()));
+  fs::remove_all(root);
+  papersim::batch::Task t;
+  t.key = "meshes/fold/0/3";
+  EXPECT_FALSE(ps::mesh_batch_spec(root, "papersim", false).running_share);
+  const auto spec = ps::mesh_batch_spec(root, "papersim", false, 5);
+  ASSERT_TRUE(spec.running_share);
+  EXPECT_LT(spec.running_share(t), 0.0);
+  const fs::path dir = ps::checkpoint_folder(root, t);
+  EXPECT_EQ(dir, root / ".checkpoints" / "meshes_fold_0_3");
+  fs::create_directories(dir);
+  std::ofstream(dir / "checkpoint.json")
+      << R"({"step": 410, "time": 4.1, "scene": {"duration": 10.0}})";
+  EXPECT_DOUBLE_EQ(spec.running_share(t), 0.41);
+  std::ofstream(dir / "checkpoint.json") << R"({"step": 410, "time": "4.1"})";  // not one of ours
+  EXPECT_LT(spec.running_share(t), 0.0);
+  fs::remove_all(root);
+}
+
 TEST(DatasetStats, CountsLatestStatePerSampleAndQuantiles) {
   const fs::path root = fs::temp_directory_path() / ("papersim_stats_" + std::to_string(getpid()));
   fs::remove_all(root);

@@ -1,14 +1,17 @@
 // The batch runner on small shell commands: finished tasks are never redone, failures are
 // recorded with their reason and do not stop the batch, the time limit kills, a lost manifest
 // row is restored, shards partition the tasks, and concurrent appends never interleave.
+#include "batch/runner.hpp"
+
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <fstream>
 #include <set>
+#include <sstream>
 
-#include "batch/runner.hpp"
+#include "batch/cli.hpp"
 #include "batch/slurm.hpp"
 
 namespace fs = std::filesystem;
@@ -106,6 +109,36 @@ TEST(Runner, FailuresAreRecordedWithTheirReasonAndTheRestFinishes) {
   const auto retry = papersim::batch::run_batch(tasks, spec);
   EXPECT_EQ(lines(root / "runs.txt").size(), 8u);
   EXPECT_EQ(retry.failed_now, 2);
+  fs::remove_all(root);
+}
+
+// The progress of running tasks that tell their share done: the runner asks for it before every
+// progress call, and the command line's progress line shows it.
+TEST(Runner, ProgressShowsTheShareOfRunningTasks) {
+  const fs::path root = fresh_dir("share");
+  const auto tasks = numbered_tasks(2);
+  auto spec = shell_spec(root, "sleep 0.5; echo ok > \"$1/value\"");
+  spec.progress_every = 0.05;
+  spec.running_share = [](const Task& t) {
+    return t.info.at("index").get<int>() == 0 ? 0.414 : -1.0;
+  };
+  std::vector<std::vector<double>> seen;
+  spec.progress = [&seen](const papersim::batch::Progress& p) {
+    if (p.running > 0) seen.push_back(p.running_done);
+  };
+  EXPECT_EQ(papersim::batch::run_batch(tasks, spec).done, 2);
+  ASSERT_FALSE(seen.empty());
+  for (const auto& shares : seen)
+    EXPECT_EQ(shares, std::vector<double>{0.414});  // task 1 tells none
+
+  std::ostringstream line;
+  papersim::batch::Progress p;
+  p.total = 9;
+  p.running = 6;
+  p.running_done = {0.414, 0.17, 1.0, 0.0, 0.5};
+  papersim::batch::progress_printer(line, false, "papersim batch")(p);
+  EXPECT_NE(line.str().find("  running at 41%, 17%, 100%, 0%, ...\n"), std::string::npos)
+      << line.str();
   fs::remove_all(root);
 }
 
