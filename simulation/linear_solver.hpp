@@ -14,6 +14,11 @@ namespace papersim::simulation {
 /// BLAS; the kernels are chosen when the first LinearSolver is made (see the .cpp).
 std::string blas_kernels();
 
+/// How many OpenMP parallel regions this process has run on their calling thread (the
+/// GOMP_parallel of linear_solver.cpp, which replaces libgomp's: see there). A test reads it
+/// to see that CHOLMOD's regions come here.
+long serial_openmp_regions();
+
 class LinearSolver {
  public:
   LinearSolver();

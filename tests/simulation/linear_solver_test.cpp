@@ -138,3 +138,20 @@ TEST(LinearSolver, BlasRunsKernelsForTheCpusInstructions) {
   }
 #endif
 }
+
+// CHOLMOD's OpenMP regions (cholmod_super_numeric opens several per supernode) run through
+// papersim's GOMP_parallel, a plain call on the calling thread, instead of libgomp's team of
+// one and its futex wake: the counter moves only when the dynamic linker bound CHOLMOD's calls
+// to it. The supernodal factorisation of a large grid then still solves to round-off.
+TEST(LinearSolver, CholmodsOpenMpRegionsRunAsPlainCalls) {
+  LinearSolver solver;
+  BlockSymmetricMatrix A = grid(60, 60, 0.0);
+  const long before = serial_openmp_regions();
+  ASSERT_TRUE(solver.factorize(A, 1));
+  const long regions = serial_openmp_regions() - before;
+  std::printf("OpenMP regions in one supernodal factorisation: %ld\n", regions);
+  EXPECT_GT(regions, 0);
+  const Eigen::VectorXd b = Eigen::VectorXd::LinSpaced(A.size(), -1, 1);
+  const Eigen::VectorXd x = solver.solve(b);
+  EXPECT_LT((A.multiply(x) - b).norm(), 1e-10 * b.norm());
+}
