@@ -30,7 +30,7 @@ std::atomic<long> g_serial_openmp_regions{0};
 /// linker exports this definition from the executable because libcholmod refers to the symbol,
 /// and the dynamic linker binds CHOLMOD's calls to it before libgomp's. Measured: the same
 /// meshes to the bit, about a fifth less CPU per fall-cylinder run (docs/performance.md,
-/// "OpenMP regions without libgomp's team"). Work-sharing loops inside a region see one thread
+/// "OpenMP regions as plain calls"). Work-sharing loops inside a region see one thread
 /// (omp_get_num_threads() = 1 outside a team) and run whole.
 extern "C" void GOMP_parallel(void (*fn)(void*), void* data, unsigned /*num_threads*/,
                               unsigned /*flags*/) {
