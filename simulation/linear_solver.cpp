@@ -23,13 +23,13 @@ std::atomic<long> g_serial_openmp_regions{0};
 /// point GCC compiles `#pragma omp parallel` to, ABI GOMP_4.0). Debian's CHOLMOD is built with
 /// OpenMP, and cholmod_super_numeric opens several regions per supernode, each with an `if`
 /// clause that is false for a sheet's small supernodes; libgomp still makes a team of one for
-/// each and wakes its barrier with a futex system call at the end (strace: about 200 futex calls
-/// per factorisation of a 682-vertex sheet, all from these regions). papersim runs CHOLMOD on one
-/// thread anyway (limit_openmp_threads below; its own parallelism is TBB), so here a region is
+/// each and wakes its barrier with a futex system call at the end (strace: 1,043,388 futex calls
+/// in 50 steps of a remeshed fall-cylinder run, all from these regions). papersim runs CHOLMOD on
+/// one thread anyway (limit_openmp_threads below; its own parallelism is TBB), so here a region is
 /// simply a call of its body: the same arithmetic in the same order, without the team. The
 /// linker exports this definition from the executable because libcholmod refers to the symbol,
 /// and the dynamic linker binds CHOLMOD's calls to it before libgomp's. Measured: the same
-/// meshes to the bit, about a fifth less CPU per fall-cylinder run (docs/performance.md,
+/// meshes to the bit at 0.67-0.90 of the CPU time by scenario (docs/performance.md,
 /// "OpenMP regions as plain calls"). Work-sharing loops inside a region see one thread
 /// (omp_get_num_threads() = 1 outside a team) and run whole.
 extern "C" void GOMP_parallel(void (*fn)(void*), void* data, unsigned /*num_threads*/,
