@@ -66,6 +66,66 @@ TEST(LinearSolver, FactorsExactlyThePositiveDefiniteMatrices) {
 
 namespace {
 
+/// An nx x ny grid with both diagonals of every cell, each edge carrying its own weight w_e times
+/// [2I -I; -I 2I] plus the coupling w_e (e_x e_y^T + e_y e_x^T) in its off-diagonal block (so no
+/// entry is like another), plus `shift` on the first degree of freedom.
+BlockSymmetricMatrix irregular_grid(int nx, int ny, double shift, unsigned seed) {
+  const int n = nx * ny;
+  std::vector<std::vector<int>> upper(n);
+  std::vector<std::array<int, 2>> edges;
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) {
+      const int v = j * nx + i;
+      upper[v].push_back(v);
+      if (i + 1 < nx) edges.push_back({v, v + 1});
+      if (j + 1 < ny) edges.push_back({v, v + nx});
+      if (i + 1 < nx && j + 1 < ny)
+        edges.push_back({v, v + nx + 1}), edges.push_back({v + 1, v + nx});
+    }
+  for (const auto& e : edges) upper[std::max(e[0], e[1])].push_back(std::min(e[0], e[1]));
+  for (auto& u : upper) std::sort(u.begin(), u.end());
+  BlockSymmetricMatrix A(upper);
+  std::srand(seed);
+  for (const auto& e : edges) {
+    const double w = 0.5 + static_cast<double>(std::rand()) / RAND_MAX;
+    Eigen::Matrix<double, 6, 6> element;
+    Eigen::Matrix3d c = Eigen::Matrix3d::Zero();
+    c(0, 1) = c(1, 0) = 0.1;
+    element << 2 * Eigen::Matrix3d::Identity(), -Eigen::Matrix3d::Identity() + c,
+        -Eigen::Matrix3d::Identity() + c, 2 * Eigen::Matrix3d::Identity();
+    A.add_element<2>(e, w * element);
+  }
+  Eigen::VectorXd d = Eigen::VectorXd::Zero(1);
+  d[0] = shift;
+  A.add_diagonal(d);
+  return A;
+}
+
+}  // namespace
+
+// The supernodal factorisation takes the permuted lower triangle, built once per pattern and
+// refilled with each matrix's values: on one pattern, matrices with different values are each
+// solved to round-off, including after an indefinite one was refused, and a new pattern id with
+// the same size is analysed again.
+TEST(LinearSolver, RefactorsNewValuesOnTheSamePattern) {
+  LinearSolver solver;
+  const Eigen::VectorXd b = Eigen::VectorXd::LinSpaced(3 * 50 * 40, -1, 1);
+  for (unsigned seed : {1u, 2u, 3u}) {
+    const BlockSymmetricMatrix A = irregular_grid(50, 40, 0.0, seed);
+    ASSERT_TRUE(solver.factorize(A, 7)) << "seed " << seed;
+    const Eigen::VectorXd x = solver.solve(b);
+    EXPECT_LT((A.multiply(x) - b).norm(), 1e-10 * b.norm()) << "seed " << seed;
+    EXPECT_FALSE(solver.factorize(irregular_grid(50, 40, -40.0, seed), 7)) << "seed " << seed;
+  }
+  EXPECT_EQ(solver.analyses(), 1);
+  const BlockSymmetricMatrix A = irregular_grid(40, 50, 0.0, 4);
+  ASSERT_TRUE(solver.factorize(A, 8));
+  EXPECT_EQ(solver.analyses(), 2);
+  EXPECT_LT((A.multiply(solver.solve(b)) - b).norm(), 1e-10 * b.norm());
+}
+
+namespace {
+
 /// Two vertices joined by k [I -I; -I I] (a stiff spring's projected Hessian) with m on the
 /// diagonal (inertia): positive definite for m > 0, singular for m = 0.
 BlockSymmetricMatrix spring(double k, double m) {
