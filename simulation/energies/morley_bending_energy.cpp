@@ -367,19 +367,31 @@ void MorleyBendingEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::Vecto
     throw NumericError("bending: the Hessian needs the integrator's auxiliary blocks");
   // Gauss-Newton: per element, [G, I]^T M [G, I] over (hinge vertices, psi blocks), with G the
   // hinge gradients (column i = grad theta_i on its 4 vertices).
-  Eigen::MatrixXd GM, H;
+  // Scratch sized for the largest element and reused: no allocation per element, and of H only
+  // what add_element reads is cleared (the aux rows left of the aux columns are not: an aux block
+  // comes after every vertex, so add_element reads the vertex-aux coupling above the diagonal).
+  std::size_t gm_size = 0, h_size = 0;
+  for (const Element& e : m_elements) {
+    const std::size_t rows = 3 * (e.vertices.size() + e.blocks.size());
+    gm_size = std::max(gm_size, 3 * e.vertices.size() * (e.theta.size() + e.psi.size()));
+    h_size = std::max(h_size, rows * rows);
+  }
+  std::vector<double> gm_buffer(gm_size), h_buffer(h_size);
   std::vector<int> index;
   for (const Element& e : m_elements) {
     const int nt = static_cast<int>(e.theta.size()), np = static_cast<int>(e.psi.size());
     const int nv = static_cast<int>(e.vertices.size()), nb = static_cast<int>(e.blocks.size());
     const int n = nt + np;
-    GM.setZero(3 * nv, n);  // G M[theta rows, :]
+    Eigen::Map<Eigen::MatrixXd> GM(gm_buffer.data(), 3 * nv, n);  // G M[theta rows, :]
+    GM.setZero();
     for (int i = 0; i < nt; ++i)
       for (int q = 0; q < 4; ++q) {
         const Eigen::Vector3d gi = grads[e.theta[i]].segment<3>(3 * q);
         GM.middleRows<3>(3 * e.local[i][q]) += gi * e.M.row(i);
       }
-    H.setZero(3 * (nv + nb), 3 * (nv + nb));
+    Eigen::Map<Eigen::MatrixXd> H(h_buffer.data(), 3 * (nv + nb), 3 * (nv + nb));
+    H.leftCols(3 * nv).topRows(3 * nv).setZero();
+    H.rightCols(3 * nb).setZero();
     for (int j = 0; j < nt; ++j)
       for (int r = 0; r < 4; ++r)
         H.block(0, 3 * e.local[j][r], 3 * nv, 3).noalias() +=
@@ -387,7 +399,6 @@ void MorleyBendingEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::Vecto
     for (int j = 0; j < np; ++j) {
       const int col = 3 * (nv + e.psi_at[j].first) + e.psi_at[j].second;
       H.block(0, col, 3 * nv, 1) += GM.col(nt + j);
-      H.block(col, 0, 1, 3 * nv) += GM.col(nt + j).transpose();
       for (int i = 0; i < np; ++i) {
         const int row = 3 * (nv + e.psi_at[i].first) + e.psi_at[i].second;
         H(row, col) += e.M(nt + i, nt + j);
