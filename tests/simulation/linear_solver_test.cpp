@@ -19,8 +19,11 @@ namespace {
 
 /// The sum over the edges of an nx x ny grid of vertices of the element [2I -I; -I 2I]
 /// (eigenvalues 1 and 3): positive definite with eigenvalues in [1, 12], plus `shift` on the
-/// first degree of freedom.
-BlockSymmetricMatrix grid(int nx, int ny, double shift) {
+/// first degree of freedom. With a nonzero `seed` the grid has both diagonals of every cell, and
+/// each edge carries its own weight w_e in [0.5, 1.5] times the element with the coupling
+/// 0.1 (e_x e_y^T + e_y e_x^T) added to its off-diagonal blocks (still positive definite), so no
+/// entry is like another.
+BlockSymmetricMatrix grid(int nx, int ny, double shift, unsigned seed = 0) {
   const int n = nx * ny;
   std::vector<std::vector<int>> upper(n);
   std::vector<std::array<int, 2>> edges;
@@ -29,15 +32,23 @@ BlockSymmetricMatrix grid(int nx, int ny, double shift) {
       const int v = j * nx + i;
       if (i + 1 < nx) edges.push_back({v, v + 1});
       if (j + 1 < ny) edges.push_back({v, v + nx});
+      if (seed != 0 && i + 1 < nx && j + 1 < ny)
+        edges.push_back({v, v + nx + 1}), edges.push_back({v + 1, v + nx});
       upper[v].push_back(v);
     }
-  for (const auto& e : edges) upper[e[1]].push_back(e[0]);
+  for (const auto& e : edges) upper[std::max(e[0], e[1])].push_back(std::min(e[0], e[1]));
   for (auto& u : upper) std::sort(u.begin(), u.end());
   BlockSymmetricMatrix A(upper);
+  Eigen::Matrix3d coupling = Eigen::Matrix3d::Zero();
+  if (seed != 0) coupling(0, 1) = coupling(1, 0) = 0.1;
   Eigen::Matrix<double, 6, 6> element;
-  element << 2 * Eigen::Matrix3d::Identity(), -Eigen::Matrix3d::Identity(), -Eigen::Matrix3d::Identity(),
-      2 * Eigen::Matrix3d::Identity();
-  for (const auto& e : edges) A.add_element<2>(e, element);
+  element << 2 * Eigen::Matrix3d::Identity(), -Eigen::Matrix3d::Identity() + coupling,
+      -Eigen::Matrix3d::Identity() + coupling, 2 * Eigen::Matrix3d::Identity();
+  std::srand(seed);
+  for (const auto& e : edges) {
+    const double w = seed == 0 ? 1.0 : 0.5 + static_cast<double>(std::rand()) / RAND_MAX;
+    A.add_element<2>(e, w * element);
+  }
   Eigen::VectorXd d = Eigen::VectorXd::Zero(1);
   d[0] = shift;
   A.add_diagonal(d);
@@ -64,61 +75,22 @@ TEST(LinearSolver, FactorsExactlyThePositiveDefiniteMatrices) {
   }
 }
 
-namespace {
-
-/// An nx x ny grid with both diagonals of every cell, each edge carrying its own weight w_e times
-/// [2I -I; -I 2I] plus the coupling w_e (e_x e_y^T + e_y e_x^T) in its off-diagonal block (so no
-/// entry is like another), plus `shift` on the first degree of freedom.
-BlockSymmetricMatrix irregular_grid(int nx, int ny, double shift, unsigned seed) {
-  const int n = nx * ny;
-  std::vector<std::vector<int>> upper(n);
-  std::vector<std::array<int, 2>> edges;
-  for (int j = 0; j < ny; ++j)
-    for (int i = 0; i < nx; ++i) {
-      const int v = j * nx + i;
-      upper[v].push_back(v);
-      if (i + 1 < nx) edges.push_back({v, v + 1});
-      if (j + 1 < ny) edges.push_back({v, v + nx});
-      if (i + 1 < nx && j + 1 < ny)
-        edges.push_back({v, v + nx + 1}), edges.push_back({v + 1, v + nx});
-    }
-  for (const auto& e : edges) upper[std::max(e[0], e[1])].push_back(std::min(e[0], e[1]));
-  for (auto& u : upper) std::sort(u.begin(), u.end());
-  BlockSymmetricMatrix A(upper);
-  std::srand(seed);
-  for (const auto& e : edges) {
-    const double w = 0.5 + static_cast<double>(std::rand()) / RAND_MAX;
-    Eigen::Matrix<double, 6, 6> element;
-    Eigen::Matrix3d c = Eigen::Matrix3d::Zero();
-    c(0, 1) = c(1, 0) = 0.1;
-    element << 2 * Eigen::Matrix3d::Identity(), -Eigen::Matrix3d::Identity() + c,
-        -Eigen::Matrix3d::Identity() + c, 2 * Eigen::Matrix3d::Identity();
-    A.add_element<2>(e, w * element);
-  }
-  Eigen::VectorXd d = Eigen::VectorXd::Zero(1);
-  d[0] = shift;
-  A.add_diagonal(d);
-  return A;
-}
-
-}  // namespace
-
 // The supernodal factorisation takes the permuted lower triangle, built once per pattern and
 // refilled with each matrix's values: on one pattern, matrices with different values are each
 // solved to round-off, including after an indefinite one was refused, and a new pattern id with
-// the same size is analysed again.
+// the same size is analysed again (the grid with diagonals and a weight per edge).
 TEST(LinearSolver, RefactorsNewValuesOnTheSamePattern) {
   LinearSolver solver;
   const Eigen::VectorXd b = Eigen::VectorXd::LinSpaced(3 * 50 * 40, -1, 1);
   for (unsigned seed : {1u, 2u, 3u}) {
-    const BlockSymmetricMatrix A = irregular_grid(50, 40, 0.0, seed);
+    const BlockSymmetricMatrix A = grid(50, 40, 0.0, seed);
     ASSERT_TRUE(solver.factorize(A, 7)) << "seed " << seed;
     const Eigen::VectorXd x = solver.solve(b);
     EXPECT_LT((A.multiply(x) - b).norm(), 1e-10 * b.norm()) << "seed " << seed;
-    EXPECT_FALSE(solver.factorize(irregular_grid(50, 40, -40.0, seed), 7)) << "seed " << seed;
+    EXPECT_FALSE(solver.factorize(grid(50, 40, -40.0, seed), 7)) << "seed " << seed;
   }
   EXPECT_EQ(solver.analyses(), 1);
-  const BlockSymmetricMatrix A = irregular_grid(40, 50, 0.0, 4);
+  const BlockSymmetricMatrix A = grid(40, 50, 0.0, 4);
   ASSERT_TRUE(solver.factorize(A, 8));
   EXPECT_EQ(solver.analyses(), 2);
   EXPECT_LT((A.multiply(solver.solve(b)) - b).norm(), 1e-10 * b.norm());
