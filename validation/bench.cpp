@@ -12,7 +12,10 @@
 // with the resolution and solver keys (time_step, sheet.edge_length, solver) taken from BIN's
 // own draw of the same (scenario, seed), i.e. at BIN's defaults, and keys BIN's scene reader
 // does not know dropped (BIN's own draw shows which keys it writes). This keeps the obstacles,
-// gravity and handles identical even when BIN draws scenes from other random streams.
+// gravity and handles identical even when BIN draws scenes from other random streams. With
+// --repeat K every binary runs each draw K times, interleaved, and a draw keeps its fastest run's
+// wall and CPU time: on a shared machine the noise only adds time, and per-run CPU times of the
+// same work were measured 40% apart there (docs/performance.md).
 //
 // --make-references DIR runs every draw at the converged settings of reference_settings() and
 // again one refinement finer (the check); a draw whose reference moves by more than --target mm
@@ -249,6 +252,7 @@ struct BenchOptions {
   double target_mm = 2;
   ReferenceSettings reference_override;  ///< fields > 0 replace reference_settings()
   std::string csv;
+  int repeat = 1;  ///< runs per draw and binary; the fastest one's times are kept
 };
 
 json with_duration(json scene, double duration) {
@@ -329,15 +333,18 @@ struct Row {
   Measurement m;
 };
 
-void print_row(const Row& r) {
+/// One run's line; `run` is "" or "run k/K" when each draw runs several times.
+void print_row(const Row& r, const std::string& run = "") {
+  const std::string suffix = run.empty() ? "" : " " + run;
   if (!r.m.ok) {
-    std::printf("%-13s %5ld %-8s FAILED %s\n", r.scenario.c_str(), r.seed, r.binary.c_str(), r.m.failure.c_str());
+    std::printf("%-13s %5ld %-8s FAILED %s%s\n", r.scenario.c_str(), r.seed, r.binary.c_str(),
+                r.m.failure.c_str(), suffix.c_str());
   } else {
     char rms[32] = "-";
     if (!std::isnan(r.m.rms_mm)) std::snprintf(rms, sizeof rms, "%.3f", r.m.rms_mm);
-    std::printf("%-13s %5ld %-8s %8d %9.2f %9.2f %8ld %10s %s\n", r.scenario.c_str(), r.seed, r.binary.c_str(),
-                r.m.vertices, r.m.wall, r.m.cpu, r.m.newton, rms,
-                r.m.unsafe.empty() ? "safe" : ("UNSAFE " + r.m.unsafe).c_str());
+    std::printf("%-13s %5ld %-8s %8d %9.2f %9.2f %8ld %10s %s%s\n", r.scenario.c_str(), r.seed,
+                r.binary.c_str(), r.m.vertices, r.m.wall, r.m.cpu, r.m.newton, rms,
+                r.m.unsafe.empty() ? "safe" : ("UNSAFE " + r.m.unsafe).c_str(), suffix.c_str());
   }
   std::fflush(stdout);
 }
@@ -425,13 +432,45 @@ void bench_scenario(const BenchOptions& o, const std::string& scenario, std::vec
       runs.emplace_back("baseline", with_duration(with_settings_of(drawn, own), o.duration));
       if (k % 2 == 1) std::swap(runs[0], runs[1]);  // alternate the order from draw to draw
     }
-    for (const auto& [binary, scene] : runs) {
-      Row r{scenario, binary, seed, {}};
-      r.m = run_scene(binary == "test" ? o.papersim : o.baseline, scene, dir / binary);
-      measure_error(ref, dir / binary, r.m);
-      print_row(r);
-      rows.push_back(r);
+    // With --repeat K every binary runs the draw K times, interleaved, the order turned each round.
+    // A row keeps the first run's results and the fastest run's wall and CPU time (the machine's
+    // noise only adds time); a repeat whose Newton iterations differ fails the row, since the
+    // same binary on the same scene must do the same work.
+    std::vector<Row> draw_rows;
+    for (int k_run = 0; k_run < o.repeat; ++k_run) {
+      for (std::size_t i = 0; i < runs.size(); ++i) {
+        const auto& [binary, scene] = runs[k_run % 2 == 0 ? i : runs.size() - 1 - i];
+        const std::string run =
+            o.repeat > 1 ? "run " + std::to_string(k_run + 1) + "/" + std::to_string(o.repeat) : "";
+        const fs::path out = dir / (k_run == 0 ? binary : binary + "_repeat");
+        Row r{scenario, binary, seed, {}};
+        r.m = run_scene(binary == "test" ? o.papersim : o.baseline, scene, out);
+        if (k_run == 0) measure_error(ref, out, r.m);
+        print_row(r, run);
+        if (k_run == 0) {
+          draw_rows.push_back(r);
+          continue;
+        }
+        fs::remove_all(out);
+        Row& first = *std::find_if(draw_rows.begin(), draw_rows.end(),
+                                   [&](const Row& d) { return d.binary == binary; });
+        if (!first.m.ok) continue;
+        if (!r.m.ok || r.m.newton != first.m.newton) {
+          first.m.ok = false;
+          first.m.failure =
+              run + (r.m.ok
+                         ? " took " + std::to_string(r.m.newton) + " Newton iterations against " +
+                               std::to_string(first.m.newton) + " in run 1 (not reproducible)"
+                         : " failed: " + r.m.failure);
+          continue;
+        }
+        first.m.wall = std::min(first.m.wall, r.m.wall);
+        first.m.cpu = std::min(first.m.cpu, r.m.cpu);
+      }
     }
+    if (o.repeat > 1)
+      for (const Row& r : draw_rows) print_row(r, "fastest of " + std::to_string(o.repeat));
+    rows.insert(rows.end(), draw_rows.begin(), draw_rows.end());
   }
 }
 
@@ -531,7 +570,14 @@ int main(int argc, char** argv) {
       ->check(CLI::PositiveNumber);
   app.add_option("--duration", o.duration, "override every scene's duration [s] (short runs for tests)")
       ->check(CLI::PositiveNumber);
-  app.add_option("--csv", o.csv, "also write every run as CSV");
+  app.add_option("--repeat", o.repeat,
+                 "run every draw K times with each binary, interleaved, and keep the fastest "
+                 "run's wall and CPU time (the other results are the first run's; a repeat with "
+                 "other Newton "
+                 "iterations fails the draw)")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 100));
+  app.add_option("--csv", o.csv, "also write every draw as CSV (with --repeat, its fastest times)");
   std::vector<std::string> sets;
   app.add_option("--set", sets, "KEY=VALUE: set a key of the measured binary's scenes (dotted, e.g. "
                  "solver.max_factor_reuse=4; the value is JSON), repeatable; not applied to the baseline or the "
