@@ -9,6 +9,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
 #include <cstring>
@@ -155,6 +156,10 @@ struct Slot {
   std::size_t next = 0;  ///< index of the command running now
   pid_t pid = -1;
   Clock::time_point start;
+  /// The share done (BatchSpec::running_share) when first known, and when last seen to grow,
+  /// with the times they were read: the task's rate in this run.
+  double share_first = -1.0, share_last = -1.0;
+  Clock::time_point share_first_time, share_last_time;
   double cpu_seconds = 0.0;  ///< user + system time of the finished commands [s]
   bool timed_out = false;
 };
@@ -434,10 +439,30 @@ void Runner::report(bool force) {
     const long long left = p.total - p.done - p.failed;
     p.eta = static_cast<double>(left) * p.elapsed / static_cast<double>(ended_now);
   }
-  if (m_spec.running_share)
-    for (const auto& s : m_slots)
-      if (const double share = m_spec.running_share(m_tasks[s->task]); share >= 0)
-        p.running_done.push_back(share);
+  std::vector<RunningRate> rates;
+  if (m_spec.running_share) {
+    const auto now = Clock::now();
+    for (const auto& s : m_slots) {
+      const double share = m_spec.running_share(m_tasks[s->task]);
+      if (share < 0) continue;
+      p.running_done.push_back(share);
+      if (s->share_first < 0) {
+        s->share_first = s->share_last = share;
+        s->share_first_time = s->share_last_time = now;
+      } else if (share > s->share_last) {
+        s->share_last = share;
+        s->share_last_time = now;
+      }
+      const double dt =
+          std::chrono::duration<double>(s->share_last_time - s->share_first_time).count();
+      if (s->share_last > s->share_first && dt > 0)
+        rates.push_back({share, (s->share_last - s->share_first) / dt});
+    }
+  }
+  if (ended_now == 0) {
+    const long long queued = p.total - p.done - p.failed - static_cast<long long>(rates.size());
+    p.eta = eta_from_running(rates, queued, m_spec.jobs);
+  }
   m_spec.progress(p);
 }
 
@@ -474,6 +499,22 @@ std::vector<Task> select_shard(const std::vector<Task>& tasks, int index, int co
   for (std::size_t p = static_cast<std::size_t>(index); p < tasks.size(); p += static_cast<std::size_t>(count))
     out.push_back(tasks[p]);
   return out;
+}
+
+double eta_from_running(const std::vector<RunningRate>& running, long long queued, int jobs) {
+  double longest = 0, work = 0, whole = 0;
+  int known = 0;
+  for (const auto& r : running) {
+    if (!(r.rate > 0)) continue;
+    const double rest = std::max(0.0, 1.0 - r.share) / r.rate;
+    longest = std::max(longest, rest);
+    work += rest;
+    whole += 1.0 / r.rate;
+    ++known;
+  }
+  if (known == 0) return -1.0;
+  work += static_cast<double>(std::max(queued, 0LL)) * whole / known;
+  return std::max(longest, work / std::max(jobs, 1));
 }
 
 std::pair<int, int> parse_shard(const std::string& text, const std::string& option) {

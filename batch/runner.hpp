@@ -50,6 +50,20 @@ std::vector<Task> select_shard(const std::vector<Task>& tasks, int index, int co
 /// @throw std::invalid_argument naming `option` when the text is not of that form
 std::pair<int, int> parse_shard(const std::string& text, const std::string& option);
 
+/// What the progress knows of one running task: its share done (0-1) and the rate at which
+/// that share grew while this run watched it [1/s], <= 0 when not seen to grow yet.
+struct RunningRate {
+  double share = 0.0;
+  double rate = 0.0;
+};
+
+/// Seconds until the batch ends, from its running tasks' shares and rates alone (before any task
+/// has ended in this run): each running task with a known rate needs (1 - share) / rate more;
+/// every other task left (`queued`, which counts the running ones without a rate too) the mean
+/// of those tasks' whole durations 1 / rate; the work is shared by `jobs` processes, and the
+/// batch lasts at least as long as its slowest running task. -1 when no rate is known.
+double eta_from_running(const std::vector<RunningRate>& running, long long queued, int jobs);
+
 /// Progress of a running batch.
 struct Progress {
   long long total = 0;     ///< tasks of this batch (this shard)
@@ -60,7 +74,9 @@ struct Progress {
   long long done_now = 0;  ///< finished by this run
   double elapsed = 0.0;    ///< wall seconds since this run started [s]
   double per_hour = 0.0;   ///< samples finished by this run per hour of wall time
-  double eta = -1.0;       ///< seconds to finish the rest at that rate, -1 when unknown [s]
+  /// Seconds to finish the rest at that rate; before any task ended in this run, from the
+  /// running tasks' shares (eta_from_running); -1 when unknown [s].
+  double eta = -1.0;
   /// Per running task whose share done is known (BatchSpec::running_share), that share [0-1].
   std::vector<double> running_done;
 };

@@ -92,7 +92,9 @@ void add_batch_subcommands(CLI::App& app, BatchCommand& c) {
           "--checkpoint-every", c.checkpoint_every,
           "save each sample's state every K steps in DATASET/.checkpoints/ (0: never); a sample "
           "stopped by an interruption, --time-limit or a killed job continues from it when run "
-          "again (with --retry-failed for a recorded failure), to the same mesh")
+          "again (with --retry-failed for a recorded failure), to the same mesh; the progress line "
+          "then shows how far "
+          "the running samples are, and an ETA from that before any sample has ended")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   batch::add_batch_cli_options(c.batch, c.common);

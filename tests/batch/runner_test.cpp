@@ -7,6 +7,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <chrono>
 #include <fstream>
 #include <set>
 #include <sstream>
@@ -139,6 +140,46 @@ TEST(Runner, ProgressShowsTheShareOfRunningTasks) {
   papersim::batch::progress_printer(line, false, "papersim batch")(p);
   EXPECT_NE(line.str().find("  running at 41%, 17%, 100%, 0%, ...\n"), std::string::npos)
       << line.str();
+  fs::remove_all(root);
+}
+
+// Before any task ends, the ETA comes from the running tasks' shares: the rest of each, and the
+// whole of each task left at the mean duration those rates give, shared by the jobs.
+TEST(Runner, EtaFromRunningSharesSharesTheWorkLeftAmongTheJobs) {
+  using papersim::batch::eta_from_running;
+  // 50 s and 150 s left of tasks of 100 s and 200 s: two more tasks of 150 s each.
+  const std::vector<papersim::batch::RunningRate> two = {{0.5, 0.01}, {0.25, 0.005}};
+  EXPECT_NEAR(eta_from_running(two, 2, 2), (50.0 + 150.0 + 2 * 150.0) / 2, 1e-9);
+  EXPECT_NEAR(eta_from_running(two, 0, 2), 150.0, 1e-9);  // the slowest running task
+  EXPECT_NEAR(eta_from_running(two, 2, 1), 500.0, 1e-9);
+  // Tasks not seen to progress tell nothing; a share past 1 has nothing left.
+  EXPECT_EQ(eta_from_running({{0.3, 0.0}}, 3, 2), -1.0);
+  EXPECT_EQ(eta_from_running({}, 3, 2), -1.0);
+  EXPECT_NEAR(eta_from_running({{1.2, 0.1}, {0.3, 0.0}}, 0, 1), 0.0, 1e-9);
+}
+
+TEST(Runner, ProgressHasAnEtaBeforeAnyTaskEndsWhenTheRunningOnesTellTheirShare) {
+  const fs::path root = fresh_dir("eta");
+  const auto tasks = numbered_tasks(1);
+  auto spec = shell_spec(root, "sleep 1; echo ok > \"$1/value\"");
+  spec.progress_every = 0.05;
+  const auto t0 = std::chrono::steady_clock::now();
+  // A task that does half of its work per second: 2 s in all.
+  spec.running_share = [t0](const Task&) {
+    return std::min(
+        1.0, 0.5 * std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  };
+  std::vector<double> etas;
+  spec.progress = [&etas](const papersim::batch::Progress& p) {
+    if (p.running > 0 && p.done_now == 0) etas.push_back(p.eta);
+  };
+  EXPECT_EQ(papersim::batch::run_batch(tasks, spec).done, 1);
+  ASSERT_GE(etas.size(), 3u);
+  EXPECT_EQ(etas.front(), -1.0);  // one reading gives no rate
+  const double last = etas.back();
+  // The rest of a 2 s task after at least 0.1 s of it (the rate is read off the same clock).
+  EXPECT_GT(last, 0.0);
+  EXPECT_LT(last, 1.95);
   fs::remove_all(root);
 }
 
