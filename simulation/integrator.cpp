@@ -9,6 +9,7 @@
 
 #include "remesh/errors.hpp"
 #include "simulation/errors.hpp"
+#include "simulation/steihaug.hpp"
 
 namespace papersim::simulation {
 
@@ -49,6 +50,7 @@ StepStats& StepStats::operator+=(const StepStats& o) {
   newton_iterations += o.newton_iterations;
   line_search_evaluations += o.line_search_evaluations;
   extrapolations += o.extrapolations;
+  trust_region_steps += o.trust_region_steps;
   reused_factorizations += o.reused_factorizations;
   following_iterations += o.following_iterations;
   seconds_assembly += o.seconds_assembly;
@@ -166,6 +168,7 @@ bool Integrator::factor_newton_matrix(const StepContext& ctx, const Eigen::Vecto
                                       StepStats& stats, bool skip_exact) {
   auto t0 = std::chrono::steady_clock::now();
   bool project = !m_params.exact_hessian_first || skip_exact;
+  m_have_exact = false;
   assemble(x, g, project);
   stats.seconds_assembly += seconds_since(t0);
   t0 = std::chrono::steady_clock::now();
@@ -173,6 +176,10 @@ bool Integrator::factor_newton_matrix(const StepContext& ctx, const Eigen::Vecto
     // The exact Hessian is indefinite here: fall back to the projected one.
     ++stats.projected_hessians;
     project = true;
+    if (m_params.trust_region_cg > 0) {
+      m_hessian_exact = m_hessian;
+      m_have_exact = true;
+    }
     const auto t1 = std::chrono::steady_clock::now();
     assemble(x, g, true);
     stats.seconds_assembly += seconds_since(t1);
@@ -266,10 +273,33 @@ NewtonResult Integrator::solve(const StepContext& ctx, Eigen::VectorXd& x, StepS
     // the right-hand side is zero; their part of the solution is dropped.
     Eigen::VectorXd rhs = Eigen::VectorXd::Zero(m_hessian.size());
     rhs.head(g.size()) = -g;
-    const Eigen::VectorXd sol = m_solver.solve(rhs);
-    const Eigen::VectorXd dx = sol.head(g.size());
+    Eigen::VectorXd sol = m_solver.solve(rhs);
+    Eigen::VectorXd dx = sol.head(g.size());
+    r.residual = max_vertex_norm(dx) / ctx.h;  // the stopping test stays the projected step's
+    if (r.iterations == 1) m_trust_radius = 0;
+    double trust_model = 0;  // the exact model's change along a trust-region step (0: none taken)
+    if (project && m_have_exact && r.residual >= m_params.tolerance) {
+      const double projected_norm = std::sqrt(sol.dot(m_hessian.multiply(sol)));
+      m_trust_radius = std::max(m_trust_radius, projected_norm);
+      const SteihaugResult cg =
+          steihaug([&](const Eigen::VectorXd& v) { return m_hessian_exact.multiply(v); },
+                   [&](const Eigen::VectorXd& v) { return m_hessian.multiply(v); },
+                   [&](const Eigen::VectorXd& v) { return m_solver.solve(v); }, rhs, sol,
+                   m_trust_radius, m_params.trust_region_cg, 0.1);
+      if (cg.model < 0) {
+        sol = cg.z;
+        dx = sol.head(g.size());
+        trust_model = cg.model;
+        ++r.trust_region_steps;
+      }
+      if (std::getenv("PAPERSIM_DEBUG_NEWTON"))
+        std::fprintf(stderr,
+                     "  trust region: %d iterations, end %d, radius %.3e (projected step %.3e), "
+                     "model %.3e\n",
+                     cg.iterations, static_cast<int>(cg.end), m_trust_radius, projected_norm,
+                     cg.model);
+    }
     stats.seconds_solve += seconds_since(t0);
-    r.residual = max_vertex_norm(dx) / ctx.h;
     if (std::getenv("PAPERSIM_DEBUG_MODEL")) debug_model(x, sol, project);
     if (std::getenv("PAPERSIM_DEBUG_NEWTON"))
       std::fprintf(stderr, "t %.4f it %d E %.12g residual %.3e decrement %.3e %s\n", ctx.time_t0,
@@ -343,6 +373,16 @@ NewtonResult Integrator::solve(const StepContext& ctx, Eigen::VectorXd& x, StepS
         e_new = e_try;
         if (m == 2) ++r.extrapolations;
       }
+    }
+    if (trust_model < 0) {
+      // The radius doubles after a full step whose energy change the exact model predicted
+      // within a quarter and shrinks after a shortened one (it never falls below the projected
+      // step, above).
+      const double agreement = (e_new - e) / trust_model;
+      if (alpha < 1.0 || agreement < 0.25)
+        m_trust_radius *= 0.25 + 0.375 * alpha;
+      else if (agreement > 0.75)
+        m_trust_radius *= 2;
     }
     may_reuse = quiet && alpha == 1.0 && !factor_projected && (r.iterations == 1 || r.residual < 0.1 * residual_before);
     residual_before = r.residual;
@@ -463,6 +503,7 @@ bool Integrator::advance(SheetState& state, double h, int depth, StepStats& stat
   stats.newton_iterations += r.iterations;
   stats.line_search_evaluations += r.line_search_evaluations;
   stats.extrapolations += r.extrapolations;
+  stats.trust_region_steps += r.trust_region_steps;
   stats.residual = std::max(stats.residual, r.residual);
   if (!r.converged) {
     if (std::getenv("PAPERSIM_DEBUG_NEWTON")) std::fprintf(stderr, "  failed: %s\n", r.failure.c_str());

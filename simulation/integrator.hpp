@@ -35,6 +35,16 @@ struct NewtonParams {
   /// of a sheet escaping a saddle by inertia alone, so the projected step is too short there and
   /// Newton crawls for tens of iterations (see docs/performance.md, "Bending model").
   int max_extrapolation = 1;
+  /// Where the exact Hessian is indefinite, take the Newton direction from up to this many
+  /// Steihaug-Toint conjugate-gradient iterations on the exact Hessian, preconditioned by the
+  /// factored projected one (simulation/steihaug.hpp), instead of the projected Newton step
+  /// (0: off). The trust region (in the projected Hessian's norm) starts each time step at the
+  /// projected step's length, never falls below it, doubles after a full step whose energy
+  /// change the exact model predicted within a quarter, and shrinks after a shortened one. The
+  /// projected model is too stiff along the directions a compressed sheet buckles in, so its
+  /// steps are too short there and Newton crawls (docs/performance.md, "Trust-region steps on the
+  /// exact Hessian").
+  int trust_region_cg = 0;
   /// Modified Newton in quiet phases (flight, rest): when the last time step converged within 2
   /// iterations on a factorisation of the exact (not projected) Hessian with the same h, up to
   /// this many consecutive iterations reuse that factorisation (and assemble only the gradient)
@@ -54,6 +64,8 @@ struct NewtonResult {
   int iterations = 0;
   int line_search_evaluations = 0;
   int extrapolations = 0;  ///< iterations whose step was lengthened (NewtonParams::max_extrapolation)
+  int trust_region_steps =
+      0;                  ///< iterations whose direction came from NewtonParams::trust_region_cg
   double residual = 0.0;  ///< last max |dx_v| / h [m/s]
   std::string failure;    ///< why it did not converge
 };
@@ -69,6 +81,7 @@ struct StepStats {
   int newton_iterations = 0;
   int line_search_evaluations = 0;
   int extrapolations = 0;  ///< Newton steps lengthened beyond the full step
+  int trust_region_steps = 0;     ///< Newton steps from conjugate gradients on the exact Hessian
   int reused_factorizations = 0;  ///< iterations that reused the previous factorisation
   /// Newton iterations that moved obstacles from the step start to its end with the sheet
   /// (Integrator::follow_obstacles); counted in newton_iterations too.
@@ -147,6 +160,11 @@ class Integrator {
   Eigen::VectorXd m_rigid_x, m_rigid_v;  // rigid blocks (3 per block)
   std::vector<std::vector<int>> m_static_pattern;  // from add_pattern, built once
   BlockSymmetricMatrix m_hessian;
+  /// The exact Hessian behind a projected factorisation (NewtonParams::trust_region_cg);
+  /// valid while m_have_exact.
+  BlockSymmetricMatrix m_hessian_exact;
+  bool m_have_exact = false;
+  double m_trust_radius = 0;  // of NewtonParams::trust_region_cg, in the projected Hessian's norm
   LinearSolver m_solver;
   long m_pattern_id = 0;
   long m_factor_pattern = -1;  // pattern of the factorisation in m_solver (-1: none yet)

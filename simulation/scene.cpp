@@ -359,6 +359,7 @@ Scene scene_from_json(const json& j, const std::string& source) {
     s.newton.max_factor_reuse = n.integer("max_factor_reuse", s.newton.max_factor_reuse, 0, 1000);
     s.newton.follow_obstacles = n.boolean("follow_obstacles", s.newton.follow_obstacles);
     s.newton.exact_retry_skip_max = n.integer("exact_retry_skip_max", s.newton.exact_retry_skip_max, 0, 1000);
+    s.newton.trust_region_cg = n.integer("trust_region_cg", s.newton.trust_region_cg, 0, 1000);
     n.finish();
   }
   s.remesh = read_remesh(r.child("remesh"));
@@ -499,7 +500,8 @@ json scene_to_json(const Scene& s) {
                  {"max_extrapolation", s.newton.max_extrapolation},
                  {"max_factor_reuse", s.newton.max_factor_reuse},
                  {"follow_obstacles", s.newton.follow_obstacles},
-                 {"exact_retry_skip_max", s.newton.exact_retry_skip_max}};
+                 {"exact_retry_skip_max", s.newton.exact_retry_skip_max},
+                 {"trust_region_cg", s.newton.trust_region_cg}};
   const remesh::RemeshParams& rp = s.remesh.params;
   j["remesh"] = {{"enabled", s.remesh.enabled},
                  {"every", s.remesh.every},

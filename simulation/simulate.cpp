@@ -47,6 +47,7 @@ json step_stats_json(const StepStats& s) {
           {"newton_iterations", s.newton_iterations},
           {"line_search_evaluations", s.line_search_evaluations},
           {"extrapolations", s.extrapolations},
+          {"trust_region_steps", s.trust_region_steps},
           {"reused_factorizations", s.reused_factorizations},
           {"following_iterations", s.following_iterations},
           {"seconds_assembly", s.seconds_assembly},
@@ -64,6 +65,7 @@ StepStats step_stats_from_json(const json& s) {
   o.newton_iterations = s.at("newton_iterations").get<int>();
   o.line_search_evaluations = s.at("line_search_evaluations").get<int>();
   o.extrapolations = s.at("extrapolations").get<int>();
+  o.trust_region_steps = s.value("trust_region_steps", 0);  // absent from older checkpoints
   o.reused_factorizations = s.at("reused_factorizations").get<int>();
   o.following_iterations = s.at("following_iterations").get<int>();
   o.seconds_assembly = s.at("seconds_assembly").get<double>();

@@ -30,7 +30,7 @@ using papersim::validation::median;
 int main(int argc, char** argv) {
   CLI::App app{"fall_study: a fall scenario over seeds, with its acceptance checks"};
   std::string name = "fall-sphere", csv;
-  int seeds = 20, first = 0;
+  int seeds = 20, first = 0, trust_region_cg = -1;
   double size_min = 0, size_max = 100, start_edge = 0, angle = 0, step = 0;
   app.add_option("--scenario", name, "fall-cylinder, fall-gable, fall-sphere, fall-spheres or pull")
       ->check(CLI::IsMember({"fall-cylinder", "fall-gable", "fall-sphere", "fall-spheres", "pull"}));
@@ -46,6 +46,9 @@ int main(int argc, char** argv) {
   app.add_option("--seeds", seeds, "number of seeds")->check(CLI::PositiveNumber);
   app.add_option("--first", first, "first seed (seeds first .. first + N - 1)")->check(CLI::NonNegativeNumber);
   app.add_option("--csv", csv, "also write the table as CSV");
+  app.add_option("--trust-region-cg", trust_region_cg,
+                 "solver.trust_region_cg (default: the scenario's)")
+      ->check(CLI::Range(0, 1000));
   CLI11_PARSE(app, argc, argv);
   if (size_min > size_max) {
     std::fprintf(stderr, "fall_study: --remesh %g mm is larger than --remesh-max %g mm\n", size_min, size_max);
@@ -67,6 +70,7 @@ int main(int argc, char** argv) {
     ps::Scene scene = ps::make_scenario(name, seed);
     if (start_edge > 0) scene.sheet.edge_length = 1e-3 * start_edge;
     if (step > 0) scene.time_step = 1e-3 * step;
+    if (trust_region_cg >= 0) scene.newton.trust_region_cg = trust_region_cg;
     if (size_min > 0) {
       scene.remesh.enabled = true;
       scene.remesh.params.size_min = 1e-3 * size_min;

@@ -1,17 +1,20 @@
 // The sparse Cholesky wrapper: factorize() succeeds exactly on positive definite matrices, so
 // Newton can try the exact Hessian and project it when it is indefinite.
+#include "simulation/linear_solver.hpp"
+
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
 #include <vector>
 
-#include "simulation/linear_solver.hpp"
 #include "simulation/sparse_matrix.hpp"
+#include "simulation/steihaug.hpp"
 
 using namespace papersim::simulation;
 
@@ -186,4 +189,88 @@ TEST(LinearSolver, CholmodsOpenMpRegionsRunAsPlainCalls) {
   const Eigen::VectorXd b = Eigen::VectorXd::LinSpaced(A.size(), -1, 1);
   const Eigen::VectorXd x = solver.solve(b);
   EXPECT_LT((A.multiply(x) - b).norm(), 1e-10 * b.norm());
+}
+
+namespace {
+
+// Steihaug-Toint conjugate gradients on small dense systems.
+struct Dense {
+  Eigen::MatrixXd h, m;
+  SteihaugResult run(const Eigen::VectorXd& b, double radius, int iterations) const {
+    const Eigen::LLT<Eigen::MatrixXd> m_factor(m);
+    return steihaug([&](const Eigen::VectorXd& v) -> Eigen::VectorXd { return h * v; },
+                    [&](const Eigen::VectorXd& v) -> Eigen::VectorXd { return m * v; },
+                    [&](const Eigen::VectorXd& v) -> Eigen::VectorXd { return m_factor.solve(v); },
+                    b, m_factor.solve(b), radius, iterations, 1e-12);
+  }
+};
+
+Eigen::MatrixXd random_spd(int n, unsigned seed) {
+  std::srand(seed);
+  const Eigen::MatrixXd a = Eigen::MatrixXd::Random(n, n);
+  return a * a.transpose() + n * Eigen::MatrixXd::Identity(n, n);
+}
+
+double m_norm(const Dense& d, const Eigen::VectorXd& z) { return std::sqrt(z.dot(d.m * z)); }
+
+}  // namespace
+
+TEST(Steihaug, WithTheExactMatrixAsPreconditionerTheFirstIterateIsTheNewtonStep) {
+  Dense d;
+  d.h = d.m = random_spd(6, 1);
+  const Eigen::VectorXd b = Eigen::VectorXd::LinSpaced(6, -1, 2);
+  const SteihaugResult r = d.run(b, 1e3, 20);
+  EXPECT_EQ(r.iterations, 1);
+  EXPECT_EQ(r.end, SteihaugResult::End::converged);
+  const Eigen::VectorXd newton = d.h.llt().solve(b);
+  EXPECT_LT((r.z - newton).norm(), 1e-12 * newton.norm());
+  EXPECT_NEAR(r.model, -0.5 * b.dot(newton), 1e-12 * std::abs(b.dot(newton)));
+}
+
+TEST(Steihaug, WithAnotherPreconditionerItConvergesToTheNewtonStepInsideTheRegion) {
+  // Conjugate gradients end at the minimiser of a definite model in at most n iterations.
+  Dense d;
+  d.h = random_spd(8, 2);
+  d.m = Eigen::MatrixXd(d.h.diagonal().asDiagonal());
+  const Eigen::VectorXd b = Eigen::VectorXd::LinSpaced(8, 1, -3);
+  const SteihaugResult r = d.run(b, 1e3, 8);
+  EXPECT_EQ(r.end, SteihaugResult::End::converged);
+  EXPECT_LE(r.iterations, 8);
+  const Eigen::VectorXd newton = d.h.llt().solve(b);
+  EXPECT_LT((r.z - newton).norm(), 1e-9 * newton.norm());
+}
+
+TEST(Steihaug, NegativeCurvatureEndsOnTheBoundaryBelowTheCauchyPoint) {
+  // An indefinite H: the model is unbounded below, so the step ends on the trust region's
+  // boundary, and it lowers the model at least as much as the Cauchy point (the model's
+  // minimiser along the preconditioned steepest descent direction within the region), which
+  // is the first iterate's direction.
+  Dense d;
+  d.h = Eigen::Vector4d(2.0, -1.0, 1.0, 3.0).asDiagonal();
+  d.m = Eigen::Vector4d(2.0, 1.0, 1.0, 3.0).asDiagonal();  // the projection of H, shifted
+  const Eigen::Vector4d b(1.0, 0.5, -1.0, 0.3);
+  const double radius = 2.0;
+  const SteihaugResult r = d.run(b, radius, 10);
+  EXPECT_TRUE(r.end == SteihaugResult::End::negative_curvature ||
+              r.end == SteihaugResult::End::boundary);
+  EXPECT_NEAR(m_norm(d, r.z), radius, 1e-12);
+  const auto model = [&](const Eigen::VectorXd& z) { return -b.dot(z) + 0.5 * z.dot(d.h * z); };
+  EXPECT_NEAR(r.model, model(r.z), 1e-12);
+  const Eigen::VectorXd y = d.m.llt().solve(b);
+  double cauchy = 0;  // the model along y up to the boundary, sampled finely
+  for (double t = 0; t <= radius / m_norm(d, y); t += 1e-4) cauchy = std::min(cauchy, model(t * y));
+  EXPECT_LE(r.model, cauchy + 1e-12);
+  EXPECT_GT(b.dot(r.z), 0);  // a descent direction of the function whose gradient is -b
+}
+
+TEST(Steihaug, ASmallRadiusCutsTheNewtonStepToTheBoundary) {
+  Dense d;
+  d.h = random_spd(5, 3);
+  d.m = d.h + Eigen::MatrixXd::Identity(5, 5);
+  const Eigen::VectorXd b = Eigen::VectorXd::Ones(5);
+  const double newton_norm = m_norm(d, d.h.llt().solve(b));
+  const SteihaugResult r = d.run(b, 0.3 * newton_norm, 10);
+  EXPECT_EQ(r.end, SteihaugResult::End::boundary);
+  EXPECT_NEAR(m_norm(d, r.z), 0.3 * newton_norm, 1e-12 * newton_norm);
+  EXPECT_LT(r.model, 0);
 }
