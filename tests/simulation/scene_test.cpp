@@ -312,6 +312,7 @@ TEST(Run, ExtrapolatedProjectedStepsSaveIterationsAndKeepTheResult) {
   Scene scene = make_scenario("pull", 3);
   scene.sheet.edge_length = 0.014;
   scene.duration = 0.4;
+  scene.newton.trust_region_cg = 0;  // projected Newton steps, the ones extrapolated
   RunOptions quiet;
   const RunResult plain = run_scene(scene, quiet);
   scene.newton.max_extrapolation = 8;
