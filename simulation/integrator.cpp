@@ -286,7 +286,7 @@ NewtonResult Integrator::solve(const StepContext& ctx, Eigen::VectorXd& x, StepS
                    [&](const Eigen::VectorXd& v) { return m_hessian.multiply(v); },
                    [&](const Eigen::VectorXd& v) { return m_solver.solve(v); }, rhs, sol,
                    m_trust_radius, m_params.trust_region_cg, 0.1);
-      if (cg.model < 0) {
+      if (cg.model < 0 && cg.z.allFinite()) {  // else the projected step
         sol = cg.z;
         dx = sol.head(g.size());
         trust_model = cg.model;

@@ -35,6 +35,7 @@ SteihaugResult steihaug(MultiplyH&& multiply_h, MultiplyM&& multiply_m, SolveM&&
   const auto to_boundary = [&] {
     const Eigen::VectorXd md = multiply_m(d);
     const double a = d.dot(md), half_b = z.dot(md), c = z.dot(multiply_m(z)) - radius * radius;
+    if (!(a > 0)) return 0.0;  // d has no length in the M norm: stay at z
     return (-half_b + std::sqrt(std::max(0.0, half_b * half_b - a * c))) / a;
   };
   for (int j = 0; j < max_iterations; ++j) {
