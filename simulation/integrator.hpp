@@ -64,8 +64,7 @@ struct NewtonResult {
   int iterations = 0;
   int line_search_evaluations = 0;
   int extrapolations = 0;  ///< iterations whose step was lengthened (NewtonParams::max_extrapolation)
-  int trust_region_steps =
-      0;                  ///< iterations whose direction came from NewtonParams::trust_region_cg
+  int trust_region_steps = 0;  ///< directions from NewtonParams::trust_region_cg
   double residual = 0.0;  ///< last max |dx_v| / h [m/s]
   std::string failure;    ///< why it did not converge
 };
