@@ -118,7 +118,8 @@ TEST(Runner, FailuresAreRecordedWithTheirReasonAndTheRestFinishes) {
 TEST(Runner, ProgressShowsTheShareOfRunningTasks) {
   const fs::path root = fresh_dir("share");
   const auto tasks = numbered_tasks(2);
-  auto spec = shell_spec(root, "sleep 0.5; echo ok > \"$1/value\"");
+  // Task 0 outlives task 1, so every progress call with a task running has task 0 among them.
+  auto spec = shell_spec(root, "if [ $2 = 0 ]; then sleep 0.8; fi; echo ok > \"$1/value\"");
   spec.progress_every = 0.05;
   spec.running_share = [](const Task& t) {
     return t.info.at("index").get<int>() == 0 ? 0.414 : -1.0;
