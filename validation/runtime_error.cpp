@@ -2,47 +2,55 @@
 // mesh edge length and time step (uniform meshes) and of remeshing settings (adaptive meshes from
 // a coarse start, --remesh), each result compared with a fine reference run of the same
 // draw (validation/compare.hpp: RMS and max position error at the same material points,
-// symmetric Hausdorff distance; and the shape error, RMS after the best rigid alignment). Writes OUT/runtime_error.csv (every draw and setting),
-// OUT/runtime_error_summary.csv (per setting over the draws: median wall and CPU time, median and
-// worst RMS error, worst max error) and OUT/runtime_error.png (gnuplot: median CPU time against the
-// worst RMS error, one series per mesh mode and time step), prints the tables, the settings no other setting
-// beats on both time and error (the Pareto front), and the cheapest setting whose RMS error is
-// below --target on every draw.
-//   papersim_runtime_error --out DIR [--scenario pull] [--seeds 0,1,2,3,4,5,6,7] [--edges 20,14,10,7]
+// symmetric Hausdorff distance; and the shape error, RMS after the best rigid alignment). Writes
+// OUT/runtime_error.csv (every draw and setting), OUT/runtime_error_summary.csv (per setting over
+// the draws: median wall and CPU time, median and worst RMS error, worst max error) and
+// OUT/runtime_error.png (gnuplot: median CPU time against the worst RMS error, one series per mesh
+// mode and time step), prints the tables, the settings no other setting beats on both time and
+// error (the Pareto front), and the cheapest setting whose RMS error is below --target on every
+// draw.
+//   papersim_runtime_error --out DIR [--scenario pull] [--seeds 0,1,2,3,4,5,6,7] [--edges
+//   20,14,10,7]
 //       [--steps 20,10,5] [--reference-edge 5] [--reference-step 2.5] [--target 2]
-//       [--check-edge 3.5] [--remesh 3:100,6:100] [--remesh-start 21] [--replot]
-// Edges and the target are in mm, steps in ms. A --remesh setting MIN:MAX[:ANGLE] runs the draw with
-// remeshing on (remesh.size_min MIN mm, size_max MAX mm, refine_angle ANGLE rad, the scene's other
-// remesh keys), starting from a uniform mesh of --remesh-start mm, at every step of --steps. Cost
-// is measured as the CPU time of the run (this process is single-threaded; on a loaded machine
+//       [--check-edge 3.5] [--remesh 3:100,6:100] [--remesh-start 21] [--set KEY=VALUE ...]
+//       [--replot]
+// Edges and the target are in mm, steps in ms. A --remesh setting MIN:MAX[:ANGLE] runs the draw
+// with remeshing on (remesh.size_min MIN mm, size_max MAX mm, refine_angle ANGLE rad, the scene's
+// other remesh keys), starting from a uniform mesh of --remesh-start mm, at every step of --steps.
+// Cost is measured as the CPU time of the run (this process is single-threaded; on a loaded machine
 // CPU time is the steadier figure), wall time is recorded too. Each draw's reference is written to
 // DIR/seed_N/reference and reused by later runs from the same scene (draw, resolution, material,
 // solver settings: the whole scene file); each sweep run's result is written to
 // DIR/seed_N/runs/*.json and read back by a later study of the same scene and reference, so an
-// interrupted study resumes, and processes on different seeds can share DIR. --check-edge runs each draw once more, finer (DIR/seed_N/reference_check), and
-// compares it with its reference: a draw whose end state changes under refinement (a draped
-// sheet choosing another fold pattern) has no converged reference, so it is reported and left
-// out of the summary; when no draw holds, no setting is recommended and the exit status is 1.
-#include <CLI/CLI.hpp>
-#include <nlohmann/json.hpp>
+// interrupted study resumes, and processes on different seeds can share DIR. --check-edge runs each
+// draw once more, finer (DIR/seed_N/reference_check), and compares it with its reference: a draw
+// whose end state changes under refinement (a draped sheet choosing another fold pattern) has no
+// converged reference, so it is reported and left out of the summary; when no draw holds, no
+// setting is recommended and the exit status is 1.
+// --set KEY=VALUE changes a scene key of the sweep's runs, not of the references, so a solver
+// option is measured against the same references: a study with --set in the same DIR reuses them,
+// and its runs are stored apart from those without (the CSVs and the plot are the last study's).
+#include <sys/resource.h>
+#include <unistd.h>
 
+#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
-#include <set>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <optional>
+#include <set>
 #include <sstream>
 #include <string>
 #include <vector>
 
-#include <sys/resource.h>
-#include <unistd.h>
-
 #include "remesh/sheet_io.hpp"
+#include "simulation/batch.hpp"
 #include "simulation/scenario.hpp"
 #include "simulation/simulate.hpp"
 #include "validation/compare.hpp"
@@ -399,12 +407,14 @@ std::optional<Sample> read_sample(const fs::path& path, const nlohmann::json& ke
 
 /// One draw: reference (cached), optional check of the reference at a finer edge, and the sweep.
 SeedResult study_draw(const std::string& scenario, long long seed, const fs::path& dir,
-                      const std::vector<double>& edges, const std::vector<double>& steps, double ref_edge,
-                      double ref_step, double check_edge, double target,
-                      const std::vector<RemeshSetting>& remeshes, double remesh_start) {
+                      const std::vector<double>& edges, const std::vector<double>& steps,
+                      double ref_edge, double ref_step, double check_edge, double target,
+                      const std::vector<RemeshSetting>& remeshes, double remesh_start,
+                      const nlohmann::json& sets) {
   SeedResult d;
   d.seed = seed;
   const ps::Scene base = ps::make_scenario(scenario, seed);
+  const ps::Scene swept = ps::apply_overrides(base, sets, "--set");
   fs::create_directories(dir);
   const pv::SheetGeometry reference =
       reference_run(with_resolution(base, ref_edge, ref_step), dir, "reference", d.reference_wall);
@@ -427,11 +437,23 @@ SeedResult study_draw(const std::string& scenario, long long seed, const fs::pat
               "vertices", "max_vert", "steps", "newton", "wall_s", "cpu_s", "rms_mm", "max_mm", "hausd_mm",
               "shape_mm");
   const nlohmann::json reference_key = ps::scene_to_json(with_resolution(base, ref_edge, ref_step));
-  const auto run_one = [&](const ps::Scene& scene, const std::string& remesh, double edge, double step) {
+  std::string sets_tag;
+  if (!sets.empty()) {
+    std::uint64_t h = 14695981039346656037ull;  // FNV-1a of the keys and values
+    for (const char c : sets.dump()) h = (h ^ static_cast<unsigned char>(c)) * 1099511628211ull;
+    char hex[24];
+    std::snprintf(hex, sizeof hex, "_set_%016llx", static_cast<unsigned long long>(h));
+    sets_tag = hex;
+  }
+  const auto run_one = [&](const ps::Scene& scene, const std::string& remesh, double edge,
+                           double step) {
     // A run already made from the same scene against the same reference (an interrupted study, or
     // another process on other seeds or settings) is read back, not run again.
-    const fs::path cached = dir / "runs" / ("remesh_" + remesh + "_edge_" + format_number(edge) + "_step_" +
-                                            format_number(step) + ".json");
+    // Runs with --set keys are stored apart (named by a hash of the keys), so a study with them
+    // and one without can share the folder and its references without replacing each other's runs.
+    const fs::path cached = dir / "runs" /
+                            ("remesh_" + remesh + "_edge_" + format_number(edge) + "_step_" +
+                             format_number(step) + sets_tag + ".json");
     const nlohmann::json key = {{"scene", ps::scene_to_json(scene)}, {"reference", reference_key}};
     if (const auto s = read_sample(cached, key)) {
       d.samples.push_back(*s);
@@ -457,10 +479,11 @@ SeedResult study_draw(const std::string& scenario, long long seed, const fs::pat
     print_sample(seed, s, "");
   };
   for (double e : edges)
-    for (double h : steps) run_one(with_resolution(base, e, h), "off", e, h);
+    for (double h : steps) run_one(with_resolution(swept, e, h), "off", e, h);
   for (const RemeshSetting& m : remeshes)
     for (double h : steps)
-      run_one(with_remesh(with_resolution(base, remesh_start, h), m, remesh_start), m.label(), remesh_start, h);
+      run_one(with_remesh(with_resolution(swept, remesh_start, h), m, remesh_start), m.label(),
+              remesh_start, h);
   return d;
 }
 
@@ -495,6 +518,12 @@ int main(int argc, char** argv) {
       ->capture_default_str()->check(CLI::PositiveNumber);
   std::string mark_text;
   app.add_option("--mark", mark_text, "EDGE:STEP: circle this uniform setting on the plot as the old default (mm, ms)");
+  std::vector<std::string> set_pairs;
+  app.add_option(
+      "--set", set_pairs,
+      "KEY=VALUE: set a scene key of the sweep's runs, not of the references (dotted, e.g. "
+      "solver.trust_region_cg=20; the value is JSON); repeatable. The sweep's own keys (time_step, "
+      "sheet.edge_length, remesh.*) are refused");
   bool replot = false;
   app.add_flag("--replot", replot, "only redraw OUT/runtime_error.png from OUT/runtime_error_summary.csv");
   CLI11_PARSE(app, argc, argv);
@@ -540,13 +569,23 @@ int main(int argc, char** argv) {
       throw std::runtime_error("--check-edge: " + format_number(check_edge) +
                                " mm is not a positive edge length finer than --reference-edge (" +
                                format_number(ref_edge) + " mm)");
-    ps::make_scenario(scenario, seeds.front());  // an unknown scenario fails here, before any run
+    const nlohmann::json sets = ps::parse_overrides(set_pairs);
+    for (const auto& [key, value] : sets.items())
+      if (key == "time_step" || key == "sheet.edge_length" || key.rfind("remesh.", 0) == 0 ||
+          key == "remesh")
+        throw std::runtime_error("--set: '" + key +
+                                 "' is set by the sweep (--edges, --steps, --remesh)");
+    // An unknown scenario or a bad --set key fails here, before any run.
+    ps::apply_overrides(ps::make_scenario(scenario, seeds.front()), sets, "--set");
+    if (!sets.empty())
+      std::printf("the sweep's runs with --set %s (not the references)\n", sets.dump().c_str());
     fs::create_directories(out);
     const auto t0 = std::chrono::steady_clock::now();
     std::vector<SeedResult> draws;
     for (long long seed : seeds) {
-      draws.push_back(study_draw(scenario, seed, fs::path(out) / ("seed_" + std::to_string(seed)), edges, steps,
-                                 ref_edge, ref_step, check_edge, target, remeshes, remesh_start));
+      draws.push_back(study_draw(scenario, seed, fs::path(out) / ("seed_" + std::to_string(seed)),
+                                 edges, steps, ref_edge, ref_step, check_edge, target, remeshes,
+                                 remesh_start, sets));
       write_csv(fs::path(out) / "runtime_error.csv", draws);  // partial results survive an interruption
     }
     const std::vector<Aggregate> settings = aggregate(draws);
