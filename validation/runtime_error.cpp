@@ -9,11 +9,10 @@
 // mode and time step), prints the tables, the settings no other setting beats on both time and
 // error (the Pareto front), and the cheapest setting whose RMS error is below --target on every
 // draw.
-//   papersim_runtime_error --out DIR [--scenario pull] [--seeds 0,1,2,3,4,5,6,7] [--edges
-//   20,14,10,7]
-//       [--steps 20,10,5] [--reference-edge 5] [--reference-step 2.5] [--target 2]
-//       [--check-edge 3.5] [--remesh 3:100,6:100] [--remesh-start 21] [--set KEY=VALUE ...]
-//       [--replot]
+//   papersim_runtime_error --out DIR [--scenario pull] [--seeds 0,1,2,3,4,5,6,7]
+//       [--edges 20,14,10,7] [--steps 20,10,5] [--reference-edge 5] [--reference-step 2.5]
+//       [--target 2] [--check-edge 3.5] [--remesh 3:100,6:100] [--remesh-start 21]
+//       [--set KEY=VALUE ...] [--replot]
 // Edges and the target are in mm, steps in ms. A --remesh setting MIN:MAX[:ANGLE] runs the draw
 // with remeshing on (remesh.size_min MIN mm, size_max MAX mm, refine_angle ANGLE rad, the scene's
 // other remesh keys), starting from a uniform mesh of --remesh-start mm, at every step of --steps.
@@ -30,10 +29,9 @@
 // --set KEY=VALUE changes a scene key of the sweep's runs, not of the references, so a solver
 // option is measured against the same references: a study with --set in the same DIR reuses them,
 // and its runs are stored apart from those without (the CSVs and the plot are the last study's).
-#include <sys/resource.h>
-#include <unistd.h>
-
 #include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -42,12 +40,14 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
-#include <nlohmann/json.hpp>
 #include <optional>
 #include <set>
 #include <sstream>
 #include <string>
 #include <vector>
+
+#include <sys/resource.h>
+#include <unistd.h>
 
 #include "remesh/sheet_io.hpp"
 #include "simulation/batch.hpp"
