@@ -66,12 +66,13 @@ Integrator::Integrator(int num_vertices, std::vector<std::unique_ptr<EnergyTerm>
       m_params(params),
       m_rigid_x(Eigen::VectorXd::Zero(3 * rigid_blocks)),
       m_rigid_v(Eigen::VectorXd::Zero(3 * rigid_blocks)) {
-  int blocks = num_vertices + rigid_blocks;
+  const int first_auxiliary = num_vertices + rigid_blocks;
+  int blocks = first_auxiliary;
   for (const auto& t : m_terms) {
     t->set_auxiliary_offset(blocks);
     blocks += t->auxiliary_blocks();
   }
-  SparsityBuilder pattern(blocks);
+  SparsityBuilder pattern(blocks, first_auxiliary);
   for (const auto& t : m_terms) t->add_pattern(pattern);
   m_static_pattern = pattern.finish();
   m_hessian = BlockSymmetricMatrix(m_static_pattern);
@@ -99,7 +100,9 @@ void Integrator::update_pattern(const Eigen::VectorXd& x) {
   for (const auto& t : m_terms) t->add_dynamic_pattern(pattern);
   m_hessian = BlockSymmetricMatrix(pattern.finish());
   ++m_pattern_id;  // the solver redoes its symbolic analysis
-  if (std::getenv("PAPERSIM_DEBUG_SOLVER")) std::fprintf(stderr, "pattern %ld nnz %zu\n", m_pattern_id, m_hessian.values().size());
+  if (std::getenv("PAPERSIM_DEBUG_SOLVER"))
+    std::fprintf(stderr, "pattern %ld nnz %zu (structure %zu)\n", m_pattern_id,
+                 m_hessian.values().size(), m_hessian.structure_rows().size());
 }
 
 EnergyTerm* Integrator::find(const std::string& name) const {

@@ -157,7 +157,7 @@ class Integrator {
   std::vector<std::unique_ptr<EnergyTerm>> m_terms;
   NewtonParams m_params;
   Eigen::VectorXd m_rigid_x, m_rigid_v;  // rigid blocks (3 per block)
-  std::vector<std::vector<int>> m_static_pattern;  // from add_pattern, built once
+  BlockPattern m_static_pattern;         // from add_pattern, built once
   BlockSymmetricMatrix m_hessian;
   /// The exact Hessian behind a projected factorisation (NewtonParams::trust_region_cg);
   /// valid while m_have_exact.

@@ -11,6 +11,7 @@
 #include <cstdlib>
 #include <iterator>
 #include <mutex>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -148,14 +149,18 @@ struct LinearSolver::Impl {
     if (factor) cholmod_free_factor(&factor, &common);
     cholmod_finish(&common);
   }
-  /// A cholmod_sparse view of our arrays (no copy).
-  cholmod_sparse view(const BlockSymmetricMatrix& A) {
+  /// A cholmod_sparse of A's structure (BlockSymmetricMatrix::structure_starts): the pattern
+  /// for the analysis, and with `gathered` filled by gather() the matrix for a simplicial
+  /// factorisation.
+  std::vector<double> gathered;
+  cholmod_sparse structure(const BlockSymmetricMatrix& A) {
     cholmod_sparse s{};
     s.nrow = s.ncol = A.size();
-    s.nzmax = A.values().size();
-    s.p = const_cast<int*>(A.column_starts().data());
-    s.i = const_cast<int*>(A.row_indices().data());
-    s.x = const_cast<double*>(A.values().data());
+    s.nzmax = A.structure_rows().size();
+    s.p = const_cast<int*>(A.structure_starts().data());
+    s.i = const_cast<int*>(A.structure_rows().data());
+    gathered.resize(s.nzmax);
+    s.x = gathered.data();
     s.stype = 1;
     s.itype = CHOLMOD_INT;
     s.xtype = CHOLMOD_REAL;
@@ -163,6 +168,11 @@ struct LinearSolver::Impl {
     s.sorted = 1;
     s.packed = 1;
     return s;
+  }
+  void gather(const BlockSymmetricMatrix& A) {
+    const auto& at = A.structure_positions();
+    const auto& x = A.values();
+    for (std::size_t k = 0; k < at.size(); ++k) gathered[k] = x[at[k]];
   }
 
   /// The supernodal factorisation takes the lower triangle of P A P' (P the analysis's
@@ -179,8 +189,8 @@ struct LinearSolver::Impl {
     const int* perm = static_cast<const int*>(factor->Perm);
     std::vector<int> inverse(n);
     for (int k = 0; k < n; ++k) inverse[perm[k]] = k;
-    const auto& Ap = A.column_starts();
-    const auto& Ai = A.row_indices();
+    const auto& Ap = A.structure_starts();
+    const auto& Ai = A.structure_rows();
     const std::size_t nnz = Ai.size();
     // Entry k = (i, j), i <= j, lands in column min(P i, P j), row max(P i, P j).
     std::vector<int> column(nnz), row(nnz);
@@ -211,7 +221,8 @@ struct LinearSolver::Impl {
   /// Supernodal factorisation of A's values through the permuted lower triangle.
   void factor_permuted_lower(const BlockSymmetricMatrix& A) {
     const auto& x = A.values();
-    for (std::size_t k = 0; k < x.size(); ++k) lower_x[to_lower[k]] = x[k];
+    const auto& at = A.structure_positions();
+    for (std::size_t k = 0; k < at.size(); ++k) lower_x[to_lower[k]] = x[at[k]];
     cholmod_sparse s{};
     s.nrow = s.ncol = A.size();
     s.nzmax = lower_x.size();
@@ -233,10 +244,16 @@ LinearSolver::LinearSolver() : m_impl(std::make_unique<Impl>()) {}
 LinearSolver::~LinearSolver() = default;
 
 bool LinearSolver::factorize(const BlockSymmetricMatrix& A, long pattern_id) {
-  for (double v : A.values())
-    if (!std::isfinite(v)) throw NumericError("linear solver: the matrix holds NaN or inf");
+  const auto& values = A.values();
+  const auto& in_structure = A.in_structure();
+  for (std::size_t k = 0; k < values.size(); ++k) {
+    if (!std::isfinite(values[k])) throw NumericError("linear solver: the matrix holds NaN or inf");
+    // A value outside the structure would be dropped from the factorisation without a sign.
+    if (values[k] != 0.0 && !in_structure[k])
+      throw std::logic_error("linear solver: an energy term wrote outside its declared sparsity");
+  }
   auto& c = m_impl->common;
-  cholmod_sparse s = m_impl->view(A);
+  cholmod_sparse s = m_impl->structure(A);
   if (!m_impl->factor || pattern_id != m_impl->pattern_id || m_impl->n != A.size()) {
     if (m_impl->factor) cholmod_free_factor(&m_impl->factor, &c);
     m_impl->factor = cholmod_analyze(&s, &c);
@@ -245,15 +262,18 @@ bool LinearSolver::factorize(const BlockSymmetricMatrix& A, long pattern_id) {
     m_impl->n = A.size();
     ++m_analyses;
     if (std::getenv("PAPERSIM_DEBUG_SOLVER"))
-      std::fprintf(stderr, "analyse n %d nnz(A) %zu lnz %.0f ordering %d %s\n", A.size(), A.values().size(), c.lnz,
-                   c.selected, m_impl->factor->is_super ? "supernodal" : "simplicial");
+      std::fprintf(stderr, "analyse n %d nnz(A) %zu lnz %.0f flops %.3g ordering %d %s\n", A.size(),
+                   s.nzmax, c.lnz, c.fl, c.selected,
+                   m_impl->factor->is_super ? "supernodal" : "simplicial");
     if (m_impl->factor->is_super) m_impl->build_permuted_lower(A);
   }
   int ok = 1;
   if (m_impl->factor->is_super)
     m_impl->factor_permuted_lower(A);
-  else
+  else {
+    m_impl->gather(A);
     ok = cholmod_factorize(&s, m_impl->factor, &c);
+  }
   if (c.status < CHOLMOD_OK) ok = 0;
   if (!ok && c.status != CHOLMOD_NOT_POSDEF)
     throw NumericError("linear solver: CHOLMOD factorisation failed, status " +

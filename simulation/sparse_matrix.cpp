@@ -3,35 +3,74 @@
 #include <cassert>
 
 #include <algorithm>
+#include <cstdint>
 #include <string>
 
 #include "remesh/errors.hpp"
 
 namespace papersim::simulation {
 
-SparsityBuilder::SparsityBuilder(int num_vertices) : m_neighbours(num_vertices) {
-  for (int j = 0; j < num_vertices; ++j) m_neighbours[j].push_back(j);
+namespace {
+constexpr std::uint16_t DIAGONAL = 0x111;  // bits 0, 4, 8: entries (0, 0), (1, 1), (2, 2)
+constexpr std::uint16_t WHOLE = 0x1FF;
+constexpr unsigned ALL_COMPONENTS = 7;
+}  // namespace
+
+SparsityBuilder::SparsityBuilder(int num_blocks, int first_auxiliary) : m_neighbours(num_blocks) {
+  if (first_auxiliary < 0) first_auxiliary = num_blocks;
+  for (int j = 0; j < num_blocks; ++j)
+    m_neighbours[j].emplace_back(j, j < first_auxiliary ? WHOLE : DIAGONAL);
 }
 
-SparsityBuilder::SparsityBuilder(std::vector<std::vector<int>> upper_neighbours)
-    : m_neighbours(std::move(upper_neighbours)) {}
+SparsityBuilder::SparsityBuilder(BlockPattern pattern) : m_neighbours(pattern.neighbours.size()) {
+  for (std::size_t j = 0; j < m_neighbours.size(); ++j)
+    for (std::size_t k = 0; k < pattern.neighbours[j].size(); ++k)
+      m_neighbours[j].emplace_back(pattern.neighbours[j][k], pattern.masks[j][k]);
+}
 
-void SparsityBuilder::add_clique(const int* vertices, int count) {
+void SparsityBuilder::couple(int i, unsigned ci, int j, unsigned cj) {
+  // Rows are the lower block's components, columns the higher one's; in a diagonal block both
+  // orders, since only its upper triangle is stored and either may be it.
+  if (i > j) std::swap(i, j), std::swap(ci, cj);
+  std::uint16_t mask = 0;
+  for (unsigned p = 0; p < 3; ++p)
+    for (unsigned q = 0; q < 3; ++q)
+      if ((ci >> p & 1) && (cj >> q & 1)) {
+        mask |= static_cast<std::uint16_t>(1u << (3 * q + p));
+        if (i == j) mask |= static_cast<std::uint16_t>(1u << (3 * p + q));
+      }
+  m_neighbours[j].emplace_back(i, mask);
+}
+
+void SparsityBuilder::add_clique(const int* blocks, int count) {
   for (int a = 0; a < count; ++a)
-    for (int b = 0; b < count; ++b)
-      if (vertices[a] < vertices[b]) m_neighbours[vertices[b]].push_back(vertices[a]);
+    for (int b = a; b < count; ++b) couple(blocks[a], ALL_COMPONENTS, blocks[b], ALL_COMPONENTS);
 }
 
-std::vector<std::vector<int>> SparsityBuilder::finish() {
-  for (auto& n : m_neighbours) {
+void SparsityBuilder::add_clique(const int* blocks, const unsigned char* components, int count) {
+  for (int a = 0; a < count; ++a)
+    for (int b = a; b < count; ++b) couple(blocks[a], components[a], blocks[b], components[b]);
+}
+
+BlockPattern SparsityBuilder::finish() {
+  BlockPattern out;
+  out.neighbours.resize(m_neighbours.size());
+  out.masks.resize(m_neighbours.size());
+  for (std::size_t j = 0; j < m_neighbours.size(); ++j) {
+    auto& n = m_neighbours[j];
     std::sort(n.begin(), n.end());
-    n.erase(std::unique(n.begin(), n.end()), n.end());
+    for (const auto& [i, mask] : n)
+      if (!out.neighbours[j].empty() && out.neighbours[j].back() == i)
+        out.masks[j].back() |= mask;
+      else
+        out.neighbours[j].push_back(i), out.masks[j].push_back(mask);
+    n = {};
   }
-  return std::move(m_neighbours);
+  return out;
 }
 
-BlockSymmetricMatrix::BlockSymmetricMatrix(std::vector<std::vector<int>> upper_neighbours)
-    : m_neighbours(std::move(upper_neighbours)) {
+BlockSymmetricMatrix::BlockSymmetricMatrix(const BlockPattern& pattern)
+    : m_neighbours(pattern.neighbours) {
   const int n = static_cast<int>(m_neighbours.size());
   m_col_start.assign(3 * n + 1, 0);
   for (int j = 0; j < n; ++j) {
@@ -42,16 +81,43 @@ BlockSymmetricMatrix::BlockSymmetricMatrix(std::vector<std::vector<int>> upper_n
     }
   }
   m_rows.resize(m_col_start.back());
+  m_in_structure.assign(m_rows.size(), 0);
+  m_structure_start.assign(3 * n + 1, 0);
+  m_structure_rows.clear();
+  m_structure_at.clear();
   for (int j = 0; j < n; ++j)
     for (int b = 0; b < 3; ++b) {
       int k = m_col_start[3 * j + b];
-      for (int i : m_neighbours[j]) {
+      for (std::size_t t = 0; t < m_neighbours[j].size(); ++t) {
+        const int i = m_neighbours[j][t];
         const int rows_in_block = i < j ? 3 : b + 1;
-        for (int a = 0; a < rows_in_block; ++a) m_rows[k++] = 3 * i + a;
+        for (int a = 0; a < rows_in_block; ++a, ++k) {
+          m_rows[k] = 3 * i + a;
+          if (pattern.masks[j][t] >> (3 * b + a) & 1) {
+            m_in_structure[k] = 1;
+            m_structure_rows.push_back(3 * i + a);
+            m_structure_at.push_back(k);
+          }
+        }
       }
+      m_structure_start[3 * j + b + 1] = static_cast<int>(m_structure_rows.size());
     }
   m_values.assign(m_rows.size(), 0.0);
 }
+
+namespace {
+BlockPattern full_pattern(std::vector<std::vector<int>> neighbours) {
+  BlockPattern p;
+  p.masks.resize(neighbours.size());
+  for (std::size_t j = 0; j < neighbours.size(); ++j)
+    p.masks[j].assign(neighbours[j].size(), WHOLE);
+  p.neighbours = std::move(neighbours);
+  return p;
+}
+}  // namespace
+
+BlockSymmetricMatrix::BlockSymmetricMatrix(std::vector<std::vector<int>> upper_neighbours)
+    : BlockSymmetricMatrix(full_pattern(std::move(upper_neighbours))) {}
 
 int BlockSymmetricMatrix::block_offset(int i, int j) const {
   const auto& n = m_neighbours[j];

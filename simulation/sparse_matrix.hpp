@@ -3,31 +3,56 @@
 /// columns (the layout CHOLMOD takes with stype = 1), and the assembly of per-element Hessians.
 #include <Eigen/Core>
 #include <array>
+#include <cstdint>
+#include <utility>
 #include <vector>
 
 namespace papersim::simulation {
 
-/// Which vertex pairs couple: built once per topology from every element's vertex list.
-class SparsityBuilder {
- public:
-  explicit SparsityBuilder(int num_vertices);
-  /// Starts from a finished pattern (finish()'s result) and adds to it.
-  explicit SparsityBuilder(std::vector<std::vector<int>> upper_neighbours);
-  /// Every pair of vertices in `vertices` couples.
-  void add_clique(const int* vertices, int count);
-  int num_vertices() const { return static_cast<int>(m_neighbours.size()); }
-  /// Sorted, unique lower neighbours (i <= j) of every vertex j, itself included.
-  std::vector<std::vector<int>> finish();
-
- private:
-  std::vector<std::vector<int>> m_neighbours;
+/// Which blocks couple, and which scalar entries of each coupling can be non-zero. A vertex
+/// couples in all three of its components; an auxiliary unknown is one component of its block
+/// (EnergyTerm::auxiliary_blocks packs three to a block), and stating that keeps the three
+/// unrelated unknowns of a block from being coupled to each other's neighbours in the
+/// factorisation (docs/performance.md, "The edge slopes in the factorisation").
+struct BlockPattern {
+  /// Sorted, unique upper neighbours i <= j of every block j, itself included.
+  std::vector<std::vector<int>> neighbours;
+  /// Per neighbour i of j: bit 3 q + p set when entry (row p of block i, column q of block j) can
+  /// be non-zero. Every diagonal entry is set.
+  std::vector<std::vector<std::uint16_t>> masks;
 };
 
-/// Upper-triangular CSC matrix of size 3N x 3N with a fixed block pattern.
+/// Builds a BlockPattern from every element's blocks: once per topology, and again from that
+/// start when contact adds couplings.
+class SparsityBuilder {
+ public:
+  /// Blocks from `first_auxiliary` on hold auxiliary unknowns: their diagonal blocks start with
+  /// the diagonal entries only (the cliques add the rest); every other block's whole.
+  explicit SparsityBuilder(int num_blocks, int first_auxiliary = -1);
+  /// Starts from a finished pattern (finish()'s result) and adds to it.
+  explicit SparsityBuilder(BlockPattern pattern);
+  /// Every pair of blocks in `blocks` couples in all components.
+  void add_clique(const int* blocks, int count);
+  /// Every pair of members couples in their components: member k is component set
+  /// `components[k]` (bit c: component c) of block `blocks[k]`; a block may appear more than once.
+  void add_clique(const int* blocks, const unsigned char* components, int count);
+  int num_blocks() const { return static_cast<int>(m_neighbours.size()); }
+  BlockPattern finish();
+
+ private:
+  void couple(int i, unsigned ci, int j, unsigned cj);
+  std::vector<std::vector<std::pair<int, std::uint16_t>>> m_neighbours;
+};
+
+/// Upper-triangular CSC matrix of size 3N x 3N with a fixed block pattern. Every entry of a
+/// coupled block is stored (so assembly indexes whole blocks); the structure, the entries the
+/// pattern's masks allow, is what the factorisation takes.
 class BlockSymmetricMatrix {
  public:
   BlockSymmetricMatrix() = default;
-  /// `upper_neighbours[j]`: sorted vertices i <= j coupled to j (j included).
+  explicit BlockSymmetricMatrix(const BlockPattern& pattern);
+  /// Every entry of every coupled block in the structure (`upper_neighbours[j]`: sorted blocks
+  /// i <= j coupled to j, j included).
   explicit BlockSymmetricMatrix(std::vector<std::vector<int>> upper_neighbours);
 
   int size() const { return 3 * static_cast<int>(m_neighbours.size()); }
@@ -56,6 +81,14 @@ class BlockSymmetricMatrix {
   std::vector<double>& values() { return m_values; }
   const std::vector<double>& values() const { return m_values; }
 
+  /// The structure in compressed columns: column starts (size() + 1), row indices, and each
+  /// entry's position in values(). Entries outside it must stay 0 (in_structure()).
+  const std::vector<int>& structure_starts() const { return m_structure_start; }
+  const std::vector<int>& structure_rows() const { return m_structure_rows; }
+  const std::vector<int>& structure_positions() const { return m_structure_at; }
+  /// Per entry of values(): whether the structure holds it.
+  const std::vector<char>& in_structure() const { return m_in_structure; }
+
  private:
   void add_block(int vi, int vj, int a, int b, const double* h, int ld);
   int block_offset(int i, int j) const;  // position of block row i within column block j
@@ -63,6 +96,8 @@ class BlockSymmetricMatrix {
   std::vector<int> m_col_start;  // 3N + 1
   std::vector<int> m_rows;
   std::vector<double> m_values;
+  std::vector<int> m_structure_start, m_structure_rows, m_structure_at;
+  std::vector<char> m_in_structure;
 };
 
 }  // namespace papersim::simulation

@@ -289,11 +289,18 @@ void MorleyBendingEnergy::update_offsets() {
 }
 
 void MorleyBendingEnergy::add_pattern(SparsityBuilder& pattern) const {
+  // Each psi is one component of its block: the vertices couple to it, and it to the element's
+  // other psi, and not to the block's other two unknowns (which belong to other edges).
   std::vector<int> clique;
+  std::vector<unsigned char> components;
   for (const Element& e : m_elements) {
     clique = e.vertices;
-    for (int b : e.blocks) clique.push_back(m_first_block + b);
-    pattern.add_clique(clique.data(), static_cast<int>(clique.size()));
+    components.assign(e.vertices.size(), 7);
+    for (const auto& [block, component] : e.psi_at) {
+      clique.push_back(m_first_block + e.blocks[block]);
+      components.push_back(static_cast<unsigned char>(1u << component));
+    }
+    pattern.add_clique(clique.data(), components.data(), static_cast<int>(clique.size()));
   }
 }
 

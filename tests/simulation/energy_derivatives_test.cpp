@@ -73,13 +73,18 @@ void check_derivatives(EnergyTerm& term, int nv, const Eigen::VectorXd& x,
   // Auxiliary unknowns (the bending energy's edge slopes) follow the vertex blocks; the
   // condensed Hessian is the Schur complement of their block.
   term.set_auxiliary_offset(nv);
-  SparsityBuilder pattern(nv + term.auxiliary_blocks());
+  SparsityBuilder pattern(nv + term.auxiliary_blocks(), nv);
   term.add_pattern(pattern);
   term.update_pattern(x);  // terms with a dynamic pattern (self-contact) choose it at x
   term.add_dynamic_pattern(pattern);
   BlockSymmetricMatrix H(pattern.finish());
   Eigen::VectorXd g = Eigen::VectorXd::Zero(x.size());
   term.add_derivatives(x, g, &H);
+  // The factorisation takes only the declared structure: nothing may be written outside it.
+  int outside = 0;
+  for (std::size_t k = 0; k < H.values().size(); ++k)
+    outside += H.values()[k] != 0.0 && !H.in_structure()[k];
+  EXPECT_EQ(outside, 0) << term.name() << " writes outside its declared sparsity";
   Eigen::VectorXd g_fd(x.size());
   Eigen::MatrixXd H_fd(x.size(), x.size());
   for (int i = 0; i < x.size(); ++i) {

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -97,6 +98,102 @@ TEST(LinearSolver, RefactorsNewValuesOnTheSamePattern) {
   ASSERT_TRUE(solver.factorize(A, 8));
   EXPECT_EQ(solver.analyses(), 2);
   EXPECT_LT((A.multiply(solver.solve(b)) - b).norm(), 1e-10 * b.norm());
+}
+
+namespace {
+
+/// A chain of `n` vertices (blocks 0 .. n - 1, each coupled to the next) and one auxiliary
+/// unknown per vertex, packed three to a block after them (EnergyTerm::auxiliary_blocks):
+/// unknown v is component v % 3 of block n + v / 3, and vertex v, unknown v and unknown v + 1
+/// form a clique.
+/// The pattern states those components, so a block's three unknowns, which belong to three
+/// different vertices, are not coupled to each other's vertices.
+BlockPattern chain_with_auxiliaries(int n) {
+  SparsityBuilder pattern(n + (n + 2) / 3, n);
+  for (int v = 0; v + 1 < n; ++v) {
+    const int pair[2] = {v, v + 1};
+    pattern.add_clique(pair, 2);
+  }
+  for (int v = 0; v < n; ++v) {
+    const int w = std::min(v + 1, n - 1);
+    const int members[3] = {v, n + v / 3, n + w / 3};
+    const unsigned char components[3] = {7, static_cast<unsigned char>(1u << (v % 3)),
+                                         static_cast<unsigned char>(1u << (w % 3))};
+    pattern.add_clique(members, components, 3);
+  }
+  return pattern.finish();
+}
+
+}  // namespace
+
+// The structure holds exactly the entries the cliques state: every entry of a coupled vertex
+// block, and of an auxiliary block only the declared components' rows and columns, plus every
+// diagonal entry.
+TEST(SparsityBuilder, AuxiliaryUnknownsCoupleOnlyInTheirComponents) {
+  const int n = 7;
+  const BlockPattern pattern = chain_with_auxiliaries(n);
+  const BlockSymmetricMatrix A(pattern);
+  auto declared = [&](int r, int c) {  // r <= c, scalar degrees of freedom
+    if (r == c) return true;
+    const int vr = r / 3, vc = c / 3;
+    if (vc < n) return vc - vr <= 1;     // vertex blocks: the chain, whole blocks
+    const int u = 3 * (vc - n) + c % 3;  // auxiliary unknown of column c
+    if (u >= n) return false;            // the last block's unused components
+    if (vr < n) return vr == u || vr + 1 == u;
+    const int w = 3 * (vr - n) + r % 3;  // auxiliary unknown of row r
+    return w < n && (w + 1 == u || u + 1 == w);
+  };
+  const auto& starts = A.structure_starts();
+  const auto& rows = A.structure_rows();
+  int held = 0, expected = 0;
+  for (int c = 0; c < A.size(); ++c) {
+    for (int r = 0; r <= c; ++r) expected += declared(r, c);
+    for (int k = starts[c]; k < starts[c + 1]; ++k) {
+      EXPECT_TRUE(declared(rows[k], c)) << "entry (" << rows[k] << ", " << c << ")";
+      ++held;
+    }
+  }
+  EXPECT_EQ(held, expected);
+  EXPECT_LT(held, static_cast<int>(A.values().size()));  // the whole blocks store more
+}
+
+// A matrix on that pattern with values only in its structure factors and solves as the dense
+// matrix does; a value outside the structure is refused rather than dropped.
+TEST(LinearSolver, FactorsTheDeclaredStructureAndRefusesValuesOutsideIt) {
+  const int n = 30;
+  BlockSymmetricMatrix A(chain_with_auxiliaries(n));
+  const auto& at = A.structure_positions();
+  const auto& starts = A.structure_starts();
+  const auto& rows = A.structure_rows();
+  Eigen::MatrixXd dense = Eigen::MatrixXd::Zero(A.size(), A.size());
+  std::srand(5);
+  for (int c = 0; c < A.size(); ++c)
+    for (int k = starts[c]; k < starts[c + 1]; ++k)
+      if (rows[k] != c) {
+        const double v = static_cast<double>(std::rand()) / RAND_MAX - 0.5;
+        A.values()[at[k]] = v;
+        dense(rows[k], c) = dense(c, rows[k]) = v;
+      }
+  // Diagonal dominance makes it positive definite.
+  for (int c = 0; c < A.size(); ++c) {
+    const double d = dense.row(c).cwiseAbs().sum() + 1;
+    A.values()[A.column_starts()[c + 1] - 1] = d;
+    dense(c, c) = d;
+  }
+  const Eigen::VectorXd b = Eigen::VectorXd::LinSpaced(A.size(), -1, 2);
+  LinearSolver solver;
+  ASSERT_TRUE(solver.factorize(A, 1));
+  EXPECT_LT((solver.solve(b) - dense.ldlt().solve(b)).norm(), 1e-12 * b.norm());
+  // Row 0 (vertex 0, x) in the column of unknown 2 (component 2 of the first auxiliary block),
+  // which couples to vertices 1 and 2 only.
+  const int c = 3 * n + 2;
+  int outside = -1;
+  for (int k = A.column_starts()[c]; k < A.column_starts()[c + 1]; ++k)
+    if (A.row_indices()[k] == 0) outside = k;
+  ASSERT_GE(outside, 0);
+  ASSERT_FALSE(A.in_structure()[outside]);
+  A.values()[outside] = 1e-3;
+  EXPECT_THROW(solver.factorize(A, 1), std::logic_error);
 }
 
 namespace {
