@@ -169,10 +169,16 @@ struct LinearSolver::Impl {
     s.packed = 1;
     return s;
   }
-  void gather(const BlockSymmetricMatrix& A) {
+  /// Returns false when a gathered value is NaN or infinite.
+  bool gather(const BlockSymmetricMatrix& A) {
     const auto& at = A.structure_positions();
     const auto& x = A.values();
-    for (std::size_t k = 0; k < at.size(); ++k) gathered[k] = x[at[k]];
+    bool finite = true;
+    for (std::size_t k = 0; k < at.size(); ++k) {
+      gathered[k] = x[at[k]];
+      finite &= std::isfinite(gathered[k]);
+    }
+    return finite;
   }
 
   /// The supernodal factorisation takes the lower triangle of P A P' (P the analysis's
@@ -218,11 +224,18 @@ struct LinearSolver::Impl {
     lower_x.assign(nnz, 0.0);
   }
 
-  /// Supernodal factorisation of A's values through the permuted lower triangle.
-  void factor_permuted_lower(const BlockSymmetricMatrix& A) {
+  /// Supernodal factorisation of A's values through the permuted lower triangle; false (and
+  /// nothing factored) when a value is NaN or infinite.
+  bool factor_permuted_lower(const BlockSymmetricMatrix& A) {
     const auto& x = A.values();
     const auto& at = A.structure_positions();
-    for (std::size_t k = 0; k < at.size(); ++k) lower_x[to_lower[k]] = x[at[k]];
+    bool finite = true;
+    for (std::size_t k = 0; k < at.size(); ++k) {
+      const double v = x[at[k]];
+      lower_x[to_lower[k]] = v;
+      finite &= std::isfinite(v);
+    }
+    if (!finite) return false;
     cholmod_sparse s{};
     s.nrow = s.ncol = A.size();
     s.nzmax = lower_x.size();
@@ -237,6 +250,7 @@ struct LinearSolver::Impl {
     s.packed = 1;
     double beta[2] = {0, 0};
     cholmod_super_numeric(&s, nullptr, beta, factor, &common);
+    return true;
   }
 };
 
@@ -245,12 +259,12 @@ LinearSolver::~LinearSolver() = default;
 
 bool LinearSolver::factorize(const BlockSymmetricMatrix& A, long pattern_id) {
   const auto& values = A.values();
-  const auto& in_structure = A.in_structure();
-  for (std::size_t k = 0; k < values.size(); ++k) {
-    if (!std::isfinite(values[k])) throw NumericError("linear solver: the matrix holds NaN or inf");
+  const char* const non_finite = "linear solver: the matrix holds NaN or inf";
+  for (int k : A.outside_positions()) {
+    if (values[k] == 0.0) continue;
+    if (!std::isfinite(values[k])) throw NumericError(non_finite);
     // A value outside the structure would be dropped from the factorisation without a sign.
-    if (values[k] != 0.0 && !in_structure[k])
-      throw std::logic_error("linear solver: an energy term wrote outside its declared sparsity");
+    throw std::logic_error("linear solver: an energy term wrote outside its declared sparsity");
   }
   auto& c = m_impl->common;
   cholmod_sparse s = m_impl->structure(A);
@@ -268,10 +282,10 @@ bool LinearSolver::factorize(const BlockSymmetricMatrix& A, long pattern_id) {
     if (m_impl->factor->is_super) m_impl->build_permuted_lower(A);
   }
   int ok = 1;
-  if (m_impl->factor->is_super)
-    m_impl->factor_permuted_lower(A);
-  else {
-    m_impl->gather(A);
+  if (m_impl->factor->is_super) {
+    if (!m_impl->factor_permuted_lower(A)) throw NumericError(non_finite);
+  } else {
+    if (!m_impl->gather(A)) throw NumericError(non_finite);
     ok = cholmod_factorize(&s, m_impl->factor, &c);
   }
   if (c.status < CHOLMOD_OK) ok = 0;

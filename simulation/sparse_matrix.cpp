@@ -85,6 +85,7 @@ BlockSymmetricMatrix::BlockSymmetricMatrix(const BlockPattern& pattern)
   m_structure_start.assign(3 * n + 1, 0);
   m_structure_rows.clear();
   m_structure_at.clear();
+  m_outside.clear();
   for (int j = 0; j < n; ++j)
     for (int b = 0; b < 3; ++b) {
       int k = m_col_start[3 * j + b];
@@ -97,6 +98,8 @@ BlockSymmetricMatrix::BlockSymmetricMatrix(const BlockPattern& pattern)
             m_in_structure[k] = 1;
             m_structure_rows.push_back(3 * i + a);
             m_structure_at.push_back(k);
+          } else {
+            m_outside.push_back(k);
           }
         }
       }
@@ -146,6 +149,22 @@ void BlockSymmetricMatrix::add_block(int vi, int vj, int a, int b, const double*
 void BlockSymmetricMatrix::add_element(const int* vertices, int n, const double* hessian) {
   for (int a = 0; a < n; ++a)
     for (int b = 0; b < n; ++b) add_block(vertices[a], vertices[b], a, b, hessian, 3 * n);
+}
+
+void BlockSymmetricMatrix::add_column(int column, const int* blocks, int n, const double* values) {
+  const int j = column / 3;
+  double* col = &m_values[m_col_start[column]];
+  for (int k = 0; k < n; ++k) {
+    assert(blocks[k] <= j);
+    double* entry = col + 3 * block_offset(blocks[k], j);
+    const int rows = blocks[k] == j ? column % 3 + 1 : 3;  // the upper triangle of a diagonal block
+    for (int p = 0; p < rows; ++p) entry[p] += values[3 * k + p];
+  }
+}
+
+void BlockSymmetricMatrix::add_entry(int row, int column, double v) {
+  assert(row <= column);
+  m_values[m_col_start[column] + 3 * block_offset(row / 3, column / 3) + row % 3] += v;
 }
 
 void BlockSymmetricMatrix::add_diagonal(const Eigen::VectorXd& d) {

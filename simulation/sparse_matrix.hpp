@@ -67,6 +67,12 @@ class BlockSymmetricMatrix {
   }
   /// Same for a dynamically sized element (n vertices, column-major 3n x 3n data).
   void add_element(const int* vertices, int n, const double* hessian);
+  /// Adds values[3 k + p] to entry (3 blocks[k] + p, column) for k < n: part of one column, for
+  /// an element whose other columns are zero there (every blocks[k] <= column / 3, so the
+  /// entries are in the stored upper triangle).
+  void add_column(int column, const int* blocks, int n, const double* values);
+  /// Adds v to entry (row, column), row <= column.
+  void add_entry(int row, int column, double v);
   /// Adds d[i] to the diagonal entry of the first d.size() degrees of freedom (the vertices';
   /// auxiliary unknowns after them are left alone when d is shorter).
   void add_diagonal(const Eigen::VectorXd& d);
@@ -88,6 +94,8 @@ class BlockSymmetricMatrix {
   const std::vector<int>& structure_positions() const { return m_structure_at; }
   /// Per entry of values(): whether the structure holds it.
   const std::vector<char>& in_structure() const { return m_in_structure; }
+  /// The positions in values() outside the structure.
+  const std::vector<int>& outside_positions() const { return m_outside; }
 
  private:
   void add_block(int vi, int vj, int a, int b, const double* h, int ld);
@@ -98,6 +106,7 @@ class BlockSymmetricMatrix {
   std::vector<double> m_values;
   std::vector<int> m_structure_start, m_structure_rows, m_structure_at;
   std::vector<char> m_in_structure;
+  std::vector<int> m_outside;
 };
 
 }  // namespace papersim::simulation

@@ -372,48 +372,57 @@ void MorleyBendingEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::Vecto
   if (!hessian) return;
   if (m_first_block < 0 && m_num_psi > 0)
     throw NumericError("bending: the Hessian needs the integrator's auxiliary blocks");
-  // Gauss-Newton: per element, [G, I]^T M [G, I] over (hinge vertices, psi blocks), with G the
-  // hinge gradients (column i = grad theta_i on its 4 vertices).
-  // Scratch sized for the largest element and reused: no allocation per element, and of H only
-  // what add_element reads is cleared (the aux rows left of the aux columns are not: an aux block
-  // comes after every vertex, so add_element reads the vertex-aux coupling above the diagonal).
+  // Gauss-Newton: per element, [G, I]^T M [G, I] over (hinge vertices, psi), with G the hinge
+  // gradients (column i = grad theta_i on its 4 vertices): the vertex part G M G^T as one
+  // element matrix, and each psi's column (G M[:, psi] over the vertices, M over the psi) alone,
+  // since a psi is one component of its block and the block's other entries are zero.
+  // Scratch sized for the largest element and reused: no allocation per element.
   std::size_t gm_size = 0, h_size = 0;
   for (const Element& e : m_elements) {
-    const std::size_t rows = 3 * (e.vertices.size() + e.blocks.size());
-    gm_size = std::max(gm_size, 3 * e.vertices.size() * (e.theta.size() + e.psi.size()));
+    const std::size_t rows = 3 * e.vertices.size();
+    gm_size = std::max(gm_size, rows * (e.theta.size() + e.psi.size()));
     h_size = std::max(h_size, rows * rows);
   }
   std::vector<double> gm_buffer(gm_size), h_buffer(h_size);
-  std::vector<int> index;
   for (const Element& e : m_elements) {
     const int nt = static_cast<int>(e.theta.size()), np = static_cast<int>(e.psi.size());
-    const int nv = static_cast<int>(e.vertices.size()), nb = static_cast<int>(e.blocks.size());
+    const int nv = static_cast<int>(e.vertices.size());
     const int n = nt + np;
-    Eigen::Map<Eigen::MatrixXd> GM(gm_buffer.data(), 3 * nv, n);  // G M[theta rows, :]
-    GM.setZero();
-    for (int i = 0; i < nt; ++i)
-      for (int q = 0; q < 4; ++q) {
-        const Eigen::Vector3d gi = grads[e.theta[i]].segment<3>(3 * q);
-        GM.middleRows<3>(3 * e.local[i][q]) += gi * e.M.row(i);
-      }
-    Eigen::Map<Eigen::MatrixXd> H(h_buffer.data(), 3 * (nv + nb), 3 * (nv + nb));
-    H.leftCols(3 * nv).topRows(3 * nv).setZero();
-    H.rightCols(3 * nb).setZero();
-    for (int j = 0; j < nt; ++j)
+    // Plain loops over column-major scratch (these sizes are too small for Eigen's dynamic
+    // kernels to pay): GM = G M[theta rows, :] (3 nv x n), then H = sum_j GM[:, j] g_j^T.
+    const int rows = 3 * nv;
+    double* GM = gm_buffer.data();
+    std::fill(GM, GM + rows * n, 0.0);
+    for (int i = 0; i < nt; ++i) {
+      const double* g = grads[e.theta[i]].data();
+      for (int q = 0; q < 4; ++q)
+        for (int k = 0; k < n; ++k) {
+          const double m = e.M(i, k);
+          double* out = GM + k * rows + 3 * e.local[i][q];
+          for (int p = 0; p < 3; ++p) out[p] += g[3 * q + p] * m;
+        }
+    }
+    double* H = h_buffer.data();
+    std::fill(H, H + rows * rows, 0.0);
+    for (int j = 0; j < nt; ++j) {
+      const double* g = grads[e.theta[j]].data();
+      const double* gm = GM + j * rows;
       for (int r = 0; r < 4; ++r)
-        H.block(0, 3 * e.local[j][r], 3 * nv, 3).noalias() +=
-            GM.col(j) * grads[e.theta[j]].segment<3>(3 * r).transpose();
+        for (int c = 0; c < 3; ++c) {
+          const double gc = g[3 * r + c];
+          double* out = H + (3 * e.local[j][r] + c) * rows;
+          for (int row = 0; row < rows; ++row) out[row] += gm[row] * gc;
+        }
+    }
+    hessian->add_element(e.vertices.data(), nv, H);
     for (int j = 0; j < np; ++j) {
-      const int col = 3 * (nv + e.psi_at[j].first) + e.psi_at[j].second;
-      H.block(0, col, 3 * nv, 1) += GM.col(nt + j);
+      const int col = 3 * (m_first_block + e.blocks[e.psi_at[j].first]) + e.psi_at[j].second;
+      hessian->add_column(col, e.vertices.data(), nv, GM + (nt + j) * rows);
       for (int i = 0; i < np; ++i) {
-        const int row = 3 * (nv + e.psi_at[i].first) + e.psi_at[i].second;
-        H(row, col) += e.M(nt + i, nt + j);
+        const int row = 3 * (m_first_block + e.blocks[e.psi_at[i].first]) + e.psi_at[i].second;
+        if (row <= col) hessian->add_entry(row, col, e.M(nt + i, nt + j));
       }
     }
-    index = e.vertices;
-    for (int b : e.blocks) index.push_back(m_first_block + b);
-    hessian->add_element(index.data(), nv + nb, H.data());
   }
   // The unused components of the last auxiliary block: identity (their right-hand side is 0).
   if (m_num_psi % 3 != 0) {

@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "simulation/errors.hpp"
 #include "simulation/sparse_matrix.hpp"
 #include "simulation/steihaug.hpp"
 
@@ -77,6 +78,23 @@ TEST(LinearSolver, FactorsExactlyThePositiveDefiniteMatrices) {
     const Eigen::VectorXd x = solver.solve(b);
     EXPECT_LT((definite.multiply(x) - b).norm(), 1e-12 * b.norm()) << n << " per side";
   }
+}
+
+// A NaN or an infinity anywhere in the matrix is refused with NumericError, by the simplicial
+// (small grid) and the supernodal (large grid) factorisation alike, and the same solver then
+// factors the clean matrix.
+TEST(LinearSolver, RefusesNonFiniteValues) {
+  for (int n : {3, 60})
+    for (double bad : {std::nan(""), HUGE_VAL}) {
+      LinearSolver solver;
+      BlockSymmetricMatrix A = grid(n, n, 0.0);
+      const std::size_t k = A.structure_positions()[A.structure_positions().size() / 2];
+      const double kept = A.values()[k];
+      A.values()[k] = bad;
+      EXPECT_THROW(solver.factorize(A, 1), NumericError) << n << " per side";
+      A.values()[k] = kept;
+      EXPECT_TRUE(solver.factorize(A, 1)) << n << " per side";
+    }
 }
 
 // The supernodal factorisation takes the permuted lower triangle, built once per pattern and
@@ -194,6 +212,47 @@ TEST(LinearSolver, FactorsTheDeclaredStructureAndRefusesValuesOutsideIt) {
   ASSERT_FALSE(A.in_structure()[outside]);
   A.values()[outside] = 1e-3;
   EXPECT_THROW(solver.factorize(A, 1), std::logic_error);
+}
+
+// One column's entries (add_column) and single entries (add_entry) land where a whole element
+// matrix with the same values puts them: a Morley-like element (two vertices and one auxiliary
+// unknown, component 1 of its block, the others zero) added both ways gives the same matrix.
+TEST(BlockSymmetricMatrix, ColumnAndEntryAddsMatchTheWholeElement) {
+  const BlockPattern pattern = chain_with_auxiliaries(6);
+  BlockSymmetricMatrix whole(pattern), parts(pattern);
+  const int aux = 6;  // the first auxiliary block (unknowns 0, 1, 2 of the chain's slopes)
+  const std::array<int, 3> blocks = {0, 1, aux};
+  Eigen::Matrix<double, 9, 9> H = Eigen::Matrix<double, 9, 9>::Zero();
+  std::srand(3);
+  auto r = [] { return static_cast<double>(std::rand()) / RAND_MAX - 0.5; };
+  // Unknown 1 (component 1 of the block) couples to vertices 0 and 1.
+  const int c = 1;
+  for (int i = 0; i < 6; ++i)
+    for (int j = 0; j <= i; ++j) H(i, j) = H(j, i) = r();
+  for (int i = 0; i < 6; ++i) H(i, 6 + c) = H(6 + c, i) = r();
+  H(6 + c, 6 + c) = 1 + r();
+  whole.add_element<3>(blocks, H);
+  Eigen::Matrix<double, 6, 6> Hv = H.topLeftCorner<6, 6>();
+  parts.add_element(blocks.data(), 2, Hv.data());
+  const Eigen::Matrix<double, 6, 1> column = H.block<6, 1>(0, 6 + c);
+  parts.add_column(3 * aux + c, blocks.data(), 2, column.data());
+  parts.add_entry(3 * aux + c, 3 * aux + c, H(6 + c, 6 + c));
+  ASSERT_EQ(whole.values().size(), parts.values().size());
+  for (std::size_t k = 0; k < whole.values().size(); ++k)
+    EXPECT_EQ(whole.values()[k], parts.values()[k]) << "entry " << k;
+  // A column that reaches its own diagonal block adds its upper part only.
+  BlockSymmetricMatrix diag(pattern);
+  const std::array<int, 1> self = {2};
+  const double values[3] = {1, 2, 3};
+  diag.add_column(3 * 2 + 1, self.data(), 1, values);
+  const Eigen::VectorXd x = Eigen::VectorXd::Unit(diag.size(), 3 * 2 + 1);
+  const Eigen::VectorXd y = diag.multiply(x);
+  EXPECT_EQ(y[6], 1);  // (6, 7) and its mirror
+  EXPECT_EQ(y[7], 2);  // the diagonal entry
+  EXPECT_EQ(y[8], 0);  // (8, 7) is below the diagonal: not stored, not added
+  double total = 0;
+  for (double v : diag.values()) total += v;
+  EXPECT_EQ(total, 3);  // nothing else written
 }
 
 namespace {
