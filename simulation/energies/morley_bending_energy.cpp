@@ -194,6 +194,9 @@ void MorleyBendingEnergy::build_elements() {
   }
   // Vertices of each element's hinges (for the Hessian), local order.
   for (Element& e : m_elements) {
+    if (e.L.rows() > 3 || e.L.cols() > MAX_ELEMENT_UNKNOWNS)
+      throw NumericError("bending: an element with " + std::to_string(e.L.cols()) +
+                         " unknowns (at most " + std::to_string(MAX_ELEMENT_UNKNOWNS) + ")");
     for (int h : e.theta) {
       std::array<int, 4> loc;
       for (int k = 0; k < 4; ++k) {
@@ -310,10 +313,10 @@ void MorleyBendingEnergy::unknowns(const Eigen::VectorXd& x, Eigen::VectorXd& th
                       : Eigen::VectorXd();
 }
 
-Eigen::VectorXd MorleyBendingEnergy::element_residual(const Element& e, const Eigen::VectorXd& theta,
-                                                const Eigen::VectorXd& psi) const {
+MorleyBendingEnergy::ElementVector MorleyBendingEnergy::element_residual(
+    const Element& e, const Eigen::VectorXd& theta, const Eigen::VectorXd& psi) const {
   const int nt = static_cast<int>(e.theta.size());
-  Eigen::VectorXd u(nt + e.psi.size());
+  ElementVector u(nt + e.psi.size());
   for (int i = 0; i < nt; ++i) u[i] = theta[e.theta[i]];
   for (size_t i = 0; i < e.psi.size(); ++i) u[nt + i] = psi[e.psi[i]];
   return e.L * u - e.c;
@@ -324,8 +327,8 @@ double MorleyBendingEnergy::value(const Eigen::VectorXd& x) const {
   unknowns(x, theta, psi);
   double energy = 0;
   for (const Element& e : m_elements) {
-    const Eigen::VectorXd r = element_residual(e, theta, psi);
-    energy += 0.5 * r.dot(e.W * r);
+    const ElementVector r = element_residual(e, theta, psi);
+    energy += 0.5 * r.dot(ElementVector(e.W * r));
   }
   return energy;
 }
@@ -364,7 +367,8 @@ void MorleyBendingEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::Vecto
   Eigen::VectorXd dE = Eigen::VectorXd::Zero(nh);
   std::vector<char> used(nh, 0);
   for (const Element& e : m_elements) {
-    const Eigen::VectorXd g = e.L.transpose() * (e.W * element_residual(e, theta, psi));
+    const ElementVector Wr = e.W * element_residual(e, theta, psi);
+    const ElementVector g = e.L.transpose() * Wr;
     for (size_t i = 0; i < e.theta.size(); ++i) dE[e.theta[i]] += g[i], used[e.theta[i]] = 1;
   }
   for (int h = 0; h < nh; ++h)

@@ -122,8 +122,12 @@ class MorleyBendingEnergy : public BendingEnergy {
   void update_offsets();
   /// theta and psi*(theta) at x.
   void unknowns(const Eigen::VectorXd& x, Eigen::VectorXd& theta, Eigen::VectorXd& psi) const;
-  Eigen::VectorXd element_residual(const Element& e, const Eigen::VectorXd& theta,
-                                   const Eigen::VectorXd& psi) const;
+  /// Element vectors without heap allocation: an element has at most 3 residual rows and
+  /// MAX_ELEMENT_UNKNOWNS unknowns (checked in build_elements).
+  static constexpr int MAX_ELEMENT_UNKNOWNS = 32;
+  using ElementVector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, MAX_ELEMENT_UNKNOWNS, 1>;
+  ElementVector element_residual(const Element& e, const Eigen::VectorXd& theta,
+                                 const Eigen::VectorXd& psi) const;
 
   std::vector<Face> m_faces;
   std::vector<Element> m_elements;  // one per unclamped face, then the boundary penalties
