@@ -175,6 +175,90 @@ collision::PairPoints ObstacleContactEnergy::sphere_points(const Eigen::VectorXd
           x.segment<3>(3 * m_faces(f, 2))};
 }
 
+/// The boxes of the sheet's faces at x. near() is face_near_bounds's test on a stored box (the
+/// same arithmetic, so the same answer). With many obstacles (fall-spheres has 121) testing
+/// every face against every obstacle dominates a contact evaluation, so there the faces are also
+/// sorted by their lowest x and near_faces lists only those whose x range can reach the box, in
+/// ascending face order as the plain loop visits them (sums and matrix entries are added in the
+/// same order, so results are the same to the bit).
+class ObstacleContactEnergy::FaceBoxes {
+ public:
+  FaceBoxes(const Eigen::MatrixX3i& faces, const Eigen::VectorXd& x, bool sorted) {
+    const int nf = static_cast<int>(faces.rows());
+    m_lo.resize(nf);
+    m_hi.resize(nf);
+    for (int f = 0; f < nf; ++f) {
+      Eigen::Vector3d lo = x.segment<3>(3 * faces(f, 0)), hi = lo;
+      for (int k = 1; k < 3; ++k) {
+        lo = lo.cwiseMin(x.segment<3>(3 * faces(f, k)));
+        hi = hi.cwiseMax(x.segment<3>(3 * faces(f, k)));
+      }
+      m_lo[f] = lo;
+      m_hi[f] = hi;
+      m_width = std::max(m_width, hi.x() - lo.x());
+    }
+    if (!sorted) return;
+    m_order.resize(nf);
+    for (int f = 0; f < nf; ++f) m_order[f] = f;
+    std::sort(m_order.begin(), m_order.end(),
+              [&](int a, int b) { return m_lo[a].x() < m_lo[b].x(); });
+    m_sorted_lo.resize(nf);
+    for (int i = 0; i < nf; ++i) m_sorted_lo[i] = m_lo[m_order[i]].x();
+  }
+  /// Whether face f's box, grown by margin, meets box b (face_near_bounds).
+  bool near(int f, const collision::Aabb& b, double margin) const {
+    return (m_hi[f].array() + margin >= b.lo.array()).all() &&
+           (m_lo[f].array() - margin <= b.hi.array()).all();
+  }
+  /// The faces f, in ascending order, for which near(f, b, m) can hold for some m <= margin
+  /// (a superset: the caller applies near() with its own margin). Valid until the next call.
+  const std::vector<int>& near_faces(const collision::Aabb& b, double margin) const {
+    const int nf = static_cast<int>(m_lo.size());
+    if (m_order.empty() || !std::isfinite(margin)) {
+      m_found.resize(nf);
+      for (int f = 0; f < nf; ++f) m_found[f] = f;
+      return m_found;
+    }
+    // near() needs lo.x - margin <= b.hi.x and hi.x + margin >= b.lo.x, with hi.x <= lo.x +
+    // m_width; the range is widened by a micrometre against the rounding of those sums.
+    const double slack = 1e-6 + 1e-12 * (std::abs(b.lo.x()) + std::abs(b.hi.x()) + margin);
+    const double from = b.lo.x() - margin - m_width - slack, to = b.hi.x() + margin + slack;
+    const auto first = std::lower_bound(m_sorted_lo.begin(), m_sorted_lo.end(), from);
+    const auto last = std::upper_bound(first, m_sorted_lo.end(), to);
+    m_found.clear();
+    // near() is monotone in the margin, so the faces it refuses at `margin` it refuses at any
+    // smaller one.
+    for (auto i = first - m_sorted_lo.begin(); i < last - m_sorted_lo.begin(); ++i)
+      if (near(m_order[i], b, margin)) m_found.push_back(m_order[i]);
+    std::sort(m_found.begin(), m_found.end());
+    return m_found;
+  }
+
+ private:
+  std::vector<Eigen::Vector3d> m_lo, m_hi;
+  double m_width = 0.0;      // the widest face in x [m]
+  std::vector<int> m_order;  // faces by their lowest x (empty: not sorted)
+  std::vector<double> m_sorted_lo;
+  mutable std::vector<int> m_found;
+};
+
+ObstacleContactEnergy::FaceBoxes ObstacleContactEnergy::face_boxes(const Eigen::VectorXd& x) const {
+  // Sorting costs a sort of the faces per evaluation; it pays only where many obstacles are
+  // tested against them (fall-spheres: 121 spheres; the other scenarios have 1-3 such obstacles).
+  int face_obstacles = 0;
+  for (int o = 0; o < num_obstacles(); ++o)
+    face_obstacles += m_mode[o] == Mode::sphere || m_mode[o] == Mode::search;
+  return FaceBoxes(m_faces, x, face_obstacles >= 8);
+}
+
+std::vector<double> ObstacleContactEnergy::face_speeds(const Eigen::VectorXd& dx) const {
+  std::vector<double> speed(m_faces.rows(), 0.0);
+  for (int f = 0; f < m_faces.rows(); ++f)
+    for (int k = 0; k < 3; ++k)
+      speed[f] = std::max(speed[f], dx.segment<3>(3 * m_faces(f, k)).norm());
+  return speed;
+}
+
 bool ObstacleContactEnergy::face_near_bounds(int o, const Eigen::VectorXd& x, int f, double margin) const {
   const auto& b = m_bounds[o];
   Eigen::Vector3d lo = x.segment<3>(3 * m_faces(f, 0)), hi = lo;
@@ -308,12 +392,14 @@ void ObstacleContactEnergy::update_bounds() {
 template <class F>
 void ObstacleContactEnergy::for_each_contact(const Eigen::VectorXd& x, double t, F&& visit, int only) const {
   const int nv = static_cast<int>(m_area.size());
+  const FaceBoxes boxes = face_boxes(x);
   for (int o = 0; o < num_obstacles(); ++o) {
     if (only >= 0 && o != only) continue;
     const auto& obs = *m_obstacles[o];
     if (m_mode[o] == Mode::sphere || m_mode[o] == Mode::search) {
       const Eigen::Affine3d pose = obs.motion.pose(t);
-      for (int f = 0; f < m_faces.rows(); ++f) {
+      for (int f : boxes.near_faces(m_bounds[o], 0.0)) {
+        if (!boxes.near(f, m_bounds[o], 0.0)) continue;  // face_contact: out of contact
         const auto r = face_contact(o, x, f, pose);
         if (r.distance >= m_params.dhat || r.distance <= 0) continue;
         FrictionPoint fp;
@@ -388,9 +474,13 @@ void ObstacleContactEnergy::begin_step(const StepContext& ctx, const Eigen::Vect
     double approach = 0;
     for (size_t o = 0; o < m_obstacles.size(); ++o) {
       const auto& obs = *m_obstacles[o];
+      // One keyframe: the obstacle's velocity is exactly zero, so it is not computed per vertex.
+      const bool still = obs.motion.keyframes().size() < 2;
       for (int v = 0; v < static_cast<int>(m_area.size()); ++v) {
         const Eigen::Vector3d p = x_t0.segment<3>(3 * v);
-        const Eigen::Vector3d vel = ctx.v_t0->segment<3>(3 * v) - obs.velocity(p, ctx.time_t0);
+        const Eigen::Vector3d vel =
+            still ? Eigen::Vector3d(ctx.v_t0->segment<3>(3 * v))
+                  : Eigen::Vector3d(ctx.v_t0->segment<3>(3 * v) - obs.velocity(p, ctx.time_t0));
         const double reach = m_params.dhat + 2 * ctx.h * vel.norm();
         if (m_bounds[o].distance_to(p) > reach) continue;
         Eigen::Vector3d n;
@@ -449,13 +539,14 @@ double ObstacleContactEnergy::value(const Eigen::VectorXd& x) const {
   double e = 0;
   const int nv = static_cast<int>(m_area.size());
   const double dhat = m_params.dhat;
+  const FaceBoxes boxes = face_boxes(x);
   for (int o = 0; o < num_obstacles(); ++o) {
     if (m_mode[o] == Mode::sphere || m_mode[o] == Mode::search) {
       const Eigen::Affine3d pose = m_obstacles[o]->motion.pose(m_time);
       collision::PairPoints pts;
       collision::DistanceStencil s;
-      for (int f = 0; f < m_faces.rows(); ++f) {
-        if (!face_near_bounds(o, x, f, 0.0)) continue;
+      for (int f : boxes.near_faces(m_bounds[o], 0.0)) {
+        if (!boxes.near(f, m_bounds[o], 0.0)) continue;
         const double d = m_mode[o] == Mode::sphere ? sphere_face_distance(o, x, f, pose, pts, s)
                                                    : face_contact(o, x, f, pose).distance;
         if (d <= 0) return INF;
@@ -523,13 +614,14 @@ void ObstacleContactEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::Vec
   };
   collision::Vector12d grad;
   collision::Matrix12d hess;
+  const FaceBoxes boxes = face_boxes(x);
   for (int o = 0; o < num_obstacles(); ++o) {
     if (m_mode[o] == Mode::sphere || m_mode[o] == Mode::search) {
       const Eigen::Affine3d pose = m_obstacles[o]->motion.pose(m_time);
       collision::PairPoints pts;
       collision::DistanceStencil s;
-      for (int f = 0; f < m_faces.rows(); ++f) {
-        if (!face_near_bounds(o, x, f, 0.0)) continue;
+      for (int f : boxes.near_faces(m_bounds[o], 0.0)) {
+        if (!boxes.near(f, m_bounds[o], 0.0)) continue;
         const double k = face_kappa(f);
         const std::array<int, 3> vs{{m_faces(f, 0), m_faces(f, 1), m_faces(f, 2)}};
         if (m_mode[o] == Mode::sphere) {
@@ -610,12 +702,17 @@ void ObstacleContactEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::Vec
 double ObstacleContactEnergy::max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const {
   ScopedTimer timer(m_stats->seconds);
   double alpha = 1.0;
-  for (int o = 0; o < num_obstacles(); ++o) alpha = obstacle_max_step(o, x, dx, alpha);
+  const FaceBoxes boxes = face_boxes(x);
+  const std::vector<double> speeds = face_speeds(dx);
+  for (int o = 0; o < num_obstacles(); ++o)
+    alpha = obstacle_max_step(o, x, dx, alpha, boxes, speeds);
   return pairs_max_step(x, dx, alpha);
 }
 
-double ObstacleContactEnergy::obstacle_max_step(int o, const Eigen::VectorXd& x, const Eigen::VectorXd& dx,
-                                                double alpha) const {
+double ObstacleContactEnergy::obstacle_max_step(int o, const Eigen::VectorXd& x,
+                                                const Eigen::VectorXd& dx, double alpha,
+                                                const FaceBoxes& boxes,
+                                                const std::vector<double>& speeds) const {
   const int nv = static_cast<int>(m_area.size());
   const auto& obs = *m_obstacles[o];
   // Faces against a convex obstacle cover their vertices (below); otherwise the vertices of
@@ -644,10 +741,10 @@ double ObstacleContactEnergy::obstacle_max_step(int o, const Eigen::VectorXd& x,
   if (m_mode[o] != Mode::sphere && m_mode[o] != Mode::search) return alpha;
   // Faces: conservative advancement on a lower bound of the field over the moving triangle.
   const Eigen::Affine3d pose = obs.motion.pose(m_time);
-  for (int f = 0; f < m_faces.rows(); ++f) {
-    double speed = 0;
-    for (int k = 0; k < 3; ++k) speed = std::max(speed, dx.segment<3>(3 * m_faces(f, k)).norm());
-    if (speed == 0 || !face_near_bounds(o, x, f, alpha * speed)) continue;
+  const double fastest = speeds.empty() ? 0.0 : *std::max_element(speeds.begin(), speeds.end());
+  for (int f : boxes.near_faces(m_bounds[o], alpha * fastest)) {
+    const double speed = speeds[f];
+    if (speed == 0 || !boxes.near(f, m_bounds[o], alpha * speed)) continue;
     if (obs.is_convex()) {
       // The minimiser m of the field over the triangle, with normal n, gives a plane that
       // separates the triangle from the convex solid: the solid lies behind the tangent plane
@@ -812,9 +909,11 @@ double ObstacleContactEnergy::max_step_with_obstacles(const Eigen::VectorXd& x, 
                                                       double dt) const {
   ScopedTimer timer(m_stats->seconds);
   double alpha = 1.0;
+  const FaceBoxes boxes = face_boxes(x);
+  const std::vector<double> speeds = face_speeds(dx);
   for (int o = 0; o < num_obstacles(); ++o) {
     if (!m_moving[o] || dt == 0) {
-      alpha = obstacle_max_step(o, x, dx, alpha);
+      alpha = obstacle_max_step(o, x, dx, alpha, boxes, speeds);
       continue;
     }
     const auto& obs = *m_obstacles[o];
@@ -840,9 +939,10 @@ double ObstacleContactEnergy::surface_distance(int o, const Eigen::VectorXd& x, 
   const collision::Collider& obs = *m_obstacles[o];
   double m = INF;
   const Eigen::Vector3d lift = lift_of(o, x);
-  for (int v = 0; v < m_area.size(); ++v) m = std::min(m, obs.distance(x.segment<3>(3 * v) - lift, t));
-  if (m_mode[o] == Mode::vertices || !(m > 0)) return m;
   const Eigen::Affine3d pose = obs.motion.pose(t);
+  for (int v = 0; v < m_area.size(); ++v)
+    m = std::min(m, obs.distance_at_pose(x.segment<3>(3 * v) - lift, pose));
+  if (m_mode[o] == Mode::vertices || !(m > 0)) return m;
   const auto face_box = [&](int f) {
     collision::Aabb b;
     for (int k = 0; k < 3; ++k) b.extend(Eigen::Vector3d(x.segment<3>(3 * m_faces(f, k))));

@@ -179,6 +179,12 @@ class ObstacleContactEnergy : public EnergyTerm {
   };
 
   bool near_bounds(int o, const Eigen::Vector3d& p) const;
+  /// The boxes of the sheet's faces at one configuration, and which of them come near an
+  /// obstacle's bounds (face_near_bounds for every face at once; see the .cpp).
+  class FaceBoxes;
+  FaceBoxes face_boxes(const Eigen::VectorXd& x) const;
+  /// The largest vertex displacement of each face along dx [m] (the faces' part of max_step).
+  std::vector<double> face_speeds(const Eigen::VectorXd& dx) const;
   /// The rigid displacement of obstacle o held in v (x or dx; set_rigid_block): (0, 0, v_z of
   /// its block), zero when o has none or v holds only the sheet.
   Eigen::Vector3d lift_of(int o, const Eigen::VectorXd& v) const {
@@ -192,8 +198,10 @@ class ObstacleContactEnergy : public EnergyTerm {
   void for_each_contact(const Eigen::VectorXd& x, double t, F&& visit, int only = -1) const;
   /// Bounds of the field at m_time, inflated by the thickness (m_bounds).
   void update_bounds();
-  /// Largest step along dx for obstacle o held at m_time (vertices and faces; not the pairs).
-  double obstacle_max_step(int o, const Eigen::VectorXd& x, const Eigen::VectorXd& dx, double alpha) const;
+  /// Largest step along dx for obstacle o held at m_time (vertices and faces; not the pairs),
+  /// with the faces' boxes at x and their speeds along dx (face_boxes, face_speeds).
+  double obstacle_max_step(int o, const Eigen::VectorXd& x, const Eigen::VectorXd& dx, double alpha,
+                           const FaceBoxes& boxes, const std::vector<double>& speeds) const;
   /// Largest step along dx for the pairs of polyhedral obstacles held at m_time.
   double pairs_max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx, double alpha) const;
   bool face_near_bounds(int o, const Eigen::VectorXd& x, int f, double margin) const;

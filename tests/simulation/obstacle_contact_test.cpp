@@ -267,3 +267,97 @@ TEST(ObstacleContact, CoupledBodyDerivativesMatchFiniteDifferences) {
   EXPECT_TRUE(std::isfinite(e.value(x + alpha * dx)));
   EXPECT_LT(alpha * 1e-3, 0.05026 - 0.05 - 2e-5);  // within the smallest gap (0.04 mm)
 }
+
+// Many spheres against a sheet by its faces: with 8 or more such obstacles the term finds the
+// faces near each sphere through the faces sorted along x instead of testing every face
+// (ObstacleContactEnergy::FaceBoxes). The barriers add up over the obstacles, so the energy and
+// the gradient with all twelve spheres must be the sums of those with each sphere alone (the
+// plain loop over every face), and the largest step the smallest of theirs: a face the search
+// missed would be missing from the sum, or let the step through a sphere. The spheres are
+// spread along x and sit 0.05-0.27 mm above the rippled sheet (the barrier reaches 0.3 mm), some
+// across face boxes' edges.
+TEST(ObstacleContact, ManySpheresFindTheFacesEachSphereAloneFinds) {
+  const int n = 41;  // 41 x 41 vertices, 5 mm apart
+  const double a = 5e-3;
+  Eigen::MatrixX2d X(n * n, 2);
+  Eigen::VectorXd x(3 * n * n);
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const int v = j * n + i;
+      X.row(v) << i * a, j * a;
+      x.segment<3>(3 * v) << i * a + 3e-4 * std::sin(7.0 * j), j * a + 3e-4 * std::cos(5.0 * i),
+          2e-4 * std::sin(1.3 * i + 0.7 * j);
+    }
+  Eigen::MatrixX3i faces(2 * (n - 1) * (n - 1), 3);
+  for (int j = 0, f = 0; j + 1 < n; ++j)
+    for (int i = 0; i + 1 < n; ++i) {
+      const int v = j * n + i;
+      faces.row(f++) << v, v + 1, v + n + 1;
+      faces.row(f++) << v, v + n + 1, v + n;
+    }
+  const Eigen::VectorXd areas = Eigen::VectorXd::Constant(n * n, a * a);
+  ContactParams params;  // dhat 0.3 mm
+  params.faces = true;
+  params.stiffness = 100.0;
+  const auto sphere = [](double cx, double cy, double r, double cz) {
+    collision::ColliderSpec spec;
+    spec.kind = collision::ColliderKind::sphere;
+    spec.radius = r;
+    spec.friction = 0.3;
+    collision::Keyframe key;
+    key.translation = Eigen::Vector3d(cx, cy, cz);
+    spec.keyframes.push_back(key);
+    return collision::make_collider(spec);
+  };
+  std::vector<std::shared_ptr<const collision::Collider>> spheres;
+  for (int k = 0; k < 12; ++k) {
+    const double cx = 0.013 + 0.0161 * k, cy = 0.02 + 0.0117 * ((k * 5) % 12),
+                 r = 0.004 + 0.001 * (k % 3);
+    const double gap = 5e-5 + 2e-5 * k;
+    // Lowered until the sheet's surface is `gap` below it (the distance changes about one to
+    // one with the height over the sheet's lowest point under the sphere).
+    double cz = r + 1e-3;
+    for (int it = 0; it < 6; ++it) {
+      ObstacleContactEnergy probe(Eigen::VectorXd::Constant(n * n, a * a), {sphere(cx, cy, r, cz)},
+                                  params);
+      probe.set_faces(faces, X);
+      cz -= probe.surface_distance(0, x, 0.0) - gap;
+    }
+    spheres.push_back(sphere(cx, cy, r, cz));
+  }
+  const Eigen::VectorXd v0 = Eigen::VectorXd::Zero(x.size());
+  StepContext ctx;
+  ctx.h = 1e-3;
+  ctx.x_t0 = &x;
+  ctx.v_t0 = &v0;
+  const auto term = [&](std::vector<std::shared_ptr<const collision::Collider>> obstacles) {
+    auto e = std::make_unique<ObstacleContactEnergy>(areas, std::move(obstacles), params);
+    e->set_faces(faces, X);
+    e->begin_step(ctx, x);
+    return e;
+  };
+  Eigen::VectorXd dx(x.size());  // up towards the spheres, and sideways
+  for (int v = 0; v < n * n; ++v) dx.segment<3>(3 * v) << 1e-4 * std::cos(0.3 * v), 2e-4, 1e-3;
+  const auto all = term(spheres);
+  const double e_all = all->value(x);
+  Eigen::VectorXd g_all = Eigen::VectorXd::Zero(x.size());
+  all->add_derivatives(x, g_all, nullptr);
+  const double step_all = all->max_step(x, dx);
+  double e_sum = 0, step_min = 1.0;
+  Eigen::VectorXd g_sum = Eigen::VectorXd::Zero(x.size());
+  int touching = 0;
+  for (const auto& s : spheres) {
+    const auto one = term({s});
+    const double e = one->value(x);
+    ASSERT_TRUE(std::isfinite(e));
+    touching += e > 0;
+    e_sum += e;
+    one->add_derivatives(x, g_sum, nullptr);
+    step_min = std::min(step_min, one->max_step(x, dx));
+  }
+  EXPECT_EQ(touching, 12);  // every sphere is within the barrier of some face
+  EXPECT_NEAR(e_all, e_sum, 1e-12 * e_sum);
+  EXPECT_LT((g_all - g_sum).norm(), 1e-12 * g_sum.norm());
+  EXPECT_LT(step_min, 0.5);  // the spheres do stop the motion
+  EXPECT_NEAR(step_all, step_min, 1e-9 * step_min);
+}
