@@ -276,7 +276,7 @@ TEST(ObstacleContact, CoupledBodyDerivativesMatchFiniteDifferences) {
 // missed would be missing from the sum, or let the step through a sphere. The spheres are
 // spread along x and sit 0.05-0.27 mm above the rippled sheet (the barrier reaches 0.3 mm), some
 // across face boxes' edges.
-TEST(ObstacleContact, ManySpheresFindTheFacesEachSphereAloneFinds) {
+TEST(ObstacleFaceSearch, ManySpheresFindTheFacesEachSphereAloneFinds) {
   const int n = 41;  // 41 x 41 vertices, 5 mm apart
   const double a = 5e-3;
   Eigen::MatrixX2d X(n * n, 2);
