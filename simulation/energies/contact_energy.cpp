@@ -187,6 +187,7 @@ class ObstacleContactEnergy::FaceBoxes {
     const int nf = static_cast<int>(faces.rows());
     m_lo.resize(nf);
     m_hi.resize(nf);
+    bool finite = true;
     for (int f = 0; f < nf; ++f) {
       Eigen::Vector3d lo = x.segment<3>(3 * faces(f, 0)), hi = lo;
       for (int k = 1; k < 3; ++k) {
@@ -196,8 +197,11 @@ class ObstacleContactEnergy::FaceBoxes {
       m_lo[f] = lo;
       m_hi[f] = hi;
       m_width = std::max(m_width, hi.x() - lo.x());
+      finite = finite && std::isfinite(lo.x()) && std::isfinite(hi.x());
     }
-    if (!sorted) return;
+    // A NaN would break the sort's ordering: the plain loop then tests every face (and
+    // near() refuses the NaN boxes, as face_near_bounds does).
+    if (!sorted || !finite) return;
     m_order.resize(nf);
     for (int f = 0; f < nf; ++f) m_order[f] = f;
     std::sort(m_order.begin(), m_order.end(),
