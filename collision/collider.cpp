@@ -236,6 +236,8 @@ Aabb Collider::swept_bounds(double t0, double t1) const {
 // x(t) = s(t) R(t) X + c(t)  =>  dx/dt = omega x (x - c) + (s'/s) (x - c) + dc/dt, analytic
 // from the keyframes (x - c = s R X, so d(s R)/dt X = (s'/s + omega x) (x - c)).
 Eigen::Vector3d Collider::velocity(const Eigen::Vector3d& p, double t) const {
+  // One keyframe (or none): the placement never changes; no pose to evaluate per point.
+  if (motion.keyframes().size() < 2) return Eigen::Vector3d::Zero();
   const Eigen::Vector3d c = motion.pose(t).translation();
   return motion.linear_velocity(t) + motion.angular_velocity(t).cross(p - c) +
          motion.scale_rate(t) / motion.scale(t) * (p - c);

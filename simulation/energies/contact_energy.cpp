@@ -249,13 +249,20 @@ class ObstacleContactEnergy::FaceBoxes {
 ObstacleContactEnergy::FaceBoxes ObstacleContactEnergy::face_boxes(const Eigen::VectorXd& x) const {
   // Sorting costs a sort of the faces per evaluation; it pays only where many obstacles are
   // tested against them (fall-spheres: 121 spheres; the other scenarios have 1-3 such obstacles).
-  int face_obstacles = 0;
+  // No such obstacle (polyhedra or vertex contact only): no boxes to build.
+  const int n = face_obstacles();
+  return n == 0 ? FaceBoxes(Eigen::MatrixX3i(), x, false) : FaceBoxes(m_faces, x, n >= 8);
+}
+
+int ObstacleContactEnergy::face_obstacles() const {
+  int n = 0;
   for (int o = 0; o < num_obstacles(); ++o)
-    face_obstacles += m_mode[o] == Mode::sphere || m_mode[o] == Mode::search;
-  return FaceBoxes(m_faces, x, face_obstacles >= 8);
+    n += m_mode[o] == Mode::sphere || m_mode[o] == Mode::search;
+  return n;
 }
 
 std::vector<double> ObstacleContactEnergy::face_speeds(const Eigen::VectorXd& dx) const {
+  if (face_obstacles() == 0) return {};
   std::vector<double> speed(m_faces.rows(), 0.0);
   for (int f = 0; f < m_faces.rows(); ++f)
     for (int k = 0; k < 3; ++k)
@@ -478,13 +485,9 @@ void ObstacleContactEnergy::begin_step(const StepContext& ctx, const Eigen::Vect
     double approach = 0;
     for (size_t o = 0; o < m_obstacles.size(); ++o) {
       const auto& obs = *m_obstacles[o];
-      // One keyframe: the obstacle's velocity is exactly zero, so it is not computed per vertex.
-      const bool still = obs.motion.keyframes().size() < 2;
       for (int v = 0; v < static_cast<int>(m_area.size()); ++v) {
         const Eigen::Vector3d p = x_t0.segment<3>(3 * v);
-        const Eigen::Vector3d vel =
-            still ? Eigen::Vector3d(ctx.v_t0->segment<3>(3 * v))
-                  : Eigen::Vector3d(ctx.v_t0->segment<3>(3 * v) - obs.velocity(p, ctx.time_t0));
+        const Eigen::Vector3d vel = ctx.v_t0->segment<3>(3 * v) - obs.velocity(p, ctx.time_t0);
         const double reach = m_params.dhat + 2 * ctx.h * vel.norm();
         if (m_bounds[o].distance_to(p) > reach) continue;
         Eigen::Vector3d n;

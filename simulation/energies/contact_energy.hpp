@@ -183,8 +183,11 @@ class ObstacleContactEnergy : public EnergyTerm {
   /// obstacle's bounds (face_near_bounds for every face at once; see the .cpp).
   class FaceBoxes;
   FaceBoxes face_boxes(const Eigen::VectorXd& x) const;
-  /// The largest vertex displacement of each face along dx [m] (the faces' part of max_step).
+  /// The largest vertex displacement of each face along dx [m] (the faces' part of max_step;
+  /// empty when no obstacle touches the sheet by faces through sphere or search mode).
   std::vector<double> face_speeds(const Eigen::VectorXd& dx) const;
+  /// Obstacles that touch the sheet's faces by sphere or search mode (those face_boxes serves).
+  int face_obstacles() const;
   /// The rigid displacement of obstacle o held in v (x or dx; set_rigid_block): (0, 0, v_z of
   /// its block), zero when o has none or v holds only the sheet.
   Eigen::Vector3d lift_of(int o, const Eigen::VectorXd& v) const {
