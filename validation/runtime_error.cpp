@@ -13,9 +13,10 @@
 //       [--edges 20,14,10,7] [--steps 20,10,5] [--reference-edge 5] [--reference-step 2.5]
 //       [--target 2] [--check-edge 3.5] [--remesh 3:100,6:100] [--remesh-start 21]
 //       [--set KEY=VALUE ...] [--replot]
-// Edges and the target are in mm, steps in ms. A --remesh setting MIN:MAX[:ANGLE] runs the draw
-// with remeshing on (remesh.size_min MIN mm, size_max MAX mm, refine_angle ANGLE rad, the scene's
-// other remesh keys), starting from a uniform mesh of --remesh-start mm, at every step of --steps.
+// Edges and the target are in mm, steps in ms. A --remesh setting MIN:MAX[:ANGLE][@EVERY] runs the
+// draw with remeshing on (remesh.size_min MIN mm, size_max MAX mm, refine_angle ANGLE rad, a pass
+// every EVERY steps, the scene's other remesh keys), starting from a uniform mesh of
+// --remesh-start mm, at every step of --steps.
 // Cost is measured as the CPU time of the run (this process is single-threaded; on a loaded machine
 // CPU time is the steadier figure), wall time is recorded too. Each draw's reference is written to
 // DIR/seed_N/reference and reused by later runs from the same scene (draw, resolution, material,
@@ -27,7 +28,8 @@
 // converged reference, so it is reported and left out of the summary; when no draw holds, no
 // setting is recommended and the exit status is 1.
 // --set KEY=VALUE changes a scene key of the sweep's runs, not of the references, so a solver
-// option is measured against the same references: a study with --set in the same DIR reuses them,
+// option (or a remeshing key the sweep does not set, such as remesh.aspect_min) is measured
+// against the same references: a study with --set in the same DIR reuses them,
 // and its runs are stored apart from those without (the CSVs and the plot are the last study's).
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
@@ -62,10 +64,12 @@ namespace pv = papersim::validation;
 
 namespace {
 
-/// A remeshing setting of the sweep: sizes in mm, refine angle in rad (0: the scene's).
+/// A remeshing setting of the sweep: sizes in mm, refine angle in rad (0: the scene's), steps
+/// between passes (0: the scene's remesh.every).
 struct RemeshSetting {
   double size_min_mm = 0, size_max_mm = 0, angle = 0;
-  /// "off" for a uniform mesh, else "MIN:MAX" or "MIN:MAX:ANGLE".
+  int every = 0;
+  /// "off" for a uniform mesh, else "MIN:MAX" or "MIN:MAX:ANGLE", with "@EVERY" when set.
   std::string label() const;
 };
 
@@ -102,7 +106,8 @@ std::string format_number(double x) {
 std::string RemeshSetting::label() const {
   if (!(size_min_mm > 0)) return "off";
   return format_number(size_min_mm) + ":" + format_number(size_max_mm) +
-         (angle > 0 ? ":" + format_number(angle) : "");
+         (angle > 0 ? ":" + format_number(angle) : "") +
+         (every > 0 ? "@" + std::to_string(every) : "");
 }
 
 /// `scene` with remeshing on at `setting` (uniform start mesh of start_mm), or off.
@@ -113,6 +118,7 @@ ps::Scene with_remesh(ps::Scene scene, const RemeshSetting& setting, double star
   scene.remesh.params.size_min = 1e-3 * setting.size_min_mm;
   scene.remesh.params.size_max = 1e-3 * setting.size_max_mm;
   if (setting.angle > 0) scene.remesh.params.refine_angle = setting.angle;
+  if (setting.every > 0) scene.remesh.every = setting.every;
   return scene;
 }
 
@@ -178,7 +184,8 @@ std::vector<double> parse_list(const std::string& text, const char* what, bool s
   return v;
 }
 
-/// --remesh: a comma-separated list of MIN:MAX[:ANGLE] (sizes in mm, MIN <= MAX; angle in rad).
+/// --remesh: a comma-separated list of MIN:MAX[:ANGLE][@EVERY] (sizes in mm, MIN <= MAX; angle in
+/// rad; EVERY steps between passes, a whole number >= 1).
 std::vector<RemeshSetting> parse_remesh(const std::string& text) {
   std::vector<RemeshSetting> out;
   if (text.empty()) return out;
@@ -186,15 +193,26 @@ std::vector<RemeshSetting> parse_remesh(const std::string& text) {
   while (pos <= text.size()) {
     const size_t end = std::min(text.find(',', pos), text.size());
     const std::string item = text.substr(pos, end - pos);
+    const size_t at = item.find('@');
+    const std::string sizes = item.substr(0, at);
     RemeshSetting r;
     int used = 0;
-    const int n = std::sscanf(item.c_str(), "%lf:%lf%n:%lf%n", &r.size_min_mm, &r.size_max_mm, &used, &r.angle, &used);
-    const bool ok = n >= 2 && used == static_cast<int>(item.size()) && r.size_min_mm > 0 &&
-                    r.size_max_mm >= r.size_min_mm && std::isfinite(r.size_max_mm) &&
-                    (n == 2 || (r.angle > 0 && std::isfinite(r.angle)));
+    const int n = std::sscanf(sizes.c_str(), "%lf:%lf%n:%lf%n", &r.size_min_mm, &r.size_max_mm,
+                              &used, &r.angle, &used);
+    bool ok = n >= 2 && used == static_cast<int>(sizes.size()) && r.size_min_mm > 0 &&
+              r.size_max_mm >= r.size_min_mm && std::isfinite(r.size_max_mm) &&
+              (n == 2 || (r.angle > 0 && std::isfinite(r.angle)));
+    if (at != std::string::npos) {
+      const std::string every = item.substr(at + 1);
+      int every_used = 0;
+      ok = ok && std::sscanf(every.c_str(), "%d%n", &r.every, &every_used) == 1 &&
+           every_used == static_cast<int>(every.size()) && r.every >= 1;
+    }
     if (!ok)
-      throw std::runtime_error("--remesh: '" + item + "' is not MIN:MAX or MIN:MAX:ANGLE (sizes in mm, 0 < MIN <= MAX; "
-                               "angle in rad, > 0)");
+      throw std::runtime_error(
+          "--remesh: '" + item +
+          "' is not MIN:MAX[:ANGLE][@EVERY] (sizes in mm, 0 < MIN <= MAX; "
+          "angle in rad, > 0; EVERY steps between passes, a whole number >= 1)");
     if (n == 2) r.angle = 0;
     out.push_back(r);
     pos = end + 1;
@@ -512,8 +530,11 @@ int main(int argc, char** argv) {
   std::string remesh_text;
   double remesh_start = 21;
   app.add_option("--remesh", remesh_text,
-                 "remeshing settings of the sweep, comma separated MIN:MAX[:ANGLE] (remesh.size_min and size_max "
-                 "in mm, refine_angle in rad; run at every --steps, from a uniform start mesh of --remesh-start)");
+                 "remeshing settings of the sweep, comma separated MIN:MAX[:ANGLE][@EVERY] "
+                 "(remesh.size_min and "
+                 "size_max in mm, refine_angle in rad, remesh.every in steps; run at every "
+                 "--steps, from a uniform "
+                 "start mesh of --remesh-start)");
   app.add_option("--remesh-start", remesh_start, "edge length of the remeshed runs' start mesh [mm]")
       ->capture_default_str()->check(CLI::PositiveNumber);
   std::string mark_text;
@@ -522,8 +543,11 @@ int main(int argc, char** argv) {
   app.add_option(
       "--set", set_pairs,
       "KEY=VALUE: set a scene key of the sweep's runs, not of the references (dotted, e.g. "
-      "solver.trust_region_cg=20; the value is JSON); repeatable. The sweep's own keys (time_step, "
-      "sheet.edge_length, remesh.*) are refused");
+      "solver.trust_region_cg=20 or remesh.aspect_min=0.5; the value is JSON); repeatable. The "
+      "sweep's "
+      "own keys (time_step, sheet.edge_length, remesh.enabled, size_min, size_max, refine_angle, "
+      "every) "
+      "are refused");
   bool replot = false;
   app.add_flag("--replot", replot, "only redraw OUT/runtime_error.png from OUT/runtime_error_summary.csv");
   CLI11_PARSE(app, argc, argv);
@@ -571,8 +595,9 @@ int main(int argc, char** argv) {
                                format_number(ref_edge) + " mm)");
     const nlohmann::json sets = ps::parse_overrides(set_pairs);
     for (const auto& [key, value] : sets.items())
-      if (key == "time_step" || key == "sheet.edge_length" || key.rfind("remesh.", 0) == 0 ||
-          key == "remesh")
+      if (key == "time_step" || key == "sheet.edge_length" || key == "remesh" ||
+          key == "remesh.enabled" || key == "remesh.size_min" || key == "remesh.size_max" ||
+          key == "remesh.refine_angle" || key == "remesh.every")
         throw std::runtime_error("--set: '" + key +
                                  "' is set by the sweep (--edges, --steps, --remesh)");
     // An unknown scenario or a bad --set key fails here, before any run.
