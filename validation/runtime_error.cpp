@@ -211,8 +211,8 @@ std::vector<RemeshSetting> parse_remesh(const std::string& text) {
     if (!ok)
       throw std::runtime_error(
           "--remesh: '" + item +
-          "' is not MIN:MAX[:ANGLE][@EVERY] (sizes in mm, 0 < MIN <= MAX; "
-          "angle in rad, > 0; EVERY steps between passes, a whole number >= 1)");
+          "' is not MIN:MAX[:ANGLE][@EVERY] (sizes in mm, 0 < MIN <= MAX; angle in rad, > 0; "
+          "EVERY steps between passes, a whole number >= 1)");
     if (n == 2) r.angle = 0;
     out.push_back(r);
     pos = end + 1;
@@ -531,10 +531,8 @@ int main(int argc, char** argv) {
   double remesh_start = 21;
   app.add_option("--remesh", remesh_text,
                  "remeshing settings of the sweep, comma separated MIN:MAX[:ANGLE][@EVERY] "
-                 "(remesh.size_min and "
-                 "size_max in mm, refine_angle in rad, remesh.every in steps; run at every "
-                 "--steps, from a uniform "
-                 "start mesh of --remesh-start)");
+                 "(remesh.size_min and size_max in mm, refine_angle in rad, remesh.every in "
+                 "steps; run at every --steps, from a uniform start mesh of --remesh-start)");
   app.add_option("--remesh-start", remesh_start, "edge length of the remeshed runs' start mesh [mm]")
       ->capture_default_str()->check(CLI::PositiveNumber);
   std::string mark_text;
