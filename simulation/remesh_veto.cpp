@@ -68,8 +68,11 @@ RemeshVeto::RemeshVeto(std::vector<std::shared_ptr<const collision::Collider>> o
     : m_obstacles(std::move(obstacles)), m_params(params) {
   for (const auto& o : m_obstacles) {
     collision::Aabb b = o->bounds(params.time);
+    collision::Aabb r = b;
     b.inflate(params.obstacle_gap);
     m_bounds.push_back(b);
+    r.inflate(std::max(params.obstacle_reach, params.obstacle_gap));
+    m_reach_bounds.push_back(r);
     const auto* analytic = dynamic_cast<const collision::AnalyticCollider*>(o.get());
     if (!analytic) continue;
     const Eigen::Affine3d pose = analytic->motion.pose(params.time);
@@ -141,6 +144,28 @@ bool RemeshVeto::near_obstacle(const Eigen::Vector3d& p) const {
   return false;
 }
 
+bool RemeshVeto::deeper_in_barrier(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
+                                   const Eigen::Vector3d& b) const {
+  if (!(m_params.obstacle_reach > 0)) return false;
+  for (size_t o = 0; o < m_obstacles.size(); ++o) {
+    if (m_reach_bounds[o].distance_to(p) > 0) continue;
+    const double d = m_obstacles[o]->distance(p, m_params.time);
+    if (!(d < m_params.obstacle_reach)) continue;
+    const double linear = 0.5 * (m_obstacles[o]->distance(a, m_params.time) +
+                                 m_obstacles[o]->distance(b, m_params.time));
+    if (d < std::min(linear, m_params.obstacle_reach) - 1e-3 * m_params.obstacle_reach) return true;
+  }
+  return false;
+}
+
+bool RemeshVeto::deeper_in_barrier(const Eigen::Matrix3d& t) const {
+  for (int k = 0; k < 3; ++k) {
+    const Eigen::Vector3d a = t.row(k), b = t.row((k + 1) % 3);
+    if (deeper_in_barrier(0.5 * (a + b), a, b)) return true;
+  }
+  return false;
+}
+
 bool RemeshVeto::near_polytope_features(const Eigen::Matrix3d& t) const {
   const double gap2 = m_params.obstacle_gap * m_params.obstacle_gap;
   for (const auto& c : m_corners)
@@ -190,6 +215,11 @@ std::string RemeshVeto::operator()(const remesh::EditProposal& edit) const {
     for (size_t f = 0; f < edit.vertices.size(); ++f)
       for (int k = 0; k < 3; ++k)
         if (edit.vertices[f][k] < 0 && near_obstacle(edit.world[f].row(k).transpose())) return "obstacle";
+    // Faces (a, new, c) and (new, b, c): the new vertex lies between a and b.
+    if (edit.world.size() >= 2 &&
+        deeper_in_barrier(edit.world[0].row(1).transpose(), edit.world[0].row(0).transpose(),
+                          edit.world[1].row(1).transpose()))
+      return "barrier";
     return {};
   }
   for (size_t f = 0; f < edit.world.size(); ++f) {
@@ -200,6 +230,8 @@ std::string RemeshVeto::operator()(const remesh::EditProposal& edit) const {
       if (near_obstacle(0.5 * (t.row(k) + t.row((k + 1) % 3)).transpose())) return "obstacle";
     if (near_polytope_features(t) || near_sphere(t)) return "obstacle";
   }
+  for (const Eigen::Matrix3d& t : edit.world)
+    if (deeper_in_barrier(t)) return "barrier";
   if (m_params.self_gap > 0)
     for (size_t f = 0; f < edit.world.size(); ++f)
       if (near_sheet(edit, static_cast<int>(f))) return "self";

@@ -11,12 +11,16 @@
 /// obstacle (the chord cuts into it). Flips and collapses move triangles: they are checked for
 /// strain, obstacles (centroid and edge midpoints against the distance field, and exactly
 /// against a sphere and a polytope's corners and edges, which can pass between those points: a
-/// gable's ridge or a small sphere's top under a large new face) and the rest of the sheet. On a bent sheet a
-/// flip or a collapse makes triangles whose world shape differs from their material shape (a
-/// chord is shorter than its arc), and the stiff membrane turns even a small strain into a large
-/// energy (Eh = 5e5 N/m: 0.1% strain over 1 cm^2 stores 25 uJ, the order of a sheet's whole
+/// gable's ridge or a small sphere's top under a large new face) and the rest of the sheet. On a
+/// bent sheet a flip or a collapse makes triangles whose world shape differs from their material
+/// shape (a chord is shorter than its arc), and the stiff membrane turns even a small strain into a
+/// large energy (Eh = 5e5 N/m: 0.1% strain over 1 cm^2 stores 25 uJ, the order of a sheet's whole
 /// bending energy), so such edits are refused unless their strain stays within
-/// `strain_tolerance`: coarsening happens where the sheet is flat.
+/// `strain_tolerance`: coarsening happens where the sheet is flat. Within the obstacle barrier's
+/// reach a new point may not lie deeper than the two corners it lies between ("barrier"): a
+/// split's vertex on a chord across a convex obstacle would start the next step with a barrier
+/// force many times its neighbours' and kick the sheet away (docs/remeshing.md, "Passes that
+/// kicked the sheet off its obstacle").
 #include <array>
 #include <memory>
 #include <string>
@@ -35,6 +39,12 @@ struct RemeshVetoParams {
   /// [1 - strain_tolerance, 1 + strain_tolerance] [-].
   double strain_tolerance = 2e-4;
   double obstacle_gap = 3e-5;    ///< closest a new point may come to an obstacle [m]
+  /// Reach of the obstacle barrier (the contact's dhat) [m]; <= 0 off. Within it a new point (a
+  /// split's vertex, a new face's edge midpoint) may not be closer to an obstacle than the mean
+  /// of the distances of the two corners it lies between (less 1e-3 of the reach): refining a
+  /// chord across a convex obstacle would start the next step with a barrier force many times
+  /// the neighbours' ("barrier").
+  double obstacle_reach = 0.0;
   double self_gap = 3e-5;        ///< closest a new triangle may come to the sheet [m]; <= 0 off
   double time = 0.0;             ///< obstacles' time [s]
 };
@@ -52,6 +62,9 @@ class RemeshVeto {
  private:
   std::string stretch_reason(const remesh::EditProposal& edit) const;
   bool near_obstacle(const Eigen::Vector3d& p) const;
+  bool deeper_in_barrier(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
+                         const Eigen::Vector3d& b) const;
+  bool deeper_in_barrier(const Eigen::Matrix3d& triangle) const;
   bool near_polytope_features(const Eigen::Matrix3d& triangle) const;
   bool near_sphere(const Eigen::Matrix3d& triangle) const;
   bool near_sheet(const remesh::EditProposal& edit, int face) const;
@@ -60,6 +73,7 @@ class RemeshVeto {
 
   std::vector<std::shared_ptr<const collision::Collider>> m_obstacles;
   std::vector<collision::Aabb> m_bounds;  // obstacles at the pass's time, grown by the gap
+  std::vector<collision::Aabb> m_reach_bounds;  // the same, grown by the barrier's reach
   /// Corners and edges of the polytope obstacles (box, gable) at the pass's time [m].
   std::vector<Eigen::Vector3d> m_corners;
   std::vector<std::array<int, 2>> m_edges;  // indices into m_corners

@@ -479,6 +479,7 @@ void Run::remesh_pass() {
   RemeshVetoParams vp;
   vp.strain_limit = m_setup.material.strain_limit;
   vp.obstacle_gap = 0.1 * m_setup.contact.dhat;
+  vp.obstacle_reach = m_setup.contact.dhat;
   vp.self_gap = m_setup.self_contact ? 0.1 * m_setup.self_contact_params.dhat : 0.0;
   vp.time = m_state.time;
   const RemeshVeto veto(m_setup.obstacles, m_mesh, rs.positions, vp);
