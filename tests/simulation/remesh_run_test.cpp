@@ -143,21 +143,50 @@ TEST(ApproachDistance, SubtractsTheDistanceClosedTowardsTheObstacle) {
   EXPECT_NEAR(approach_distance(resting, x, v, 0.0, 0.0)(0), 0.05, 1e-12);
 }
 
+namespace {
+
+/// Two triangles (0, 1, 2) and (1, 3, 2) forming a flat square of 1 cm, world = material.
+struct FlatSquare {
+  rm::SheetMesh mesh;
+  rm::RemeshState state;
+  FlatSquare() : mesh(square_material(), square_faces()) {
+    state.positions.resize(4, 3);
+    state.positions << 0, 0, 0, 0.01, 0, 0, 0, 0.01, 0, 0.01, 0.01, 0;
+    state.velocities = Eigen::MatrixX3d::Zero(4, 3);
+  }
+  static Eigen::MatrixX2d square_material() {
+    Eigen::MatrixX2d X(4, 2);
+    X << 0, 0, 1, 0, 0, 1, 1, 1;
+    return 0.01 * X;
+  }
+  static Eigen::MatrixX3i square_faces() {
+    Eigen::MatrixX3i F(2, 3);
+    F << 0, 1, 2, 1, 3, 2;
+    return F;
+  }
+};
+
+/// The edge between vertices a and b of the editor's mesh.
+OpenMesh::EdgeHandle edge_between(const rm::MeshEditor& editor, int a, int b) {
+  for (auto e : editor.mesh().edges()) {
+    const auto h = editor.mesh().halfedge_handle(e, 0);
+    const int u = editor.mesh().from_vertex_handle(h).idx(),
+              v = editor.mesh().to_vertex_handle(h).idx();
+    if ((u == a && v == b) || (u == b && v == a)) return e;
+  }
+  return OpenMesh::EdgeHandle();
+}
+
+}  // namespace
+
 TEST(RemeshVeto, RefusesEditsThatBreakTheSolversInvariants) {
   // Two triangles (0, 1, 2) and (1, 3, 2) forming a unit square in material space, whose world
   // square is creased along the diagonal 1-2 by lifting corner 3.
-  Eigen::MatrixX2d X(4, 2);
-  X << 0, 0, 1, 0, 0, 1, 1, 1;
-  X *= 0.01;
-  Eigen::MatrixX3i F(2, 3);
-  F << 0, 1, 2, 1, 3, 2;
-  rm::SheetMesh mesh(X, F);
-  rm::RemeshState state;
-  state.positions.resize(4, 3);
+  FlatSquare sq;
+  rm::SheetMesh& mesh = sq.mesh;
+  rm::RemeshState& state = sq.state;
   const double s = 0.01 / std::sqrt(2.0);  // height of corner 3 when bent 90 degrees
   // Flat: corner 3 at its material place. Flipping the diagonal keeps every triangle isometric.
-  state.positions << 0, 0, 0, 0.01, 0, 0, 0, 0.01, 0, 0.01, 0.01, 0;
-  state.velocities = Eigen::MatrixX3d::Zero(4, 3);
   RemeshVetoParams p;
   p.strain_limit = 0.005;
   p.self_gap = 0;
@@ -190,12 +219,7 @@ TEST(RemeshVeto, RefusesEditsThatBreakTheSolversInvariants) {
   RemeshVetoParams q = p;
   q.obstacle_gap = 3e-5;
   const RemeshVeto near_sphere({sphere}, mesh, state.positions, q);
-  OpenMesh::EdgeHandle bottom;
-  for (auto e : editor.mesh().edges()) {
-    const auto h = editor.mesh().halfedge_handle(e, 0);
-    const int a = editor.mesh().from_vertex_handle(h).idx(), b = editor.mesh().to_vertex_handle(h).idx();
-    if ((a == 0 && b == 1) || (a == 1 && b == 0)) bottom = e;
-  }
+  const OpenMesh::EdgeHandle bottom = edge_between(editor, 0, 1);
   EXPECT_EQ(near_sphere(editor.propose_split(bottom)), "obstacle");
   // The same split next to a sphere 1 mm lower is allowed.
   k.translation = centre - Eigen::Vector3d(0, 0, 1e-3);
@@ -212,24 +236,10 @@ TEST(RemeshVeto, RefusesEditsThatBreakTheSolversInvariants) {
 // 0.1 mm, beyond the 30 um gap but inside a 0.3 mm reach. Under a 100 m sphere (a plane to within
 // 3e-8 m over the edge) the midpoint is as far as its ends, and the split is allowed.
 TEST(RemeshVeto, RefusesASplitWhoseVertexSinksIntoTheBarrier) {
-  Eigen::MatrixX2d X(4, 2);
-  X << 0, 0, 1, 0, 0, 1, 1, 1;
-  X *= 0.01;
-  Eigen::MatrixX3i F(2, 3);
-  F << 0, 1, 2, 1, 3, 2;
-  rm::SheetMesh mesh(X, F);
-  rm::RemeshState state;
-  state.positions.resize(4, 3);
-  state.positions << 0, 0, 0, 0.01, 0, 0, 0, 0.01, 0, 0.01, 0.01, 0;
-  state.velocities = Eigen::MatrixX3d::Zero(4, 3);
-  rm::MeshEditor editor(mesh, state);
-  OpenMesh::EdgeHandle bottom;
-  for (auto e : editor.mesh().edges()) {
-    const auto h = editor.mesh().halfedge_handle(e, 0);
-    const int a = editor.mesh().from_vertex_handle(h).idx(),
-              b = editor.mesh().to_vertex_handle(h).idx();
-    if ((a == 0 && b == 1) || (a == 1 && b == 0)) bottom = e;
-  }
+  FlatSquare sq;
+  rm::SheetMesh& mesh = sq.mesh;
+  rm::MeshEditor editor(mesh, sq.state);
+  const OpenMesh::EdgeHandle bottom = edge_between(editor, 0, 1);
   const auto veto_over_sphere = [&](double radius, double reach) {
     papersim::collision::Shape ball;
     ball.kind = papersim::collision::ShapeKind::sphere;
@@ -245,7 +255,7 @@ TEST(RemeshVeto, RefusesASplitWhoseVertexSinksIntoTheBarrier) {
     // The edge's end: 0.2248 mm from the 10 cm sphere, 0.1001 mm from the 100 m one.
     EXPECT_NEAR(sphere->distance(Eigen::Vector3d(0, 0, 0), 0.0),
                 std::hypot(radius + 1e-4, 0.005) - radius, 1e-9);
-    return RemeshVeto({sphere}, mesh, state.positions, p)(editor.propose_split(bottom));
+    return RemeshVeto({sphere}, mesh, sq.state.positions, p)(editor.propose_split(bottom));
   };
   EXPECT_EQ(veto_over_sphere(0.1, 3e-4), "barrier");
   EXPECT_EQ(veto_over_sphere(0.1, 0.0), "");     // without the rule: only the 30 um gap counts
