@@ -28,13 +28,17 @@ FitBendingEnergy::FitBendingEnergy(const remesh::SheetMesh& mesh, const Material
   const Eigen::MatrixX2d X = mesh.material_coords();
   const Eigen::MatrixX3i fh = remesh::face_hinges(mesh, m_hinges);
   m_faces.resize(faces.rows());
-  for (int f = 0; f < faces.rows(); ++f) build_stencil(f, fh, faces, X);
+  std::vector<std::vector<int>> vertex_faces(X.rows());
+  for (int f = 0; f < faces.rows(); ++f)
+    for (int k = 0; k < 3; ++k) vertex_faces[faces(f, k)].push_back(f);
+  for (int f = 0; f < faces.rows(); ++f) build_stencil(f, fh, faces, vertex_faces, X);
   for (Face& face : m_faces) face.M = face.P.transpose() * m_Q * face.P + face.R.transpose() * face.R;
   set_plastic_state(mesh.plastic_curvature(), mesh.damage());
 }
 
 void FitBendingEnergy::build_stencil(int f, const Eigen::MatrixX3i& fh, const Eigen::MatrixX3i& F,
-                                  const Eigen::MatrixX2d& X) {
+                                     const std::vector<std::vector<int>>& vertex_faces,
+                                     const Eigen::MatrixX2d& X) {
   Face& face = m_faces[f];
   auto add_face_hinges = [&](int g) {
     for (int k = 0; k < 3; ++k)
@@ -66,12 +70,13 @@ void FitBendingEnergy::build_stencil(int f, const Eigen::MatrixX3i& fh, const Ei
     for (int h : face.hinges)
       for (int k = 0; k < 4; ++k) verts.push_back(m_hinges.vertices(h, k));
     for (int k = 0; k < 3; ++k) verts.push_back(F(f, k));
-    for (int g = 0; g < F.rows(); ++g)
-      for (int k = 0; k < 3; ++k)
-        if (std::find(verts.begin(), verts.end(), F(g, k)) != verts.end()) {
-          add_face_hinges(g);
-          break;
-        }
+    // The faces with a corner in verts, in ascending order (the stencil's row order).
+    std::vector<int> ring_faces;
+    for (int v : verts)
+      ring_faces.insert(ring_faces.end(), vertex_faces[v].begin(), vertex_faces[v].end());
+    std::sort(ring_faces.begin(), ring_faces.end());
+    ring_faces.erase(std::unique(ring_faces.begin(), ring_faces.end()), ring_faces.end());
+    for (int g : ring_faces) add_face_hinges(g);
   }
   if (!determined())
     throw NumericError("bending: the curvature of face " + std::to_string(f) +
