@@ -12,7 +12,7 @@
 //   papersim_runtime_error --out DIR [--scenario pull] [--seeds 0,1,2,3,4,5,6,7]
 //       [--edges 20,14,10,7] [--steps 20,10,5] [--reference-edge 5] [--reference-step 2.5]
 //       [--target 2] [--check-edge 3.5] [--remesh 3:100,6:100] [--remesh-start 21]
-//       [--set KEY=VALUE ...] [--replot]
+//       [--set KEY=VALUE ...] [--set-all KEY=VALUE ...] [--replot]
 // Edges and the target are in mm, steps in ms. A --remesh setting MIN:MAX[:ANGLE][@EVERY] runs the
 // draw with remeshing on (remesh.size_min MIN mm, size_max MAX mm, refine_angle ANGLE rad, a pass
 // every EVERY steps, the scene's other remesh keys), starting from a uniform mesh of
@@ -31,6 +31,8 @@
 // option (or a remeshing key the sweep does not set, such as remesh.aspect_min) is measured
 // against the same references: a study with --set in the same DIR reuses them,
 // and its runs are stored apart from those without (the CSVs and the plot are the last study's).
+// --set-all KEY=VALUE changes a scene key of every run, the references included: another physics
+// (a material key) measured against references of that physics, in a DIR of its own.
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
@@ -428,10 +430,10 @@ SeedResult study_draw(const std::string& scenario, long long seed, const fs::pat
                       const std::vector<double>& edges, const std::vector<double>& steps,
                       double ref_edge, double ref_step, double check_edge, double target,
                       const std::vector<RemeshSetting>& remeshes, double remesh_start,
-                      const nlohmann::json& sets) {
+                      const nlohmann::json& sets, const nlohmann::json& all_sets) {
   SeedResult d;
   d.seed = seed;
-  const ps::Scene base = ps::make_scenario(scenario, seed);
+  const ps::Scene base = ps::apply_overrides(ps::make_scenario(scenario, seed), all_sets, "--set-all");
   const ps::Scene swept = ps::apply_overrides(base, sets, "--set");
   fs::create_directories(dir);
   const pv::SheetGeometry reference =
@@ -546,6 +548,11 @@ int main(int argc, char** argv) {
       "own keys (time_step, sheet.edge_length, remesh.enabled, size_min, size_max, refine_angle, "
       "every) "
       "are refused");
+  std::vector<std::string> all_pairs;
+  app.add_option("--set-all", all_pairs,
+                 "KEY=VALUE: set a scene key of every run, the references and their checks too (another "
+                 "physics, e.g. sheet.material.stretch_stiffness=5000: use a new OUT, as the references "
+                 "of another scene replace those in it); repeatable, the same keys refused as for --set");
   bool replot = false;
   app.add_flag("--replot", replot, "only redraw OUT/runtime_error.png from OUT/runtime_error_summary.csv");
   CLI11_PARSE(app, argc, argv);
@@ -592,23 +599,28 @@ int main(int argc, char** argv) {
                                " mm is not a positive edge length finer than --reference-edge (" +
                                format_number(ref_edge) + " mm)");
     const nlohmann::json sets = ps::parse_overrides(set_pairs);
-    for (const auto& [key, value] : sets.items())
-      if (key == "time_step" || key == "sheet.edge_length" || key == "remesh" ||
-          key == "remesh.enabled" || key == "remesh.size_min" || key == "remesh.size_max" ||
-          key == "remesh.refine_angle" || key == "remesh.every")
-        throw std::runtime_error("--set: '" + key +
-                                 "' is set by the sweep (--edges, --steps, --remesh)");
-    // An unknown scenario or a bad --set key fails here, before any run.
-    ps::apply_overrides(ps::make_scenario(scenario, seeds.front()), sets, "--set");
+    const nlohmann::json all_sets = ps::parse_overrides(all_pairs);
+    for (const auto& [option, keys] : {std::pair{"--set", &sets}, std::pair{"--set-all", &all_sets}})
+      for (const auto& [key, value] : keys->items())
+        if (key == "time_step" || key == "sheet.edge_length" || key == "remesh" ||
+            key == "remesh.enabled" || key == "remesh.size_min" || key == "remesh.size_max" ||
+            key == "remesh.refine_angle" || key == "remesh.every")
+          throw std::runtime_error(std::string(option) + ": '" + key +
+                                   "' is set by the sweep (--edges, --steps, --remesh)");
+    // An unknown scenario or a bad --set / --set-all key fails here, before any run.
+    ps::apply_overrides(ps::apply_overrides(ps::make_scenario(scenario, seeds.front()), all_sets, "--set-all"),
+                        sets, "--set");
     if (!sets.empty())
       std::printf("the sweep's runs with --set %s (not the references)\n", sets.dump().c_str());
+    if (!all_sets.empty())
+      std::printf("every run and reference with --set-all %s\n", all_sets.dump().c_str());
     fs::create_directories(out);
     const auto t0 = std::chrono::steady_clock::now();
     std::vector<SeedResult> draws;
     for (long long seed : seeds) {
       draws.push_back(study_draw(scenario, seed, fs::path(out) / ("seed_" + std::to_string(seed)),
                                  edges, steps, ref_edge, ref_step, check_edge, target, remeshes,
-                                 remesh_start, sets));
+                                 remesh_start, sets, all_sets));
       write_csv(fs::path(out) / "runtime_error.csv", draws);  // partial results survive an interruption
     }
     const std::vector<Aggregate> settings = aggregate(draws);
