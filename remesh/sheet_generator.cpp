@@ -133,7 +133,13 @@ Eigen::MatrixX3i delaunay_triangulation(const Eigen::MatrixX2d& P) {
 SheetMesh make_rotated_lattice(const LatticeOptions& o) {
   if (!(o.width > 0 && o.height > 0 && o.edge_length > 0))
     throw MeshError("lattice: width, height and edge_length must be > 0");
+  if (!(o.aspect > 0 && o.aspect <= 1)) throw MeshError("lattice: aspect must be in (0, 1]");
   const double h = o.edge_length;
+  // Lattice vectors: h along the grain, h / aspect across it.
+  const Eigen::Vector2d a1(h * std::cos(o.angle), h * std::sin(o.angle));
+  const Eigen::Vector2d a2 = Eigen::Vector2d(-a1.y(), a1.x()) / o.aspect;
+  // Half the lattice's spacing across a side of constant x / y (at aspect 1: half an edge).
+  const double margin_x = 0.5 * std::max(h, std::abs(a2.x())), margin_y = 0.5 * std::max(h, std::abs(a2.y()));
   std::vector<Eigen::Vector2d> pts;
   // Boundary: evenly spaced points on the four sides.
   const int nx = std::max(1, static_cast<int>(std::lround(o.width / h)));
@@ -159,19 +165,17 @@ SheetMesh make_rotated_lattice(const LatticeOptions& o) {
   }
   const auto near_line = [&](const Eigen::Vector2d& p) {
     for (double lx : o.lines_x)
-      if (std::abs(p.x() - lx) < 0.5 * h) return true;
+      if (std::abs(p.x() - lx) < margin_x) return true;
     return false;
   };
   // Interior: the rotated lattice, kept half a spacing away from the boundary and the lines.
-  const Eigen::Vector2d a1(h * std::cos(o.angle), h * std::sin(o.angle));
-  const Eigen::Vector2d a2(-a1.y(), a1.x());
   const int range = static_cast<int>(std::ceil((o.width + o.height) / h)) + 2;
   const Eigen::Vector2d centre(0.5 * o.width, 0.5 * o.height);
   for (int i = -range; i <= range; ++i)
     for (int j = -range; j <= range; ++j) {
       const Eigen::Vector2d p = centre + i * a1 + j * a2 + 0.25 * (a1 + a2);
-      if (p.x() > 0.5 * h && p.x() < o.width - 0.5 * h && p.y() > 0.5 * h &&
-          p.y() < o.height - 0.5 * h && !near_line(p))
+      if (p.x() > margin_x && p.x() < o.width - margin_x && p.y() > margin_y &&
+          p.y() < o.height - margin_y && !near_line(p))
         pts.push_back(p);
     }
   Eigen::MatrixX2d P(pts.size(), 2);

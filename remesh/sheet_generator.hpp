@@ -33,6 +33,9 @@ struct LatticeOptions {
   double height = 0.297;      ///< [m] along material y
   double edge_length = 5e-3;  ///< lattice spacing [m]
   double angle = 0.5235987755982988;  ///< angle of the lattice (the mesh grain) to material x [rad]
+  /// The lattice's spacing across the grain is edge_length / aspect (0 < aspect <= 1): at aspect
+  /// < 1 its cells, and the triangles, are 1 / aspect times longer across the grain than along it.
+  double aspect = 1.0;
   /// Material x of straight lines of vertices across the sheet (x = const, spaced like the
   /// boundary), for boundary conditions the mesh must represent exactly: a clamp line.
   std::vector<double> lines_x;
@@ -40,8 +43,8 @@ struct LatticeOptions {
 
 /// A rectangle [0, width] x [0, height] meshed by the Delaunay triangulation of a square lattice
 /// rotated by `angle` plus evenly spaced boundary points: a mesh whose grain is at an angle to
-/// the sheet's edges (for orientation tests). Lattice points closer than half a spacing to the
-/// boundary or to one of `lines_x` are left out.
+/// the sheet's edges (for orientation tests). Lattice points closer than half a spacing (measured
+/// across the side) to the boundary or to one of `lines_x` are left out.
 /// @throw MeshError when an option is out of range.
 SheetMesh make_rotated_lattice(const LatticeOptions& options);
 

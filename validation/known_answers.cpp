@@ -276,41 +276,21 @@ Strip strip_rotated(double h, double angle_deg) {
 /// is h along the direction at `angle_deg` to material x (the strip's length, the direction it
 /// bends in) and h / aspect across it: faces `aspect` times as wide as long, like the anisotropic
 /// faces remeshing makes (remesh.aspect_min). At 0 degrees the long edges lie along the bend's
-/// generators (the faces are as the sizing of a cylinder asks), at 90 degrees across them. Plus
-/// boundary points every h and a line of vertices at the clamp, as on the other strips.
+/// generators (the faces are as the sizing of a cylinder asks), at 90 degrees across them. A line
+/// of vertices at the clamp, as on the other strips.
 Strip strip_thin_faces(double h, double aspect, double angle_deg) {
   Strip s;
   s.edge = h;
   s.clamp = 2 * h;
   s.width = THIN_STRIP_WIDTH;
-  const double W = STRIP_LENGTH + s.clamp, H = s.width, t = angle_deg * PI / 180;
-  const Eigen::Vector2d a1(h * std::cos(t), h * std::sin(t));
-  const Eigen::Vector2d a2 = (h / aspect) * Eigen::Vector2d(-std::sin(t), std::cos(t));
-  std::vector<Eigen::Vector2d> pts;
-  const int nx = static_cast<int>(std::lround(W / h)), ny = static_cast<int>(std::lround(H / h));
-  for (int i = 0; i < nx; ++i) pts.emplace_back(W * i / nx, 0.0), pts.emplace_back(W * (nx - i) / nx, H);
-  for (int j = 0; j < ny; ++j) pts.emplace_back(W, H * j / ny), pts.emplace_back(0.0, H * (ny - j) / ny);
-  pts.erase(std::remove_if(pts.begin(), pts.end(),
-                           [&](const Eigen::Vector2d& p) {
-                             return (p.y() == 0.0 || p.y() == H) && std::abs(p.x() - s.clamp) < 0.5 * h;
-                           }),
-            pts.end());
-  for (int j = 0; j <= ny; ++j) pts.emplace_back(s.clamp, H * j / ny);
-  // Lattice points are kept half a lattice spacing (measured across the side) from the sides
-  // and the clamp line, so that no face there is much smaller than h.
-  const double margin_x = 0.5 * std::max(h, std::abs(a2.x())), margin_y = 0.5 * std::max(h, std::abs(a2.y()));
-  const int range = static_cast<int>(std::ceil((W + H) / h)) + 2;
-  const Eigen::Vector2d centre(0.5 * W, 0.5 * H);
-  for (int i = -range; i <= range; ++i)
-    for (int j = -range; j <= range; ++j) {
-      const Eigen::Vector2d p = centre + i * a1 + j * a2 + 0.25 * (a1 + a2);
-      if (p.x() > margin_x && p.x() < W - margin_x && p.y() > margin_y && p.y() < H - margin_y &&
-          std::abs(p.x() - s.clamp) > margin_x)
-        pts.push_back(p);
-    }
-  Eigen::MatrixX2d P(pts.size(), 2);
-  for (size_t i = 0; i < pts.size(); ++i) P.row(i) = pts[i].transpose();
-  s.mesh = rm::SheetMesh(P, rm::delaunay_triangulation(P));
+  rm::LatticeOptions o;
+  o.width = STRIP_LENGTH + s.clamp;
+  o.height = s.width;
+  o.edge_length = h;
+  o.angle = angle_deg * PI / 180;
+  o.aspect = aspect;
+  o.lines_x = {s.clamp};
+  s.mesh = rm::make_rotated_lattice(o);
   s.label = fmt("aspect %g at %gdeg", aspect, angle_deg);
   return s;
 }

@@ -146,6 +146,49 @@ TEST(SheetGenerator, RotatedLatticeKeepsRequestedLinesOfVertices) {
   EXPECT_THROW(make_rotated_lattice(o), MeshError);
 }
 
+TEST(SheetGenerator, RotatedLatticeAtAnAspectHasFacesLongAcrossTheGrain) {
+  LatticeOptions o;
+  o.width = 0.15;
+  o.height = 0.1;
+  o.edge_length = 2.5e-3;
+  o.aspect = 0.2;
+  o.angle = 30 * M_PI / 180;
+  o.lines_x = {0.005};
+  const SheetMesh m = make_rotated_lattice(o);
+  const Eigen::MatrixX2d X = m.material_coords();
+  const Eigen::MatrixX3i F = m.faces();
+  const Eigen::Vector2d grain(std::cos(o.angle), std::sin(o.angle)), across(-grain.y(), grain.x());
+  double area = 0;
+  int interior = 0;
+  for (int f = 0; f < F.rows(); ++f) {
+    Eigen::Vector2d p[3];
+    for (int k = 0; k < 3; ++k) p[k] = X.row(F(f, k));
+    const Eigen::Vector2d e1 = p[1] - p[0], e2 = p[2] - p[0], c = (p[0] + p[1] + p[2]) / 3;
+    area += 0.5 * (e1.x() * e2.y() - e1.y() * e2.x());
+    // Away from the sides and the line, every face is half a lattice cell: its extent is one
+    // spacing along the grain (2.5 mm) and one across it (12.5 mm).
+    const double far = 2 * o.edge_length / o.aspect;
+    if (c.x() < far || c.x() > o.width - far || c.y() < far || c.y() > o.height - far ||
+        std::abs(c.x() - 0.005) < far)
+      continue;
+    ++interior;
+    double along_lo = 1, along_hi = -1, across_lo = 1, across_hi = -1;
+    for (const auto& q : p) {
+      along_lo = std::min(along_lo, q.dot(grain)), along_hi = std::max(along_hi, q.dot(grain));
+      across_lo = std::min(across_lo, q.dot(across)), across_hi = std::max(across_hi, q.dot(across));
+    }
+    EXPECT_NEAR(along_hi - along_lo, o.edge_length, 1e-9) << "face " << f;
+    EXPECT_NEAR(across_hi - across_lo, o.edge_length / o.aspect, 1e-9) << "face " << f;
+  }
+  EXPECT_GT(interior, 50);
+  EXPECT_NEAR(area, o.width * o.height, 1e-12);
+  EXPECT_EQ(m.num_vertices() - m.num_edges() + m.num_faces(), 1) << "a disk";
+  o.aspect = 0;
+  EXPECT_THROW(make_rotated_lattice(o), MeshError);
+  o.aspect = 1.5;
+  EXPECT_THROW(make_rotated_lattice(o), MeshError);
+}
+
 namespace {
 /// An edge across a cell of the lattice (its ends differ in both material coordinates): the
 /// two triangles beside it make a convex quadrilateral, so flipping it leaves valid faces.
