@@ -1,7 +1,8 @@
 // Known-answer validation (VALIDATION.md sections 1, 2, 3, 5 and 6; issue 5 item 2): the
 // simulator library against answers computed independently of it.
 //   1. heavy elastica: a clamped strip sagging under its own weight, along the mesh grid and at
-//      30 degrees to it, with a mesh-convergence line for the rotated mesh;
+//      30 degrees to it, with a mesh-convergence line for the rotated mesh; reported only, on a
+//      wide strip of thin faces at angles to the bend (membrane locking, --only thin);
 //   2. self-buckling (Greenhill): a vertical strip stays straight below G_c and falls over above;
 //   3. cylinder wrap: bending energy of an isometrically wrapped sheet, D A / (2 R^2), and its
 //      angle defect, over mesh patterns and axis angles;
