@@ -1023,7 +1023,8 @@ void run_plasticity(Report& report, bool quick) {
 int main(int argc, char** argv) {
   CLI::App app{"papersim_known_answers: the simulator against the known answers of VALIDATION.md "
                "(heavy elastica, self-buckling, cylinder wrap, backward-Euler damping, friction on "
-               "an incline, bending plasticity). Exit status 1 when a case fails."};
+               "an incline, bending plasticity; reported only, the elastica on thin faces). Exit status 1 when a "
+               "case fails."};
   bool quick = false;
   std::string csv;
   std::vector<std::string> only;
