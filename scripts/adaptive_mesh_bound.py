@@ -132,9 +132,20 @@ def rho_for(a, b, aspect_min):
     return min(1.0, max(aspect_min, math.sqrt(b / a))) if a > 0 else 1.0
 
 
+def effective_curvature(a, b, rho):
+    """k = rho a + b / rho: the density an element of aspect rho needs per unit error is k / (8 e)."""
+    return rho * a + b / rho
+
+
+def uniform_error(curv, h):
+    """RMS deviation of a uniform mesh of edge h: e = (a + b) h^2 / 8 per face."""
+    total = sum(A for A, _, _ in curv)
+    return h * h / 8 * math.sqrt(sum(A * (a + b) ** 2 for A, a, b in curv) / total)
+
+
 def closed_ratio(curv, aspect_min):
     total = sum(A for A, _, _ in curv)
-    mean_k23 = sum(A * (rho_for(a, b, aspect_min) * a + (b / rho_for(a, b, aspect_min) if a > 0 else 0)) ** (2 / 3)
+    mean_k23 = sum(A * effective_curvature(a, b, rho_for(a, b, aspect_min)) ** (2 / 3)
                    for A, a, b in curv) / total
     mean_iso2 = sum(A * (a + b) ** 2 for A, a, b in curv) / total
     return mean_k23 ** 1.5 / math.sqrt(mean_iso2)
@@ -145,7 +156,7 @@ def clamped_mesh(curv, aspect_min, size_min, size_max, scale):
     total = verts = err2 = 0.0
     for A, a, b in curv:
         rho = rho_for(a, b, aspect_min)
-        k = rho * a + b / rho
+        k = effective_curvature(a, b, rho)
         if k > 0:
             e = scale * k ** (1 / 3)
             h1 = math.sqrt(8 * e / (a + b / rho ** 2))
@@ -206,7 +217,7 @@ def self_test():
     # aspect_min of the uniform one, and with size_max the longer extent stops at size_max.
     curv = face_curvatures(*synthetic_sheet(radius, 0.0))
     total = sum(A for A, _, _ in curv)
-    err = h * h / 8 * math.sqrt(sum(A * (a + b) ** 2 for A, a, b in curv) / total)
+    err = uniform_error(curv, h)
     check("cylinder: uniform error, mm", err * 1000, h * h / (8 * radius) * 1000, 0.02)
     for x in (1.0, 0.7, 0.5, 0.2):
         check(f"cylinder: ideal ratio at aspect {x:g}", closed_ratio(curv, x), x, 0.01)
@@ -217,7 +228,7 @@ def self_test():
     # (h / size_max)^2 of its uniform count.
     curv = face_curvatures(*synthetic_sheet(radius, 0.5))
     total = sum(A for A, _, _ in curv)
-    err = h * h / 8 * math.sqrt(sum(A * (a + b) ** 2 for A, a, b in curv) / total)
+    err = uniform_error(curv, h)
     check("half rolled: ideal isotropic ratio", closed_ratio(curv, 1.0), 0.5, 0.03)
     got, _ = clamped_ratio(curv, 1.0, 0.003, smax, err, total / (h * h))
     check("half rolled: clamped isotropic ratio", got, 0.5 + 0.5 * (h / smax) ** 2, 0.03)
@@ -257,7 +268,7 @@ def main():
     for path, (pos, mat, faces, _) in sheets:
         curv = face_curvatures(pos, mat, faces)
         total = sum(A for A, _, _ in curv)
-        uniform_err = h * h / 8 * math.sqrt(sum(A * (a + b) ** 2 for A, a, b in curv) / total)
+        uniform_err = uniform_error(curv, h)
         uniform_verts = total / (h * h)
         row = {"uniform_err_mm": uniform_err * 1000}
         for x in aspects:

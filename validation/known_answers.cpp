@@ -13,7 +13,6 @@
 // Prints one row per case (expected, measured, relative error, tolerance, verdict), optionally
 // writes the same rows as CSV, and exits with status 1 when a case fails.
 #include <CLI/CLI.hpp>
-#include <algorithm>
 #include <Eigen/Geometry>
 #include <chrono>
 #include <cmath>
