@@ -150,7 +150,7 @@ json parse_overrides(const std::vector<std::string>& pairs) {
 
 Scene apply_overrides(const Scene& scene, const json& overrides, const std::string& source) {
   if (overrides.empty()) return scene;
-  json j = scene_to_json(scene);
+  json j = scene_to_json(scene, true);  // keys written only when not at their default too
   for (const auto& [key, value] : overrides.items()) node_at(j, key, source) = value;
   return scene_from_json(j, source);
 }

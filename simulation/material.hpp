@@ -6,6 +6,11 @@ namespace papersim::simulation {
 /// Discretisation of the bending energy (simulation/energies/bending_energy.hpp).
 enum class BendingModel { fit, morley };
 
+/// How the membrane measures an edge (simulation/energies/membrane_energy.hpp): `chord`, the
+/// straight segment between its ends; `arc`, the arc of the surface the bending discretisation
+/// describes (the chord lengthened by the face's normal curvature along the edge).
+enum class MembraneModel { chord, arc };
+
 struct Material {
   double density = 0.08;              ///< areal density rho_A [kg/m^2]
   double stretch_stiffness = 5e5;     ///< Eh, Young's modulus x thickness [N/m]
@@ -18,6 +23,7 @@ struct Material {
   double yield_curvature = 200.0;     ///< plastic yield curvature [1/m]
   double weakening = 1.0;             ///< D / (1 + weakening * damage) [-]
   BendingModel bending_model = BendingModel::morley;  ///< "fit" or "morley"
+  MembraneModel membrane_model = MembraneModel::chord;  ///< "chord" or "arc"
 };
 
 }  // namespace papersim::simulation

@@ -187,7 +187,7 @@ Terms build_terms(const remesh::SheetMesh& mesh, const PhysicsSetup& setup, Term
   t.list.push_back(std::make_unique<InertiaEnergy>(t.masses));
   if (m.damping > 0) t.list.push_back(std::make_unique<DampingEnergy>(t.masses, m.damping));
   if (setup.gravity.squaredNorm() > 0) t.list.push_back(std::make_unique<GravityEnergy>(t.masses, setup.gravity));
-  auto membrane = std::make_unique<MembraneEnergy>(X, F, m);
+  auto membrane = std::make_unique<MembraneEnergy>(mesh, m);
   t.membrane = membrane.get();
   t.list.push_back(std::move(membrane));
   auto bending = make_bending_energy(mesh, m, BendingHessian::gauss_newton, clamped_faces(mesh, setup.clamps));

@@ -163,6 +163,14 @@ BendingModel bending_model_from(Reader& r, const std::string& key, BendingModel 
 
 const char* to_string(BendingModel m) { return m == BendingModel::morley ? "morley" : "fit"; }
 
+MembraneModel membrane_model_from(Reader& r, const std::string& key, MembraneModel d) {
+  const std::string name = r.string(key, "");
+  if (name.empty()) return d;
+  if (name == "chord") return MembraneModel::chord;
+  if (name == "arc") return MembraneModel::arc;
+  r.fail(key, "expected one of chord, arc; got '" + name + "'");
+}
+
 Material read_material(Reader r) {
   Material m;
   m.density = r.number("density", m.density, 0, 1e3, true);
@@ -176,6 +184,7 @@ Material read_material(Reader r) {
   m.yield_curvature = r.number("yield_curvature", m.yield_curvature, 0, 1e6, true);
   m.weakening = r.number("weakening", m.weakening, 0, 1e3);
   m.bending_model = bending_model_from(r, "bending_model", m.bending_model);
+  m.membrane_model = membrane_model_from(r, "membrane_model", m.membrane_model);
   r.finish();
   return m;
 }
@@ -441,7 +450,7 @@ json obstacle_json(const collision::ColliderSpec& c) {
 
 }  // namespace
 
-json scene_to_json(const Scene& s) {
+json scene_to_json(const Scene& s, bool every_key) {
   json j;
   j["name"] = s.name;
   const Material& m = s.sheet.material;
@@ -463,6 +472,10 @@ json scene_to_json(const Scene& s) {
                   {"yield_curvature", m.yield_curvature},
                   {"weakening", m.weakening},
                   {"bending_model", to_string(m.bending_model)}}}};
+  // Written only when not the default (or asked for), so that scenes of the default model keep
+  // their bytes.
+  if (m.membrane_model == MembraneModel::arc || every_key)
+    j["sheet"]["material"]["membrane_model"] = m.membrane_model == MembraneModel::arc ? "arc" : "chord";
   if (!s.sheet.mesh_path.empty()) j["sheet"]["mesh"] = s.sheet.mesh_path;
   j["gravity"] = vec(s.gravity);
   j["duration"] = s.duration;

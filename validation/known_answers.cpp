@@ -303,12 +303,15 @@ Strip strip_thin_faces(double h, double aspect, double angle_deg) {
 ps::BendingModel g_bending_model = ps::Material{}.bending_model;
 /// The strips' membrane stiffness [N/m] (--stretch-stiffness).
 double g_stretch_stiffness = ps::Material{}.stretch_stiffness;
+/// The membrane discretisation under test (--membrane).
+ps::MembraneModel g_membrane_model = ps::Material{}.membrane_model;
 
 ps::Material beam_material() {
   ps::Material m;
   m.poisson = 0.0;
   m.bending_model = g_bending_model;
   m.stretch_stiffness = g_stretch_stiffness;
+  m.membrane_model = g_membrane_model;
   return m;
 }
 
@@ -1042,7 +1045,13 @@ int main(int argc, char** argv) {
                  "membrane stiffness of the strips [N/m] (default: the material's, 5e5); the strain "
                  "limit stays. With 'thin': how much of the stiffening is membrane locking")
       ->check(CLI::PositiveNumber);
+  std::string membrane = "chord";
+  app.add_option("--membrane", membrane,
+                 "membrane discretisation of the beams and strips: chord (the simulator's default) or "
+                 "arc (edges measured along the bent surface; sheet.material.membrane_model)")
+      ->check(CLI::IsMember({"chord", "arc"}));
   CLI11_PARSE(app, argc, argv);
+  g_membrane_model = membrane == "arc" ? ps::MembraneModel::arc : ps::MembraneModel::chord;
   g_bending_model = bending == "morley" ? ps::BendingModel::morley : ps::BendingModel::fit;
 
   const std::set<std::string> selected(only.begin(), only.end());

@@ -4,9 +4,11 @@
 #include <Eigen/LU>
 #include <Eigen/SVD>
 #include <Eigen/Cholesky>
+#include <algorithm>
 #include <cmath>
 
 #include "collision/barrier.hpp"
+#include "simulation/energies/bending_energy.hpp"
 #include "simulation/energies/psd.hpp"
 #include "simulation/errors.hpp"
 
@@ -82,7 +84,180 @@ CFunction limit_barrier(const Vec3& c, double L, double dhat, double Lc, double 
   return r;
 }
 
+/// StVK plus the limits at C (Voigt); value infinite past a limit.
+CFunction energy_density(const Vec3& c, double lambda, double mu, double L, double dhat, double Lc,
+                         double dhat_c, double kappa) {
+  CFunction W = stvk(c, lambda, mu);
+  if (L > 0 || Lc > 0) {
+    const CFunction B = limit_barrier(c, L, dhat, Lc, dhat_c, kappa);
+    if (!std::isfinite(B.value)) {
+      W.value = INF;
+      return W;
+    }
+    W.value += B.value;
+    W.grad += B.grad;
+    W.hess += B.hess;
+  }
+  return W;
+}
+
+/// dc/dx of a triangle (rows: c0, c1, c2 in Voigt; columns: its three corners).
+Eigen::Matrix<double, 3, 9> c_jacobian(const Eigen::Matrix<double, 3, 2>& F,
+                                       const Eigen::Matrix<double, 3, 2>& w) {
+  Eigen::Matrix<double, 3, 9> J;
+  for (int j = 0; j < 3; ++j) {
+    const double w0 = w(j, 0), w1 = w(j, 1);
+    J.block<1, 3>(0, 3 * j) = 2 * w0 * F.col(0).transpose();
+    J.block<1, 3>(1, 3 * j) = 2 * w1 * F.col(1).transpose();
+    J.block<1, 3>(2, 3 * j) = (w0 * F.col(1) + w1 * F.col(0)).transpose();
+  }
+  return J;
+}
+
+
+/// The arc model's fade-out: psi = 1 / (1 + (s / S_C)^4) [rad].
+constexpr double S_C = 0.5;
+
 }  // namespace
+
+MembraneEnergy::MembraneEnergy(const remesh::SheetMesh& mesh, const Material& m)
+    : MembraneEnergy(mesh.material_coords(), mesh.faces(), m) {
+  if (m.membrane_model == MembraneModel::arc) build_arcs(mesh);
+}
+
+void MembraneEnergy::build_arcs(const remesh::SheetMesh& mesh) {
+  const Eigen::MatrixX3i F = mesh.faces();
+  const Eigen::MatrixX2d X = mesh.material_coords();
+  m_hinges = remesh::interior_hinges(mesh);
+  const Eigen::MatrixX3i fh = remesh::face_hinges(mesh, m_hinges);
+  std::vector<std::vector<int>> vertex_faces(X.rows());
+  for (int f = 0; f < F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) vertex_faces[F(f, k)].push_back(f);
+  // Each face's curvature fit.
+  m_fits.resize(F.rows());
+  for (int f = 0; f < F.rows(); ++f) {
+    CurvatureFit& fit = m_fits[f];
+    auto add_face_hinges = [&](int g) {
+      for (int k = 0; k < 3; ++k)
+        if (fh(g, k) >= 0 && std::find(fit.hinges.begin(), fit.hinges.end(), fh(g, k)) == fit.hinges.end())
+          fit.hinges.push_back(fh(g, k));
+    };
+    auto rows = [&]() {
+      Eigen::MatrixXd B(fit.hinges.size(), 3);
+      for (size_t i = 0; i < fit.hinges.size(); ++i) {
+        const Eigen::Vector4i v = m_hinges.vertices.row(fit.hinges[i]);
+        B.row(i) = hinge_curvature_row(X.row(v[0]), X.row(v[1]), X.row(v[2]), X.row(v[3]));
+      }
+      return B;
+    };
+    auto determined = [&]() {
+      if (fit.hinges.size() < 3) return false;
+      Eigen::JacobiSVD<Eigen::MatrixXd> svd(rows());
+      return svd.singularValues()[2] > 1e-6 * svd.singularValues()[0];
+    };
+    // The face's own hinges (three on an interior face: exact for every constant curvature),
+    // then its edge neighbours' and a ring of faces while not determined (boundary faces).
+    add_face_hinges(f);
+    if (!determined()) {
+      const std::vector<int> mine = fit.hinges;
+      for (int h : mine)
+        for (int s = 0; s < 2; ++s) add_face_hinges(m_hinges.faces(h, s));
+    }
+    for (int ring = 0; ring < 2 && !determined(); ++ring) {
+      std::vector<int> ring_faces;
+      for (int h : std::vector<int>(fit.hinges))
+        for (int k = 0; k < 4; ++k) {
+          const auto& vf = vertex_faces[m_hinges.vertices(h, k)];
+          ring_faces.insert(ring_faces.end(), vf.begin(), vf.end());
+        }
+      for (int k = 0; k < 3; ++k)
+        ring_faces.insert(ring_faces.end(), vertex_faces[F(f, k)].begin(), vertex_faces[F(f, k)].end());
+      std::sort(ring_faces.begin(), ring_faces.end());
+      ring_faces.erase(std::unique(ring_faces.begin(), ring_faces.end()), ring_faces.end());
+      for (int g : ring_faces) add_face_hinges(g);
+    }
+    if (!determined()) {  // too few interior edges (a mesh of one or two faces): no correction
+      fit.hinges.clear();
+      fit.P.setZero(3, 0);
+      continue;
+    }
+    const Eigen::MatrixXd B = rows();
+    fit.P = (B.transpose() * B).ldlt().solve(B.transpose());
+  }
+  // Each face's element: its edges' curvatures from the face and its edge neighbours.
+  m_arcs.resize(F.rows());
+  for (int f = 0; f < F.rows(); ++f) {
+    Arc& a = m_arcs[f];
+    a.faces.push_back(f);
+    for (int j = 0; j < 3; ++j)
+      if (fh(f, j) >= 0) {
+        const int h = fh(f, j);
+        a.faces.push_back(m_hinges.faces(h, 0) == f ? m_hinges.faces(h, 1) : m_hinges.faces(h, 0));
+      }
+    a.weight.setZero(3, a.faces.size());
+    Eigen::Matrix3d Aedge;  // row j: (ex^2, ey^2, 2 ex ey), so e_j^T C e_j = row . c
+    for (int j = 0, next = 1; j < 3; ++j) {
+      const Eigen::Vector2d e = X.row(F(f, (j + 2) % 3)) - X.row(F(f, (j + 1) % 3));
+      a.length[j] = e.norm();
+      const Eigen::Vector2d t = e / a.length[j];
+      Aedge.row(j) << e.x() * e.x(), e.y() * e.y(), 2 * e.x() * e.y();
+      a.Q.row(j) << t.x() * t.x(), t.y() * t.y(), 2 * t.x() * t.y();
+      if (fh(f, j) >= 0) {
+        a.weight(j, 0) = 0.5;
+        a.weight(j, next) = 0.5;
+        a.size[j] = std::sqrt(m_tris[f].area + m_tris[a.faces[next]].area);
+        ++next;
+      } else {
+        a.weight(j, 0) = 1;
+        a.size[j] = std::sqrt(2 * m_tris[f].area);
+      }
+    }
+    a.G = Aedge.inverse();
+    for (int k = 0; k < 3; ++k) a.vertices.push_back(F(f, k));
+    for (int g : a.faces)
+      for (int h : m_fits[g].hinges)
+        if (std::find(a.hinges.begin(), a.hinges.end(), h) == a.hinges.end()) a.hinges.push_back(h);
+    for (int h : a.hinges) {
+      std::array<int, 4> loc;
+      for (int k = 0; k < 4; ++k) {
+        const int v = m_hinges.vertices(h, k);
+        auto it = std::find(a.vertices.begin(), a.vertices.end(), v);
+        if (it == a.vertices.end()) {
+          a.vertices.push_back(v);
+          it = a.vertices.end() - 1;
+        }
+        loc[k] = static_cast<int>(it - a.vertices.begin());
+      }
+      a.local.push_back(loc);
+    }
+  }
+}
+
+MembraneEnergy::Delta MembraneEnergy::arc_delta(double L, double size, const Eigen::RowVector3d& qrow,
+                                                const Eigen::Vector3d& K, bool derivatives) {
+  // delta = psi(q) u with u = L^4 k^2 / 12, k = qrow K, and psi = 1 / (1 + c q^2),
+  // q = h^2 K^T M K = s^2 (M = diag(1, 1, 2): |K|^2 in Voigt), c = 1 / S_C^4: smooth in K.
+  const Eigen::Vector3d M(1, 1, 2);
+  const double c = 1 / std::pow(S_C, 4), L2 = size * size, L4 = L * L * L * L;
+  const double q = L2 * K.dot(M.cwiseProduct(K));
+  const double den = 1 + c * q * q;
+  const double psi = 1 / den;
+  const double k = qrow.dot(K);
+  const double u = L4 * k * k / 12;
+  Delta d;
+  d.value = psi * u;
+  if (!derivatives) return d;
+  const double psi_q = -2 * c * q / (den * den);
+  const double psi_qq = -2 * c / (den * den) + 8 * c * c * q * q / (den * den * den);
+  const Eigen::Vector3d dq = 2 * L2 * M.cwiseProduct(K);
+  const Eigen::Matrix3d ddq = 2 * L2 * M.asDiagonal();
+  const Eigen::Vector3d du = L4 * k / 6 * qrow.transpose();
+  const Eigen::Matrix3d ddu = L4 / 6 * qrow.transpose() * qrow;
+  d.gradient = psi * du + u * psi_q * dq;
+  d.hessian = psi * ddu + psi_q * (du * dq.transpose() + dq * du.transpose()) +
+              u * (psi_qq * dq * dq.transpose() + psi_q * ddq);
+  return d;
+}
 
 MembraneEnergy::MembraneEnergy(const Eigen::MatrixX2d& X, const Eigen::MatrixX3i& F,
                                const Material& m) {
@@ -114,6 +289,10 @@ MembraneEnergy::MembraneEnergy(const Eigen::MatrixX2d& X, const Eigen::MatrixX3i
 }
 
 void MembraneEnergy::add_pattern(SparsityBuilder& pattern) const {
+  if (arc()) {
+    for (const auto& a : m_arcs) pattern.add_clique(a.vertices.data(), static_cast<int>(a.vertices.size()));
+    return;
+  }
   for (const auto& t : m_tris) pattern.add_clique(t.v.data(), 3);
 }
 
@@ -124,23 +303,11 @@ double MembraneEnergy::element(int f, const Eigen::Matrix<double, 9, 1>& xs,
   Eigen::Matrix<double, 3, 2> F = Eigen::Matrix<double, 3, 2>::Zero();
   for (int i = 0; i < 3; ++i) F += xs.segment<3>(3 * i) * t.w.row(i);
   const Vec3 c(F.col(0).squaredNorm(), F.col(1).squaredNorm(), F.col(0).dot(F.col(1)));
-  CFunction W = stvk(c, m_lambda, m_mu);
-  if (m_limit > 0 || m_limit_low > 0) {
-    const CFunction B = limit_barrier(c, m_limit, m_dhat, m_limit_low, m_dhat_low, m_kappa);
-    if (!std::isfinite(B.value)) return INF;
-    W.value += B.value;
-    W.grad += B.grad;
-    W.hess += B.hess;
-  }
+  const CFunction W = energy_density(c, m_lambda, m_mu, m_limit, m_dhat, m_limit_low, m_dhat_low, m_kappa);
+  if (!std::isfinite(W.value)) return INF;
   if (!g && !H) return t.area * W.value;
   // dc/dx_j: c0 -> 2 w_j0 F0, c1 -> 2 w_j1 F1, c2 -> w_j0 F1 + w_j1 F0.
-  Eigen::Matrix<double, 3, 9> J;
-  for (int j = 0; j < 3; ++j) {
-    const double w0 = t.w(j, 0), w1 = t.w(j, 1);
-    J.block<1, 3>(0, 3 * j) = 2 * w0 * F.col(0).transpose();
-    J.block<1, 3>(1, 3 * j) = 2 * w1 * F.col(1).transpose();
-    J.block<1, 3>(2, 3 * j) = (w0 * F.col(1) + w1 * F.col(0)).transpose();
-  }
+  const Eigen::Matrix<double, 3, 9> J = c_jacobian(F, t.w);
   if (g) *g = t.area * J.transpose() * W.grad;
   if (H) {
     // Geometric term: d2c/dx_i dx_j = 2 (w_i^T G w_j) I3, G = [[g0, g2/2], [g2/2, g1]]. It is
@@ -159,6 +326,105 @@ double MembraneEnergy::element(int f, const Eigen::Matrix<double, 9, 1>& xs,
   return t.area * W.value;
 }
 
+double MembraneEnergy::arc_element(int f, const Eigen::VectorXd& x, const Eigen::VectorXd& theta,
+                                   const std::vector<Eigen::Matrix<double, 12, 1>>* grads,
+                                   const std::vector<Eigen::Matrix<double, 12, 12>>* hesses,
+                                   Eigen::VectorXd* g, Eigen::MatrixXd* H) const {
+  const Triangle& t = m_tris[f];
+  const Arc& a = m_arcs[f];
+  Eigen::Matrix<double, 3, 2> F = Eigen::Matrix<double, 3, 2>::Zero();
+  for (int i = 0; i < 3; ++i) F += x.segment<3>(3 * t.v[i]) * t.w.row(i);
+  const Vec3 c(F.col(0).squaredNorm(), F.col(1).squaredNorm(), F.col(0).dot(F.col(1)));
+  const int nf = static_cast<int>(a.faces.size());
+  Eigen::Matrix<double, 3, Eigen::Dynamic> K(3, nf);  // the curvature of each of a.faces
+  for (int i = 0; i < nf; ++i) {
+    const CurvatureFit& fit = m_fits[a.faces[i]];
+    Eigen::VectorXd th(fit.hinges.size());
+    for (size_t k = 0; k < fit.hinges.size(); ++k) th[k] = theta[fit.hinges[k]];
+    K.col(i) = fit.hinges.empty() ? Eigen::Vector3d::Zero() : Eigen::Vector3d(fit.P * th);
+  }
+  const bool derivatives = g || H;
+  Delta d[3];
+  Eigen::Vector3d delta;
+  for (int j = 0; j < 3; ++j) {
+    d[j] = arc_delta(a.length[j], a.size[j], a.Q.row(j), K * a.weight.row(j).transpose(), derivatives);
+    delta[j] = d[j].value;
+  }
+  // Stretching at the arcs' C', the limits at the chords' C.
+  const CFunction W = stvk(c + a.G * delta, m_lambda, m_mu);
+  CFunction B;
+  if (m_limit > 0 || m_limit_low > 0) {
+    B = limit_barrier(c, m_limit, m_dhat, m_limit_low, m_dhat_low, m_kappa);
+    if (!std::isfinite(B.value)) return INF;
+  }
+  const double value = t.area * (W.value + B.value);
+  if (!derivatives) return value;
+  const int n = 3 * static_cast<int>(a.vertices.size());
+  // dK_i/dx over the local vertices, per face i of a.faces.
+  std::vector<Eigen::MatrixXd> DK(nf, Eigen::MatrixXd::Zero(3, n));
+  auto local_of = [&](int h) { return static_cast<int>(std::find(a.hinges.begin(), a.hinges.end(), h) - a.hinges.begin()); };
+  for (int i = 0; i < nf; ++i) {
+    const CurvatureFit& fit = m_fits[a.faces[i]];
+    for (size_t k = 0; k < fit.hinges.size(); ++k) {
+      const auto& loc = a.local[local_of(fit.hinges[k])];
+      for (int q = 0; q < 4; ++q)
+        DK[i].middleCols<3>(3 * loc[q]) += fit.P.col(k) * (*grads)[fit.hinges[k]].segment<3>(3 * q).transpose();
+    }
+  }
+  // dK_e/dx per edge, and d delta_e / dx.
+  Eigen::MatrixXd DKe[3];
+  Eigen::MatrixXd Ddelta(3, n);
+  for (int j = 0; j < 3; ++j) {
+    DKe[j] = Eigen::MatrixXd::Zero(3, n);
+    for (int i = 0; i < nf; ++i)
+      if (a.weight(j, i) != 0) DKe[j] += a.weight(j, i) * DK[i];
+    Ddelta.row(j) = d[j].gradient.transpose() * DKe[j];
+  }
+  const Eigen::Matrix<double, 3, 9> Jc = c_jacobian(F, t.w);
+  // dc'/dx = dc/dx (the corners, local 0-2) + G d delta / dx.
+  Eigen::MatrixXd J = a.G * Ddelta;
+  J.leftCols<9>() += Jc;
+  if (g) {
+    *g = t.area * J.transpose() * W.grad;
+    g->head<9>() += t.area * Jc.transpose() * B.grad;
+  }
+  if (!H) return value;
+  *H = t.area * J.transpose() * W.hess * J;
+  H->topLeftCorner<9, 9>() += t.area * Jc.transpose() * B.hess * Jc;
+  // The chords' geometric term (dW/dC' + dB/dC as a tensor, on the corners).
+  const Vec3 sc = W.grad + B.grad;
+  Eigen::Matrix2d S;
+  S << sc[0], 0.5 * sc[2], 0.5 * sc[2], sc[1];
+  Eigen::Matrix<double, 9, 9> Hg = Eigen::Matrix<double, 9, 9>::Zero();
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      Hg.block<3, 3>(3 * i, 3 * j).diagonal().array() += 2 * t.area * t.w.row(i).dot(S * t.w.row(j).transpose());
+  if (m_project && (S.determinant() < 0 || S.trace() < 0)) Hg = project_psd(Hg);
+  H->topLeftCorner<9, 9>() += Hg;
+  // The arcs' geometric terms through each K_e: dW/d delta_e d2 delta_e / dK_e2 (3 x 3,
+  // projected when projecting), and with the exact Hessian dW/d delta_e d delta_e / dK_e times
+  // the hinges' Hessians.
+  const Vec3 beta = a.G.transpose() * W.grad;
+  for (int j = 0; j < 3; ++j) {
+    Eigen::Matrix3d HK = t.area * beta[j] * d[j].hessian;
+    if (m_project) HK = project_psd(HK);
+    H->noalias() += DKe[j].transpose() * HK * DKe[j];
+    if (!hesses) continue;
+    for (int i = 0; i < nf; ++i) {
+      if (a.weight(j, i) == 0) continue;
+      const CurvatureFit& fit = m_fits[a.faces[i]];
+      const Eigen::VectorXd w = t.area * beta[j] * a.weight(j, i) * fit.P.transpose() * d[j].gradient;
+      for (size_t k = 0; k < fit.hinges.size(); ++k) {
+        const auto& loc = a.local[local_of(fit.hinges[k])];
+        for (int q = 0; q < 4; ++q)
+          for (int r = 0; r < 4; ++r)
+            H->block<3, 3>(3 * loc[q], 3 * loc[r]) += w[k] * (*hesses)[fit.hinges[k]].block<3, 3>(3 * q, 3 * r);
+      }
+    }
+  }
+  return value;
+}
+
 namespace {
 Eigen::Matrix<double, 9, 1> gather(const Eigen::VectorXd& x, const std::array<int, 3>& v) {
   Eigen::Matrix<double, 9, 1> xs;
@@ -169,6 +435,14 @@ Eigen::Matrix<double, 9, 1> gather(const Eigen::VectorXd& x, const std::array<in
 
 double MembraneEnergy::value(const Eigen::VectorXd& x) const {
   double e = 0;
+  if (arc()) {
+    const Eigen::VectorXd theta = hinge_angles_at(m_hinges, x);
+    for (int f = 0; f < static_cast<int>(m_tris.size()); ++f) {
+      e += arc_element(f, x, theta, nullptr, nullptr, nullptr, nullptr);
+      if (!std::isfinite(e)) return INF;
+    }
+    return e;
+  }
   for (int f = 0; f < static_cast<int>(m_tris.size()); ++f) {
     e += element(f, gather(x, m_tris[f].v), nullptr, nullptr);
     if (!std::isfinite(e)) return INF;
@@ -178,6 +452,21 @@ double MembraneEnergy::value(const Eigen::VectorXd& x) const {
 
 void MembraneEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd& gradient,
                                      BlockSymmetricMatrix* hessian) const {
+  if (arc()) {
+    const bool exact = hessian && !m_project;
+    const HingeDerivatives hd = hinge_derivatives(m_hinges, x, exact);
+    Eigen::VectorXd g;
+    Eigen::MatrixXd H;
+    for (int f = 0; f < static_cast<int>(m_tris.size()); ++f) {
+      const Arc& a = m_arcs[f];
+      if (!std::isfinite(arc_element(f, x, hd.theta, &hd.gradients, exact ? &hd.hessians : nullptr, &g,
+                                     hessian ? &H : nullptr)))
+        throw NumericError("membrane: derivatives requested past the strain limit");
+      for (size_t i = 0; i < a.vertices.size(); ++i) gradient.segment<3>(3 * a.vertices[i]) += g.segment<3>(3 * i);
+      if (hessian) hessian->add_element(a.vertices.data(), static_cast<int>(a.vertices.size()), H.data());
+    }
+    return;
+  }
   Eigen::Matrix<double, 9, 1> g;
   Eigen::Matrix<double, 9, 9> H;
   for (int f = 0; f < static_cast<int>(m_tris.size()); ++f) {

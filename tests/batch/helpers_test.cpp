@@ -40,6 +40,11 @@ TEST(Overrides, SetDottedKeysAndRefuseUnknownOnesByName) {
   EXPECT_NE(scene_error([&] { ps::apply_overrides(base, ps::parse_overrides({"duration=-1"}), "--set"); })
                 .find("duration"), std::string::npos);
   EXPECT_NE(scene_error([] { ps::parse_overrides({"duration"}); }).find("KEY=VALUE"), std::string::npos);
+  // A key written to scene files only when not at its default can be set too.
+  EXPECT_EQ(base.sheet.material.membrane_model, ps::MembraneModel::chord);
+  EXPECT_EQ(ps::apply_overrides(base, ps::parse_overrides({"sheet.material.membrane_model=arc"}), "--set")
+                .sheet.material.membrane_model,
+            ps::MembraneModel::arc);
 }
 
 TEST(Mix, ParsesWeightsAndOverridesAndRefusesBadKeys) {

@@ -96,6 +96,18 @@ TEST(Scene, JsonRoundTripIsExact) {
 
 // Obstacle `scale` (uniform scale of the shape, per keyframe or for the whole obstacle): read,
 // range-checked with the key named, written back exactly.
+TEST(Scene, MembraneModelIsReadCheckedAndRoundTrips) {
+  EXPECT_EQ(error_of({{"sheet", {{"material", {{"membrane_model", "arcs"}}}}}}),
+            "s.json: key 'sheet.material.membrane_model': expected one of chord, arc; got 'arcs'");
+  Scene s = small_scene();
+  EXPECT_FALSE(scene_to_json(s)["sheet"]["material"].contains("membrane_model"))
+      << "the default is not written, so default scenes keep their bytes";
+  s.sheet.material.membrane_model = MembraneModel::arc;
+  const json j = scene_to_json(s);
+  EXPECT_EQ(j["sheet"]["material"]["membrane_model"], "arc");
+  EXPECT_EQ(scene_from_json(j, "again").sheet.material.membrane_model, MembraneModel::arc);
+}
+
 TEST(Scene, ObstacleScaleIsReadCheckedAndRoundTrips) {
   const json keys = {{{"time", 0.0}}, {{"time", 1.0}, {"scale", 0.25}}};
   const Scene s = scene_from_json(
