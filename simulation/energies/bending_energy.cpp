@@ -1,6 +1,8 @@
 #include "simulation/energies/bending_energy.hpp"
 
 #include <Eigen/LU>
+#include <Eigen/SVD>
+#include <algorithm>
 #include <cmath>
 
 #include "simulation/energies/dihedral_angle.hpp"
@@ -26,6 +28,70 @@ Eigen::RowVector3d hinge_curvature_row(const Eigen::Vector2d& p0, const Eigen::V
   const Eigen::Vector2d e = (p1 - p0).normalized();
   const Eigen::Vector2d r = pb - p0;
   return row / std::abs(e.x() * r.y() - e.y() * r.x());
+}
+
+CurvatureStencils::CurvatureStencils(const remesh::Hinges& hinges, const Eigen::MatrixX3i& face_hinges,
+                                     const Eigen::MatrixX3i& faces, const Eigen::MatrixX2d& X)
+    : m_hinges(hinges), m_face_hinges(face_hinges), m_faces(faces), m_X(X), m_vertex_faces(X.rows()) {
+  for (int f = 0; f < faces.rows(); ++f)
+    for (int k = 0; k < 3; ++k) m_vertex_faces[faces(f, k)].push_back(f);
+}
+
+void CurvatureStencils::add_face_hinges(std::vector<int>& stencil, int g) const {
+  for (int k = 0; k < 3; ++k) {
+    const int h = m_face_hinges(g, k);
+    if (h >= 0 && std::find(stencil.begin(), stencil.end(), h) == stencil.end()) stencil.push_back(h);
+  }
+}
+
+void CurvatureStencils::add_neighbour_hinges(std::vector<int>& stencil) const {
+  const std::vector<int> mine = stencil;
+  for (int h : mine)
+    for (int s = 0; s < 2; ++s) add_face_hinges(stencil, m_hinges.faces(h, s));
+}
+
+Eigen::MatrixXd CurvatureStencils::rows(const std::vector<int>& stencil) const {
+  Eigen::MatrixXd B(stencil.size(), 3);
+  for (size_t i = 0; i < stencil.size(); ++i) {
+    const Eigen::Vector4i v = m_hinges.vertices.row(stencil[i]);
+    B.row(i) = hinge_curvature_row(m_X.row(v[0]), m_X.row(v[1]), m_X.row(v[2]), m_X.row(v[3]));
+  }
+  return B;
+}
+
+bool CurvatureStencils::determined(const std::vector<int>& stencil) const {
+  if (stencil.size() < 3) return false;
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(rows(stencil));
+  return svd.singularValues()[2] > 1e-6 * svd.singularValues()[0];
+}
+
+void CurvatureStencils::grow_until_determined(std::vector<int>& stencil, int f) const {
+  for (int ring = 0; ring < 2 && !determined(stencil); ++ring) {
+    std::vector<int> verts;
+    for (int h : stencil)
+      for (int k = 0; k < 4; ++k) verts.push_back(m_hinges.vertices(h, k));
+    for (int k = 0; k < 3; ++k) verts.push_back(m_faces(f, k));
+    // The faces with a corner in verts, in ascending order (the stencil's row order).
+    std::vector<int> ring_faces;
+    for (int v : verts) ring_faces.insert(ring_faces.end(), m_vertex_faces[v].begin(), m_vertex_faces[v].end());
+    std::sort(ring_faces.begin(), ring_faces.end());
+    ring_faces.erase(std::unique(ring_faces.begin(), ring_faces.end()), ring_faces.end());
+    for (int g : ring_faces) add_face_hinges(stencil, g);
+  }
+}
+
+std::array<int, 4> local_hinge(const remesh::Hinges& hinges, int h, std::vector<int>& vertices) {
+  std::array<int, 4> loc;
+  for (int k = 0; k < 4; ++k) {
+    const int v = hinges.vertices(h, k);
+    auto it = std::find(vertices.begin(), vertices.end(), v);
+    if (it == vertices.end()) {
+      vertices.push_back(v);
+      it = vertices.end() - 1;
+    }
+    loc[k] = static_cast<int>(it - vertices.begin());
+  }
+  return loc;
 }
 
 Eigen::Matrix3d plate_energy_matrix(double nu) {

@@ -7,6 +7,7 @@
 ///   - fit: a per-face curvature tensor fitted to a stencil of hinge angles, with a residual
 ///     penalty against hourglass modes (fit_bending_energy.hpp); cheaper, but 2-5% stiff at 30
 ///     degrees to the mesh grain at 2.5 mm (docs/elastica_30deg_diagnosis.md).
+#include <array>
 #include <memory>
 #include <vector>
 
@@ -53,6 +54,37 @@ class BendingEnergy : public EnergyTerm {
 Eigen::RowVector3d hinge_curvature_row(const Eigen::Vector2d& p0, const Eigen::Vector2d& p1,
                                        const Eigen::Vector2d& pa, const Eigen::Vector2d& pb);
 
+
+/// Stencils of hinges that fit a face's curvature (the fit bending model, the arc membrane):
+/// K = P theta with P the least-squares inverse of the stencil's hinge_curvature_row rows.
+class CurvatureStencils {
+ public:
+  /// @param face_hinges remesh::face_hinges of the mesh; faces #F by 3; X material coordinates.
+  CurvatureStencils(const remesh::Hinges& hinges, const Eigen::MatrixX3i& face_hinges,
+                    const Eigen::MatrixX3i& faces, const Eigen::MatrixX2d& X);
+  /// Appends face g's interior edges not yet in `stencil`.
+  void add_face_hinges(std::vector<int>& stencil, int g) const;
+  /// Appends the hinges of the faces of every hinge in `stencil` (the edge neighbours).
+  void add_neighbour_hinges(std::vector<int>& stencil) const;
+  /// The stencil's rows, #S by 3 (theta = rows K for a constant curvature K).
+  Eigen::MatrixXd rows(const std::vector<int>& stencil) const;
+  /// True when the rows determine K (three or more, of rank 3 to 1e-6).
+  bool determined(const std::vector<int>& stencil) const;
+  /// While not determined, at most twice: adds the hinges of every face with a corner among the
+  /// stencil's vertices and face f's (boundary faces).
+  void grow_until_determined(std::vector<int>& stencil, int f) const;
+
+ private:
+  const remesh::Hinges& m_hinges;
+  const Eigen::MatrixX3i& m_face_hinges;
+  const Eigen::MatrixX3i& m_faces;
+  const Eigen::MatrixX2d& m_X;
+  std::vector<std::vector<int>> m_vertex_faces;  // faces with corner v, ascending
+};
+
+/// The local indices of hinge h's (v0, v1, a, b) in `vertices`, appending those not yet there
+/// (an element's local vertex list).
+std::array<int, 4> local_hinge(const remesh::Hinges& hinges, int h, std::vector<int>& vertices);
 
 /// Positions of hinge v = (v0, v1, a, b) in x.
 inline void gather_hinge(const Eigen::VectorXd& x, const Eigen::Vector4i& v, Eigen::Vector3d* p) {

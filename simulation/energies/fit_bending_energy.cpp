@@ -28,60 +28,24 @@ FitBendingEnergy::FitBendingEnergy(const remesh::SheetMesh& mesh, const Material
   const Eigen::MatrixX2d X = mesh.material_coords();
   const Eigen::MatrixX3i fh = remesh::face_hinges(mesh, m_hinges);
   m_faces.resize(faces.rows());
-  std::vector<std::vector<int>> vertex_faces(X.rows());
-  for (int f = 0; f < faces.rows(); ++f)
-    for (int k = 0; k < 3; ++k) vertex_faces[faces(f, k)].push_back(f);
-  for (int f = 0; f < faces.rows(); ++f) build_stencil(f, fh, faces, vertex_faces, X);
+  const CurvatureStencils stencils(m_hinges, fh, faces, X);
+  for (int f = 0; f < faces.rows(); ++f) build_stencil(f, stencils, faces, X);
   for (Face& face : m_faces) face.M = face.P.transpose() * m_Q * face.P + face.R.transpose() * face.R;
   set_plastic_state(mesh.plastic_curvature(), mesh.damage());
 }
 
-void FitBendingEnergy::build_stencil(int f, const Eigen::MatrixX3i& fh, const Eigen::MatrixX3i& F,
-                                     const std::vector<std::vector<int>>& vertex_faces,
+void FitBendingEnergy::build_stencil(int f, const CurvatureStencils& stencils, const Eigen::MatrixX3i& F,
                                      const Eigen::MatrixX2d& X) {
   Face& face = m_faces[f];
-  auto add_face_hinges = [&](int g) {
-    for (int k = 0; k < 3; ++k)
-      if (fh(g, k) >= 0 &&
-          std::find(face.hinges.begin(), face.hinges.end(), fh(g, k)) == face.hinges.end())
-        face.hinges.push_back(fh(g, k));
-  };
-  add_face_hinges(f);
   // Stencil: the face's own hinges and those of its edge neighbours (up to nine), then of
   // faces sharing a vertex while the curvature is not determined (boundary faces).
-  const std::vector<int> mine = face.hinges;
-  for (int h : mine)
-    for (int s = 0; s < 2; ++s) add_face_hinges(m_hinges.faces(h, s));
-  auto rows = [&]() {
-    Eigen::MatrixXd B(face.hinges.size(), 3);
-    for (size_t i = 0; i < face.hinges.size(); ++i) {
-      const Eigen::Vector4i v = m_hinges.vertices.row(face.hinges[i]);
-      B.row(i) = hinge_curvature_row(X.row(v[0]), X.row(v[1]), X.row(v[2]), X.row(v[3]));
-    }
-    return B;
-  };
-  auto determined = [&]() {
-    if (face.hinges.size() < 3) return false;
-    Eigen::JacobiSVD<Eigen::MatrixXd> svd(rows());
-    return svd.singularValues()[2] > 1e-6 * svd.singularValues()[0];
-  };
-  for (int ring = 0; ring < 2 && !determined(); ++ring) {
-    std::vector<int> verts;
-    for (int h : face.hinges)
-      for (int k = 0; k < 4; ++k) verts.push_back(m_hinges.vertices(h, k));
-    for (int k = 0; k < 3; ++k) verts.push_back(F(f, k));
-    // The faces with a corner in verts, in ascending order (the stencil's row order).
-    std::vector<int> ring_faces;
-    for (int v : verts)
-      ring_faces.insert(ring_faces.end(), vertex_faces[v].begin(), vertex_faces[v].end());
-    std::sort(ring_faces.begin(), ring_faces.end());
-    ring_faces.erase(std::unique(ring_faces.begin(), ring_faces.end()), ring_faces.end());
-    for (int g : ring_faces) add_face_hinges(g);
-  }
-  if (!determined())
+  stencils.add_face_hinges(face.hinges, f);
+  stencils.add_neighbour_hinges(face.hinges);
+  stencils.grow_until_determined(face.hinges, f);
+  if (!stencils.determined(face.hinges))
     throw NumericError("bending: the curvature of face " + std::to_string(f) +
                        " is not determined by its neighbourhood (too few interior edges)");
-  const Eigen::MatrixXd B = rows();
+  const Eigen::MatrixXd B = stencils.rows(face.hinges);
   const int ns = static_cast<int>(face.hinges.size());
   face.P = (B.transpose() * B).ldlt().solve(B.transpose());
   // Residual of the fit, scaled to curvature units by the centroid distance across each hinge
@@ -99,19 +63,7 @@ void FitBendingEnergy::build_stencil(int f, const Eigen::MatrixX3i& fh, const Ei
   }
   face.R = inv_l.asDiagonal() * (Eigen::MatrixXd::Identity(ns, ns) - B * face.P);
   face.R *= std::sqrt(HOURGLASS_WEIGHT / ns);
-  for (int h : face.hinges) {
-    std::array<int, 4> loc;
-    for (int k = 0; k < 4; ++k) {
-      const int v = m_hinges.vertices(h, k);
-      auto it = std::find(face.vertices.begin(), face.vertices.end(), v);
-      if (it == face.vertices.end()) {
-        face.vertices.push_back(v);
-        it = face.vertices.end() - 1;
-      }
-      loc[k] = static_cast<int>(it - face.vertices.begin());
-    }
-    face.local.push_back(loc);
-  }
+  for (int h : face.hinges) face.local.push_back(local_hinge(m_hinges, h, face.vertices));
   Eigen::Matrix2d T;
   T.col(0) = X.row(F(f, 1)) - X.row(F(f, 0));
   T.col(1) = X.row(F(f, 2)) - X.row(F(f, 0));

@@ -62,9 +62,8 @@ class FitBendingEnergy : public BendingEnergy {
     double stiffness = 0;                // A D_f [N m^3]
     Eigen::Vector3d plastic = Eigen::Vector3d::Zero();
   };
-  /// vertex_faces[v]: the faces with corner v, ascending.
-  void build_stencil(int f, const Eigen::MatrixX3i& face_hinges, const Eigen::MatrixX3i& faces,
-                     const std::vector<std::vector<int>>& vertex_faces, const Eigen::MatrixX2d& X);
+  void build_stencil(int f, const CurvatureStencils& stencils, const Eigen::MatrixX3i& faces,
+                     const Eigen::MatrixX2d& X);
   double face_energy(const Face& face, const Eigen::VectorXd& theta) const;
 
   std::vector<Face> m_faces;

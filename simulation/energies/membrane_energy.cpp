@@ -130,58 +130,22 @@ void MembraneEnergy::build_arcs(const remesh::SheetMesh& mesh) {
   const Eigen::MatrixX2d X = mesh.material_coords();
   m_hinges = remesh::interior_hinges(mesh);
   const Eigen::MatrixX3i fh = remesh::face_hinges(mesh, m_hinges);
-  std::vector<std::vector<int>> vertex_faces(X.rows());
-  for (int f = 0; f < F.rows(); ++f)
-    for (int k = 0; k < 3; ++k) vertex_faces[F(f, k)].push_back(f);
-  // Each face's curvature fit.
+  const CurvatureStencils stencils(m_hinges, fh, F, X);
+  // Each face's curvature fit: its own hinges (three on an interior face: exact for every
+  // constant curvature), then its edge neighbours' and rings of faces while not determined
+  // (boundary faces).
   m_fits.resize(F.rows());
   for (int f = 0; f < F.rows(); ++f) {
     CurvatureFit& fit = m_fits[f];
-    auto add_face_hinges = [&](int g) {
-      for (int k = 0; k < 3; ++k)
-        if (fh(g, k) >= 0 && std::find(fit.hinges.begin(), fit.hinges.end(), fh(g, k)) == fit.hinges.end())
-          fit.hinges.push_back(fh(g, k));
-    };
-    auto rows = [&]() {
-      Eigen::MatrixXd B(fit.hinges.size(), 3);
-      for (size_t i = 0; i < fit.hinges.size(); ++i) {
-        const Eigen::Vector4i v = m_hinges.vertices.row(fit.hinges[i]);
-        B.row(i) = hinge_curvature_row(X.row(v[0]), X.row(v[1]), X.row(v[2]), X.row(v[3]));
-      }
-      return B;
-    };
-    auto determined = [&]() {
-      if (fit.hinges.size() < 3) return false;
-      Eigen::JacobiSVD<Eigen::MatrixXd> svd(rows());
-      return svd.singularValues()[2] > 1e-6 * svd.singularValues()[0];
-    };
-    // The face's own hinges (three on an interior face: exact for every constant curvature),
-    // then its edge neighbours' and a ring of faces while not determined (boundary faces).
-    add_face_hinges(f);
-    if (!determined()) {
-      const std::vector<int> mine = fit.hinges;
-      for (int h : mine)
-        for (int s = 0; s < 2; ++s) add_face_hinges(m_hinges.faces(h, s));
-    }
-    for (int ring = 0; ring < 2 && !determined(); ++ring) {
-      std::vector<int> ring_faces;
-      for (int h : std::vector<int>(fit.hinges))
-        for (int k = 0; k < 4; ++k) {
-          const auto& vf = vertex_faces[m_hinges.vertices(h, k)];
-          ring_faces.insert(ring_faces.end(), vf.begin(), vf.end());
-        }
-      for (int k = 0; k < 3; ++k)
-        ring_faces.insert(ring_faces.end(), vertex_faces[F(f, k)].begin(), vertex_faces[F(f, k)].end());
-      std::sort(ring_faces.begin(), ring_faces.end());
-      ring_faces.erase(std::unique(ring_faces.begin(), ring_faces.end()), ring_faces.end());
-      for (int g : ring_faces) add_face_hinges(g);
-    }
-    if (!determined()) {  // too few interior edges (a mesh of one or two faces): no correction
+    stencils.add_face_hinges(fit.hinges, f);
+    if (!stencils.determined(fit.hinges)) stencils.add_neighbour_hinges(fit.hinges);
+    stencils.grow_until_determined(fit.hinges, f);
+    if (!stencils.determined(fit.hinges)) {  // too few interior edges (a mesh of one or two faces)
       fit.hinges.clear();
       fit.P.setZero(3, 0);
       continue;
     }
-    const Eigen::MatrixXd B = rows();
+    const Eigen::MatrixXd B = stencils.rows(fit.hinges);
     fit.P = (B.transpose() * B).ldlt().solve(B.transpose());
   }
   // Each face's element: its edges' curvatures from the face and its edge neighbours.
@@ -217,19 +181,7 @@ void MembraneEnergy::build_arcs(const remesh::SheetMesh& mesh) {
     for (int g : a.faces)
       for (int h : m_fits[g].hinges)
         if (std::find(a.hinges.begin(), a.hinges.end(), h) == a.hinges.end()) a.hinges.push_back(h);
-    for (int h : a.hinges) {
-      std::array<int, 4> loc;
-      for (int k = 0; k < 4; ++k) {
-        const int v = m_hinges.vertices(h, k);
-        auto it = std::find(a.vertices.begin(), a.vertices.end(), v);
-        if (it == a.vertices.end()) {
-          a.vertices.push_back(v);
-          it = a.vertices.end() - 1;
-        }
-        loc[k] = static_cast<int>(it - a.vertices.begin());
-      }
-      a.local.push_back(loc);
-    }
+    for (int h : a.hinges) a.local.push_back(local_hinge(m_hinges, h, a.vertices));
   }
 }
 

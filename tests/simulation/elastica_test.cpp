@@ -77,6 +77,18 @@ ElasticaResult run_elastica(const remesh::SheetMesh& mesh, double L, double c, d
   return r;
 }
 
+/// A strip of free length L and width w with its clamp band c, meshed by a lattice of spacing h
+/// at angle_deg to its length, with a line of vertices at the clamp's edge.
+remesh::SheetMesh lattice_strip(double L, double w, double h, double c, double angle_deg) {
+  remesh::LatticeOptions o;
+  o.width = L + c;
+  o.height = w;
+  o.edge_length = h;
+  o.angle = angle_deg * M_PI / 180;
+  o.lines_x = {c};
+  return remesh::make_rotated_lattice(o);
+}
+
 struct Case {
   double G, tip_drop;
 };
@@ -111,14 +123,8 @@ INSTANTIATE_TEST_SUITE_P(Models, HeavyElastica, ::testing::Values(BendingModel::
 // the tip drop is 5.0% short at 2.5 mm edges, 2.1% at 1.25 mm and 1.6% at 0.8 mm
 // (docs/elastica_30deg_diagnosis.md). The Morley model is within 0.3% at 2.5 mm.
 TEST(HeavyElasticaMorley, StripAtThirtyDegreesToTheGrain) {
-  const double L = 0.1, w = 0.01, h = 2.5e-3, c = 2 * h;
-  remesh::LatticeOptions o;
-  o.width = L + c;
-  o.height = w;
-  o.edge_length = h;
-  o.angle = 30 * M_PI / 180;
-  o.lines_x = {c};
-  const remesh::SheetMesh mesh = remesh::make_rotated_lattice(o);
+  const double L = 0.1, h = 2.5e-3, c = 2 * h;
+  const remesh::SheetMesh mesh = lattice_strip(L, 0.01, h, c, 30);
   for (const Case& k : CASES) {
     const ElasticaResult r = run_elastica(mesh, L, c, k.G, BendingModel::morley);
     std::printf("heavy elastica at 30 degrees (Morley): G = %g tip drop / L = %.5f (expected %.5f, ratio %.4f)\n",
@@ -135,14 +141,8 @@ TEST(HeavyElasticaMorley, StripAtThirtyDegreesToTheGrain) {
 // times its measured error), and the chord model at least 4% short (the locking this test is
 // about; it would pass unlocked chords only if the mesh changed).
 TEST(HeavyElasticaArcMembrane, FiveMillimetreCellsAtFortyFiveDegreesDoNotLock) {
-  const double L = 0.1, w = 0.05, h = 5e-3, c = 2 * h;
-  remesh::LatticeOptions o;
-  o.width = L + c;
-  o.height = w;
-  o.edge_length = h;
-  o.angle = 45 * M_PI / 180;
-  o.lines_x = {c};
-  const remesh::SheetMesh mesh = remesh::make_rotated_lattice(o);
+  const double L = 0.1, h = 5e-3, c = 2 * h;
+  const remesh::SheetMesh mesh = lattice_strip(L, 0.05, h, c, 45);
   const Case k = CASES[1];  // G = 8
   const ElasticaResult chord = run_elastica(mesh, L, c, k.G, BendingModel::morley, MembraneModel::chord);
   const ElasticaResult arc = run_elastica(mesh, L, c, k.G, BendingModel::morley, MembraneModel::arc);
