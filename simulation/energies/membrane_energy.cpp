@@ -182,7 +182,19 @@ void MembraneEnergy::build_arcs(const remesh::SheetMesh& mesh) {
       for (int h : m_fits[g].hinges)
         if (std::find(a.hinges.begin(), a.hinges.end(), h) == a.hinges.end()) a.hinges.push_back(h);
     for (int h : a.hinges) a.local.push_back(local_hinge(m_hinges, h, a.vertices));
+    for (int g : a.faces)
+      for (int h : m_fits[g].hinges)
+        a.fit_local.push_back(static_cast<int>(std::find(a.hinges.begin(), a.hinges.end(), h) - a.hinges.begin()));
   }
+}
+
+Eigen::Matrix3Xd MembraneEnergy::face_curvatures(const Eigen::VectorXd& theta) const {
+  Eigen::Matrix3Xd K = Eigen::Matrix3Xd::Zero(3, m_fits.size());
+  for (size_t f = 0; f < m_fits.size(); ++f) {
+    const CurvatureFit& fit = m_fits[f];
+    for (size_t k = 0; k < fit.hinges.size(); ++k) K.col(f) += fit.P.col(k) * theta[fit.hinges[k]];
+  }
+  return K;
 }
 
 MembraneEnergy::Delta MembraneEnergy::arc_delta(double L, double size, const Eigen::RowVector3d& qrow,
@@ -278,28 +290,23 @@ double MembraneEnergy::element(int f, const Eigen::Matrix<double, 9, 1>& xs,
   return t.area * W.value;
 }
 
-double MembraneEnergy::arc_element(int f, const Eigen::VectorXd& x, const Eigen::VectorXd& theta,
+double MembraneEnergy::arc_element(int f, const Eigen::VectorXd& x, const Eigen::Matrix3Xd& Kf,
                                    const std::vector<Eigen::Matrix<double, 12, 1>>* grads,
                                    const std::vector<Eigen::Matrix<double, 12, 12>>* hesses,
-                                   Eigen::VectorXd* g, Eigen::MatrixXd* H) const {
+                                   ArcWork* work, bool hessian) const {
   const Triangle& t = m_tris[f];
   const Arc& a = m_arcs[f];
   Eigen::Matrix<double, 3, 2> F = Eigen::Matrix<double, 3, 2>::Zero();
   for (int i = 0; i < 3; ++i) F += x.segment<3>(3 * t.v[i]) * t.w.row(i);
   const Vec3 c(F.col(0).squaredNorm(), F.col(1).squaredNorm(), F.col(0).dot(F.col(1)));
   const int nf = static_cast<int>(a.faces.size());
-  Eigen::Matrix<double, 3, Eigen::Dynamic> K(3, nf);  // the curvature of each of a.faces
-  for (int i = 0; i < nf; ++i) {
-    const CurvatureFit& fit = m_fits[a.faces[i]];
-    Eigen::VectorXd th(fit.hinges.size());
-    for (size_t k = 0; k < fit.hinges.size(); ++k) th[k] = theta[fit.hinges[k]];
-    K.col(i) = fit.hinges.empty() ? Eigen::Vector3d::Zero() : Eigen::Vector3d(fit.P * th);
-  }
-  const bool derivatives = g || H;
+  const bool derivatives = work != nullptr;
   Delta d[3];
   Eigen::Vector3d delta;
   for (int j = 0; j < 3; ++j) {
-    d[j] = arc_delta(a.length[j], a.size[j], a.Q.row(j), K * a.weight.row(j).transpose(), derivatives);
+    Eigen::Vector3d Ke = Eigen::Vector3d::Zero();  // the edge's curvature, from its faces'
+    for (int i = 0; i < nf; ++i) Ke += a.weight(j, i) * Kf.col(a.faces[i]);
+    d[j] = arc_delta(a.length[j], a.size[j], a.Q.row(j), Ke, derivatives);
     delta[j] = d[j].value;
   }
   // Stretching at the arcs' C', the limits at the chords' C.
@@ -311,39 +318,59 @@ double MembraneEnergy::arc_element(int f, const Eigen::VectorXd& x, const Eigen:
   }
   const double value = t.area * (W.value + B.value);
   if (!derivatives) return value;
+  ArcWork& s = *work;
   const int n = 3 * static_cast<int>(a.vertices.size());
-  // dK_i/dx over the local vertices, per face i of a.faces.
-  std::vector<Eigen::MatrixXd> DK(nf, Eigen::MatrixXd::Zero(3, n));
-  auto local_of = [&](int h) { return static_cast<int>(std::find(a.hinges.begin(), a.hinges.end(), h) - a.hinges.begin()); };
-  for (int i = 0; i < nf; ++i) {
+  // Rows 3 + 3j of M: dK_e/dx of edge j over the local vertices, the weighted sum of its faces'
+  // dK/dx; d delta_e / dx from them.
+  s.M.setZero(12, n);
+  for (int i = 0, p = 0; i < nf; ++i) {
     const CurvatureFit& fit = m_fits[a.faces[i]];
     for (size_t k = 0; k < fit.hinges.size(); ++k) {
-      const auto& loc = a.local[local_of(fit.hinges[k])];
-      for (int q = 0; q < 4; ++q)
-        DK[i].middleCols<3>(3 * loc[q]) += fit.P.col(k) * (*grads)[fit.hinges[k]].segment<3>(3 * q).transpose();
+      const auto& loc = a.local[a.fit_local[p++]];
+      const Eigen::Matrix<double, 12, 1>& gh = (*grads)[fit.hinges[k]];
+      for (int j = 0; j < 3; ++j) {
+        if (a.weight(j, i) == 0) continue;
+        const Eigen::Vector3d wP = a.weight(j, i) * fit.P.col(k);
+        for (int q = 0; q < 4; ++q)
+          s.M.block<3, 3>(3 + 3 * j, 3 * loc[q]).noalias() += wP * gh.segment<3>(3 * q).transpose();
+      }
     }
   }
-  // dK_e/dx per edge, and d delta_e / dx.
-  Eigen::MatrixXd DKe[3];
-  Eigen::MatrixXd Ddelta(3, n);
-  for (int j = 0; j < 3; ++j) {
-    DKe[j] = Eigen::MatrixXd::Zero(3, n);
-    for (int i = 0; i < nf; ++i)
-      if (a.weight(j, i) != 0) DKe[j] += a.weight(j, i) * DK[i];
-    Ddelta.row(j) = d[j].gradient.transpose() * DKe[j];
-  }
+  s.Dd.resize(3, n);
+  for (int j = 0; j < 3; ++j) s.Dd.row(j).noalias() = d[j].gradient.transpose() * s.M.middleRows<3>(3 + 3 * j);
   const Eigen::Matrix<double, 3, 9> Jc = c_jacobian(F, t.w);
-  // dc'/dx = dc/dx (the corners, local 0-2) + G d delta / dx.
-  Eigen::MatrixXd J = a.G * Ddelta;
-  J.leftCols<9>() += Jc;
-  if (g) {
-    *g = t.area * J.transpose() * W.grad;
-    g->head<9>() += t.area * Jc.transpose() * B.grad;
+  // Rows 0-2: dc'/dx = dc/dx (the corners, local 0-2) + G d delta / dx.
+  s.M.topRows<3>().noalias() = a.G * s.Dd;
+  s.M.topLeftCorner<3, 9>() += Jc;
+  s.g.noalias() = t.area * s.M.topRows<3>().transpose() * W.grad;
+  s.g.head<9>() += t.area * Jc.transpose() * B.grad;
+  if (!hessian) return value;
+  // H = M^T D M with D = diag(A d2W/dc'2, the arcs' geometric terms through each K_e:
+  // A dW/d delta_e d2 delta_e / dK_e2, projected when projecting). Projected, D is PSD (St.
+  // Venant-Kirchhoff's d2W/dc'2 is): with D = L L^T block by block, H = (L^T M)^T (L^T M), one
+  // triangle computed and mirrored.
+  const Vec3 beta = a.G.transpose() * W.grad;
+  s.D.setZero();
+  if (m_project) {
+    s.D.topLeftCorner<3, 3>() = (t.area * W.hess).llt().matrixL();
+    for (int j = 0; j < 3; ++j) {
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(t.area * beta[j] * d[j].hessian);
+      s.D.block<3, 3>(3 + 3 * j, 3 + 3 * j) =
+          es.eigenvectors() * es.eigenvalues().cwiseMax(0.0).cwiseSqrt().asDiagonal();
+    }
+    s.DM.noalias() = s.D.transpose() * s.M;
+    s.H.setZero(n, n);
+    s.H.selfadjointView<Eigen::Lower>().rankUpdate(s.DM.transpose());
+    s.H.triangularView<Eigen::StrictlyUpper>() = s.H.transpose();
+  } else {
+    s.D.topLeftCorner<3, 3>() = t.area * W.hess;
+    for (int j = 0; j < 3; ++j) s.D.block<3, 3>(3 + 3 * j, 3 + 3 * j) = t.area * beta[j] * d[j].hessian;
+    s.DM.noalias() = s.D * s.M;
+    s.H.noalias() = s.M.transpose() * s.DM;
   }
-  if (!H) return value;
-  *H = t.area * J.transpose() * W.hess * J;
-  H->topLeftCorner<9, 9>() += t.area * Jc.transpose() * B.hess * Jc;
-  // The chords' geometric term (dW/dC' + dB/dC as a tensor, on the corners).
+  // The limits' Hessian and the chords' geometric term (dW/dC' + dB/dC as a tensor), on the
+  // corners.
+  Eigen::Matrix<double, 9, 9> Hc = t.area * Jc.transpose() * B.hess * Jc;
   const Vec3 sc = W.grad + B.grad;
   Eigen::Matrix2d S;
   S << sc[0], 0.5 * sc[2], 0.5 * sc[2], sc[1];
@@ -352,25 +379,22 @@ double MembraneEnergy::arc_element(int f, const Eigen::VectorXd& x, const Eigen:
     for (int j = 0; j < 3; ++j)
       Hg.block<3, 3>(3 * i, 3 * j).diagonal().array() += 2 * t.area * t.w.row(i).dot(S * t.w.row(j).transpose());
   if (m_project && (S.determinant() < 0 || S.trace() < 0)) Hg = project_psd(Hg);
-  H->topLeftCorner<9, 9>() += Hg;
-  // The arcs' geometric terms through each K_e: dW/d delta_e d2 delta_e / dK_e2 (3 x 3,
-  // projected when projecting), and with the exact Hessian dW/d delta_e d delta_e / dK_e times
-  // the hinges' Hessians.
-  const Vec3 beta = a.G.transpose() * W.grad;
+  s.H.topLeftCorner<9, 9>() += Hc + Hg;
+  if (!hesses) return value;
+  // The exact Hessian: dW/d delta_e d delta_e / dK_e times the hinges' Hessians.
   for (int j = 0; j < 3; ++j) {
-    Eigen::Matrix3d HK = t.area * beta[j] * d[j].hessian;
-    if (m_project) HK = project_psd(HK);
-    H->noalias() += DKe[j].transpose() * HK * DKe[j];
-    if (!hesses) continue;
-    for (int i = 0; i < nf; ++i) {
-      if (a.weight(j, i) == 0) continue;
+    for (int i = 0, p = 0; i < nf; ++i) {
       const CurvatureFit& fit = m_fits[a.faces[i]];
+      if (a.weight(j, i) == 0) {
+        p += static_cast<int>(fit.hinges.size());
+        continue;
+      }
       const Eigen::VectorXd w = t.area * beta[j] * a.weight(j, i) * fit.P.transpose() * d[j].gradient;
       for (size_t k = 0; k < fit.hinges.size(); ++k) {
-        const auto& loc = a.local[local_of(fit.hinges[k])];
+        const auto& loc = a.local[a.fit_local[p++]];
         for (int q = 0; q < 4; ++q)
           for (int r = 0; r < 4; ++r)
-            H->block<3, 3>(3 * loc[q], 3 * loc[r]) += w[k] * (*hesses)[fit.hinges[k]].block<3, 3>(3 * q, 3 * r);
+            s.H.block<3, 3>(3 * loc[q], 3 * loc[r]) += w[k] * (*hesses)[fit.hinges[k]].block<3, 3>(3 * q, 3 * r);
       }
     }
   }
@@ -388,9 +412,9 @@ Eigen::Matrix<double, 9, 1> gather(const Eigen::VectorXd& x, const std::array<in
 double MembraneEnergy::value(const Eigen::VectorXd& x) const {
   double e = 0;
   if (arc()) {
-    const Eigen::VectorXd theta = hinge_angles_at(m_hinges, x);
+    const Eigen::Matrix3Xd K = face_curvatures(hinge_angles_at(m_hinges, x));
     for (int f = 0; f < static_cast<int>(m_tris.size()); ++f) {
-      e += arc_element(f, x, theta, nullptr, nullptr, nullptr, nullptr);
+      e += arc_element(f, x, K, nullptr, nullptr, nullptr, false);
       if (!std::isfinite(e)) return INF;
     }
     return e;
@@ -407,15 +431,16 @@ void MembraneEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd& 
   if (arc()) {
     const bool exact = hessian && !m_project;
     const HingeDerivatives hd = hinge_derivatives(m_hinges, x, exact);
-    Eigen::VectorXd g;
-    Eigen::MatrixXd H;
+    const Eigen::Matrix3Xd K = face_curvatures(hd.theta);
+    ArcWork work;
     for (int f = 0; f < static_cast<int>(m_tris.size()); ++f) {
       const Arc& a = m_arcs[f];
-      if (!std::isfinite(arc_element(f, x, hd.theta, &hd.gradients, exact ? &hd.hessians : nullptr, &g,
-                                     hessian ? &H : nullptr)))
+      if (!std::isfinite(arc_element(f, x, K, &hd.gradients, exact ? &hd.hessians : nullptr, &work,
+                                     hessian != nullptr)))
         throw NumericError("membrane: derivatives requested past the strain limit");
-      for (size_t i = 0; i < a.vertices.size(); ++i) gradient.segment<3>(3 * a.vertices[i]) += g.segment<3>(3 * i);
-      if (hessian) hessian->add_element(a.vertices.data(), static_cast<int>(a.vertices.size()), H.data());
+      for (size_t i = 0; i < a.vertices.size(); ++i)
+        gradient.segment<3>(3 * a.vertices[i]) += work.g.segment<3>(3 * i);
+      if (hessian) hessian->add_element(a.vertices.data(), static_cast<int>(a.vertices.size()), work.H.data());
     }
     return;
   }

@@ -94,6 +94,7 @@ class MembraneEnergy : public EnergyTerm {
     std::vector<int> hinges;                // the union of the stencils of `faces`
     std::vector<std::array<int, 4>> local;  // per hinge: local index of (v0, v1, a, b)
     std::vector<int> faces;                 // the face, then its edge neighbours
+    std::vector<int> fit_local;  // per face of `faces` in turn, per hinge of its fit: index in `local`
     /// Edge j (opposite corner j): material length, (tx^2, ty^2, 2 tx ty), and the weights of
     /// `faces` in its curvature (1/2 each across an interior edge, 1 on the boundary).
     Eigen::Vector3d length;
@@ -109,13 +110,25 @@ class MembraneEnergy : public EnergyTerm {
     Eigen::Vector3d gradient;
     Eigen::Matrix3d hessian;
   };
+  /// An arc element's derivatives and the work matrices behind them, reused from face to face.
+  struct ArcWork {
+    Eigen::MatrixXd M;                           // 12 x n: dC'/dx, then dK_e/dx of edges 0-2
+    Eigen::Matrix<double, 3, Eigen::Dynamic> Dd;  // 3 x n: d delta_e / dx
+    Eigen::Matrix<double, 12, 12> D;             // the second derivatives M is contracted with
+    Eigen::MatrixXd DM;                          // D M (or L^T M, D = L L^T)
+    Eigen::VectorXd g;                           // gradient over the local vertices
+    Eigen::MatrixXd H;                           // Hessian over the local vertices
+  };
   static Delta arc_delta(double L, double size, const Eigen::RowVector3d& q, const Eigen::Vector3d& K,
                          bool derivatives);
   void build_arcs(const remesh::SheetMesh& mesh);
-  double arc_element(int f, const Eigen::VectorXd& x, const Eigen::VectorXd& theta,
+  /// Every face's fitted curvature K (Voigt, 3 x #F) from the hinge angles.
+  Eigen::Matrix3Xd face_curvatures(const Eigen::VectorXd& theta) const;
+  /// One arc element's energy; with `work`, its gradient (and with `hessian` its Hessian) in it.
+  double arc_element(int f, const Eigen::VectorXd& x, const Eigen::Matrix3Xd& K,
                      const std::vector<Eigen::Matrix<double, 12, 1>>* grads,
-                     const std::vector<Eigen::Matrix<double, 12, 12>>* hesses, Eigen::VectorXd* g,
-                     Eigen::MatrixXd* H) const;
+                     const std::vector<Eigen::Matrix<double, 12, 12>>* hesses, ArcWork* work,
+                     bool hessian) const;
 
   std::vector<Triangle> m_tris;
   std::vector<Arc> m_arcs;  // empty under the chord model
