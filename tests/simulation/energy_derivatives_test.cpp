@@ -144,6 +144,29 @@ TEST(EnergyDerivatives, MembraneArc) {
   }
 }
 
+/// A sheet of 5 mm cells at `angle` to its sides, flat and rolled isometrically onto a
+/// cylinder of radius R about the material y axis.
+struct RolledSheet {
+  remesh::SheetMesh mesh;
+  Eigen::VectorXd flat, rolled;
+};
+RolledSheet rolled_sheet(double width, double height, double angle, double R) {
+  remesh::LatticeOptions o;
+  o.width = width;
+  o.height = height;
+  o.edge_length = 5e-3;
+  o.angle = angle;
+  RolledSheet s{remesh::make_rotated_lattice(o), {}, {}};
+  const Eigen::MatrixX2d X = s.mesh.material_coords();
+  s.flat.resize(3 * X.rows());
+  s.rolled.resize(3 * X.rows());
+  for (int v = 0; v < X.rows(); ++v) {
+    s.flat.segment<3>(3 * v) << X(v, 0), X(v, 1), 0;
+    s.rolled.segment<3>(3 * v) << R * std::sin(X(v, 0) / R), X(v, 1), R * (1 - std::cos(X(v, 0) / R));
+  }
+  return s;
+}
+
 TEST(MembraneArc, MeasuresASheetRolledOnACylinderAsUnstretched) {
   // A 6 x 4 cm sheet of 5 mm cells at 45 degrees to its sides, rolled isometrically onto a
   // cylinder of radius 5 cm (k l = 0.1-0.14 rad). Its chords are short by (k l cos^2 a)^2 / 24:
@@ -151,28 +174,18 @@ TEST(MembraneArc, MeasuresASheetRolledOnACylinderAsUnstretched) {
   // locking); the arc model measures the edges along the surface and sees almost none: what
   // remains is of higher order in k l and from the fade-out (measured: 4e-6 of the chord
   // model's energy). A correction whose curvature were off by 1.6% would leave 1e-3 of it.
-  remesh::LatticeOptions o;
-  o.width = 0.06;
-  o.height = 0.04;
-  o.edge_length = 5e-3;
-  o.angle = M_PI / 4;
-  const remesh::SheetMesh mesh = remesh::make_rotated_lattice(o);
-  const Eigen::MatrixX2d X = mesh.material_coords();
-  const double R = 0.05;
-  Eigen::VectorXd flat(3 * X.rows()), rolled(3 * X.rows());
-  for (int v = 0; v < X.rows(); ++v) {
-    flat.segment<3>(3 * v) << X(v, 0), X(v, 1), 0;
-    rolled.segment<3>(3 * v) << R * std::sin(X(v, 0) / R), X(v, 1), R * (1 - std::cos(X(v, 0) / R));
-  }
+  const double width = 0.06, height = 0.04, R = 0.05;
+  const RolledSheet s = rolled_sheet(width, height, M_PI / 4, R);
+  const Eigen::VectorXd &flat = s.flat, &rolled = s.rolled;
   Material chord_material, arc_material;
   chord_material.strain_limit = arc_material.strain_limit = 0;  // the rolled chords are not stretched anyway
   arc_material.membrane_model = MembraneModel::arc;
-  const MembraneEnergy chord(mesh, chord_material), arc(mesh, arc_material);
+  const MembraneEnergy chord(s.mesh, chord_material), arc(s.mesh, arc_material);
   EXPECT_EQ(arc.value(flat), chord.value(flat)) << "flat: no curvature, no correction (both at round-off)";
   const double e_chord = chord.value(rolled), e_arc = arc.value(rolled);
   // The chord model's energy is the locking strain's: about Eh/2 (k^2 l^2 / 24)^2 per area.
   const double strain = std::pow(5e-3 / R, 2) / 24;
-  EXPECT_GT(e_chord, 0.1 * 0.5 * chord_material.stretch_stiffness * strain * strain * o.width * o.height);
+  EXPECT_GT(e_chord, 0.1 * 0.5 * chord_material.stretch_stiffness * strain * strain * width * height);
   EXPECT_LT(e_arc, 1e-3 * e_chord) << "chord " << e_chord << " J, arc " << e_arc << " J";
 }
 
@@ -191,28 +204,18 @@ TEST(MembraneArc, ProjectedHessianIsExactWhereNothingIsProjectedAndPsdElsewhere)
   // update), the exact one as a plain product. On a sheet rolled isometrically onto a cylinder
   // (5 mm cells at 30 degrees, R = 5 cm) the arcs are nearly unstretched, so dW/dC' is small:
   // the terms that projecting changes or drops (the geometric ones, proportional to it) nearly
-  // vanish,
-  // and the two agree to the order of the residual strain, about 1e-6 (measured 8.5e-7 of the
-  // Hessian's norm; bound 1e-5; a wrong factor is off by order one). Stretched by a further 0.3%
+  // vanish, and the two agree to the order of the residual strain, about 1e-6 (measured 8.5e-7
+  // of the Hessian's norm; bound 1e-5; a wrong factor is off by order one). Stretched by a further 0.3%
   // along the axis, the geometric terms are in play: the projected Hessian must be PSD, and a
   // rigid translation must stay in its null space (the chords and the curvatures do not see
   // it).
-  remesh::LatticeOptions o;
-  o.width = 0.03;
-  o.height = 0.02;
-  o.edge_length = 5e-3;
-  o.angle = M_PI / 6;
-  const remesh::SheetMesh mesh = remesh::make_rotated_lattice(o);
-  const Eigen::MatrixX2d X = mesh.material_coords();
-  const int nv = static_cast<int>(X.rows());
-  const double R = 0.05;
-  Eigen::VectorXd rolled(3 * nv);
-  for (int v = 0; v < nv; ++v)
-    rolled.segment<3>(3 * v) << R * std::sin(X(v, 0) / R), X(v, 1), R * (1 - std::cos(X(v, 0) / R));
+  const RolledSheet s = rolled_sheet(0.03, 0.02, M_PI / 6, 0.05);
+  const int nv = s.mesh.num_vertices();
+  const Eigen::VectorXd& rolled = s.rolled;
   Material m;
   m.strain_limit = 0;
   m.membrane_model = MembraneModel::arc;
-  MembraneEnergy e(mesh, m);
+  MembraneEnergy e(s.mesh, m);
   const Eigen::MatrixXd projected = dense_hessian(e, nv, rolled);
   e.set_hessian_projection(false);
   const Eigen::MatrixXd exact = dense_hessian(e, nv, rolled);
