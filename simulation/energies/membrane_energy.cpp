@@ -346,9 +346,9 @@ double MembraneEnergy::arc_element(int f, const Eigen::VectorXd& x, const Eigen:
   s.g.head<9>() += t.area * Jc.transpose() * B.grad;
   if (!hessian) return value;
   // H = M^T D M with D = diag(A d2W/dc'2, the arcs' geometric terms through each K_e:
-  // A dW/d delta_e d2 delta_e / dK_e2, projected when projecting). Projected, D is PSD (St.
-  // Venant-Kirchhoff's d2W/dc'2 is): with D = L L^T block by block, H = (L^T M)^T (L^T M), one
-  // triangle computed and mirrored.
+  // A dW/d delta_e d2 delta_e / dK_e2, projected when projecting), one triangle computed and
+  // mirrored. Projected, D is PSD (St. Venant-Kirchhoff's d2W/dc'2 is): with D = L L^T block by
+  // block, H = (L^T M)^T (L^T M), a rank update.
   const Vec3 beta = a.G.transpose() * W.grad;
   s.D.setZero();
   if (m_project) {
@@ -361,13 +361,14 @@ double MembraneEnergy::arc_element(int f, const Eigen::VectorXd& x, const Eigen:
     s.DM.noalias() = s.D.transpose() * s.M;
     s.H.setZero(n, n);
     s.H.selfadjointView<Eigen::Lower>().rankUpdate(s.DM.transpose());
-    s.H.triangularView<Eigen::StrictlyUpper>() = s.H.transpose();
   } else {
     s.D.topLeftCorner<3, 3>() = t.area * W.hess;
     for (int j = 0; j < 3; ++j) s.D.block<3, 3>(3 + 3 * j, 3 + 3 * j) = t.area * beta[j] * d[j].hessian;
     s.DM.noalias() = s.D * s.M;
-    s.H.noalias() = s.M.transpose() * s.DM;
+    s.H.resize(n, n);
+    s.H.triangularView<Eigen::Lower>() = s.M.transpose() * s.DM;
   }
+  s.H.triangularView<Eigen::StrictlyUpper>() = s.H.transpose();
   // The limits' Hessian and the chords' geometric term (dW/dC' + dB/dC as a tensor), on the
   // corners.
   Eigen::Matrix<double, 9, 9> Hc = t.area * Jc.transpose() * B.hess * Jc;
@@ -381,7 +382,9 @@ double MembraneEnergy::arc_element(int f, const Eigen::VectorXd& x, const Eigen:
   if (m_project && (S.determinant() < 0 || S.trace() < 0)) Hg = project_psd(Hg);
   s.H.topLeftCorner<9, 9>() += Hc + Hg;
   if (!hesses) return value;
-  // The exact Hessian: dW/d delta_e d delta_e / dK_e times the hinges' Hessians.
+  // The exact Hessian: dW/d delta_e d delta_e / dK_e times the hinges' Hessians, each hinge's
+  // coefficients summed over the edges and faces that use it, its Hessian added once.
+  s.coefficient.setZero(static_cast<int>(a.hinges.size()));
   for (int j = 0; j < 3; ++j) {
     for (int i = 0, p = 0; i < nf; ++i) {
       const CurvatureFit& fit = m_fits[a.faces[i]];
@@ -389,14 +392,18 @@ double MembraneEnergy::arc_element(int f, const Eigen::VectorXd& x, const Eigen:
         p += static_cast<int>(fit.hinges.size());
         continue;
       }
-      const Eigen::VectorXd w = t.area * beta[j] * a.weight(j, i) * fit.P.transpose() * d[j].gradient;
-      for (size_t k = 0; k < fit.hinges.size(); ++k) {
-        const auto& loc = a.local[a.fit_local[p++]];
-        for (int q = 0; q < 4; ++q)
-          for (int r = 0; r < 4; ++r)
-            s.H.block<3, 3>(3 * loc[q], 3 * loc[r]) += w[k] * (*hesses)[fit.hinges[k]].block<3, 3>(3 * q, 3 * r);
-      }
+      const double scale = t.area * beta[j] * a.weight(j, i);
+      for (size_t k = 0; k < fit.hinges.size(); ++k)
+        s.coefficient[a.fit_local[p++]] += scale * fit.P.col(k).dot(d[j].gradient);
     }
+  }
+  for (size_t l = 0; l < a.hinges.size(); ++l) {
+    const double w = s.coefficient[static_cast<int>(l)];
+    if (w == 0) continue;
+    const auto& loc = a.local[l];
+    const Eigen::Matrix<double, 12, 12>& Hh = (*hesses)[a.hinges[l]];
+    for (int q = 0; q < 4; ++q)
+      for (int r = 0; r < 4; ++r) s.H.block<3, 3>(3 * loc[q], 3 * loc[r]) += w * Hh.block<3, 3>(3 * q, 3 * r);
   }
   return value;
 }

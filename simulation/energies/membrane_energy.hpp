@@ -117,6 +117,7 @@ class MembraneEnergy : public EnergyTerm {
     Eigen::Matrix<double, 12, 12> D;             // the second derivatives M is contracted with
     Eigen::MatrixXd DM;                          // D M (or L^T M, D = L L^T)
     Eigen::VectorXd g;                           // gradient over the local vertices
+    Eigen::VectorXd coefficient;                 // per hinge of the element: its Hessian's weight
     Eigen::MatrixXd H;                           // Hessian over the local vertices
   };
   static Delta arc_delta(double L, double size, const Eigen::RowVector3d& q, const Eigen::Vector3d& K,
