@@ -864,6 +864,7 @@ PlasticBendResult bend_and_release(double k, double ky, bool quick) {
   scene.sheet.material.weakening = 1.0;
   scene.sheet.material.damping = 20.0;  // [1/s] to rest within the relaxation
   scene.sheet.material.bending_model = ps::BendingModel::morley;
+  scene.sheet.material.membrane_model = g_membrane_model;
   scene.gravity = Eigen::Vector3d::Zero();
   scene.ground = false;
   scene.time_step = 5e-3;
@@ -922,6 +923,7 @@ FoldResult fold_and_release(double r, double ky, bool quick) {
   scene.sheet.material.yield_curvature = ky;
   scene.sheet.material.damping = 20.0;
   scene.sheet.material.bending_model = ps::BendingModel::morley;
+  scene.sheet.material.membrane_model = g_membrane_model;
   scene.gravity = Eigen::Vector3d::Zero();
   scene.ground = false;
   scene.time_step = 5e-3;
