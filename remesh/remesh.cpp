@@ -297,6 +297,7 @@ RemeshStats remesh(SheetMesh& mesh, RemeshState& state, const RemeshParams& para
   RemeshState work_state = state;
   const std::vector<Eigen::Matrix2d> metrics =
       vertex_metrics(work, sizing(work, work_state, params));
+  work_state.membrane_strain.resize(0, 3);  // per face: stale once the faces change
   RemeshStats stats;
   {
     MeshEditor ed(work, work_state, veto);

@@ -61,6 +61,12 @@ struct RemeshState {
   /// is carried like the positions (linear on split), so it keeps #V rows: recompute it before
   /// relying on it again.
   Eigen::VectorXd obstacle_distance;
+  /// Membrane Green strain per face (e_xx, e_yy, e_xy) [-], #F (input of the compression
+  /// criterion; may be empty: then the chords' strain from the positions). For a membrane that
+  /// does not measure its strain on the chords (the simulation's arc model, which counts a face
+  /// bent smoothly as unstrained). Read once at the start of a pass; the edits change the faces,
+  /// so remesh() empties it.
+  Eigen::MatrixX3d membrane_strain;
 };
 
 enum class EditKind { split, flip, collapse };

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <sstream>
 #include <string>
 
@@ -27,17 +28,19 @@ void require(bool ok, const std::string& name, const std::string& rule, double v
     throw ParameterError("remesh: " + name + " must be " + rule + " (got " + number(value) + ")");
 }
 
-void check_rows(const std::string& name, Eigen::Index rows, int nv) {
-  if (rows != nv)
-    throw MeshError("remesh: state." + name + " has " + std::to_string(rows) +
-                    " rows, the mesh has " + std::to_string(nv) + " vertices");
+/// `element` names what a row is for: "vertex" or "face".
+void check_rows(const std::string& name, Eigen::Index rows, int n, const std::string& element = "vertex") {
+  if (rows != n)
+    throw MeshError("remesh: state." + name + " has " + std::to_string(rows) + " rows, the mesh has " +
+                    std::to_string(n) + " " + (element == "vertex" ? "vertices" : element + "s"));
 }
 
 template <typename Derived>
-void check_finite(const std::string& name, const Eigen::MatrixBase<Derived>& m) {
+void check_finite(const std::string& name, const Eigen::MatrixBase<Derived>& m,
+                  const std::string& element = "vertex") {
   for (Eigen::Index r = 0; r < m.rows(); ++r)
     if (!m.row(r).allFinite())
-      throw MeshError("remesh: state." + name + " of vertex " + std::to_string(r) +
+      throw MeshError("remesh: state." + name + " of " + element + " " + std::to_string(r) +
                       " is NaN or infinite");
 }
 
@@ -141,6 +144,9 @@ void check_state(const SheetMesh& mesh, const RemeshState& state) {
   check_finite("positions", state.positions);
   check_finite("velocities", state.velocities);
   check_finite("obstacle_distance", state.obstacle_distance);
+  if (state.membrane_strain.rows() > 0)
+    check_rows("membrane_strain", state.membrane_strain.rows(), mesh.num_faces(), "face");
+  check_finite("membrane_strain", state.membrane_strain, "face");
 }
 
 std::vector<double> edge_dihedral_angles(const SheetMesh& sheet, const Eigen::MatrixX3d& x) {
@@ -304,11 +310,13 @@ Eigen::Matrix2d obstacle_metric(const Eigen::Vector3d& d, const Eigen::Matrix2d&
   return o / 3.0;
 }
 
-/// One face's corners (columns): material [m], world [m], velocities [m/s], obstacle distances [m].
+/// One face's corners (columns): material [m], world [m], velocities [m/s], obstacle distances
+/// [m]; and its membrane strain when the caller gives it (else the chords').
 struct FaceInputs {
   Eigen::Matrix<double, 2, 3> material;
   Eigen::Matrix3d world, velocity;
   Eigen::Vector3d distance = Eigen::Vector3d::Zero();
+  std::optional<Eigen::Matrix2d> strain;
 };
 
 /// The unclamped criteria of one face (Narain et al. 2012, section 4); s is the face's curvature
@@ -323,8 +331,13 @@ SizingTerms face_terms(const FaceInputs& in, const Eigen::Matrix2d& s, const Eig
   t.curvature = s2 / a2;
   t.plastic = kp.transpose() * kp / a2;
   if (p.refine_compression > 0) {
-    const Eigen::Matrix<double, 3, 2> def = material_gradient<3>(in.world, dm_inv);
-    const Eigen::Matrix2d green = 0.5 * (def.transpose() * def - Eigen::Matrix2d::Identity());
+    Eigen::Matrix2d green;
+    if (in.strain) {
+      green = *in.strain;
+    } else {
+      const Eigen::Matrix<double, 3, 2> def = material_gradient<3>(in.world, dm_inv);
+      green = 0.5 * (def.transpose() * def - Eigen::Matrix2d::Identity());
+    }
     Eigen::Matrix<double, 2, 3> edges;
     for (int k = 0; k < 3; ++k) edges.col(k) = in.material.col((k + 1) % 3) - in.material.col(k);
     t.compression = compression_metric_at_resolution(
@@ -359,6 +372,10 @@ std::vector<SizingTerms> sizing_terms(const SheetMesh& mesh, const RemeshState& 
       in.world.col(k) = state.positions.row(v).transpose();
       in.velocity.col(k) = state.velocities.row(v).transpose();
       if (use_obstacles) in.distance(k) = state.obstacle_distance(v);
+    }
+    if (state.membrane_strain.rows() > 0) {
+      const Eigen::RowVector3d e = state.membrane_strain.row(f);
+      in.strain = (Eigen::Matrix2d() << e[0], e[2], e[2], e[1]).finished();
     }
     Eigen::Matrix2d kp;
     kp << plastic(f, 0), plastic(f, 2), plastic(f, 2), plastic(f, 1);

@@ -7,6 +7,7 @@
 #include "collision/self_contact.hpp"
 #include "collision/shapes.hpp"
 #include "remesh/mesh_editor.hpp"
+#include "simulation/energies/membrane_energy.hpp"
 
 namespace papersim::simulation {
 
@@ -32,7 +33,8 @@ bool segment_crosses_triangle(const Eigen::Vector3d& p, const Eigen::Vector3d& q
 
 /// Principal stretches (smallest, largest) of the triangle with world corners x and material
 /// corners X [-].
-Eigen::Vector2d principal_stretches(const Eigen::Matrix3d& x, const Eigen::Matrix<double, 3, 2>& X) {
+/// Right Cauchy-Green tensor of a triangle (rows = corners; world x, material X).
+Eigen::Matrix2d cauchy_green(const Eigen::Matrix3d& x, const Eigen::Matrix<double, 3, 2>& X) {
   Eigen::Matrix2d Dm;
   Dm.col(0) = (X.row(1) - X.row(0)).transpose();
   Dm.col(1) = (X.row(2) - X.row(0)).transpose();
@@ -40,7 +42,10 @@ Eigen::Vector2d principal_stretches(const Eigen::Matrix3d& x, const Eigen::Matri
   Ds.col(0) = (x.row(1) - x.row(0)).transpose();
   Ds.col(1) = (x.row(2) - x.row(0)).transpose();
   const Eigen::Matrix<double, 3, 2> F = Ds * Dm.inverse();
-  const Eigen::Matrix2d C = F.transpose() * F;
+  return F.transpose() * F;
+}
+
+Eigen::Vector2d principal_stretches(const Eigen::Matrix2d& C) {
   return Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(C).eigenvalues().cwiseMax(0.0).cwiseSqrt();
 }
 
@@ -129,11 +134,41 @@ std::string RemeshVeto::stretch_reason(const remesh::EditProposal& edit) const {
   const double hi = 1 + (split ? m_params.strain_limit : m_params.strain_tolerance);
   const double lo = split ? 0.0 : 1 - m_params.strain_tolerance;
   for (size_t f = 0; f < edit.world.size(); ++f) {
-    const Eigen::Vector2d s = principal_stretches(edit.world[f], edit.material[f]);
+    const Eigen::Vector2d s = split || m_curvatures.rows() == 0
+                                  ? principal_stretches(cauchy_green(edit.world[f], edit.material[f]))
+                                  : arc_stretches(edit, f);
     if (!(s[1] < hi)) return "stretch";
     if (!(s[0] > lo)) return "compression";
   }
   return {};
+}
+
+Eigen::Vector2d RemeshVeto::arc_stretches(const remesh::EditProposal& edit, size_t f) const {
+  // The face's curvature: the mean of its corners' that the starting mesh had (a vertex a split
+  // of this pass inserted has none).
+  Eigen::Vector3d K = Eigen::Vector3d::Zero();
+  int known = 0;
+  for (int v : edit.vertices[f])
+    if (v >= 0 && v < m_curvatures.rows()) K += m_curvatures.row(v).transpose(), ++known;
+  const Eigen::Matrix<double, 3, 2>& X = edit.material[f];
+  Eigen::Matrix2d C = cauchy_green(edit.world[f], X);
+  if (known == 0) return principal_stretches(C);
+  K /= known;
+  // C' = C + G delta as the arc membrane has it: row j of A maps C to the squared length of the
+  // edge opposite corner j, so G = A^-1.
+  const double area = 0.5 * std::abs((X(1, 0) - X(0, 0)) * (X(2, 1) - X(0, 1)) - (X(1, 1) - X(0, 1)) * (X(2, 0) - X(0, 0)));
+  Eigen::Matrix3d A;
+  Eigen::Vector3d delta;
+  for (int j = 0; j < 3; ++j) {
+    const Eigen::Vector2d e = (X.row((j + 2) % 3) - X.row((j + 1) % 3)).transpose();
+    const double L = e.norm();
+    A.row(j) << e.x() * e.x(), e.y() * e.y(), 2 * e.x() * e.y();
+    const Eigen::RowVector3d q(e.x() * e.x() / (L * L), e.y() * e.y() / (L * L), 2 * e.x() * e.y() / (L * L));
+    delta[j] = MembraneEnergy::arc_correction(L, std::sqrt(2 * area), q, K);
+  }
+  const Eigen::Vector3d c = Eigen::Vector3d(C(0, 0), C(1, 1), C(0, 1)) + A.inverse() * delta;
+  C << c[0], c[2], c[2], c[1];
+  return principal_stretches(C);
 }
 
 bool RemeshVeto::near_obstacle(const Eigen::Vector3d& p) const {

@@ -56,11 +56,20 @@ class RemeshVeto {
              const remesh::SheetMesh& mesh, const Eigen::MatrixX3d& positions,
              const RemeshVetoParams& params);
 
+  /// Under the arc membrane: each vertex's curvature in material space (Voigt K_xx, K_yy, K_xy;
+  /// #V of the starting mesh, MembraneEnergy::vertex_curvatures) [1/m]. Flips and collapses are
+  /// then held to the tolerance on the strain the arc membrane measures (each new edge as long as
+  /// the arc over it, with the mean curvature of the face's corners from the starting mesh), not
+  /// on the chords', which are shorter wherever the sheet bends.
+  void set_vertex_curvatures(Eigen::MatrixX3d curvatures) { m_curvatures = std::move(curvatures); }
+
   /// Empty to allow the edit, else the reason ("stretch", "obstacle", "self").
   std::string operator()(const remesh::EditProposal& edit) const;
 
  private:
   std::string stretch_reason(const remesh::EditProposal& edit) const;
+  /// Principal stretches of new face f of `edit`, of its arcs under set_vertex_curvatures.
+  Eigen::Vector2d arc_stretches(const remesh::EditProposal& edit, size_t f) const;
   bool near_obstacle(const Eigen::Vector3d& p) const;
   bool deeper_in_barrier(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
                          const Eigen::Vector3d& b) const;
@@ -80,6 +89,7 @@ class RemeshVeto {
   /// Centres and radii of the sphere obstacles at the pass's time [m].
   std::vector<std::pair<Eigen::Vector3d, double>> m_spheres;
   RemeshVetoParams m_params;
+  Eigen::MatrixX3d m_curvatures;          // per vertex of the starting mesh; empty: chords
   double m_cell = 1.0;                    // grid cell size [m]
   std::unordered_map<long long, std::vector<int>> m_grid;  // faces of the starting mesh by cell
 };

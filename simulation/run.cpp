@@ -469,20 +469,27 @@ std::string Run::check_remeshed(const remesh::SheetMesh& mesh, const SheetState&
   return {};
 }
 
-void Run::remesh_pass() {
-  auto t0 = std::chrono::steady_clock::now();
-  remesh::SheetMesh mesh = m_mesh;  // a copy: the pass is undone when its result fails a check
+remesh::RemeshState Run::remesh_state() const {
   remesh::RemeshState rs;
   rs.positions = m_state.positions_matrix();
   rs.velocities = m_state.velocities_matrix();
   if (!m_setup.obstacles.empty()) rs.obstacle_distance = vertex_obstacle_distance();
+  if (m_terms.membrane->arc()) rs.membrane_strain = m_terms.membrane->green_strains(m_state.positions);
+  return rs;
+}
+
+void Run::remesh_pass() {
+  auto t0 = std::chrono::steady_clock::now();
+  remesh::SheetMesh mesh = m_mesh;  // a copy: the pass is undone when its result fails a check
+  remesh::RemeshState rs = remesh_state();
   RemeshVetoParams vp;
   vp.strain_limit = m_setup.material.strain_limit;
   vp.obstacle_gap = 0.1 * m_setup.contact.dhat;
   vp.obstacle_reach = m_setup.contact.dhat;
   vp.self_gap = m_setup.self_contact ? 0.1 * m_setup.self_contact_params.dhat : 0.0;
   vp.time = m_state.time;
-  const RemeshVeto veto(m_setup.obstacles, m_mesh, rs.positions, vp);
+  RemeshVeto veto(m_setup.obstacles, m_mesh, rs.positions, vp);
+  if (m_terms.membrane->arc()) veto.set_vertex_curvatures(m_terms.membrane->vertex_curvatures(m_state.positions));
   const remesh::RemeshStats st = remesh::remesh(mesh, rs, m_scene.remesh.params, std::cref(veto));
   add_counts(m_remesh.refusals, st.refusals);
   m_remesh.seconds_remesh += seconds_since(t0);

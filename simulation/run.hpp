@@ -240,6 +240,11 @@ class Run {
   /// Smallest surface distance to each obstacle at the current state [m].
   const std::vector<double>& step_obstacle_distance() const { return m_step_distance; }
 
+  /// What a remeshing pass sizes the current mesh by: positions, velocities, each vertex's
+  /// obstacle distance (with obstacles) and, under the arc membrane, the strain it measures (a
+  /// face bent smoothly is not compressed although its chords are shorter).
+  remesh::RemeshState remesh_state() const;
+
   /// The result so far (final figures measured at the current state).
   RunResult result(double wall_seconds) const;
   /// The counts and extremes so far, with `wall_seconds` of wall time (the run's so far).

@@ -53,9 +53,7 @@ double largest_eigenvalue(const Eigen::Matrix2d& m) {
 
 void report(const ps::Run& run, const rm::RemeshParams& p, const std::string& dump) {
   const rm::SheetMesh& mesh = run.mesh();
-  rm::RemeshState rs;
-  rs.positions = run.state().positions_matrix();
-  rs.velocities = run.state().velocities_matrix();
+  const rm::RemeshState rs = run.remesh_state();
   const std::vector<rm::SizingTerms> terms = rm::sizing_terms(mesh, rs, p);
   const Eigen::MatrixX3i f = mesh.faces();
   const Eigen::MatrixX3d& x = rs.positions;

@@ -290,6 +290,15 @@ double MembraneEnergy::element(int f, const Eigen::Matrix<double, 9, 1>& xs,
   return t.area * W.value;
 }
 
+void MembraneEnergy::arc_deltas(int f, const Eigen::Matrix3Xd& K, bool derivatives, Delta d[3]) const {
+  const Arc& a = m_arcs[f];
+  for (int j = 0; j < 3; ++j) {
+    Eigen::Vector3d Ke = Eigen::Vector3d::Zero();  // the edge's curvature, from its faces'
+    for (size_t i = 0; i < a.faces.size(); ++i) Ke += a.weight(j, i) * K.col(a.faces[i]);
+    d[j] = arc_delta(a.length[j], a.size[j], a.Q.row(j), Ke, derivatives);
+  }
+}
+
 double MembraneEnergy::arc_element(int f, const Eigen::VectorXd& x, const Eigen::Matrix3Xd& Kf,
                                    const std::vector<Eigen::Matrix<double, 12, 1>>* grads,
                                    const std::vector<Eigen::Matrix<double, 12, 12>>* hesses,
@@ -302,13 +311,8 @@ double MembraneEnergy::arc_element(int f, const Eigen::VectorXd& x, const Eigen:
   const int nf = static_cast<int>(a.faces.size());
   const bool derivatives = work != nullptr;
   Delta d[3];
-  Eigen::Vector3d delta;
-  for (int j = 0; j < 3; ++j) {
-    Eigen::Vector3d Ke = Eigen::Vector3d::Zero();  // the edge's curvature, from its faces'
-    for (int i = 0; i < nf; ++i) Ke += a.weight(j, i) * Kf.col(a.faces[i]);
-    d[j] = arc_delta(a.length[j], a.size[j], a.Q.row(j), Ke, derivatives);
-    delta[j] = d[j].value;
-  }
+  arc_deltas(f, Kf, derivatives, d);
+  const Eigen::Vector3d delta(d[0].value, d[1].value, d[2].value);
   // Stretching at the arcs' C', the limits at the chords' C.
   const CFunction W = stvk(c + a.G * delta, m_lambda, m_mu);
   CFunction B;
@@ -473,6 +477,41 @@ Eigen::MatrixX2d MembraneEnergy::principal_stretches(const Eigen::VectorXd& x) c
         std::sqrt(std::max(0.0, es.eigenvalues()[0]));
   }
   return s;
+}
+
+Eigen::MatrixX3d MembraneEnergy::green_strains(const Eigen::VectorXd& x) const {
+  Eigen::Matrix3Xd K;
+  if (arc()) K = face_curvatures(hinge_angles_at(m_hinges, x));
+  Eigen::MatrixX3d e(m_tris.size(), 3);
+  for (int f = 0; f < static_cast<int>(m_tris.size()); ++f) {
+    const auto& t = m_tris[f];
+    Eigen::Matrix<double, 3, 2> F = Eigen::Matrix<double, 3, 2>::Zero();
+    for (int i = 0; i < 3; ++i) F += x.segment<3>(3 * t.v[i]) * t.w.row(i);
+    Eigen::Vector3d c(F.col(0).squaredNorm(), F.col(1).squaredNorm(), F.col(0).dot(F.col(1)));
+    if (arc()) {
+      Delta d[3];
+      arc_deltas(f, K, false, d);
+      c += m_arcs[f].G * Eigen::Vector3d(d[0].value, d[1].value, d[2].value);
+    }
+    e.row(f) << 0.5 * (c[0] - 1), 0.5 * (c[1] - 1), 0.5 * c[2];
+  }
+  return e;
+}
+
+Eigen::MatrixX3d MembraneEnergy::vertex_curvatures(const Eigen::VectorXd& x) const {
+  if (!arc()) return Eigen::MatrixX3d(0, 3);
+  const Eigen::Matrix3Xd K = face_curvatures(hinge_angles_at(m_hinges, x));
+  const Eigen::Index nv = x.size() / 3;
+  Eigen::MatrixX3d sum = Eigen::MatrixX3d::Zero(nv, 3);
+  Eigen::VectorXd area = Eigen::VectorXd::Zero(nv);
+  for (int f = 0; f < static_cast<int>(m_tris.size()); ++f)
+    for (int v : m_tris[f].v) {
+      sum.row(v) += m_tris[f].area * K.col(f).transpose();
+      area[v] += m_tris[f].area;
+    }
+  for (Eigen::Index v = 0; v < nv; ++v)
+    if (area[v] > 0) sum.row(v) /= area[v];
+  return sum;
 }
 
 }  // namespace papersim::simulation

@@ -69,6 +69,23 @@ class MembraneEnergy : public EnergyTerm {
   /// see them, under either model).
   Eigen::MatrixX2d principal_stretches(const Eigen::VectorXd& x) const;
 
+  /// Green strain (C - I) / 2 of every face at x, #F by 3 (e_xx, e_yy, e_xy): of the chords'
+  /// C under the chord model, of the arcs' C' under the arc model (the strain the stretching
+  /// energy measures; a face bent smoothly is unstrained although its chords are shorter).
+  Eigen::MatrixX3d green_strains(const Eigen::VectorXd& x) const;
+
+  /// Under the arc model, each vertex's curvature: the area-weighted mean of its faces' fitted
+  /// curvatures (Voigt K_xx, K_yy, K_xy in material space, #V by 3) [1/m]. Empty (0 rows) under
+  /// the chord model.
+  Eigen::MatrixX3d vertex_curvatures(const Eigen::VectorXd& x) const;
+
+  /// The arc model's correction of an edge's squared length [m^2]: psi(size |K|) L^4 k^2 / 12,
+  /// with L its material length, q = (tx^2, ty^2, 2 tx ty) of its material direction, k = q K
+  /// the normal curvature along it and `size` the fade's length (sqrt(2 x the faces' mean area)).
+  static double arc_correction(double L, double size, const Eigen::RowVector3d& q, const Eigen::Vector3d& K) {
+    return arc_delta(L, size, q, K, false).value;
+  }
+
   /// Energy, gradient and PSD Hessian of one triangle (x0, x1, x2 stacked).
   double element(int f, const Eigen::Matrix<double, 9, 1>& xs, Eigen::Matrix<double, 9, 1>* g,
                  Eigen::Matrix<double, 9, 9>* H) const;
@@ -125,6 +142,8 @@ class MembraneEnergy : public EnergyTerm {
   void build_arcs(const remesh::SheetMesh& mesh);
   /// Every face's fitted curvature K (Voigt, 3 x #F) from the hinge angles.
   Eigen::Matrix3Xd face_curvatures(const Eigen::VectorXd& theta) const;
+  /// The deltas of face f's three edges (with their derivatives in K when `derivatives`).
+  void arc_deltas(int f, const Eigen::Matrix3Xd& K, bool derivatives, Delta d[3]) const;
   /// One arc element's energy; with `work`, its gradient (and with `hessian` its Hessian) in it.
   double arc_element(int f, const Eigen::VectorXd& x, const Eigen::Matrix3Xd& K,
                      const std::vector<Eigen::Matrix<double, 12, 1>>* grads,

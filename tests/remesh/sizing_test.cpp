@@ -133,6 +133,30 @@ TEST(CompressionMetric, CompressedCoarseFaceRefinesByTheBuckleItNeedsNotToSizeMi
   for (double l : wanted_along_x(mf)) EXPECT_NEAR(l, p.refine_compression / std::sqrt(4e-3), 1e-9);
 }
 
+TEST(CompressionMetric, AGivenMembraneStrainReplacesTheChords) {
+  // The 20 mm grid compressed by 1% of the test above, but with the strain its membrane measures
+  // given as zero (as the arc membrane measures a sheet bent smoothly): no compression demand;
+  // given as the chords' own, the same demand as from the positions. A pass reads the strain at
+  // its start and empties it, since its edits change the faces.
+  const double g = -1e-2;
+  SheetMesh mesh = grid(0.2, 0.2, 11, 11);
+  RemeshState s = compressed_state(mesh, g);
+  RemeshParams p;
+  p.size_min = 1e-3;
+  const std::vector<SizingTerms> from_chords = sizing_terms(mesh, s, p);
+  s.membrane_strain = Eigen::MatrixX3d::Zero(mesh.num_faces(), 3);
+  for (const SizingTerms& t : sizing_terms(mesh, s, p)) EXPECT_EQ(t.compression.norm(), 0.0);
+  s.membrane_strain.col(0).setConstant(g);  // compressed_state's Green strain along x
+  const std::vector<SizingTerms> given = sizing_terms(mesh, s, p);
+  ASSERT_EQ(given.size(), from_chords.size());
+  for (size_t f = 0; f < given.size(); ++f) {
+    EXPECT_GT(from_chords[f].compression(0, 0), 0.0);
+    EXPECT_NEAR(given[f].compression(0, 0), from_chords[f].compression(0, 0), 1e-9 * from_chords[f].compression(0, 0));
+  }
+  remesh(mesh, s, p);
+  EXPECT_EQ(s.membrane_strain.rows(), 0);
+}
+
 TEST(Sizing, PlasticCurvatureRefinesAFlatSheetAlongTheCrease) {
   // A crease pressed flat: the world shape is flat, the plastic curvature remembers the fold.
   SheetMesh mesh = grid(0.1, 0.1, 11, 11);
@@ -227,6 +251,24 @@ TEST(Sizing, ErrorsNameTheParameterOrArray) {
     FAIL() << "expected MeshError";
   } catch (const MeshError& e) {
     EXPECT_NE(std::string(e.what()).find("state.obstacle_distance"), std::string::npos) << e.what();
+  }
+  s = flat_state(mesh);
+  s.membrane_strain = Eigen::MatrixX3d::Zero(mesh.num_vertices(), 3);  // one row per vertex, not face
+  try {
+    remesh(mesh, s, p);
+    FAIL() << "expected MeshError";
+  } catch (const MeshError& e) {
+    EXPECT_NE(std::string(e.what()).find("state.membrane_strain has 30 rows, the mesh has 40 faces"),
+              std::string::npos)
+        << e.what();
+  }
+  s.membrane_strain = Eigen::MatrixX3d::Zero(mesh.num_faces(), 3);
+  s.membrane_strain(7, 2) = std::nan("");
+  try {
+    sizing(mesh, s, p);
+    FAIL() << "expected MeshError";
+  } catch (const MeshError& e) {
+    EXPECT_NE(std::string(e.what()).find("state.membrane_strain of face 7"), std::string::npos) << e.what();
   }
   s = flat_state(mesh);
   s.positions(2, 1) = std::nan("");

@@ -7,6 +7,7 @@
 
 #include "collision/collider.hpp"
 #include "collision/shapes.hpp"
+#include "remesh/remesh.hpp"
 #include "remesh/sheet_generator.hpp"
 #include "simulation/energies/bending_energy.hpp"
 #include "simulation/energies/contact_energy.hpp"
@@ -187,6 +188,58 @@ TEST(MembraneArc, MeasuresASheetRolledOnACylinderAsUnstretched) {
   const double strain = std::pow(5e-3 / R, 2) / 24;
   EXPECT_GT(e_chord, 0.1 * 0.5 * chord_material.stretch_stiffness * strain * strain * width * height);
   EXPECT_LT(e_arc, 1e-3 * e_chord) << "chord " << e_chord << " J, arc " << e_arc << " J";
+}
+
+TEST(MembraneArc, GreenStrainsAreWhatEachModelMeasuresAndTheSizingSeesThem) {
+  // The rolled sheet of the test above, on a 3 cm cylinder (k l = 0.17-0.24 rad). Under the
+  // chord model the faces' Green strains are the chords' (their principal values give
+  // principal_stretches), compressed across the axis by about (k l cos^2 a)^2 / 24; under the arc
+  // model they are C' - I, almost zero. A remeshing pass sizing by the arc strain therefore asks
+  // for no refinement against compression where one sizing by the chords does.
+  const double R = 0.03;
+  const RolledSheet s = rolled_sheet(0.06, 0.04, M_PI / 4, R);
+  Material chord_material, arc_material;
+  arc_material.membrane_model = MembraneModel::arc;
+  const MembraneEnergy chord(s.mesh, chord_material), arc(s.mesh, arc_material);
+  const Eigen::MatrixX3d e_chord = chord.green_strains(s.rolled), e_arc = arc.green_strains(s.rolled);
+  const Eigen::MatrixX2d stretch = chord.principal_stretches(s.rolled);
+  ASSERT_EQ(e_chord.rows(), s.mesh.num_faces());
+  double most_chord = 0, most_arc = 0;
+  for (int f = 0; f < e_chord.rows(); ++f) {
+    const auto eig = [](const Eigen::RowVector3d& e) {
+      return Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>((Eigen::Matrix2d() << e[0], e[2], e[2], e[1]).finished())
+          .eigenvalues();
+    };
+    const Eigen::Vector2d lc = eig(e_chord.row(f)), la = eig(e_arc.row(f));
+    EXPECT_NEAR(std::sqrt(1 + 2 * lc[0]), stretch(f, 1), 1e-12);
+    EXPECT_NEAR(std::sqrt(1 + 2 * lc[1]), stretch(f, 0), 1e-12);
+    most_chord = std::max(most_chord, -lc[0]);
+    most_arc = std::max(most_arc, la.cwiseAbs().maxCoeff());
+  }
+  const double locking = std::pow(5e-3 / R, 2) / 24;  // (k l)^2 / 24 at the cells' 5 mm
+  EXPECT_GT(most_chord, 0.5 * locking);
+  EXPECT_LT(most_arc, 0.05 * most_chord) << "chord " << most_chord << ", arc " << most_arc;
+  // The sizing, with a compression criterion fine enough to see the chords' strain (ArcSim's
+  // metric asks for l^2 |e| <= c^2: c = 2e-5 m against 5 mm cells; at refine_angle 0.05 rad a
+  // face is refined when it holds more than (0.05 / 2 pi)^2 = 6.3e-5 of strain).
+  remesh::RemeshParams p;
+  p.refine_compression = 2e-5;
+  p.refine_angle = 0.05;
+  remesh::RemeshState rs;
+  rs.positions = Eigen::Map<const Eigen::MatrixXd>(s.rolled.data(), 3, s.mesh.num_vertices()).transpose();
+  rs.velocities = Eigen::MatrixX3d::Zero(s.mesh.num_vertices(), 3);
+  // A face is refined when the criterion asks for edges shorter than the 5 mm cells.
+  const auto refined = [&](const remesh::RemeshState& state) {
+    int n = 0;
+    for (const remesh::SizingTerms& t : remesh::sizing_terms(s.mesh, state, p))
+      n += Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(t.compression).eigenvalues()[1] > 1 / (5e-3 * 5e-3);
+    return n;
+  };
+  const int refined_by_chords = refined(rs);
+  rs.membrane_strain = e_arc;
+  const int refined_by_arcs = refined(rs);
+  EXPECT_GT(refined_by_chords, s.mesh.num_faces() / 2);
+  EXPECT_EQ(refined_by_arcs, 0);
 }
 
 /// The Hessian term adds at x, dense.

@@ -13,6 +13,7 @@
 #include "remesh/sheet_generator.hpp"
 #include "remesh/sheet_io.hpp"
 #include "remesh/sizing.hpp"
+#include "simulation/energies/membrane_energy.hpp"
 #include "simulation/errors.hpp"
 #include "simulation/remesh_veto.hpp"
 #include "simulation/run.hpp"
@@ -235,6 +236,71 @@ TEST(RemeshVeto, RefusesEditsThatBreakTheSolversInvariants) {
 // whose top is 0.1 mm below the edge's midpoint: the ends are 0.2248 mm from it, the midpoint
 // 0.1 mm, beyond the 30 um gap but inside a 0.3 mm reach. Under a 100 m sphere (a plane to within
 // 3e-8 m over the edge) the midpoint is as far as its ends, and the split is allowed.
+TEST(RemeshVeto, UnderTheArcMembraneHoldsFlipsToTheStrainOfTheArcs) {
+  // A 3 x 2 cm sheet of 5 mm cells rolled isometrically onto a cylinder of radius 3 cm about
+  // material y. Its chords across the axis are shorter than their material length (a 5 mm edge
+  // by (k l)^2 / 24 = 1.2e-3), so every face it has, and any a flip makes, is compressed beyond
+  // the tolerance of 2e-4 on chords; measured along the surface as the arc membrane measures it,
+  // the flip's faces are unstrained and it is allowed. Squeezed by a further 0.5% along the
+  // surface, the arcs are compressed too and it is refused again.
+  rm::LatticeOptions o;
+  o.width = 0.03;
+  o.height = 0.02;
+  o.edge_length = 5e-3;
+  o.angle = 0;
+  rm::SheetMesh mesh = rm::make_rotated_lattice(o);
+  const double R = 0.03;
+  const auto rolled = [&](double squeeze) {
+    const Eigen::MatrixX2d X = mesh.material_coords();
+    Eigen::MatrixX3d x(X.rows(), 3);
+    for (int v = 0; v < X.rows(); ++v) {
+      const double a = (1 - squeeze) * X(v, 0) / R;
+      x.row(v) << R * std::sin(a), X(v, 1), R * (1 - std::cos(a));
+    }
+    return x;
+  };
+  rm::RemeshState state;
+  state.positions = rolled(0);
+  state.velocities = Eigen::MatrixX3d::Zero(mesh.num_vertices(), 3);
+  Material arc;
+  arc.membrane_model = MembraneModel::arc;
+  const MembraneEnergy membrane(mesh, arc);
+  const auto flat = [](const Eigen::MatrixX3d& x) {
+    return Eigen::VectorXd(Eigen::Map<const Eigen::VectorXd>(Eigen::MatrixXd(x.transpose()).data(), x.size()));
+  };
+  RemeshVetoParams p;
+  p.self_gap = 0;
+  // The interior diagonal nearest the sheet's middle (its faces' curvature fits are exact).
+  rm::MeshEditor editor(mesh, state);
+  const Eigen::MatrixX2d X = mesh.material_coords();
+  OpenMesh::EdgeHandle middle;
+  double best = INFINITY;
+  for (auto e : editor.mesh().edges()) {
+    if (editor.mesh().is_boundary(e)) continue;
+    const auto h = editor.mesh().halfedge_handle(e, 0);
+    const int a = editor.mesh().from_vertex_handle(h).idx(), b = editor.mesh().to_vertex_handle(h).idx();
+    const Eigen::RowVector2d d = X.row(b) - X.row(a), m = 0.5 * (X.row(a) + X.row(b));
+    if (std::abs(d.x()) < 1e-9 || std::abs(d.y()) < 1e-9) continue;  // a side, not a diagonal
+    const double to_middle = (m - Eigen::RowVector2d(0.015, 0.01)).norm();
+    if (to_middle < best) best = to_middle, middle = e;
+  }
+  ASSERT_TRUE(middle.is_valid());
+  const rm::EditProposal flip = editor.propose_flip(middle);
+  RemeshVeto chords({}, mesh, state.positions, p);
+  EXPECT_EQ(chords(flip), "compression");
+  RemeshVeto arcs({}, mesh, state.positions, p);
+  arcs.set_vertex_curvatures(membrane.vertex_curvatures(flat(state.positions)));
+  EXPECT_EQ(arcs(flip), "");
+  // Squeezed: the same flip, its corners 0.5% closer along the surface.
+  rm::RemeshState squeezed = state;
+  squeezed.positions = rolled(0.005);
+  rm::MeshEditor squeezed_editor(mesh, squeezed);
+  const rm::EditProposal squeezed_flip = squeezed_editor.propose_flip(middle);
+  RemeshVeto squeezed_arcs({}, mesh, squeezed.positions, p);
+  squeezed_arcs.set_vertex_curvatures(membrane.vertex_curvatures(flat(squeezed.positions)));
+  EXPECT_EQ(squeezed_arcs(squeezed_flip), "compression");
+}
+
 TEST(RemeshVeto, RefusesASplitWhoseVertexSinksIntoTheBarrier) {
   FlatSquare sq;
   rm::SheetMesh& mesh = sq.mesh;
