@@ -31,9 +31,7 @@ bool segment_crosses_triangle(const Eigen::Vector3d& p, const Eigen::Vector3d& q
   return w >= 0 && w <= 1;
 }
 
-/// Principal stretches (smallest, largest) of the triangle with world corners x and material
-/// corners X [-].
-/// Right Cauchy-Green tensor of a triangle (rows = corners; world x, material X).
+/// Right Cauchy-Green tensor of the triangle with world corners x and material corners X (rows).
 Eigen::Matrix2d cauchy_green(const Eigen::Matrix3d& x, const Eigen::Matrix<double, 3, 2>& X) {
   Eigen::Matrix2d Dm;
   Dm.col(0) = (X.row(1) - X.row(0)).transpose();
@@ -45,6 +43,7 @@ Eigen::Matrix2d cauchy_green(const Eigen::Matrix3d& x, const Eigen::Matrix<doubl
   return F.transpose() * F;
 }
 
+/// Principal stretches (smallest, largest) of a right Cauchy-Green tensor [-].
 Eigen::Vector2d principal_stretches(const Eigen::Matrix2d& C) {
   return Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(C).eigenvalues().cwiseMax(0.0).cwiseSqrt();
 }
