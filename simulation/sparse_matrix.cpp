@@ -3,6 +3,7 @@
 #include <cassert>
 
 #include <algorithm>
+#include <atomic>
 #include <cstdint>
 #include <string>
 
@@ -14,6 +15,7 @@ namespace {
 constexpr std::uint16_t DIAGONAL = 0x111;  // bits 0, 4, 8: entries (0, 0), (1, 1), (2, 2)
 constexpr std::uint16_t WHOLE = 0x1FF;
 constexpr unsigned ALL_COMPONENTS = 7;
+std::atomic<std::uint64_t> g_layouts{0};  // layouts made so far (BlockSymmetricMatrix::layout)
 }  // namespace
 
 SparsityBuilder::SparsityBuilder(int num_blocks, int first_auxiliary) : m_neighbours(num_blocks) {
@@ -70,7 +72,7 @@ BlockPattern SparsityBuilder::finish() {
 }
 
 BlockSymmetricMatrix::BlockSymmetricMatrix(const BlockPattern& pattern)
-    : m_neighbours(pattern.neighbours) {
+    : m_neighbours(pattern.neighbours), m_layout(++g_layouts) {
   const int n = static_cast<int>(m_neighbours.size());
   m_col_start.assign(3 * n + 1, 0);
   for (int j = 0; j < n; ++j) {
@@ -149,6 +151,35 @@ void BlockSymmetricMatrix::add_block(int vi, int vj, int a, int b, const double*
 void BlockSymmetricMatrix::add_element(const int* vertices, int n, const double* hessian) {
   for (int a = 0; a < n; ++a)
     for (int b = 0; b < n; ++b) add_block(vertices[a], vertices[b], a, b, hessian, 3 * n);
+}
+
+void BlockSymmetricMatrix::find_slots(const int* vertices, int n, std::vector<int>& slots) const {
+  for (int b = 0; b < n; ++b)
+    for (int a = 0; a < n; ++a)
+      if (vertices[a] < vertices[b] || a == b) slots.push_back(3 * block_offset(vertices[a], vertices[b]));
+}
+
+void BlockSymmetricMatrix::add_element(const int* vertices, int n, const int* slots, const double* hessian) {
+  // add_element(vertices, n, hessian) with add_block's searches read from `slots`: the same
+  // additions in the same order.
+  const int ld = 3 * n;
+  for (int b = 0; b < n; ++b) {
+    const int vj = vertices[b];
+    double* col[3];
+    for (int q = 0; q < 3; ++q) col[q] = &m_values[m_col_start[3 * vj + q]];
+    for (int a = 0; a < n; ++a) {
+      const int vi = vertices[a];
+      if (vi < vj) {
+        const int pos = *slots++;
+        for (int q = 0; q < 3; ++q)
+          for (int p = 0; p < 3; ++p) col[q][pos + p] += hessian[(3 * b + q) * ld + 3 * a + p];
+      } else if (a == b) {
+        const int pos = *slots++;
+        for (int q = 0; q < 3; ++q)
+          for (int p = 0; p <= q; ++p) col[q][pos + p] += hessian[(3 * b + q) * ld + 3 * a + p];
+      }
+    }
+  }
 }
 
 void BlockSymmetricMatrix::add_column(int column, const int* blocks, int n, const double* values) {

@@ -67,6 +67,15 @@ class BlockSymmetricMatrix {
   }
   /// Same for a dynamically sized element (n vertices, column-major 3n x 3n data).
   void add_element(const int* vertices, int n, const double* hessian);
+  /// Same, with the blocks' places found beforehand by find_slots on this layout: the same sums
+  /// without searching the pattern (ElementSlots keeps them for a term's elements).
+  void add_element(const int* vertices, int n, const int* slots, const double* hessian);
+  /// Appends to `slots` the place of each block add_element adds for these vertices, (a, b) with
+  /// vertices[a] < vertices[b] or a == b, b outer and a inner.
+  void find_slots(const int* vertices, int n, std::vector<int>& slots) const;
+  /// Which layout this is (where each coupled block is stored): a copy keeps it, a matrix built
+  /// from a pattern gets a new one, so slots found on a matrix hold on any with its layout.
+  std::uint64_t layout() const { return m_layout; }
   /// Adds values[3 k + p] to entry (3 blocks[k] + p, column) for k < n: part of one column, for
   /// an element whose other columns are zero there (every blocks[k] <= column / 3, so the
   /// entries are in the stored upper triangle).
@@ -107,6 +116,31 @@ class BlockSymmetricMatrix {
   std::vector<int> m_structure_start, m_structure_rows, m_structure_at;
   std::vector<char> m_in_structure;
   std::vector<int> m_outside;
+  std::uint64_t m_layout = 0;  // 0: no blocks (default-constructed)
+};
+
+/// One energy term's elements' places in a matrix (BlockSymmetricMatrix::find_slots), found
+/// again whenever the term meets a matrix of another layout. The term's elements must not change
+/// while it lives (a new mesh builds new terms).
+class ElementSlots {
+ public:
+  /// Whether the slots must be found again for `matrix`: then reset(matrix) and add() every
+  /// element in the order slots(e) will ask for them.
+  bool stale(const BlockSymmetricMatrix& matrix) const { return matrix.layout() != m_layout; }
+  void reset(const BlockSymmetricMatrix& matrix) {
+    m_layout = matrix.layout();
+    m_slots.clear();
+    m_start.assign(1, 0);
+  }
+  void add(const BlockSymmetricMatrix& matrix, const int* vertices, int n) {
+    matrix.find_slots(vertices, n, m_slots);
+    m_start.push_back(static_cast<int>(m_slots.size()));
+  }
+  const int* slots(int element) const { return m_slots.data() + m_start[element]; }
+
+ private:
+  std::uint64_t m_layout = ~std::uint64_t{0};  // none: a matrix of any layout, 0 too, is new to it
+  std::vector<int> m_slots, m_start;
 };
 
 }  // namespace papersim::simulation

@@ -116,7 +116,12 @@ void FitBendingEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd
   const auto& grads = hd.gradients;
   const auto& hesses = hd.hessians;
   Eigen::MatrixXd H, JM;
-  for (const Face& face : m_faces) {
+  if (hessian && m_slots.stale(*hessian)) {
+    m_slots.reset(*hessian);
+    for (const Face& face : m_faces) m_slots.add(*hessian, face.vertices.data(), static_cast<int>(face.vertices.size()));
+  }
+  for (std::size_t fi = 0; fi < m_faces.size(); ++fi) {
+    const Face& face = m_faces[fi];
     const int ns = static_cast<int>(face.hinges.size());
     Eigen::VectorXd t(ns);
     for (int i = 0; i < ns; ++i) t[i] = theta[face.hinges[i]];
@@ -153,7 +158,7 @@ void FitBendingEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd
                 c[i] * hesses[face.hinges[i]].block<3, 3>(3 * q, 3 * r);
     }
     if (m_hessian_kind == BendingHessian::projected) H = project_psd(H);
-    hessian->add_element(face.vertices.data(), nv, H.data());
+    hessian->add_element(face.vertices.data(), nv, m_slots.slots(static_cast<int>(fi)), H.data());
   }
 }
 

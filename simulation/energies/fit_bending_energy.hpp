@@ -67,6 +67,7 @@ class FitBendingEnergy : public BendingEnergy {
   double face_energy(const Face& face, const Eigen::VectorXd& theta) const;
 
   std::vector<Face> m_faces;
+  mutable ElementSlots m_slots;  // the faces' places in the Hessian
 };
 
 }  // namespace papersim::simulation

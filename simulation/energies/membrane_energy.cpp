@@ -350,9 +350,12 @@ double MembraneEnergy::arc_element(int f, const Eigen::VectorXd& x, const Eigen:
   s.g.head<9>() += t.area * Jc.transpose() * B.grad;
   if (!hessian) return value;
   // H = M^T D M with D = diag(A d2W/dc'2, the arcs' geometric terms through each K_e:
-  // A dW/d delta_e d2 delta_e / dK_e2, projected when projecting), one triangle computed and
-  // mirrored. Projected, D is PSD (St. Venant-Kirchhoff's d2W/dc'2 is): with D = L L^T block by
-  // block, H = (L^T M)^T (L^T M), a rank update.
+  // A dW/d delta_e d2 delta_e / dK_e2, projected when projecting). Projected, D is PSD (St.
+  // Venant-Kirchhoff's d2W/dc'2 is): with D = L L^T block by block, H = (L^T M)^T (L^T M).
+  // D is block diagonal, so D M (or L^T M) is four 3 x n products; H's lower 3 x 3 blocks are
+  // products of 12 x 3 column blocks, then mirrored. Fixed sizes the compiler unrolls: Eigen's
+  // general kernels spent their time packing these small operands (docs/performance.md, "The
+  // arc membrane's assembly").
   const Vec3 beta = a.G.transpose() * W.grad;
   s.D.setZero();
   if (m_project) {
@@ -362,17 +365,31 @@ double MembraneEnergy::arc_element(int f, const Eigen::VectorXd& x, const Eigen:
       s.D.block<3, 3>(3 + 3 * j, 3 + 3 * j) =
           es.eigenvectors() * es.eigenvalues().cwiseMax(0.0).cwiseSqrt().asDiagonal();
     }
-    s.DM.noalias() = s.D.transpose() * s.M;
-    s.H.setZero(n, n);
-    s.H.selfadjointView<Eigen::Lower>().rankUpdate(s.DM.transpose());
   } else {
     s.D.topLeftCorner<3, 3>() = t.area * W.hess;
     for (int j = 0; j < 3; ++j) s.D.block<3, 3>(3 + 3 * j, 3 + 3 * j) = t.area * beta[j] * d[j].hessian;
-    s.DM.noalias() = s.D * s.M;
-    s.H.resize(n, n);
-    s.H.triangularView<Eigen::Lower>() = s.M.transpose() * s.DM;
   }
-  s.H.triangularView<Eigen::StrictlyUpper>() = s.H.transpose();
+  s.DM.resize(12, n);
+  for (int j = 0; j < 4; ++j) {
+    const Eigen::Matrix3d Dj = m_project ? Eigen::Matrix3d(s.D.block<3, 3>(3 * j, 3 * j).transpose())
+                                         : Eigen::Matrix3d(s.D.block<3, 3>(3 * j, 3 * j));
+    s.DM.middleRows<3>(3 * j).noalias() = Dj.lazyProduct(s.M.middleRows<3>(3 * j));
+  }
+  // Projected: H = (L^T M)^T (L^T M); exact: H = M^T (D M). Lower blocks, then mirrored.
+  const double* left = m_project ? s.DM.data() : s.M.data();
+  s.H.resize(n, n);
+  for (int b = 0; b < n / 3; ++b) {
+    const Eigen::Map<const Eigen::Matrix<double, 12, 3>> right(s.DM.data() + 36 * b);
+    for (int q = b; q < n / 3; ++q)
+      s.H.block<3, 3>(3 * q, 3 * b).noalias() =
+          Eigen::Map<const Eigen::Matrix<double, 12, 3>>(left + 36 * q).transpose().lazyProduct(right);
+  }
+  for (int b = 0; b < n / 3; ++b) {  // the upper triangle from the lower, block by block
+    for (int q = b + 1; q < n / 3; ++q) s.H.block<3, 3>(3 * b, 3 * q) = s.H.block<3, 3>(3 * q, 3 * b).transpose();
+    s.H(3 * b, 3 * b + 1) = s.H(3 * b + 1, 3 * b);
+    s.H(3 * b, 3 * b + 2) = s.H(3 * b + 2, 3 * b);
+    s.H(3 * b + 1, 3 * b + 2) = s.H(3 * b + 2, 3 * b + 1);
+  }
   // The limits' Hessian and the chords' geometric term (dW/dC' + dB/dC as a tensor), on the
   // corners.
   Eigen::Matrix<double, 9, 9> Hc = t.area * Jc.transpose() * B.hess * Jc;
@@ -444,6 +461,10 @@ void MembraneEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd& 
     const HingeDerivatives hd = hinge_derivatives(m_hinges, x, exact);
     const Eigen::Matrix3Xd K = face_curvatures(hd.theta);
     ArcWork work;
+    if (hessian && m_slots.stale(*hessian)) {
+      m_slots.reset(*hessian);
+      for (const Arc& a : m_arcs) m_slots.add(*hessian, a.vertices.data(), static_cast<int>(a.vertices.size()));
+    }
     for (int f = 0; f < static_cast<int>(m_tris.size()); ++f) {
       const Arc& a = m_arcs[f];
       if (!std::isfinite(arc_element(f, x, K, &hd.gradients, exact ? &hd.hessians : nullptr, &work,
@@ -451,7 +472,8 @@ void MembraneEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd& 
         throw NumericError("membrane: derivatives requested past the strain limit");
       for (size_t i = 0; i < a.vertices.size(); ++i)
         gradient.segment<3>(3 * a.vertices[i]) += work.g.segment<3>(3 * i);
-      if (hessian) hessian->add_element(a.vertices.data(), static_cast<int>(a.vertices.size()), work.H.data());
+      if (hessian)
+        hessian->add_element(a.vertices.data(), static_cast<int>(a.vertices.size()), m_slots.slots(f), work.H.data());
     }
     return;
   }

@@ -129,10 +129,10 @@ class MembraneEnergy : public EnergyTerm {
   };
   /// An arc element's derivatives and the work matrices behind them, reused from face to face.
   struct ArcWork {
-    Eigen::MatrixXd M;                           // 12 x n: dC'/dx, then dK_e/dx of edges 0-2
+    Eigen::Matrix<double, 12, Eigen::Dynamic> M;  // 12 x n: dC'/dx, then dK_e/dx of edges 0-2
     Eigen::Matrix<double, 3, Eigen::Dynamic> Dd;  // 3 x n: d delta_e / dx
     Eigen::Matrix<double, 12, 12> D;             // the second derivatives M is contracted with
-    Eigen::MatrixXd DM;                          // D M (or L^T M, D = L L^T)
+    Eigen::Matrix<double, 12, Eigen::Dynamic> DM;  // D M (or L^T M, D = L L^T)
     Eigen::VectorXd g;                           // gradient over the local vertices
     Eigen::VectorXd coefficient;                 // per hinge of the element: its Hessian's weight
     Eigen::MatrixXd H;                           // Hessian over the local vertices
@@ -161,6 +161,7 @@ class MembraneEnergy : public EnergyTerm {
   double m_dhat_low = 0;   // its activation distance in lambda
   double m_kappa;          // barrier stiffness [J/m^2]
   bool m_project = true;   // element Hessians projected to PSD under compression
+  mutable ElementSlots m_slots;  // the arc elements' places in the Hessian
 };
 
 }  // namespace papersim::simulation

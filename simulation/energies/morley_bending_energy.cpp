@@ -388,7 +388,12 @@ void MorleyBendingEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::Vecto
     h_size = std::max(h_size, rows * rows);
   }
   std::vector<double> gm_buffer(gm_size), h_buffer(h_size);
-  for (const Element& e : m_elements) {
+  if (m_slots.stale(*hessian)) {
+    m_slots.reset(*hessian);
+    for (const Element& e : m_elements) m_slots.add(*hessian, e.vertices.data(), static_cast<int>(e.vertices.size()));
+  }
+  for (std::size_t ei = 0; ei < m_elements.size(); ++ei) {
+    const Element& e = m_elements[ei];
     const int nt = static_cast<int>(e.theta.size()), np = static_cast<int>(e.psi.size());
     const int nv = static_cast<int>(e.vertices.size());
     const int n = nt + np;
@@ -418,7 +423,7 @@ void MorleyBendingEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::Vecto
           for (int row = 0; row < rows; ++row) out[row] += gm[row] * gc;
         }
     }
-    hessian->add_element(e.vertices.data(), nv, H);
+    hessian->add_element(e.vertices.data(), nv, m_slots.slots(static_cast<int>(ei)), H);
     for (int j = 0; j < np; ++j) {
       const int col = 3 * (m_first_block + e.blocks[e.psi_at[j].first]) + e.psi_at[j].second;
       hessian->add_column(col, e.vertices.data(), nv, GM + (nt + j) * rows);

@@ -143,6 +143,7 @@ class MorleyBendingEnergy : public BendingEnergy {
   int m_num_psi = 0;
   int m_first_block = -1;
   long m_factorizations = 0;
+  mutable ElementSlots m_slots;  // the elements' places in the Hessian
 };
 
 }  // namespace papersim::simulation

@@ -1,0 +1,99 @@
+// Assembly into the block matrix: an element's blocks added at places found once (ElementSlots)
+// are the sums the searching add_element makes, and a matrix of another layout is told apart.
+#include "simulation/sparse_matrix.hpp"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <random>
+#include <vector>
+
+using namespace papersim::simulation;
+
+namespace {
+
+/// Elements of 1-12 distinct vertices out of 40, in random order.
+std::vector<std::vector<int>> random_elements(int count, std::mt19937& rng) {
+  std::vector<std::vector<int>> elements;
+  std::vector<int> all(40);
+  for (int i = 0; i < 40; ++i) all[i] = i;
+  for (int e = 0; e < count; ++e) {
+    std::shuffle(all.begin(), all.end(), rng);
+    const int n = 1 + static_cast<int>(rng() % 12);
+    elements.emplace_back(all.begin(), all.begin() + n);
+  }
+  return elements;
+}
+
+Eigen::MatrixXd random_symmetric(int size, std::mt19937& rng) {
+  std::uniform_real_distribution<double> u(-1, 1);
+  Eigen::MatrixXd A(size, size);
+  for (int j = 0; j < size; ++j)
+    for (int i = 0; i < size; ++i) A(i, j) = u(rng);
+  return A + A.transpose();
+}
+
+/// Adds every element's Hessian to `m`: with slots found for m's layout, or by searching.
+void assemble(BlockSymmetricMatrix& m, const std::vector<std::vector<int>>& elements,
+              const std::vector<Eigen::MatrixXd>& hessians, ElementSlots* slots) {
+  m.set_zero();
+  if (slots && slots->stale(m)) {
+    slots->reset(m);
+    for (const auto& e : elements) slots->add(m, e.data(), static_cast<int>(e.size()));
+  }
+  for (std::size_t k = 0; k < elements.size(); ++k) {
+    const int n = static_cast<int>(elements[k].size());
+    if (slots)
+      m.add_element(elements[k].data(), n, slots->slots(static_cast<int>(k)), hessians[k].data());
+    else
+      m.add_element(elements[k].data(), n, hessians[k].data());
+  }
+}
+
+}  // namespace
+
+TEST(ElementSlots, AddWhatTheSearchAddsAndAreFoundAgainForANewLayout) {
+  std::mt19937 rng(7);
+  const auto elements = random_elements(60, rng);
+  std::vector<Eigen::MatrixXd> hessians;
+  for (const auto& e : elements) hessians.push_back(random_symmetric(3 * static_cast<int>(e.size()), rng));
+  SparsityBuilder builder(40);
+  for (const auto& e : elements) builder.add_clique(e.data(), static_cast<int>(e.size()));
+  const BlockPattern pattern = builder.finish();
+
+  BlockSymmetricMatrix searched(pattern), slotted(pattern);
+  EXPECT_NE(searched.layout(), slotted.layout());  // each construction is a layout of its own
+  ElementSlots slots;
+  assemble(searched, elements, hessians, nullptr);
+  assemble(slotted, elements, hessians, &slots);
+  ASSERT_EQ(searched.values().size(), slotted.values().size());
+  for (std::size_t k = 0; k < searched.values().size(); ++k)
+    ASSERT_EQ(searched.values()[k], slotted.values()[k]) << "entry " << k;  // the same sums, bit for bit
+
+  // A copy has the layout: the slots hold on it.
+  BlockSymmetricMatrix copy = slotted;
+  EXPECT_FALSE(slots.stale(copy));
+  // Contact couples two vertices the elements did not: blocks move, so the old places are wrong
+  // and the slots are found again.
+  SparsityBuilder more(pattern);
+  int pair[2] = {-1, -1};
+  for (int i = 0; i < 40 && pair[0] < 0; ++i)
+    for (int j = i + 1; j < 40; ++j)
+      if (!std::binary_search(pattern.neighbours[j].begin(), pattern.neighbours[j].end(), i)) {
+        pair[0] = i, pair[1] = j;
+        break;
+      }
+  ASSERT_GE(pair[0], 0) << "the random elements couple every pair";
+  more.add_clique(pair, 2);
+  BlockSymmetricMatrix wider(more.finish()), wider_searched(wider);
+  EXPECT_TRUE(slots.stale(wider));
+  const std::vector<int> before(slots.slots(0), slots.slots(static_cast<int>(elements.size()) - 1));
+  assemble(wider, elements, hessians, &slots);
+  assemble(wider_searched, elements, hessians, nullptr);
+  for (std::size_t k = 0; k < wider.values().size(); ++k) ASSERT_EQ(wider.values()[k], wider_searched.values()[k]);
+  const std::vector<int> after(slots.slots(0), slots.slots(static_cast<int>(elements.size()) - 1));
+  EXPECT_NE(before, after) << "the new coupling moves some block of column " << pair[1];
+  // Both layouts' matrices hold the same element sums (the new coupling's block stays zero).
+  const Eigen::VectorXd x = Eigen::VectorXd::LinSpaced(120, -1, 1);
+  EXPECT_LT((wider.multiply(x) - searched.multiply(x)).norm(), 1e-12 * searched.multiply(x).norm());
+}
