@@ -149,8 +149,9 @@ void BlockSymmetricMatrix::add_block(int vi, int vj, int a, int b, const double*
 }
 
 void BlockSymmetricMatrix::add_element(const int* vertices, int n, const double* hessian) {
-  for (int a = 0; a < n; ++a)
-    for (int b = 0; b < n; ++b) add_block(vertices[a], vertices[b], a, b, hessian, 3 * n);
+  std::vector<int> slots;
+  find_slots(vertices, n, slots);
+  add_element(vertices, n, slots.data(), hessian);
 }
 
 void BlockSymmetricMatrix::find_slots(const int* vertices, int n, std::vector<int>& slots) const {
@@ -160,8 +161,7 @@ void BlockSymmetricMatrix::find_slots(const int* vertices, int n, std::vector<in
 }
 
 void BlockSymmetricMatrix::add_element(const int* vertices, int n, const int* slots, const double* hessian) {
-  // add_element(vertices, n, hessian) with add_block's searches read from `slots`: the same
-  // additions in the same order.
+  // As add_block, block by block, with the places from `slots` (find_slots's order).
   const int ld = 3 * n;
   for (int b = 0; b < n; ++b) {
     const int vj = vertices[b];

@@ -1,5 +1,6 @@
 // Assembly into the block matrix: an element's blocks added at places found once (ElementSlots)
-// are the sums the searching add_element makes, and a matrix of another layout is told apart.
+// are the sums the searching add_element makes and the dense sum of the elements, and a matrix of
+// another layout is told apart.
 #include "simulation/sparse_matrix.hpp"
 
 #include <gtest/gtest.h>
@@ -69,6 +70,17 @@ TEST(ElementSlots, AddWhatTheSearchAddsAndAreFoundAgainForANewLayout) {
   ASSERT_EQ(searched.values().size(), slotted.values().size());
   for (std::size_t k = 0; k < searched.values().size(); ++k)
     ASSERT_EQ(searched.values()[k], slotted.values()[k]) << "entry " << k;  // the same sums, bit for bit
+  // And they are the elements' sum: against the dense matrix, column by column.
+  Eigen::MatrixXd dense = Eigen::MatrixXd::Zero(120, 120);
+  for (std::size_t k = 0; k < elements.size(); ++k)
+    for (std::size_t a = 0; a < elements[k].size(); ++a)
+      for (std::size_t b = 0; b < elements[k].size(); ++b)
+        dense.block<3, 3>(3 * elements[k][a], 3 * elements[k][b]) +=
+            hessians[k].block<3, 3>(3 * static_cast<int>(a), 3 * static_cast<int>(b));
+  for (int c = 0; c < 120; ++c) {
+    const Eigen::VectorXd e = Eigen::VectorXd::Unit(120, c);
+    ASSERT_LT((slotted.multiply(e) - dense.col(c)).norm(), 1e-12 * (1 + dense.col(c).norm())) << "column " << c;
+  }
 
   // A copy has the layout: the slots hold on it.
   BlockSymmetricMatrix copy = slotted;
