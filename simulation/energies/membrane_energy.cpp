@@ -24,6 +24,7 @@ struct CFunction {
   double value = 0;
   Vec3 grad = Vec3::Zero();
   Mat3 hess = Mat3::Zero();
+  bool active = false;  // limit_barrier: a limit is near (else all zero)
 };
 
 /// St. Venant-Kirchhoff in plane stress: W = lambda/2 tr(E)^2 + mu tr(E^2), E = (C - I)/2.
@@ -46,12 +47,18 @@ CFunction stvk(const Vec3& c, double lambda, double mu) {
 /// the Daleckii-Krein formula for spectral functions.
 CFunction limit_barrier(const Vec3& c, double L, double dhat, double Lc, double dhat_c, double kappa) {
   CFunction r;
+  // Most faces are far from both limits: decide that from the eigenvalues in closed form,
+  // mean -+ radius, before any eigenvector is computed.
+  const double mean = 0.5 * (c[0] + c[1]), half = 0.5 * (c[0] - c[1]);
+  const double radius = std::sqrt(half * half + c[2] * c[2]);
+  if (!(L > 0 && mean + radius >= L - dhat) && !(Lc > 0 && mean - radius <= Lc + dhat_c)) return r;
   Eigen::Matrix2d C;
   C << c[0], c[2], c[2], c[1];
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> es(C);
   const Eigen::Vector2d lam = es.eigenvalues();
   const bool upper = L > 0 && lam[1] >= L - dhat, lower = Lc > 0 && lam[0] <= Lc + dhat_c;
   if (!upper && !lower) return r;  // inactive: both eigenvalues far from the limits
+  r.active = true;
   if ((L > 0 && lam[1] >= L) || (Lc > 0 && lam[0] <= Lc)) {
     r.value = INF;
     return r;
@@ -390,18 +397,20 @@ double MembraneEnergy::arc_element(int f, const Eigen::VectorXd& x, const Eigen:
     s.H(3 * b, 3 * b + 2) = s.H(3 * b + 2, 3 * b);
     s.H(3 * b + 1, 3 * b + 2) = s.H(3 * b + 2, 3 * b + 1);
   }
-  // The limits' Hessian and the chords' geometric term (dW/dC' + dB/dC as a tensor), on the
+  // The limits' Hessian (where a limit is near) and the chords' geometric term (dW/dC' + dB/dC as a tensor), on the
   // corners.
-  Eigen::Matrix<double, 9, 9> Hc = t.area * Jc.transpose() * B.hess * Jc;
+  if (B.active) s.H.topLeftCorner<9, 9>().noalias() += t.area * Jc.transpose() * B.hess * Jc;
   const Vec3 sc = W.grad + B.grad;
   Eigen::Matrix2d S;
   S << sc[0], 0.5 * sc[2], 0.5 * sc[2], sc[1];
-  Eigen::Matrix<double, 9, 9> Hg = Eigen::Matrix<double, 9, 9>::Zero();
+  // The geometric term is Sg (x) I3 with Sg_ij = 2 A w_i^T S w_j, so its projection is that of
+  // the 3 x 3 Sg, (x) I3.
+  Eigen::Matrix3d Sg;
   for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j)
-      Hg.block<3, 3>(3 * i, 3 * j).diagonal().array() += 2 * t.area * t.w.row(i).dot(S * t.w.row(j).transpose());
-  if (m_project && (S.determinant() < 0 || S.trace() < 0)) Hg = project_psd(Hg);
-  s.H.topLeftCorner<9, 9>() += Hc + Hg;
+    for (int j = 0; j < 3; ++j) Sg(i, j) = 2 * t.area * t.w.row(i).dot(S * t.w.row(j).transpose());
+  if (m_project && (S.determinant() < 0 || S.trace() < 0)) Sg = project_psd(Sg);
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) s.H.block<3, 3>(3 * i, 3 * j).diagonal().array() += Sg(i, j);
   if (!hesses) return value;
   // The exact Hessian: dW/d delta_e d delta_e / dK_e times the hinges' Hessians, each hinge's
   // coefficients summed over the edges and faces that use it, its Hessian added once.

@@ -258,10 +258,11 @@ TEST(MembraneArc, ProjectedHessianIsExactWhereNothingIsProjectedAndPsdElsewhere)
   // (5 mm cells at 30 degrees, R = 5 cm) the arcs are nearly unstretched, so dW/dC' is small:
   // the terms that projecting changes or drops (the geometric ones, proportional to it) nearly
   // vanish, and the two agree to the order of the residual strain, about 1e-6 (measured 8.5e-7
-  // of the Hessian's norm; bound 1e-5; a wrong factor is off by order one). Stretched by a further 0.3%
-  // along the axis, the geometric terms are in play: the projected Hessian must be PSD, and a
-  // rigid translation must stay in its null space (the chords and the curvatures do not see
-  // it).
+  // of the Hessian's norm; bound 1e-5; a wrong factor is off by order one). Stretched or
+  // compressed by a further 0.3% along the axis, the geometric terms are in play (compressed,
+  // the chords' and the arcs' are indefinite and projected): the projected Hessian must be PSD,
+  // and a rigid translation must stay in its null space (the chords and the curvatures do not
+  // see it).
   const RolledSheet s = rolled_sheet(0.03, 0.02, M_PI / 6, 0.05);
   const int nv = s.mesh.num_vertices();
   const Eigen::VectorXd& rolled = s.rolled;
@@ -274,17 +275,19 @@ TEST(MembraneArc, ProjectedHessianIsExactWhereNothingIsProjectedAndPsdElsewhere)
   const Eigen::MatrixXd exact = dense_hessian(e, nv, rolled);
   EXPECT_LT((projected - exact).norm(), 1e-5 * exact.norm());
 
-  Eigen::VectorXd stretched = rolled;
-  for (int v = 0; v < nv; ++v) stretched[3 * v + 1] *= 1.003;
   e.set_hessian_projection(true);
-  const Eigen::MatrixXd H = dense_hessian(e, nv, stretched);
-  EXPECT_LT((H - H.transpose()).norm(), 1e-12 * H.norm());
-  const Eigen::VectorXd eigenvalues = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(H).eigenvalues();
-  EXPECT_GT(eigenvalues.minCoeff(), -1e-10 * eigenvalues.maxCoeff());
-  for (int axis = 0; axis < 3; ++axis) {
-    Eigen::VectorXd t = Eigen::VectorXd::Zero(3 * nv);
-    for (int v = 0; v < nv; ++v) t[3 * v + axis] = 1;
-    EXPECT_LT((H * t).norm(), 1e-9 * H.norm() * t.norm()) << "axis " << axis;
+  for (const double scale : {1.003, 0.997}) {
+    Eigen::VectorXd strained = rolled;
+    for (int v = 0; v < nv; ++v) strained[3 * v + 1] *= scale;
+    const Eigen::MatrixXd H = dense_hessian(e, nv, strained);
+    EXPECT_LT((H - H.transpose()).norm(), 1e-12 * H.norm()) << "scale " << scale;
+    const Eigen::VectorXd eigenvalues = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(H).eigenvalues();
+    EXPECT_GT(eigenvalues.minCoeff(), -1e-10 * eigenvalues.maxCoeff()) << "scale " << scale;
+    for (int axis = 0; axis < 3; ++axis) {
+      Eigen::VectorXd t = Eigen::VectorXd::Zero(3 * nv);
+      for (int v = 0; v < nv; ++v) t[3 * v + axis] = 1;
+      EXPECT_LT((H * t).norm(), 1e-9 * H.norm() * t.norm()) << "scale " << scale << ", axis " << axis;
+    }
   }
 }
 
