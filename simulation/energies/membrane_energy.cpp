@@ -397,8 +397,8 @@ double MembraneEnergy::arc_element(int f, const Eigen::VectorXd& x, const Eigen:
     s.H(3 * b, 3 * b + 2) = s.H(3 * b + 2, 3 * b);
     s.H(3 * b + 1, 3 * b + 2) = s.H(3 * b + 2, 3 * b + 1);
   }
-  // The limits' Hessian (where a limit is near) and the chords' geometric term (dW/dC' + dB/dC as a tensor), on the
-  // corners.
+  // The limits' Hessian (where a limit is near) and the chords' geometric term (dW/dC' + dB/dC
+  // as a tensor), on the corners.
   if (B.active) s.H.topLeftCorner<9, 9>().noalias() += t.area * Jc.transpose() * B.hess * Jc;
   const Vec3 sc = W.grad + B.grad;
   Eigen::Matrix2d S;
