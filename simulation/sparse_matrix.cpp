@@ -183,19 +183,28 @@ void BlockSymmetricMatrix::add_element(const int* vertices, int n, const int* sl
 }
 
 void BlockSymmetricMatrix::add_column(int column, const int* blocks, int n, const double* values) {
-  const int j = column / 3;
-  double* col = &m_values[m_col_start[column]];
   for (int k = 0; k < n; ++k) {
-    assert(blocks[k] <= j);
-    double* entry = col + 3 * block_offset(blocks[k], j);
+    assert(blocks[k] <= column / 3);
+    const int position = this->position(3 * blocks[k], column);
+    add_column(column, blocks + k, 1, &position, values + 3 * k);
+  }
+}
+
+void BlockSymmetricMatrix::add_column(int column, const int* blocks, int n, const int* positions,
+                                      const double* values) {
+  const int j = column / 3;
+  for (int k = 0; k < n; ++k) {
+    double* entry = &m_values[positions[k]];
     const int rows = blocks[k] == j ? column % 3 + 1 : 3;  // the upper triangle of a diagonal block
     for (int p = 0; p < rows; ++p) entry[p] += values[3 * k + p];
   }
 }
 
-void BlockSymmetricMatrix::add_entry(int row, int column, double v) {
+void BlockSymmetricMatrix::add_entry(int row, int column, double v) { add_at(position(row, column), v); }
+
+int BlockSymmetricMatrix::position(int row, int column) const {
   assert(row <= column);
-  m_values[m_col_start[column] + 3 * block_offset(row / 3, column / 3) + row % 3] += v;
+  return m_col_start[column] + 3 * block_offset(row / 3, column / 3) + row % 3;
 }
 
 void BlockSymmetricMatrix::add_diagonal(const Eigen::VectorXd& d) {

@@ -80,8 +80,16 @@ class BlockSymmetricMatrix {
   /// an element whose other columns are zero there (every blocks[k] <= column / 3, so the
   /// entries are in the stored upper triangle).
   void add_column(int column, const int* blocks, int n, const double* values);
+  /// Same, with positions[k] = position(3 blocks[k], column) found beforehand: the same sums
+  /// without searching the pattern.
+  void add_column(int column, const int* blocks, int n, const int* positions, const double* values);
   /// Adds v to entry (row, column), row <= column.
   void add_entry(int row, int column, double v);
+  /// Where entry (row, column), row <= column, of a coupled block is stored in values(): slots
+  /// for add_column and add_at that hold on any matrix of this layout.
+  int position(int row, int column) const;
+  /// Adds v to values()[position].
+  void add_at(int position, double v) { m_values[position] += v; }
   /// Adds d[i] to the diagonal entry of the first d.size() degrees of freedom (the vertices';
   /// auxiliary unknowns after them are left alone when d is shorter).
   void add_diagonal(const Eigen::VectorXd& d);
@@ -131,16 +139,23 @@ class ElementSlots {
     m_layout = matrix.layout();
     m_slots.clear();
     m_start.assign(1, 0);
+    m_positions.clear();
   }
-  void add(const BlockSymmetricMatrix& matrix, const int* vertices, int n) {
+  void add(const BlockSymmetricMatrix& matrix, const int* vertices, int n) { add(matrix, vertices, n, {}); }
+  /// Same, and keeps `positions` (BlockSymmetricMatrix::position) of the entries the element adds
+  /// column by column or one by one, for positions(element).
+  void add(const BlockSymmetricMatrix& matrix, const int* vertices, int n, const std::vector<int>& positions) {
     matrix.find_slots(vertices, n, m_slots);
+    m_positions.push_back(static_cast<int>(m_slots.size()));
+    m_slots.insert(m_slots.end(), positions.begin(), positions.end());
     m_start.push_back(static_cast<int>(m_slots.size()));
   }
   const int* slots(int element) const { return m_slots.data() + m_start[element]; }
+  const int* positions(int element) const { return m_slots.data() + m_positions[element]; }
 
  private:
   std::uint64_t m_layout = ~std::uint64_t{0};  // none: a matrix of any layout, 0 too, is new to it
-  std::vector<int> m_slots, m_start;
+  std::vector<int> m_slots, m_start, m_positions;
 };
 
 }  // namespace papersim::simulation

@@ -488,12 +488,16 @@ void MembraneEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd& 
   }
   Eigen::Matrix<double, 9, 1> g;
   Eigen::Matrix<double, 9, 9> H;
+  if (hessian && m_slots.stale(*hessian)) {
+    m_slots.reset(*hessian);
+    for (const auto& t : m_tris) m_slots.add(*hessian, t.v.data(), 3);
+  }
   for (int f = 0; f < static_cast<int>(m_tris.size()); ++f) {
     const auto& t = m_tris[f];
     if (!std::isfinite(element(f, gather(x, t.v), &g, hessian ? &H : nullptr)))
       throw NumericError("membrane: derivatives requested past the strain limit");
     for (int i = 0; i < 3; ++i) gradient.segment<3>(3 * t.v[i]) += g.segment<3>(3 * i);
-    if (hessian) hessian->add_element<3>(t.v, H);
+    if (hessian) hessian->add_element(t.v.data(), 3, m_slots.slots(f), H.data());
   }
 }
 

@@ -161,7 +161,7 @@ class MembraneEnergy : public EnergyTerm {
   double m_dhat_low = 0;   // its activation distance in lambda
   double m_kappa;          // barrier stiffness [J/m^2]
   bool m_project = true;   // element Hessians projected to PSD under compression
-  mutable ElementSlots m_slots;  // the arc elements' places in the Hessian
+  mutable ElementSlots m_slots;  // the elements' places in the Hessian (arcs or triangles)
 };
 
 }  // namespace papersim::simulation

@@ -388,9 +388,25 @@ void MorleyBendingEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::Vecto
     h_size = std::max(h_size, rows * rows);
   }
   std::vector<double> gm_buffer(gm_size), h_buffer(h_size);
+  // Each element's vertex blocks, then its slopes' columns (add_column) and slope-slope entries
+  // in the order the loop below adds them.
+  auto slope_column = [&](const Element& e, int j) {
+    return 3 * (m_first_block + e.blocks[e.psi_at[j].first]) + e.psi_at[j].second;
+  };
   if (m_slots.stale(*hessian)) {
     m_slots.reset(*hessian);
-    for (const Element& e : m_elements) m_slots.add(*hessian, e.vertices.data(), static_cast<int>(e.vertices.size()));
+    std::vector<int> positions;
+    for (const Element& e : m_elements) {
+      positions.clear();
+      const int np = static_cast<int>(e.psi.size());
+      for (int j = 0; j < np; ++j) {
+        const int col = slope_column(e, j);
+        for (int v : e.vertices) positions.push_back(hessian->position(3 * v, col));
+        for (int i = 0; i < np; ++i)
+          if (const int row = slope_column(e, i); row <= col) positions.push_back(hessian->position(row, col));
+      }
+      m_slots.add(*hessian, e.vertices.data(), static_cast<int>(e.vertices.size()), positions);
+    }
   }
   for (std::size_t ei = 0; ei < m_elements.size(); ++ei) {
     const Element& e = m_elements[ei];
@@ -424,13 +440,13 @@ void MorleyBendingEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::Vecto
         }
     }
     hessian->add_element(e.vertices.data(), nv, m_slots.slots(static_cast<int>(ei)), H);
+    const int* at = m_slots.positions(static_cast<int>(ei));
     for (int j = 0; j < np; ++j) {
-      const int col = 3 * (m_first_block + e.blocks[e.psi_at[j].first]) + e.psi_at[j].second;
-      hessian->add_column(col, e.vertices.data(), nv, GM + (nt + j) * rows);
-      for (int i = 0; i < np; ++i) {
-        const int row = 3 * (m_first_block + e.blocks[e.psi_at[i].first]) + e.psi_at[i].second;
-        if (row <= col) hessian->add_entry(row, col, e.M(nt + i, nt + j));
-      }
+      const int col = slope_column(e, j);
+      hessian->add_column(col, e.vertices.data(), nv, at, GM + (nt + j) * rows);
+      at += nv;
+      for (int i = 0; i < np; ++i)
+        if (slope_column(e, i) <= col) hessian->add_at(*at++, e.M(nt + i, nt + j));
     }
   }
   // The unused components of the last auxiliary block: identity (their right-hand side is 0).

@@ -109,3 +109,109 @@ TEST(ElementSlots, AddWhatTheSearchAddsAndAreFoundAgainForANewLayout) {
   const Eigen::VectorXd x = Eigen::VectorXd::LinSpaced(120, -1, 1);
   EXPECT_LT((wider.multiply(x) - searched.multiply(x)).norm(), 1e-12 * searched.multiply(x).norm());
 }
+
+TEST(ElementSlots, PositionsFoundOnceAddTheColumnsAndEntriesTheSearchAdds) {
+  // Blocks 0-29 are vertices, 30-39 hold auxiliary unknowns, one component each (as the Morley
+  // edge slopes): each element couples some vertices with some auxiliary unknowns, and adds
+  // the unknowns' columns over its vertices and their entries among themselves one by one.
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1, 1);
+  struct Element {
+    std::vector<int> vertices;
+    std::vector<int> columns;  // scalar columns of auxiliary unknowns
+  };
+  std::vector<Element> elements;
+  SparsityBuilder builder(40, 30);
+  for (int k = 0; k < 50; ++k) {
+    Element e;
+    std::vector<int> all(30);
+    for (int i = 0; i < 30; ++i) all[i] = i;
+    std::shuffle(all.begin(), all.end(), rng);
+    e.vertices.assign(all.begin(), all.begin() + 1 + static_cast<int>(rng() % 6));
+    for (int c = 0, n = 1 + static_cast<int>(rng() % 4); c < n; ++c) e.columns.push_back(90 + static_cast<int>(rng() % 30));
+    std::vector<int> blocks = e.vertices;
+    std::vector<unsigned char> components(blocks.size(), 7);
+    for (int c : e.columns) {
+      blocks.push_back(c / 3);
+      components.push_back(static_cast<unsigned char>(1u << (c % 3)));
+    }
+    builder.add_clique(blocks.data(), components.data(), static_cast<int>(blocks.size()));
+    elements.push_back(e);
+  }
+  const BlockPattern pattern = builder.finish();
+  // Values to add: per element, each column over its vertices, then each entry row <= column.
+  std::vector<std::vector<double>> column_values, entry_values;
+  for (const Element& e : elements) {
+    column_values.emplace_back(3 * e.vertices.size() * e.columns.size());
+    for (double& v : column_values.back()) v = u(rng);
+    entry_values.emplace_back(e.columns.size() * e.columns.size());
+    for (double& v : entry_values.back()) v = u(rng);
+  }
+  auto add = [&](BlockSymmetricMatrix& m, ElementSlots* slots) {
+    m.set_zero();
+    if (slots) {
+      slots->reset(m);
+      std::vector<int> positions;
+      for (const Element& e : elements) {
+        positions.clear();
+        for (int col : e.columns) {
+          for (int v : e.vertices) positions.push_back(m.position(3 * v, col));
+          for (int row : e.columns)
+            if (row <= col) positions.push_back(m.position(row, col));
+        }
+        slots->add(m, e.vertices.data(), static_cast<int>(e.vertices.size()), positions);
+      }
+    }
+    for (std::size_t k = 0; k < elements.size(); ++k) {
+      const Element& e = elements[k];
+      const int nv = static_cast<int>(e.vertices.size());
+      const int* at = slots ? slots->positions(static_cast<int>(k)) : nullptr;
+      for (std::size_t j = 0; j < e.columns.size(); ++j) {
+        const int col = e.columns[j];
+        const double* values = column_values[k].data() + 3 * nv * j;
+        if (at) {
+          m.add_column(col, e.vertices.data(), nv, at, values);
+          at += nv;
+        } else {
+          m.add_column(col, e.vertices.data(), nv, values);
+        }
+        for (std::size_t i = 0; i < e.columns.size(); ++i) {
+          if (e.columns[i] > col) continue;
+          const double v = entry_values[k][i + e.columns.size() * j];
+          if (at)
+            m.add_at(*at++, v);
+          else
+            m.add_entry(e.columns[i], col, v);
+        }
+      }
+    }
+  };
+  BlockSymmetricMatrix searched(pattern), slotted(pattern);
+  ElementSlots slots;
+  add(searched, nullptr);
+  add(slotted, &slots);
+  for (std::size_t k = 0; k < searched.values().size(); ++k)
+    ASSERT_EQ(searched.values()[k], slotted.values()[k]) << "entry " << k;  // the same sums, bit for bit
+  // And they are the sums asked for: against a dense matrix of the upper triangle.
+  Eigen::MatrixXd dense = Eigen::MatrixXd::Zero(120, 120);
+  for (std::size_t k = 0; k < elements.size(); ++k) {
+    const Element& e = elements[k];
+    const int nv = static_cast<int>(e.vertices.size());
+    for (std::size_t j = 0; j < e.columns.size(); ++j) {
+      for (int a = 0; a < nv; ++a)
+        for (int p = 0; p < 3; ++p) dense(3 * e.vertices[a] + p, e.columns[j]) += column_values[k][3 * nv * j + 3 * a + p];
+      for (std::size_t i = 0; i < e.columns.size(); ++i)
+        if (e.columns[i] <= e.columns[j]) dense(e.columns[i], e.columns[j]) += entry_values[k][i + e.columns.size() * j];
+    }
+  }
+  const auto& starts = slotted.column_starts();
+  const auto& rows = slotted.row_indices();
+  double checked = 0;
+  for (int c = 0; c < 120; ++c)
+    for (int k = starts[c]; k < starts[c + 1]; ++k) {
+      ASSERT_NEAR(slotted.values()[k], dense(rows[k], c), 1e-12) << "entry (" << rows[k] << ", " << c << ")";
+      checked += std::abs(dense(rows[k], c));
+    }
+  EXPECT_NEAR(checked, dense.cwiseAbs().sum(), 1e-9);  // no sum fell outside the stored entries
+  EXPECT_GT(checked, 0);
+}
