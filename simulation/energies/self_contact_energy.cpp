@@ -126,6 +126,22 @@ void SelfContactEnergy::find_candidates(const Eigen::VectorXd& x, const Eigen::V
   m_candidates.reserve(c.size());
   for (const auto& [v, f] : c.point_triangle) m_candidates.push_back({false, v, f});
   for (const auto& [a, b] : c.edge_edge) m_candidates.push_back({true, a, b});
+  m_base_distance.assign(m_candidates.size(), 0.0);
+}
+
+Eigen::VectorXd SelfContactEnergy::motions(const Eigen::VectorXd& x) const {
+  const Eigen::Index nv = x.size() / 3;
+  const Eigen::VectorXd d = x - m_base;
+  const Eigen::Vector3d mean = vertex_mean(d);
+  Eigen::VectorXd m(nv);
+  for (Eigen::Index v = 0; v < nv; ++v) m[v] = (d.segment<3>(3 * v) - mean).norm();
+  return m;
+}
+
+double SelfContactEnergy::pair_motion(const Pair& p, const Eigen::VectorXd& moved) const {
+  const std::array<int, 4> v = vertices(p);
+  if (p.edge_edge) return std::max(moved[v[0]], moved[v[1]]) + std::max(moved[v[2]], moved[v[3]]);
+  return moved[v[0]] + std::max({moved[v[1]], moved[v[2]], moved[v[3]]});
 }
 
 void SelfContactEnergy::build_candidates(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const {
@@ -142,15 +158,26 @@ void SelfContactEnergy::ensure_candidates(const Eigen::VectorXd& x) const {
   if (!covered(x)) find_candidates(x, nullptr);
 }
 
-double SelfContactEnergy::stencil_distance2(const Pair& p, const PairPoints& pts, DistanceStencil& s,
-                                            double reject2) const {
-  // A lower bound from bounding spheres first: most candidates are neighbours in the mesh a
-  // whole edge apart, and the closest-feature search costs several times more (measured: the
-  // stencils were 6% of a fall-sphere run with no pair ever within the thickness).
+double SelfContactEnergy::stencil_distance2(std::size_t k, const PairPoints& pts, DistanceStencil& s,
+                                            double reject2, const Eigen::VectorXd& moved) const {
+  const Pair& p = m_candidates[k];
+  // A bound kept from an earlier x first, then one from bounding spheres: most candidates are
+  // neighbours in the mesh a whole edge apart, and the closest-feature search costs several
+  // times more (measured: the stencils were 6% of a fall-sphere run with no pair ever within
+  // the thickness). Each bound is a distance at x no larger than the pair's, so a pair is
+  // rejected only where its distance would be.
+  const double motion = pair_motion(p, moved);
+  const double kept = m_base_distance[k] - motion;
+  if (kept > 0 && kept * kept >= reject2) return kept * kept;
   const double gap = collision::pair_distance_lower_bound(pts, p.edge_edge);
-  if (gap > 0 && gap * gap >= reject2) return gap * gap;
+  if (gap > 0 && gap * gap >= reject2) {
+    m_base_distance[k] = std::max(m_base_distance[k], gap - motion);
+    return gap * gap;
+  }
   s = p.edge_edge ? collision::edge_edge_stencil(pts) : collision::point_triangle_stencil(pts);
-  return collision::distance_squared(s, pts);
+  const double d2 = collision::distance_squared(s, pts);
+  m_base_distance[k] = std::max(m_base_distance[k], std::sqrt(d2) - motion);
+  return d2;
 }
 
 void SelfContactEnergy::begin_step(const StepContext& ctx, const Eigen::VectorXd& x_t0) {
@@ -161,10 +188,12 @@ void SelfContactEnergy::begin_step(const StepContext& ctx, const Eigen::VectorXd
   m_friction_keys.clear();
   if (m_params.friction <= 0) return;
   const double dhat = m_params.dhat, kappa = m_params.stiffness / dhat;
-  for (const Pair& p : m_candidates) {
+  const Eigen::VectorXd moved = motions(x_t0);
+  for (std::size_t k = 0; k < m_candidates.size(); ++k) {
+    const Pair& p = m_candidates[k];
     const PairPoints pts = points(p, x_t0);
     DistanceStencil s;
-    const double d2 = stencil_distance2(p, pts, s, dhat * dhat);
+    const double d2 = stencil_distance2(k, pts, s, dhat * dhat, moved);
     if (d2 >= dhat * dhat || d2 <= 0) continue;
     const double d = std::sqrt(d2);
     const double m = p.edge_edge ? collision::edge_edge_mollifier(pts, mollifier_eps(p), nullptr, nullptr) : 1.0;
@@ -192,9 +221,11 @@ bool SelfContactEnergy::update_pattern(const Eigen::VectorXd& x) {
   const double dhat2 = m_params.dhat * m_params.dhat, near2 = 4 * dhat2;
   bool missing = !std::includes(m_pattern.begin(), m_pattern.end(), m_friction_keys.begin(), m_friction_keys.end());
   std::vector<Pair> near;
-  for (const Pair& p : m_candidates) {
+  const Eigen::VectorXd moved = motions(x);
+  for (std::size_t k = 0; k < m_candidates.size(); ++k) {
+    const Pair& p = m_candidates[k];
     DistanceStencil s;
-    const double d2 = stencil_distance2(p, points(p, x), s, near2);
+    const double d2 = stencil_distance2(k, points(p, x), s, near2, moved);
     if (d2 >= near2) continue;
     near.push_back(p);
     if (!missing && d2 < dhat2) missing = !std::binary_search(m_pattern.begin(), m_pattern.end(), key(p));
@@ -232,10 +263,12 @@ double SelfContactEnergy::value(const Eigen::VectorXd& x) const {
   ensure_candidates(x);
   const double dhat = m_params.dhat, kappa = m_params.stiffness / dhat;
   double e = 0;
-  for (const Pair& p : m_candidates) {
+  const Eigen::VectorXd moved = motions(x);
+  for (std::size_t k = 0; k < m_candidates.size(); ++k) {
+    const Pair& p = m_candidates[k];
     const PairPoints pts = points(p, x);
     DistanceStencil s;
-    const double d2 = stencil_distance2(p, pts, s, dhat * dhat);
+    const double d2 = stencil_distance2(k, pts, s, dhat * dhat, moved);
     if (d2 >= dhat * dhat) continue;
     if (!(d2 > 0)) return INF;
     const double m = p.edge_edge ? collision::edge_edge_mollifier(pts, mollifier_eps(p), nullptr, nullptr) : 1.0;
@@ -287,10 +320,12 @@ void SelfContactEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::VectorX
   ensure_candidates(x);
   const double dhat2 = m_params.dhat * m_params.dhat;
   int active = 0;
-  for (const Pair& p : m_candidates) {
+  const Eigen::VectorXd moved = motions(x);
+  for (std::size_t k = 0; k < m_candidates.size(); ++k) {
+    const Pair& p = m_candidates[k];
     const PairPoints pts = points(p, x);
     DistanceStencil s;
-    const double d2 = stencil_distance2(p, pts, s, dhat2);
+    const double d2 = stencil_distance2(k, pts, s, dhat2, moved);
     if (d2 >= dhat2 || !(d2 > 0)) continue;
     ++active;
     add_pair(p, pts, s, g, H);

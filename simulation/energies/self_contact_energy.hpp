@@ -125,10 +125,15 @@ class SelfContactEnergy : public EnergyTerm {
   void find_candidates(const Eigen::VectorXd& x, const Eigen::VectorXd* dx) const;
   /// True when the current candidate set holds every pair within dhat at x.
   bool covered(const Eigen::VectorXd& x) const;
-  /// Squared distance of a pair and its stencil s; when a bounding-sphere bound shows the
-  /// squared distance is at least `reject2`, that bound instead (s not set).
-  double stencil_distance2(const Pair& p, const collision::PairPoints& pts, collision::DistanceStencil& s,
-                           double reject2 = INF) const;
+  /// Squared distance of candidate k and its stencil s; when a lower bound shows the squared
+  /// distance is at least `reject2`, that bound instead (s not set). `moved`: motions(x).
+  double stencil_distance2(std::size_t k, const collision::PairPoints& pts, collision::DistanceStencil& s,
+                           double reject2, const Eigen::VectorXd& moved) const;
+  /// Per vertex, how far it is from m_base after removing the mean displacement [m]: a pair's
+  /// distance differs from its distance at m_base by at most the largest of its first
+  /// primitive's plus the largest of its second's.
+  Eigen::VectorXd motions(const Eigen::VectorXd& x) const;
+  double pair_motion(const Pair& p, const Eigen::VectorXd& moved) const;
   /// Adds one pair's barrier derivatives (gradient, Hessian) at distance stencil s.
   void add_pair(const Pair& p, const collision::PairPoints& pts, const collision::DistanceStencil& s,
                 Eigen::VectorXd& g, BlockSymmetricMatrix* H) const;
@@ -147,6 +152,11 @@ class SelfContactEnergy : public EnergyTerm {
   // (mean displacement), and (b) at any x within dhat / 4 of a point of the segment after the
   // same removal (see covered).
   mutable std::vector<Pair> m_candidates;
+  // Per candidate, a lower bound on its distance at m_base [m], from the last time its distance
+  // (or a bound) was found at some x, less the pair's motion from m_base to x; 0 until then. A
+  // candidate whose bound less its motion to x reaches the rejection distance needs no
+  // closest-feature search at x (most candidates are mesh neighbours millimetres apart).
+  mutable std::vector<double> m_base_distance;
   mutable Eigen::VectorXd m_base, m_segment_dx;
   mutable double m_margin = 0;
 

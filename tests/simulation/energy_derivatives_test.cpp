@@ -780,3 +780,66 @@ TEST(EnergyDerivatives, SelfContactFrictionAndCcd) {
   EXPECT_LE(alpha, 0.25 * 0.9 + 1e-12) << "at most 90% of the 0.5 mm gap is closed";
   EXPECT_LT(e.value(t.x + alpha * dx), INF);
 }
+
+TEST(EnergyDerivatives, SelfContactBoundsKeptBetweenEvaluationsRejectOnlyFarPairs) {
+  // Two layers of a 9 x 9 grid of 2 mm cells, 0.7 mm apart (dhat 1 mm): every vertex is near the
+  // other layer, and the mesh neighbours within a layer are candidates that are millimetres
+  // apart. One energy evaluated along a sequence of small motions keeps, per candidate, a bound
+  // from its earlier distances; the energy, gradient and Hessian must be those of a fresh energy
+  // (no bounds kept) at each position.
+  const int n = 9;
+  const double cell = 2e-3;
+  const int per_layer = n * n;
+  Eigen::MatrixX2d X(2 * per_layer, 2);
+  Eigen::VectorXd x0(6 * per_layer);
+  std::vector<Eigen::Vector3i> faces;
+  for (int layer = 0; layer < 2; ++layer)
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        const int v = layer * per_layer + j * n + i;
+        X.row(v) << i * cell + layer * 0.05, j * cell;  // material: the layers side by side
+        x0.segment<3>(3 * v) << i * cell, j * cell, layer * 7e-4;
+        if (i + 1 < n && j + 1 < n) {
+          faces.emplace_back(v, v + 1, v + n + 1);
+          faces.emplace_back(v, v + n + 1, v + n);
+        }
+      }
+  Eigen::MatrixX3i F(static_cast<int>(faces.size()), 3);
+  for (size_t f = 0; f < faces.size(); ++f) F.row(static_cast<int>(f)) = faces[f].transpose();
+  SelfContactParams params = self_params();
+  params.friction = 0;
+  SelfContactEnergy kept(X, F, params);
+  kept.set_hessian_projection(false);
+  std::mt19937 rng(5);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  Eigen::VectorXd x = x0;
+  int active = 0;
+  for (int k = 0; k < 12; ++k) {
+    // Steps of up to about 0.1 mm per vertex: within the candidates' margin, so the set stays.
+    for (int i = 0; i < x.size(); ++i) x[i] = x0[i] + 3e-5 * k * normal(rng) / 4;
+    SelfContactEnergy fresh(X, F, params);
+    fresh.set_hessian_projection(false);
+    const double e_kept = kept.value(x), e_fresh = fresh.value(x);
+    ASSERT_GT(e_fresh, 0.0);
+    ASSERT_NEAR(e_kept, e_fresh, 1e-12 * e_fresh) << "position " << k;
+    Eigen::VectorXd g_kept = Eigen::VectorXd::Zero(x.size()), g_fresh = g_kept;
+    kept.update_pattern(x);
+    fresh.update_pattern(x);
+    SparsityBuilder pattern_builder(2 * per_layer);
+    kept.add_dynamic_pattern(pattern_builder);
+    fresh.add_dynamic_pattern(pattern_builder);
+    const BlockPattern pattern = pattern_builder.finish();
+    BlockSymmetricMatrix H_kept(pattern), H_fresh(pattern);
+    kept.add_derivatives(x, g_kept, &H_kept);
+    fresh.add_derivatives(x, g_fresh, &H_fresh);
+    ASSERT_LT((g_kept - g_fresh).norm(), 1e-12 * g_fresh.norm()) << "position " << k;
+    double h_norm = 0, h_diff = 0;
+    for (size_t i = 0; i < H_fresh.values().size(); ++i) {
+      h_norm += H_fresh.values()[i] * H_fresh.values()[i];
+      h_diff += std::pow(H_kept.values()[i] - H_fresh.values()[i], 2);
+    }
+    ASSERT_LT(std::sqrt(h_diff), 1e-12 * std::sqrt(h_norm)) << "position " << k;
+    active = kept.active_pairs();
+  }
+  EXPECT_GT(active, 2 * (n - 1) * (n - 1)) << "pairs across the layers are active";
+}
