@@ -152,9 +152,9 @@ class SelfContactEnergy : public EnergyTerm {
   // (mean displacement), and (b) at any x within dhat / 4 of a point of the segment after the
   // same removal (see covered).
   mutable std::vector<Pair> m_candidates;
-  // Per candidate, a lower bound on its distance at m_base [m], from the last time its distance
-  // (or a bound) was found at some x, less the pair's motion from m_base to x; 0 until then. A
-  // candidate whose bound less its motion to x reaches the rejection distance needs no
+  // Per candidate, a lower bound on its distance at m_base [m]: the best over the distances (or
+  // bounds) found at earlier x, each less the pair's motion from m_base to that x; 0 until the
+  // first. A candidate whose bound less its motion to x reaches the rejection distance needs no
   // closest-feature search at x (most candidates are mesh neighbours millimetres apart).
   mutable std::vector<double> m_base_distance;
   mutable Eigen::VectorXd m_base, m_segment_dx;
