@@ -17,9 +17,15 @@ namespace {
 constexpr double INF = std::numeric_limits<double>::infinity();
 
 // ----------------------------------------------------------------------------------------------
-// Broad phase: a uniform grid of boxes, sorted by cell key.
+// Broad phase: a uniform grid of boxes.
 
-/// A uniform grid over the boxes of `inserted`; queries report each overlapping pair once.
+/// A uniform grid over the boxes of `inserted`; queries report each overlapping pair once, in
+/// the order of the cells they scan (x, then y, then z) and, within a cell, of the boxes' indices.
+///
+/// The cells' lists are held densely (a start per cell of the grid's extent, filled by counting)
+/// when the extent has few cells for the entries, as a sheet's has; otherwise as entries sorted
+/// by cell key, found by binary search. Both hold the same lists, so a query reports the same
+/// pairs in the same order.
 class BoxGrid {
  public:
   explicit BoxGrid(const std::vector<Aabb>& inserted) : m_boxes(inserted) {
@@ -37,50 +43,90 @@ class BoxGrid {
     // blow the grid up: no box spans more than 8 cells per axis, nor the grid 2^20 per axis.
     m_cell = std::max({mean, largest / 8, (all.hi - all.lo).maxCoeff() / (1 << 20), 1e-9});
     m_origin = all.lo;
-    for (int i = 0; i < static_cast<int>(inserted.size()); ++i)
-      for_cells(inserted[i], [&](std::uint64_t key) { m_entries.push_back({key, i}); });
-    std::sort(m_entries.begin(), m_entries.end());
+    m_low.resize(inserted.size());
+    std::vector<Eigen::Array3i> high(inserted.size());
+    std::size_t entries = 0;
+    for (std::size_t i = 0; i < inserted.size(); ++i) {
+      m_low[i] = cell(inserted[i].lo);
+      high[i] = cell(inserted[i].hi);
+      entries += static_cast<std::size_t>((high[i] - m_low[i] + 1).prod());
+    }
+    // Every box lies in `all`, so its cells lie in [0, cell(all.hi)].
+    m_size = cell(all.hi) + 1;
+    const double cells = double(m_size.x()) * double(m_size.y()) * double(m_size.z());
+    m_dense = cells <= 4.0 * double(entries) + 65536.0;
+    if (m_dense) {
+      m_start.assign(static_cast<std::size_t>(cells) + 1, 0);
+      for (std::size_t i = 0; i < inserted.size(); ++i)
+        for_cells(m_low[i], high[i], [&](std::size_t c) { ++m_start[c + 1]; });
+      for (std::size_t c = 1; c < m_start.size(); ++c) m_start[c] += m_start[c - 1];
+      m_index.resize(entries);
+      std::vector<int> next(m_start.begin(), m_start.end() - 1);
+      for (std::size_t i = 0; i < inserted.size(); ++i)
+        for_cells(m_low[i], high[i], [&](std::size_t c) { m_index[next[c]++] = static_cast<int>(i); });
+    } else {
+      m_entries.reserve(entries);
+      for (std::size_t i = 0; i < inserted.size(); ++i)
+        for_cells(m_low[i], high[i], [&](std::size_t c) { m_entries.push_back({c, static_cast<int>(i)}); });
+      std::sort(m_entries.begin(), m_entries.end());
+    }
   }
 
   /// Calls report(i) for every inserted box i overlapping q (once each).
   template <class Report>
   void query(const Aabb& q, Report&& report) const {
-    if (m_entries.empty()) return;
-    for_cells(q, [&](std::uint64_t key) {
-      auto it = std::lower_bound(m_entries.begin(), m_entries.end(), Entry{key, -1});
-      for (; it != m_entries.end() && it->key == key; ++it) {
-        const Aabb& b = m_boxes[it->index];
-        if ((b.lo.array() > q.hi.array()).any() || (q.lo.array() > b.hi.array()).any()) continue;
-        // Report the pair only from the cell holding the low corner of the boxes' overlap.
-        if (cell_key(b.lo.cwiseMax(q.lo)) == key) report(it->index);
-      }
-    });
+    if (m_boxes.empty()) return;
+    const Eigen::Array3i lo = cell(q.lo), hi = cell(q.hi).min(m_size - 1);
+    if ((lo > hi).any()) return;
+    auto visit = [&](int i, const Eigen::Array3i& here) {
+      const Aabb& b = m_boxes[i];
+      if ((b.lo.array() > q.hi.array()).any() || (q.lo.array() > b.hi.array()).any()) return;
+      // Report the pair only from the cell holding the low corner of the boxes' overlap (cell()
+      // is monotone in each axis, so that corner's cell is the larger of the two low cells).
+      if ((m_low[i].max(lo) == here).all()) report(i);
+    };
+    for (int x = lo.x(); x <= hi.x(); ++x)
+      for (int y = lo.y(); y <= hi.y(); ++y)
+        for (int z = lo.z(); z <= hi.z(); ++z) {
+          const Eigen::Array3i here(x, y, z);
+          const std::size_t c = index_of(here);
+          if (m_dense) {
+            for (int k = m_start[c]; k < m_start[c + 1]; ++k) visit(m_index[k], here);
+          } else {
+            auto it = std::lower_bound(m_entries.begin(), m_entries.end(), Entry{c, -1});
+            for (; it != m_entries.end() && it->cell == c; ++it) visit(it->index, here);
+          }
+        }
   }
 
  private:
   struct Entry {
-    std::uint64_t key;
+    std::size_t cell;
     int index;
-    bool operator<(const Entry& o) const { return key < o.key || (key == o.key && index < o.index); }
+    bool operator<(const Entry& o) const { return cell < o.cell || (cell == o.cell && index < o.index); }
   };
   Eigen::Array3i cell(const Eigen::Vector3d& p) const {
     const Eigen::Array3d c = ((p - m_origin) / m_cell).array().floor();
     return c.max(0.0).min(double((1 << 21) - 1)).cast<int>();
   }
-  static std::uint64_t key_of(const Eigen::Array3i& c) {
-    return (std::uint64_t(c.x()) << 42) | (std::uint64_t(c.y()) << 21) | std::uint64_t(c.z());
+  /// A cell's place in x, y, z order within the grid's extent.
+  std::size_t index_of(const Eigen::Array3i& c) const {
+    return (std::size_t(c.x()) * std::size_t(m_size.y()) + std::size_t(c.y())) * std::size_t(m_size.z()) +
+           std::size_t(c.z());
   }
-  std::uint64_t cell_key(const Eigen::Vector3d& p) const { return key_of(cell(p)); }
   template <class F>
-  void for_cells(const Aabb& b, F&& f) const {
-    const Eigen::Array3i lo = cell(b.lo), hi = cell(b.hi);
+  void for_cells(const Eigen::Array3i& lo, const Eigen::Array3i& hi, F&& f) const {
     for (int x = lo.x(); x <= hi.x(); ++x)
       for (int y = lo.y(); y <= hi.y(); ++y)
-        for (int z = lo.z(); z <= hi.z(); ++z) f(key_of(Eigen::Array3i(x, y, z)));
+        for (int z = lo.z(); z <= hi.z(); ++z) f(index_of(Eigen::Array3i(x, y, z)));
   }
 
   const std::vector<Aabb>& m_boxes;
-  std::vector<Entry> m_entries;
+  std::vector<Eigen::Array3i> m_low;  ///< each inserted box's lowest cell
+  Eigen::Array3i m_size = Eigen::Array3i::Zero();  ///< cells per axis
+  bool m_dense = false;
+  std::vector<int> m_start, m_index;  ///< dense: cell c's boxes are m_index[m_start[c] .. m_start[c + 1])
+  std::vector<Entry> m_entries;       ///< sparse: (cell, box) sorted
   Eigen::Vector3d m_origin = Eigen::Vector3d::Zero();
   double m_cell = 1.0;
 };

@@ -222,29 +222,15 @@ TEST(SelfContactDistance, MollifierDerivatives) {
   EXPECT_EQ(g.norm(), 0.0);
 }
 
-TEST(SelfContactBroadPhase, MatchesBruteForceBoxesAndHoldsEveryClosePair) {
-  // A crumpled random sheet: a 12 x 12 grid with random heights folded over itself.
-  const int n = 12;
-  Eigen::MatrixX3i F(2 * (n - 1) * (n - 1), 3);
-  int f = 0;
-  for (int i = 0; i + 1 < n; ++i)
-    for (int j = 0; j + 1 < n; ++j) {
-      const int a = i * n + j, b = a + 1, c = a + n, d = c + 1;
-      F.row(f++) << a, b, d;
-      F.row(f++) << a, d, c;
-    }
-  const SelfContactMesh mesh = SelfContactMesh::from_faces(F, n * n);
-  EXPECT_EQ(mesh.edges.rows(), 3 * (n - 1) * (n - 1) + 2 * (n - 1));
-  std::mt19937 rng(2);
-  std::uniform_real_distribution<double> u(-0.3, 0.3);
-  Eigen::VectorXd x0(3 * n * n), x1(3 * n * n);
-  for (int i = 0; i < n; ++i)
-    for (int j = 0; j < n; ++j) {
-      const double s = double(j) / (n - 1), a = 3.0 * s;  // folded like a spiral
-      x0.segment<3>(3 * (i * n + j)) << std::cos(a) * (1 - 0.5 * s), double(i) / (n - 1), std::sin(a) * (1 - 0.5 * s) + 0.05 * u(rng);
-      x1.segment<3>(3 * (i * n + j)) = x0.segment<3>(3 * (i * n + j)) + 0.1 * Eigen::Vector3d(u(rng), u(rng), u(rng));
-    }
-  const double radius = 0.15;
+namespace {
+
+/// Checks find_self_contact_candidates on (F, x0, x1, radius) against every pair's swept boxes:
+/// each pair whose boxes come within `radius` in every axis is reported once and no other; every
+/// pair closer than `radius` at x0 is among them. Returns the number of point-triangle pairs.
+std::size_t check_broad_phase_against_brute_force(const Eigen::MatrixX3i& F, const Eigen::VectorXd& x0,
+                                                  const Eigen::VectorXd& x1, double radius) {
+  const int nv = static_cast<int>(x0.size() / 3);
+  const SelfContactMesh mesh = SelfContactMesh::from_faces(F, nv);
   const SelfContactCandidates c = find_self_contact_candidates(mesh, x0, x1, radius);
   std::set<std::array<int, 2>> pt(c.point_triangle.begin(), c.point_triangle.end());
   std::set<std::array<int, 2>> ee(c.edge_edge.begin(), c.edge_edge.end());
@@ -265,7 +251,7 @@ TEST(SelfContactBroadPhase, MatchesBruteForceBoxesAndHoldsEveryClosePair) {
   };
   size_t expected_pt = 0, expected_ee = 0;
   auto p0 = [&](int v) { return Eigen::Vector3d(x0.segment<3>(3 * v)); };
-  for (int v = 0; v < n * n; ++v)
+  for (int v = 0; v < nv; ++v)
     for (int k = 0; k < F.rows(); ++k) {
       if (F(k, 0) == v || F(k, 1) == v || F(k, 2) == v) continue;
       const bool boxes = overlap(box({v}), box({F(k, 0), F(k, 1), F(k, 2)}));
@@ -286,7 +272,68 @@ TEST(SelfContactBroadPhase, MatchesBruteForceBoxesAndHoldsEveryClosePair) {
     }
   EXPECT_EQ(expected_pt, pt.size());
   EXPECT_EQ(expected_ee, ee.size());
-  EXPECT_GT(pt.size(), 100u) << "the test sheet really comes close to itself";
+  return pt.size();
+}
+
+/// Faces of an n x m grid of vertices (row-major), two per quad.
+Eigen::MatrixX3i grid_faces(int n, int m) {
+  Eigen::MatrixX3i F(2 * (n - 1) * (m - 1), 3);
+  int f = 0;
+  for (int i = 0; i + 1 < n; ++i)
+    for (int j = 0; j + 1 < m; ++j) {
+      const int a = i * m + j, b = a + 1, c = a + m, d = c + 1;
+      F.row(f++) << a, b, d;
+      F.row(f++) << a, d, c;
+    }
+  return F;
+}
+
+}  // namespace
+
+TEST(SelfContactBroadPhase, MatchesBruteForceBoxesAndHoldsEveryClosePair) {
+  // A crumpled random sheet: a 12 x 12 grid with random heights folded over itself.
+  const int n = 12;
+  const Eigen::MatrixX3i F = grid_faces(n, n);
+  EXPECT_EQ(SelfContactMesh::from_faces(F, n * n).edges.rows(), 3 * (n - 1) * (n - 1) + 2 * (n - 1));
+  std::mt19937 rng(2);
+  std::uniform_real_distribution<double> u(-0.3, 0.3);
+  Eigen::VectorXd x0(3 * n * n), x1(3 * n * n);
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      const double s = double(j) / (n - 1), a = 3.0 * s;  // folded like a spiral
+      x0.segment<3>(3 * (i * n + j)) << std::cos(a) * (1 - 0.5 * s), double(i) / (n - 1), std::sin(a) * (1 - 0.5 * s) + 0.05 * u(rng);
+      x1.segment<3>(3 * (i * n + j)) = x0.segment<3>(3 * (i * n + j)) + 0.1 * Eigen::Vector3d(u(rng), u(rng), u(rng));
+    }
+  EXPECT_GT(check_broad_phase_against_brute_force(F, x0, x1, 0.15), 100u)
+      << "the test sheet really comes close to itself";
+}
+
+TEST(SelfContactBroadPhase, AStripAlongTheDiagonalOfAHugeBoxMatchesBruteForce) {
+  // A 2 x 300 strip of 1 mm faces along the diagonal of a 1 m cube, bent back on itself in
+  // the middle so that its two halves lie 0.5 mm apart, and a lone face at the far corner: the
+  // grid's cells are about a face's box (3-4 mm), so its extent holds 1.5e7-3e7 of them
+  // against a few thousand entries (measured), and the cells' lists are kept sorted rather than dense (BoxGrid); the
+  // pairs must be the same.
+  const int m = 300, nv = 2 * m + 3;
+  Eigen::MatrixX3i F(2 * (m - 1) + 1, 3);
+  F << grid_faces(2, m), Eigen::RowVector3i(2 * m, 2 * m + 1, 2 * m + 2);
+  const Eigen::Vector3d along = Eigen::Vector3d(1, 1, 1).normalized(), across(1 / std::sqrt(2.0), -1 / std::sqrt(2.0), 0);
+  const Eigen::Vector3d normal = along.cross(across);
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-1e-4, 1e-4);
+  Eigen::VectorXd x0(3 * nv), x1(3 * nv);
+  for (int i = 0; i < 2; ++i)
+    for (int j = 0; j < m; ++j) {
+      const double s = j < m / 2 ? 1e-3 * j : 1e-3 * (m - 1 - j);  // back along the first half
+      const double h = j < m / 2 ? 0.0 : 5e-4;
+      x0.segment<3>(3 * (i * m + j)) = 0.85 * along + s * along + 1e-3 * i * across + h * normal;
+    }
+  // A lone 1 mm face at the cube's far corner stretches the grid's extent over the cube.
+  x0.segment<3>(3 * 2 * m) << 0, 0, 0;
+  x0.segment<3>(3 * (2 * m + 1)) << 1e-3, 0, 0;
+  x0.segment<3>(3 * (2 * m + 2)) << 0, 1e-3, 0;
+  for (int v = 0; v < nv; ++v) x1.segment<3>(3 * v) = x0.segment<3>(3 * v) + Eigen::Vector3d(u(rng), u(rng), u(rng));
+  EXPECT_GT(check_broad_phase_against_brute_force(F, x0, x1, 1e-3), 500u) << "the halves face each other";
 }
 
 TEST(SelfContactCcd, HeadOnPointStopsBeforeTheFace) {
