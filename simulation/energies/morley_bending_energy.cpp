@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <numeric>
 #include <string>
 
 #include "simulation/energies/dihedral_angle.hpp"
@@ -207,6 +208,17 @@ void MorleyBendingEnergy::build_elements() {
       }
       e.local.push_back(loc);
     }
+    // Local order ascending in the global numbering: the blocks of column block b that the
+    // matrix stores (its upper triangle) are then the rows of local blocks 0..b, a prefix, and
+    // the Hessian loop computes only those.
+    std::vector<int> order(e.vertices.size()), rank(e.vertices.size());
+    std::iota(order.begin(), order.end(), 0);
+    std::sort(order.begin(), order.end(), [&](int a, int b) { return e.vertices[a] < e.vertices[b]; });
+    std::vector<int> sorted(e.vertices.size());
+    for (std::size_t i = 0; i < order.size(); ++i) sorted[i] = e.vertices[order[i]], rank[order[i]] = static_cast<int>(i);
+    e.vertices = std::move(sorted);
+    for (auto& loc : e.local)
+      for (int& k : loc) k = rank[k];
     for (int p : e.psi) {
       const int block = p / 3;
       auto it = std::find(e.blocks.begin(), e.blocks.end(), block);
@@ -313,13 +325,42 @@ void MorleyBendingEnergy::unknowns(const Eigen::VectorXd& x, Eigen::VectorXd& th
                       : Eigen::VectorXd();
 }
 
+namespace {
+
+/// y = A x for an element's small dense matrices (at most 3 rows, or 3 columns with `transposed`),
+/// each entry summed over the columns in order from zero. That is the order and the rounding of
+/// Eigen's matrix-vector kernel (gemv) at these sizes, without its dispatch or, inside a larger
+/// expression, its heap temporary: the same results to the bit (checked on whole runs).
+void element_product(const Eigen::MatrixXd& A, const double* x, double* y) {
+  const Eigen::Index rows = A.rows(), cols = A.cols();
+  for (Eigen::Index r = 0; r < rows; ++r) {
+    double s = 0;
+    for (Eigen::Index c = 0; c < cols; ++c) s += A(r, c) * x[c];
+    y[r] = s;
+  }
+}
+
+/// y = A^T x, each entry summed over A's rows in order from zero.
+void element_product_transposed(const Eigen::MatrixXd& A, const double* x, double* y) {
+  const Eigen::Index rows = A.rows(), cols = A.cols();
+  for (Eigen::Index c = 0; c < cols; ++c) {
+    double s = 0;
+    for (Eigen::Index r = 0; r < rows; ++r) s += A(r, c) * x[r];
+    y[c] = s;
+  }
+}
+
+}  // namespace
+
 MorleyBendingEnergy::ElementVector MorleyBendingEnergy::element_residual(
     const Element& e, const Eigen::VectorXd& theta, const Eigen::VectorXd& psi) const {
   const int nt = static_cast<int>(e.theta.size());
   ElementVector u(nt + e.psi.size());
   for (int i = 0; i < nt; ++i) u[i] = theta[e.theta[i]];
   for (size_t i = 0; i < e.psi.size(); ++i) u[nt + i] = psi[e.psi[i]];
-  return e.L * u - e.c;
+  ElementVector r(e.L.rows());
+  element_product(e.L, u.data(), r.data());
+  return r - e.c;
 }
 
 double MorleyBendingEnergy::value(const Eigen::VectorXd& x) const {
@@ -328,7 +369,9 @@ double MorleyBendingEnergy::value(const Eigen::VectorXd& x) const {
   double energy = 0;
   for (const Element& e : m_elements) {
     const ElementVector r = element_residual(e, theta, psi);
-    energy += 0.5 * r.dot(ElementVector(e.W * r));
+    ElementVector Wr(r.size());
+    element_product(e.W, r.data(), Wr.data());
+    energy += 0.5 * r.dot(Wr);
   }
   return energy;
 }
@@ -367,8 +410,10 @@ void MorleyBendingEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::Vecto
   Eigen::VectorXd dE = Eigen::VectorXd::Zero(nh);
   std::vector<char> used(nh, 0);
   for (const Element& e : m_elements) {
-    const ElementVector Wr = e.W * element_residual(e, theta, psi);
-    const ElementVector g = e.L.transpose() * Wr;
+    const ElementVector r = element_residual(e, theta, psi);
+    ElementVector Wr(r.size()), g(e.L.cols());
+    element_product(e.W, r.data(), Wr.data());
+    element_product_transposed(e.L, Wr.data(), g.data());
     for (size_t i = 0; i < e.theta.size(); ++i) dE[e.theta[i]] += g[i], used[e.theta[i]] = 1;
   }
   for (int h = 0; h < nh; ++h)
@@ -436,7 +481,8 @@ void MorleyBendingEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::Vecto
         for (int c = 0; c < 3; ++c) {
           const double gc = g[3 * r + c];
           double* out = H + (3 * e.local[j][r] + c) * rows;
-          for (int row = 0; row < rows; ++row) out[row] += gm[row] * gc;
+          const int upper = 3 * (e.local[j][r] + 1);  // rows add_element reads (see build_elements)
+          for (int row = 0; row < upper; ++row) out[row] += gm[row] * gc;
         }
     }
     hessian->add_element(e.vertices.data(), nv, m_slots.slots(static_cast<int>(ei)), H);
