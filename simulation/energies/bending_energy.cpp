@@ -65,8 +65,9 @@ bool CurvatureStencils::determined(const std::vector<int>& stencil) const {
   return svd.singularValues()[2] > 1e-6 * svd.singularValues()[0];
 }
 
-void CurvatureStencils::grow_until_determined(std::vector<int>& stencil, int f) const {
-  for (int ring = 0; ring < 2 && !determined(stencil); ++ring) {
+bool CurvatureStencils::grow_until_determined(std::vector<int>& stencil, int f) const {
+  for (int ring = 0; ring < 2; ++ring) {
+    if (determined(stencil)) return true;
     std::vector<int> verts;
     for (int h : stencil)
       for (int k = 0; k < 4; ++k) verts.push_back(m_hinges.vertices(h, k));
@@ -78,6 +79,7 @@ void CurvatureStencils::grow_until_determined(std::vector<int>& stencil, int f) 
     ring_faces.erase(std::unique(ring_faces.begin(), ring_faces.end()), ring_faces.end());
     for (int g : ring_faces) add_face_hinges(stencil, g);
   }
+  return determined(stencil);
 }
 
 std::array<int, 4> local_hinge(const remesh::Hinges& hinges, int h, std::vector<int>& vertices) {

@@ -71,8 +71,8 @@ class CurvatureStencils {
   /// True when the rows determine K (three or more, of rank 3 to 1e-6).
   bool determined(const std::vector<int>& stencil) const;
   /// While not determined, at most twice: adds the hinges of every face with a corner among the
-  /// stencil's vertices and face f's (boundary faces).
-  void grow_until_determined(std::vector<int>& stencil, int f) const;
+  /// stencil's vertices and face f's (boundary faces). Returns determined(stencil) at the end.
+  bool grow_until_determined(std::vector<int>& stencil, int f) const;
 
  private:
   const remesh::Hinges& m_hinges;

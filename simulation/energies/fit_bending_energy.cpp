@@ -41,8 +41,7 @@ void FitBendingEnergy::build_stencil(int f, const CurvatureStencils& stencils, c
   // faces sharing a vertex while the curvature is not determined (boundary faces).
   stencils.add_face_hinges(face.hinges, f);
   stencils.add_neighbour_hinges(face.hinges);
-  stencils.grow_until_determined(face.hinges, f);
-  if (!stencils.determined(face.hinges))
+  if (!stencils.grow_until_determined(face.hinges, f))
     throw NumericError("bending: the curvature of face " + std::to_string(f) +
                        " is not determined by its neighbourhood (too few interior edges)");
   const Eigen::MatrixXd B = stencils.rows(face.hinges);

@@ -146,8 +146,7 @@ void MembraneEnergy::build_arcs(const remesh::SheetMesh& mesh) {
     CurvatureFit& fit = m_fits[f];
     stencils.add_face_hinges(fit.hinges, f);
     if (!stencils.determined(fit.hinges)) stencils.add_neighbour_hinges(fit.hinges);
-    stencils.grow_until_determined(fit.hinges, f);
-    if (!stencils.determined(fit.hinges)) {  // too few interior edges (a mesh of one or two faces)
+    if (!stencils.grow_until_determined(fit.hinges, f)) {  // too few interior edges (a mesh of one or two faces)
       fit.hinges.clear();
       fit.P.setZero(3, 0);
       continue;
