@@ -71,9 +71,10 @@ class BoxGrid {
     }
   }
 
-  /// Calls report(i) for every inserted box i overlapping q (once each).
+  /// Calls report(i) for every inserted box i > after overlapping q (once each). Each cell holds
+  /// its boxes in ascending order, so the boxes at or below `after` are skipped untested.
   template <class Report>
-  void query(const Aabb& q, Report&& report) const {
+  void query(const Aabb& q, Report&& report, int after = -1) const {
     if (m_boxes.empty()) return;
     const Eigen::Array3i lo = cell(q.lo), hi = cell(q.hi).min(m_size - 1);
     if ((lo > hi).any()) return;
@@ -90,9 +91,12 @@ class BoxGrid {
           const Eigen::Array3i here(x, y, z);
           const std::size_t c = index_of(here);
           if (m_dense) {
-            for (int k = m_start[c]; k < m_start[c + 1]; ++k) visit(m_index[k], here);
+            const int* first = m_index.data() + m_start[c];
+            const int* last = m_index.data() + m_start[c + 1];
+            if (after >= 0) first = std::upper_bound(first, last, after);
+            for (; first != last; ++first) visit(*first, here);
           } else {
-            auto it = std::lower_bound(m_entries.begin(), m_entries.end(), Entry{c, -1});
+            auto it = std::lower_bound(m_entries.begin(), m_entries.end(), Entry{c, after + 1});
             for (; it != m_entries.end() && it->cell == c; ++it) visit(it->index, here);
           }
         }
@@ -381,11 +385,10 @@ SelfContactCandidates find_self_contact_candidates(const SelfContactMesh& mesh,
   const BoxGrid edges(edge_boxes);
   for (int a = 0; a < static_cast<int>(ne); ++a)
     edges.query(edge_boxes[a], [&](int b) {
-      if (b <= a) return;
       const int a0 = mesh.edges(a, 0), a1 = mesh.edges(a, 1), b0 = mesh.edges(b, 0), b1 = mesh.edges(b, 1);
       if (a0 == b0 || a0 == b1 || a1 == b0 || a1 == b1) return;
       out.edge_edge.push_back({{a, b}});
-    });
+    }, a);
   return out;
 }
 
