@@ -215,7 +215,10 @@ void MorleyBendingEnergy::build_elements() {
     std::iota(order.begin(), order.end(), 0);
     std::sort(order.begin(), order.end(), [&](int a, int b) { return e.vertices[a] < e.vertices[b]; });
     std::vector<int> sorted(e.vertices.size());
-    for (std::size_t i = 0; i < order.size(); ++i) sorted[i] = e.vertices[order[i]], rank[order[i]] = static_cast<int>(i);
+    for (std::size_t i = 0; i < order.size(); ++i) {
+      sorted[i] = e.vertices[order[i]];
+      rank[order[i]] = static_cast<int>(i);
+    }
     e.vertices = std::move(sorted);
     for (auto& loc : e.local)
       for (int& k : loc) k = rank[k];
@@ -340,7 +343,8 @@ void element_product(const Eigen::MatrixXd& A, const double* x, double* y) {
   }
 }
 
-/// y = A^T x, each entry summed over A's rows in order from zero.
+/// y = A^T x, each entry summed over A's rows (at most 3) in order from zero, as Eigen's kernel
+/// for the transposed product sums them at that depth.
 void element_product_transposed(const Eigen::MatrixXd& A, const double* x, double* y) {
   const Eigen::Index rows = A.rows(), cols = A.cols();
   for (Eigen::Index c = 0; c < cols; ++c) {
