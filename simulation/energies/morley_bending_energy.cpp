@@ -6,7 +6,6 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
-#include <numeric>
 #include <string>
 
 #include "simulation/energies/dihedral_angle.hpp"
@@ -211,17 +210,13 @@ void MorleyBendingEnergy::build_elements() {
     // Local order ascending in the global numbering: the blocks of column block b that the
     // matrix stores (its upper triangle) are then the rows of local blocks 0..b, a prefix, and
     // the Hessian loop computes only those.
-    std::vector<int> order(e.vertices.size()), rank(e.vertices.size());
-    std::iota(order.begin(), order.end(), 0);
-    std::sort(order.begin(), order.end(), [&](int a, int b) { return e.vertices[a] < e.vertices[b]; });
-    std::vector<int> sorted(e.vertices.size());
-    for (std::size_t i = 0; i < order.size(); ++i) {
-      sorted[i] = e.vertices[order[i]];
-      rank[order[i]] = static_cast<int>(i);
-    }
-    e.vertices = std::move(sorted);
+    const std::vector<int> unsorted = e.vertices;
+    std::sort(e.vertices.begin(), e.vertices.end());
     for (auto& loc : e.local)
-      for (int& k : loc) k = rank[k];
+      for (int& k : loc) {
+        const auto at = std::lower_bound(e.vertices.begin(), e.vertices.end(), unsorted[k]);
+        k = static_cast<int>(at - e.vertices.begin());
+      }
     for (int p : e.psi) {
       const int block = p / 3;
       auto it = std::find(e.blocks.begin(), e.blocks.end(), block);
@@ -330,27 +325,17 @@ void MorleyBendingEnergy::unknowns(const Eigen::VectorXd& x, Eigen::VectorXd& th
 
 namespace {
 
-/// y = A x for an element's small dense matrices (at most 3 rows, or 3 columns with `transposed`),
-/// each entry summed over the columns in order from zero. That is the order and the rounding of
-/// Eigen's matrix-vector kernel (gemv) at these sizes, without its dispatch or, inside a larger
-/// expression, its heap temporary: the same results to the bit (checked on whole runs).
-void element_product(const Eigen::MatrixXd& A, const double* x, double* y) {
+/// y = A x for an element's small dense matrices (L or W, at most 3 rows, or L's transpose, at
+/// most 3 columns), each entry summed over the columns in order from zero. That is the order and
+/// the rounding of Eigen's matrix-vector kernels at these sizes, without their dispatch or, inside
+/// a larger expression, a heap temporary: the same results to the bit (checked on whole runs).
+template <class Matrix>
+void element_product(const Matrix& A, const double* x, double* y) {
   const Eigen::Index rows = A.rows(), cols = A.cols();
   for (Eigen::Index r = 0; r < rows; ++r) {
     double s = 0;
     for (Eigen::Index c = 0; c < cols; ++c) s += A(r, c) * x[c];
     y[r] = s;
-  }
-}
-
-/// y = A^T x, each entry summed over A's rows (at most 3) in order from zero, as Eigen's kernel
-/// for the transposed product sums them at that depth.
-void element_product_transposed(const Eigen::MatrixXd& A, const double* x, double* y) {
-  const Eigen::Index rows = A.rows(), cols = A.cols();
-  for (Eigen::Index c = 0; c < cols; ++c) {
-    double s = 0;
-    for (Eigen::Index r = 0; r < rows; ++r) s += A(r, c) * x[r];
-    y[c] = s;
   }
 }
 
@@ -417,7 +402,7 @@ void MorleyBendingEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::Vecto
     const ElementVector r = element_residual(e, theta, psi);
     ElementVector Wr(r.size()), g(e.L.cols());
     element_product(e.W, r.data(), Wr.data());
-    element_product_transposed(e.L, Wr.data(), g.data());
+    element_product(e.L.transpose(), Wr.data(), g.data());
     for (size_t i = 0; i < e.theta.size(); ++i) dE[e.theta[i]] += g[i], used[e.theta[i]] = 1;
   }
   for (int h = 0; h < nh; ++h)
