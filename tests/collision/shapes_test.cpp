@@ -1,5 +1,6 @@
 #include "collision/errors.hpp"
 #include "collision/shapes.hpp"
+#include "validation/compare.hpp"
 
 #include <gtest/gtest.h>
 
@@ -10,37 +11,16 @@
 #include <vector>
 
 namespace pc = papersim::collision;
+namespace pv = papersim::validation;
 
 namespace {
 
 using Triangle = std::array<Eigen::Vector3d, 3>;
 
-/// Closest point on triangle abc to p (Ericson, Real-Time Collision Detection, 5.1.5).
-Eigen::Vector3d closest_on_triangle(const Eigen::Vector3d& p, const Triangle& t) {
-  const Eigen::Vector3d &a = t[0], &b = t[1], &c = t[2];
-  const Eigen::Vector3d ab = b - a, ac = c - a, ap = p - a;
-  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
-  if (d1 <= 0 && d2 <= 0) return a;
-  const Eigen::Vector3d bp = p - b;
-  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
-  if (d3 >= 0 && d4 <= d3) return b;
-  const double vc = d1 * d4 - d3 * d2;
-  if (vc <= 0 && d1 >= 0 && d3 <= 0) return a + d1 / (d1 - d3) * ab;
-  const Eigen::Vector3d cp = p - c;
-  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
-  if (d6 >= 0 && d5 <= d6) return c;
-  const double vb = d5 * d2 - d1 * d6;
-  if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + d2 / (d2 - d6) * ac;
-  const double va = d3 * d6 - d5 * d4;
-  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0)
-    return b + (d4 - d3) / ((d4 - d3) + (d5 - d6)) * (c - b);
-  const double denom = 1.0 / (va + vb + vc);
-  return a + ab * (vb * denom) + ac * (vc * denom);
-}
-
 double unsigned_distance(const Eigen::Vector3d& p, const std::vector<Triangle>& tris) {
   double best = 1e300;
-  for (const Triangle& t : tris) best = std::min(best, (p - closest_on_triangle(p, t)).norm());
+  for (const Triangle& t : tris)
+    best = std::min(best, (p - pv::closest_point_on_triangle(p, t[0], t[1], t[2])).norm());
   return best;
 }
 
