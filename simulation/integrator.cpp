@@ -473,7 +473,7 @@ bool Integrator::follow_obstacles(const StepContext& ctx, Eigen::VectorXd& x, do
   return true;
 }
 
-bool Integrator::advance(SheetState& state, double h, int depth, StepStats& stats) {
+bool Integrator::advance(SheetState& state, double h, int depth, int max_depth, StepStats& stats) {
   StepContext ctx;
   ctx.time_t0 = state.time;
   ctx.h = h;
@@ -511,12 +511,13 @@ bool Integrator::advance(SheetState& state, double h, int depth, StepStats& stat
   if (!r.converged) {
     if (std::getenv("PAPERSIM_DEBUG_NEWTON")) std::fprintf(stderr, "  failed: %s\n", r.failure.c_str());
     ++stats.failed_solves;
-    if (depth >= m_params.max_halvings) {
+    if (depth >= max_depth) {
       std::ostringstream s;
       s << "time step failed at t = " << state.time << " s with h = " << h << " s: " << r.failure;
       throw NumericError(s.str());
     }
-    return advance(state, 0.5 * h, depth + 1, stats) && advance(state, 0.5 * h, depth + 1, stats);
+    return advance(state, 0.5 * h, depth + 1, max_depth, stats) &&
+           advance(state, 0.5 * h, depth + 1, max_depth, stats);
   }
   const Eigen::Index n = state.positions.size(), nr = m_rigid_x.size();
   state.velocities = (x.head(n) - x_t0.head(n)) / h;
@@ -529,10 +530,14 @@ bool Integrator::advance(SheetState& state, double h, int depth, StepStats& stat
   return true;
 }
 
-StepStats Integrator::step(SheetState& state, double h) {
+StepStats Integrator::step(SheetState& state, double h, int max_halvings) {
   StepStats stats;
-  advance(state, h, 0, stats);
+  step(state, h, max_halvings, stats);
   return stats;
+}
+
+void Integrator::step(SheetState& state, double h, int max_halvings, StepStats& stats) {
+  advance(state, h, 0, max_halvings < 0 ? m_params.max_halvings : max_halvings, stats);
 }
 
 }  // namespace papersim::simulation

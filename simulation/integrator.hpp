@@ -107,9 +107,13 @@ class Integrator {
   const Eigen::VectorXd& rigid_positions() const { return m_rigid_x; }
   const Eigen::VectorXd& rigid_velocities() const { return m_rigid_v; }
 
-  /// Advance `state` by h [s].
-  /// @throw NumericError when the step fails even after max_halvings splits, or NaN appears.
-  StepStats step(SheetState& state, double h);
+  /// Advance `state` by h [s], splitting a failed step in two up to `max_halvings` times (< 0:
+  /// NewtonParams::max_halvings).
+  /// @throw NumericError when the step fails even after those splits, or NaN appears; `state`
+  ///        may then have advanced part of the step.
+  StepStats step(SheetState& state, double h, int max_halvings = -1);
+  /// As above, counting into `stats` (which then holds the work of a step that failed too).
+  void step(SheetState& state, double h, int max_halvings, StepStats& stats);
 
   /// Begins a step of length h from `state` and returns the incremental potential at its start
   /// (+inf when the state is infeasible for some term): the check of a state the integrator has
@@ -137,7 +141,7 @@ class Integrator {
   /// Begins a step on every term and chooses the terms whose obstacles are followed
   /// (m_following), those set to the step start.
   void begin_step(const StepContext& ctx, const Eigen::VectorXd& x_t0);
-  bool advance(SheetState& state, double h, int depth, StepStats& stats);
+  bool advance(SheetState& state, double h, int depth, int max_depth, StepStats& stats);
   /// The gradient of the incremental potential at x into g (no Hessian).
   void assemble_gradient(const Eigen::VectorXd& x, Eigen::VectorXd& g) const;
   /// Gradient and Hessian at x (element Hessians projected to PSD when `project`).

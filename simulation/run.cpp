@@ -387,7 +387,28 @@ const StepStats& Run::step() {
   if (r.enabled && m_step == 0) remesh_pass();
   begin_lift_bodies(m_terms, *m_integrator);
   const double t0 = m_state.time;
-  m_last = m_integrator->step(m_state, m_h);
+  // Rescue (RemeshSpec::rescue_distance): a remeshed step that has to be split finer than
+  // h / 2^kRescueHalvings (a run with fewer failed solves is not affected) stops there, the
+  // run turns on the obstacle criterion, remeshes from the step's start and takes the step
+  // again with every split it may make. A mesh too coarse where the sheet meets an obstacle (a
+  // face larger than a sphere it lands on) can leave Newton crawling at every step length.
+  constexpr int kRescueHalvings = 6;
+  const bool may_rescue = r.enabled && m_remesh.rescues == 0 && r.params.obstacle_distance <= 0 &&
+                          r.rescue_distance > 0 && !m_setup.obstacles.empty() &&
+                          m_scene.newton.max_halvings > kRescueHalvings;
+  const SheetState start = may_rescue ? m_state : SheetState();
+  try {
+    m_last = StepStats();
+    m_integrator->step(m_state, m_h, may_rescue ? kRescueHalvings : -1, m_last);
+  } catch (const NumericError&) {
+    if (!may_rescue) throw;
+    m_totals += m_last;  // the work of the attempt
+    m_state = start;
+    ++m_remesh.rescues;
+    remesh_pass();
+    begin_lift_bodies(m_terms, *m_integrator);
+    m_last = m_integrator->step(m_state, m_h);
+  }
   // Plastic return mapping on the accepted step (simulation/plasticity.hpp).
   if (plasticity_enabled(m_setup.material))
     apply_plasticity(*m_terms.bending, m_state.positions, m_setup.material.yield_curvature, m_mesh);
@@ -469,6 +490,12 @@ std::string Run::check_remeshed(const remesh::SheetMesh& mesh, const SheetState&
   return {};
 }
 
+remesh::RemeshParams Run::remesh_params() const {
+  remesh::RemeshParams p = m_scene.remesh.params;
+  if (m_remesh.rescues > 0 && p.obstacle_distance <= 0) p.obstacle_distance = m_scene.remesh.rescue_distance;
+  return p;
+}
+
 remesh::RemeshState Run::remesh_state() const {
   remesh::RemeshState rs;
   rs.positions = m_state.positions_matrix();
@@ -490,7 +517,7 @@ void Run::remesh_pass() {
   vp.time = m_state.time;
   RemeshVeto veto(m_setup.obstacles, m_mesh, rs.positions, vp);
   if (m_terms.membrane->arc()) veto.set_vertex_curvatures(m_terms.membrane->vertex_curvatures(m_state.positions));
-  const remesh::RemeshStats st = remesh::remesh(mesh, rs, m_scene.remesh.params, std::cref(veto));
+  const remesh::RemeshStats st = remesh::remesh(mesh, rs, remesh_params(), std::cref(veto));
   add_counts(m_remesh.refusals, st.refusals);
   m_remesh.seconds_remesh += seconds_since(t0);
   if (st.splits + st.flips + st.collapses == 0) return;

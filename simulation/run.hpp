@@ -153,6 +153,9 @@ struct MeshCounts {
 struct RemeshTotals {
   int passes = 0;     ///< remeshing passes that changed the mesh and were kept
   int rollbacks = 0;  ///< passes undone because their result failed a check (by reason below)
+  /// Failed steps taken again after a pass with the obstacle criterion turned on
+  /// (RemeshSpec::rescue_distance, Run::step): 0 or 1; after one, the criterion stays on.
+  int rescues = 0;
   std::map<std::string, int> rollback_reasons;
   int splits = 0, flips = 0, collapses = 0;  ///< edits of the kept passes
   std::map<std::string, int> refusals;       ///< edits refused, by reason ("veto: ..." from the run)
@@ -221,8 +224,11 @@ class Run {
               const RunTally* tally = nullptr);
 
   /// Advance by one time step of the scene, remeshing before the first step, after it and then
-  /// after every `remesh.every` steps when the scene remeshes.
-  /// @throw NumericError when the step fails.
+  /// after every `remesh.every` steps when the scene remeshes. A remeshed run whose step fails
+  /// at h / 64 while the obstacle criterion is off turns it on (`remesh.rescue_distance`),
+  /// remeshes and takes the step again from its start with every split the solver allows, once
+  /// per run (RemeshTotals::rescues).
+  /// @throw NumericError when the step fails (again).
   const StepStats& step();
   bool finished() const { return m_step >= m_steps; }
   int steps_done() const { return m_step; }
@@ -272,6 +278,9 @@ class Run {
   /// One remeshing pass: kept when the new mesh passes every check (no self-intersection,
   /// stretch within the limit, finite energy), undone otherwise.
   void remesh_pass();
+  /// The sizing parameters of a pass: the scene's, with the obstacle criterion on at
+  /// `remesh.rescue_distance` after a rescue (Run::step).
+  remesh::RemeshParams remesh_params() const;
   /// Why a remeshed sheet cannot be used (empty when it can); builds its terms into `terms`.
   std::string check_remeshed(const remesh::SheetMesh& mesh, const SheetState& state, Terms& terms);
   /// Smallest distance of each vertex to any obstacle at the current state, less the distance it

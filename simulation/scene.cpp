@@ -262,6 +262,7 @@ RemeshSpec read_remesh(Reader r) {
   p.refine_compression = r.number("refine_compression", p.refine_compression, -1, 1);
   p.refine_velocity = r.number("refine_velocity", p.refine_velocity, -1, 1e3);
   p.obstacle_distance = r.number("obstacle_distance", p.obstacle_distance, -1, 10);
+  s.rescue_distance = r.number("rescue_distance", s.rescue_distance, -1, 10);
   p.size_min = r.number("size_min", p.size_min, 0, 100, true);
   p.size_max = r.number("size_max", p.size_max, 0, 100, true);
   if (p.size_max < p.size_min) r.fail("size_max", "smaller than size_min");
@@ -522,6 +523,7 @@ json scene_to_json(const Scene& s, bool every_key) {
                  {"refine_compression", rp.refine_compression},
                  {"refine_velocity", rp.refine_velocity},
                  {"obstacle_distance", rp.obstacle_distance},
+                 {"rescue_distance", s.remesh.rescue_distance},
                  {"size_min", rp.size_min},
                  {"size_max", rp.size_max},
                  {"aspect_min", rp.aspect_min},

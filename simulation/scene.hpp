@@ -50,6 +50,10 @@ struct RemeshSpec {
   /// Remesh before the first step, after it, and then after every `every` steps.
   int every = 1;
   remesh::RemeshParams params;
+  /// [m] when a step fails at h / 64 while the obstacle criterion is off
+  /// (params.obstacle_distance <= 0), the run turns it on with this distance, remeshes and takes
+  /// the step again (Run::step); <= 0 off.
+  double rescue_distance = 0.05;
 };
 
 /// ContactParams with the stiffness left to the scene (0: automatic).

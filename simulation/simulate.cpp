@@ -106,6 +106,7 @@ SelfContactStatistics self_contact_from_json(const json& c) {
 json remesh_json(const RemeshTotals& r) {
   return {{"passes", r.passes},
           {"rollbacks", r.rollbacks},
+          {"rescues", r.rescues},
           {"rollback_reasons", r.rollback_reasons},
           {"splits", r.splits},
           {"flips", r.flips},
@@ -121,6 +122,7 @@ RemeshTotals remesh_from_json(const json& r) {
   RemeshTotals x;
   x.passes = r.at("passes").get<int>();
   x.rollbacks = r.at("rollbacks").get<int>();
+  x.rescues = r.value("rescues", 0);  // absent from checkpoints written before rescues
   x.rollback_reasons = r.at("rollback_reasons").get<std::map<std::string, int>>();
   x.splits = r.at("splits").get<int>();
   x.flips = r.at("flips").get<int>();

@@ -4,7 +4,9 @@
 // contact. With --remesh the runs remesh (docs/scene.md, "Remeshing"): every kept pass was
 // checked exactly for self-intersection and stretch by the run (a pass that fails is undone and
 // counted as a rollback); the table adds the vertex counts (start, largest, end), the passes,
-// the rollbacks and the largest jump of the mechanical energy across a pass.
+// the rollbacks, the rescues (a failed step taken again after a pass with the obstacle
+// criterion on, remesh.rescue_distance) and the largest jump of the mechanical energy across a
+// pass.
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cmath>
@@ -31,7 +33,7 @@ int main(int argc, char** argv) {
   CLI::App app{"fall_study: a fall scenario over seeds, with its acceptance checks"};
   std::string name = "fall-sphere", csv;
   int seeds = 20, first = 0, trust_region_cg = -1;
-  double size_min = 0, size_max = 100, start_edge = 0, angle = 0, step = 0;
+  double size_min = 0, size_max = 100, start_edge = 0, angle = 0, step = 0, rescue = -1;
   app.add_option("--scenario", name, "fall-cylinder, fall-gable, fall-sphere, fall-spheres or pull")
       ->check(CLI::IsMember({"fall-cylinder", "fall-gable", "fall-sphere", "fall-spheres", "pull"}));
   app.add_option("--remesh", size_min, "remesh with this remesh.size_min [mm] (0: the scenario's setting)")
@@ -39,6 +41,9 @@ int main(int argc, char** argv) {
   app.add_option("--remesh-max", size_max, "remesh.size_max with --remesh [mm]")->capture_default_str()
       ->check(CLI::PositiveNumber);
   app.add_option("--remesh-angle", angle, "remesh.refine_angle with --remesh [rad] (0: the scene's)")
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--rescue-distance", rescue,
+                 "remesh.rescue_distance with --remesh [mm] (0: no rescue; default: the scene's)")
       ->check(CLI::NonNegativeNumber);
   app.add_option("--start-edge", start_edge, "start mesh edge length [mm] (0: the scenario's)")
       ->check(CLI::NonNegativeNumber);
@@ -54,15 +59,16 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "fall_study: --remesh %g mm is larger than --remesh-max %g mm\n", size_min, size_max);
     return 2;
   }
-  std::printf("%-5s %-6s %-8s %-7s %-6s %-9s %-10s %-10s %-5s %-7s %-7s %-15s %-6s %-5s %-9s %s\n", "seed", "verts",
+  std::printf("%-5s %-6s %-8s %-7s %-6s %-9s %-10s %-10s %-5s %-7s %-7s %-15s %-6s %-5s %-4s %-9s %s\n", "seed", "verts",
               "wall_s", "newton", "halved", "max_s1", "min_obst", "min_ground", "self", "contact", "self_c",
-              "v_start/max", "passes", "rollb", "e_jump", "verdict (rollbacks by reason)");
+              "v_start/max", "passes", "rollb", "resc", "e_jump", "verdict (rollbacks by reason)");
   std::ofstream out;
   if (!csv.empty()) {
     out.open(csv);
     out << "scenario,seed,vertices,wall_seconds,newton_iterations,failed_solves,max_stretch,min_obstacle,"
            "min_ground,self_intersections,contact_share,self_contact_share,vertices_start,vertices_max,"
-           "remesh_passes,remesh_rollbacks,max_energy_jump,max_energy_jump_relative,verdict,rollback_reasons\n";
+           "remesh_passes,remesh_rollbacks,max_energy_jump,max_energy_jump_relative,verdict,rollback_reasons,"
+           "remesh_rescues\n";
   }
   int failures = 0;
   std::vector<double> walls, shares, jumps;
@@ -76,10 +82,11 @@ int main(int argc, char** argv) {
       scene.remesh.params.size_min = 1e-3 * size_min;
       scene.remesh.params.size_max = 1e-3 * size_max;
       if (angle > 0) scene.remesh.params.refine_angle = angle;
+      if (rescue >= 0) scene.remesh.rescue_distance = 1e-3 * rescue;
     }
     std::string verdict = "PASS";
     double wall = 0, s1 = 0, obstacle = INFINITY, ground = INFINITY, share = 0, self_share = 0;
-    int newton = 0, halved = 0, verts = 0, self = -1, verts_start = 0, verts_max = 0, passes = 0, rollbacks = 0;
+    int newton = 0, halved = 0, verts = 0, self = -1, verts_start = 0, verts_max = 0, passes = 0, rollbacks = 0, rescues = 0;
     double jump = 0, jump_relative = 0;
     std::string reasons;  // "obstacle 3 stretch 1"
     try {
@@ -94,6 +101,7 @@ int main(int argc, char** argv) {
       if (r.remesh) {
         passes = r.remesh->passes;
         rollbacks = r.remesh->rollbacks;
+        rescues = r.remesh->rescues;
         jump = r.remesh->max_energy_jump;
         jump_relative = r.remesh->max_energy_jump_relative;
         for (const auto& [reason, n] : r.remesh->rollback_reasons)
@@ -115,15 +123,15 @@ int main(int argc, char** argv) {
     shares.push_back(share + self_share);
     jumps.push_back(jump_relative);
     const std::string counts = std::to_string(verts_start) + "/" + std::to_string(verts_max);
-    std::printf("%-5d %-6d %-8.2f %-7d %-6d %-9.6f %-10.3g %-10.3g %-5d %-7.3f %-7.3f %-15s %-6d %-5d %-9.3g %s%s\n",
+    std::printf("%-5d %-6d %-8.2f %-7d %-6d %-9.6f %-10.3g %-10.3g %-5d %-7.3f %-7.3f %-15s %-6d %-5d %-4d %-9.3g %s%s\n",
                 seed, verts, wall, newton, halved, s1, obstacle, ground, self, share, self_share, counts.c_str(),
-                passes, rollbacks, jump, verdict.c_str(), reasons.empty() ? "" : (" (" + reasons + ")").c_str());
+                passes, rollbacks, rescues, jump, verdict.c_str(), reasons.empty() ? "" : (" (" + reasons + ")").c_str());
     std::fflush(stdout);
     if (out)
       out << name << ',' << seed << ',' << verts << ',' << wall << ',' << newton << ',' << halved << ',' << s1 << ','
           << obstacle << ',' << ground << ',' << self << ',' << share << ',' << self_share << ',' << verts_start << ','
           << verts_max << ',' << passes << ',' << rollbacks << ',' << jump << ',' << jump_relative << ',' << verdict
-          << ',' << reasons << '\n';
+          << ',' << reasons << ',' << rescues << '\n';
   }
   std::sort(walls.begin(), walls.end());
   if (size_min > 0)
