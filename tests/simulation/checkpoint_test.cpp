@@ -158,6 +158,7 @@ TEST(Checkpoint, RunFiguresRoundTripThroughJson) {
   t.quality.min_obstacle_distance = {2e-7, INF};
   t.quality.lifts = {{1, 20.5, 3e-3}};
   t.remesh.passes = 5;
+  t.remesh.rescues = 1;  // a resumed run keeps the obstacle criterion a rescue turned on
   t.remesh.refusals = {{"too long", 12}, {"veto: strain", 3}};
   t.remesh.rollback_reasons = {{"obstacle", 1}};
   t.remesh.max_energy_jump_relative = 0.04;
@@ -182,6 +183,7 @@ TEST(Checkpoint, RunFiguresRoundTripThroughJson) {
   EXPECT_EQ(u.quality.lifts[0].max_load, 20.5);
   EXPECT_EQ(u.quality.lifts[0].max_rise, 3e-3);
   EXPECT_EQ(u.remesh.passes, 5);
+  EXPECT_EQ(u.remesh.rescues, 1);
   EXPECT_EQ(u.remesh.refusals, t.remesh.refusals);
   EXPECT_EQ(u.remesh.rollback_reasons, t.remesh.rollback_reasons);
   EXPECT_EQ(u.remesh.max_energy_jump_relative, 0.04);
