@@ -509,9 +509,11 @@ TEST(RemeshRun, DrapedSheetRemeshesWithoutDegenerateFaces) {
 
 // Rescue (remesh.rescue_distance): fall-sphere seed 25 remeshed 8:100 mm from the 21 mm grid
 // without the obstacle criterion lands on its 4 cm sphere at about 7 m/s on a 105-vertex mesh
-// whose faces are larger than the sphere; at t = 0.145 s Newton crawls (every step cut short by
-// the sphere's collision bound) and the step cannot be taken with 6 halvings, nor (found by the
-// safety study, docs/remeshing.md) with the 10 the solver allows. The run turns the obstacle
+// whose faces are larger than the sphere; at t = 0.145 s the barrier is back at its weight-scaled
+// stiffness while one face carries the falling sheet's load onto the sphere, Newton pushes that
+// face to picometres from it and crawls (every step cut short by the sphere's collision bound,
+// docs/remeshing.md), and the step cannot be taken with 6 halvings, nor (found by the safety
+// study) with the 10 the solver allows. The run turns the obstacle
 // criterion on, remeshes from the step's start and takes the step again: it goes on past the
 // impact on a mesh refined at the sphere, free of self-intersection, outside the obstacles and
 // within the strain limit.
