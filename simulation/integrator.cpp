@@ -131,6 +131,7 @@ double Integrator::start_energy(const SheetState& state, double h) {
   const Eigen::VectorXd x_t0 = with_rigid(state.positions, m_rigid_x), v_t0 = with_rigid(state.velocities, m_rigid_v);
   ctx.x_t0 = &x_t0;
   ctx.v_t0 = &v_t0;
+  ctx.contact_stiffness = state.contact_stiffness;
   begin_step(ctx, x_t0);
   const double e = energy(x_t0);
   m_following.clear();
@@ -480,6 +481,7 @@ bool Integrator::advance(SheetState& state, double h, int depth, int max_depth, 
   const Eigen::VectorXd x_t0 = with_rigid(state.positions, m_rigid_x), v_t0 = with_rigid(state.velocities, m_rigid_v);
   ctx.x_t0 = &x_t0;
   ctx.v_t0 = &v_t0;
+  ctx.contact_stiffness = state.contact_stiffness;
   begin_step(ctx, x_t0);
   // Start from the explicit prediction x_t0 + h v_t0 when it is feasible (CCD-safe from x_t0
   // and finite energy): Newton then only corrects it, instead of producing the whole motion of
@@ -525,6 +527,7 @@ bool Integrator::advance(SheetState& state, double h, int depth, int max_depth, 
   m_rigid_v = (x.tail(nr) - x_t0.tail(nr)) / h;
   m_rigid_x = x.tail(nr);
   state.time += h;
+  for (const auto& t : m_terms) t->end_step(state);
   ++stats.substeps;
   if (!state.positions.allFinite()) throw NumericError("NaN in the positions after a step");
   return true;

@@ -350,6 +350,7 @@ Scene scene_from_json(const json& j, const std::string& source) {
     s.contact.stiffness = c.number("stiffness", 0.0, 0, 1e12);
     s.contact.eps_velocity = c.number("static_velocity", s.contact.eps_velocity, 0, 10, true);
     s.contact.faces = c.boolean("faces", s.contact.faces);
+    s.contact.hold_load = c.boolean("hold_load", s.contact.hold_load);
     c.finish();
   }
   {
@@ -503,7 +504,8 @@ json scene_to_json(const Scene& s, bool every_key) {
   j["contact"] = {{"thickness", s.contact.dhat},
                   {"stiffness", s.contact.stiffness},
                   {"static_velocity", s.contact.eps_velocity},
-                  {"faces", s.contact.faces}};
+                  {"faces", s.contact.faces},
+                  {"hold_load", s.contact.hold_load}};
   j["self_contact"] = {{"enabled", s.self_contact.enabled},
                        {"thickness", s.self_contact.dhat},
                        {"stiffness", s.self_contact.stiffness},

@@ -1,5 +1,6 @@
 #pragma once
-/// The sheet's dynamic state: world positions and velocities of the vertices, and the time.
+/// The sheet's dynamic state: world positions and velocities of the vertices, the time, and the
+/// obstacle barrier's stiffness the last step ended with (ObstacleContactEnergy, "Load rule").
 #include <Eigen/Core>
 
 namespace papersim::simulation {
@@ -8,6 +9,10 @@ struct SheetState {
   Eigen::VectorXd positions;   ///< 3N world positions [m], vertex v at 3v..3v+2
   Eigen::VectorXd velocities;  ///< 3N [m/s]
   double time = 0.0;           ///< [s]
+  /// Stiffness of the obstacle barrier over the step that reached this state [Pa]; 0: none yet
+  /// (the scene's `contact.stiffness`). Carried into the next step, which lets it fall only as
+  /// fast as the contact load allows.
+  double contact_stiffness = 0.0;
 
   int num_vertices() const { return static_cast<int>(positions.size() / 3); }
   /// Positions as #V by 3.

@@ -261,7 +261,8 @@ void save_checkpoint(const std::string& dir, const Scene& scene, int step, const
   remesh::write_sheet_file((d / name.str()).string(), mesh, state.positions_matrix(), state.velocities_matrix(),
                            scene.sheet.width, scene.sheet.height);
   json j = {{"format", CHECKPOINT_FORMAT}, {"step", step},        {"time", state.time},
-            {"sheet", name.str()},         {"version", version()}, {"scene", scene_to_json(scene)}};
+            {"sheet", name.str()},         {"version", version()}, {"scene", scene_to_json(scene)},
+            {"contact_stiffness", state.contact_stiffness}};
   if (tally) j["run"] = tally_to_json(*tally);
   common::write_text_atomically(d / "checkpoint.json", j.dump(1) + "\n");
   if (!previous.empty() && previous != name.str() && previous.find('/') == std::string::npos)
@@ -281,6 +282,7 @@ Checkpoint load_checkpoint(const std::string& dir) {
       throw SceneError(where + "key 'format' is not \"" + CHECKPOINT_FORMAT + "\"");
     c.step = j.at("step").get<int>();
     c.time = j.at("time").get<double>();
+    c.state.contact_stiffness = j.value("contact_stiffness", 0.0);  // absent before the load rule
     sheet = j.at("sheet").get<std::string>();
     c.scene = j.at("scene");
     if (j.contains("run")) {

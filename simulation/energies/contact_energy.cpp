@@ -419,7 +419,7 @@ void ObstacleContactEnergy::for_each_contact(const Eigen::VectorXd& x, double t,
         fp.weights = r.barycentric;
         fp.obstacle = o;
         visit(fp, -face_kappa(f) * barrier_first_derivative(r.distance, m_params.dhat), contact_point(fp, x),
-              r.gradient);
+              r.gradient, r.distance);
       }
     }
     if (!uses_vertices(o)) continue;
@@ -433,7 +433,7 @@ void ObstacleContactEnergy::for_each_contact(const Eigen::VectorXd& x, double t,
       FrictionPoint fp;
       fp.vertices[0] = v;
       fp.obstacle = o;
-      visit(fp, -kappa(v) * barrier_first_derivative(d, m_params.dhat), p, n);
+      visit(fp, -kappa(v) * barrier_first_derivative(d, m_params.dhat), p, n, d);
     }
   }
   // Corner-triangle and edge-edge pairs of polyhedral obstacles: normal force of the mollified
@@ -466,7 +466,7 @@ void ObstacleContactEnergy::for_each_contact(const Eigen::VectorXd& x, double t,
     const double kappa_pair = m_stiffness / m_params.dhat * pair_weight(p);
     // n from the obstacle to the sheet in both cases (friction depends only on its plane).
     const Eigen::Vector3d n = p.edge_edge ? r.normalized() : Eigen::Vector3d(-r.normalized());
-    visit(fp, -kappa_pair * m * barrier_first_derivative(d, m_params.dhat), contact_point(fp, x), n);
+    visit(fp, -kappa_pair * m * barrier_first_derivative(d, m_params.dhat), contact_point(fp, x), n, d);
   }
 }
 
@@ -478,7 +478,8 @@ void ObstacleContactEnergy::begin_step(const StepContext& ctx, const Eigen::Vect
   update_bounds();
   m_moving.clear();
   for (const auto& o : m_obstacles) m_moving.push_back(o->motion.moves_during(m_t0, m_t1));
-  m_stiffness = m_params.stiffness;
+  const double carried = std::max(ctx.contact_stiffness, m_params.stiffness);
+  double stiffness = m_params.stiffness;
   if (m_impact_density > 0 && ctx.v_t0) {
     // Impact rule (header): the fastest normal approach of a vertex that can reach an obstacle
     // within this step.
@@ -495,34 +496,58 @@ void ObstacleContactEnergy::begin_step(const StepContext& ctx, const Eigen::Vect
         approach = std::max(approach, -n.dot(vel));
       }
     }
-    m_stiffness = std::max(m_stiffness, m_impact_density * approach * approach /
-                                            (2 * m_params.dhat * std::log(100.0)));
+    stiffness = std::max(stiffness, m_impact_density * approach * approach / (2 * m_params.dhat * std::log(100.0)));
   }
+  // Contacts at the step start, their forces at the stiffness that holds them there.
+  struct Contact {
+    FrictionPoint fp;
+    double lambda;
+    Eigen::Vector3d p, n;
+  };
+  std::vector<Contact> contacts;
+  double gap = m_params.dhat;
+  m_stiffness = carried;
+  m_features.assign(m_obstacles.size(), {});
+  for (int o = 0; o < num_obstacles(); ++o) m_features[o] = world_features(o, m_time);
+  for_each_contact(x_t0, ctx.time_t0,
+                   [&](const FrictionPoint& fp, double lambda, const Eigen::Vector3d& p, const Eigen::Vector3d& n, double d) {
+                     contacts.push_back({fp, lambda, p, n});
+                     gap = std::min(gap, d);
+                   });
+  if (m_params.hold_load && gap < m_params.dhat) {
+    // Load rule (header): the stiffness falls only as far as still holds the present contact
+    // pressure at dhat / 100 or farther.
+    const double ratio = barrier_first_derivative(gap, m_params.dhat) /
+                         barrier_first_derivative(m_params.dhat / 100, m_params.dhat);
+    stiffness = std::max(stiffness, carried * std::min(1.0, ratio));
+  }
+  m_stiffness = stiffness;
   // Lagged friction: normal force and tangent plane at the step start (IPC Sec. 5).
   m_friction.clear();
   m_normal_force = 0.0;
-  const auto add_friction = [&](FrictionPoint fp, double lambda, const Eigen::Vector3d& p, const Eigen::Vector3d& n) {
+  for (Contact& c : contacts) {
+    const double lambda = c.lambda * stiffness / carried;
     m_normal_force += lambda;
-    const collision::Collider& obs = *m_obstacles[fp.obstacle];
-    if (obs.friction <= 0) return;
-    fp.mu_lambda = obs.friction * lambda;
-    const Eigen::Vector3d a = std::abs(n.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
-    fp.T.col(0) = n.cross(a).normalized();
-    fp.T.col(1) = n.cross(fp.T.col(0));
-    fp.origin = p + ctx.h * obs.velocity(p, ctx.time_t0);
-    m_friction.push_back(fp);
-  };
-  m_features.assign(m_obstacles.size(), {});
-  for (int o = 0; o < num_obstacles(); ++o) m_features[o] = world_features(o, m_time);
-  for_each_contact(x_t0, ctx.time_t0, add_friction);
+    const collision::Collider& obs = *m_obstacles[c.fp.obstacle];
+    if (obs.friction <= 0) continue;
+    c.fp.mu_lambda = obs.friction * lambda;
+    const Eigen::Vector3d a = std::abs(c.n.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+    c.fp.T.col(0) = c.n.cross(a).normalized();
+    c.fp.T.col(1) = c.n.cross(c.fp.T.col(0));
+    c.fp.origin = c.p + ctx.h * obs.velocity(c.p, ctx.time_t0);
+    m_friction.push_back(c.fp);
+  }
   m_stats->max_friction_points = std::max(m_stats->max_friction_points, active_friction());
   m_stats->max_normal_force = std::max(m_stats->max_normal_force, m_normal_force);
 }
 
+void ObstacleContactEnergy::end_step(SheetState& state) const { state.contact_stiffness = m_stiffness; }
+
 Eigen::Vector3d ObstacleContactEnergy::obstacle_load(int o, const Eigen::VectorXd& x) const {
   Eigen::Vector3d load = Eigen::Vector3d::Zero();
   for_each_contact(
-      x, m_time, [&](const FrictionPoint&, double lambda, const Eigen::Vector3d&, const Eigen::Vector3d& n) { load -= lambda * n; },
+      x, m_time,
+      [&](const FrictionPoint&, double lambda, const Eigen::Vector3d&, const Eigen::Vector3d& n, double) { load -= lambda * n; },
       o);
   return load;
 }

@@ -51,6 +51,16 @@
 /// barrier can absorb the kinetic energy of the fastest approach within the layer, stopping it
 /// at about dhat / 100: stiffness >= rho_A v_n^2 / (2 dhat ln 100), v_n the largest normal
 /// speed towards an obstacle of a vertex that can reach it within the step.
+///
+/// Load rule (ContactParams::hold_load): once an impact has raised the stiffness, the sheet's
+/// load may rest on a few vertices or faces at about dhat / 100. Falling back at once to the
+/// weight's stiffness would let that load push them to nanometres from the surface, where the
+/// continuous collision detection cuts every step short and Newton crawls. So the stiffness the last step ended with
+/// (SheetState::contact_stiffness, carried in StepContext) falls at a step start only as far as
+/// still holds the largest contact pressure at the step start at dhat / 100 or farther:
+/// stiffness >= carried x min(1, b'(d_min) / b'(dhat / 100)), d_min the smallest gap of any
+/// contact term. It never rises by this rule (a rise would push the sheet off in one step), and
+/// it falls to the scene's stiffness once the load eases or the sheet leaves the obstacles.
 #include <array>
 #include <memory>
 #include <vector>
@@ -66,6 +76,7 @@ struct ContactParams {
   double dhat = 3e-4;          ///< barrier activation distance (contact thickness) [m]
   double stiffness = 1.0;      ///< pressure scale of the barrier [Pa] (see above)
   double eps_velocity = 1e-3;  ///< slip speed below which friction is static-like [m/s]
+  bool hold_load = true;       ///< the load rule (above)
   /// Contact on sheet faces against obstacles other than planes (set_faces), for features
   /// smaller than the sheet's edges; off: vertices only.
   bool faces = false;
@@ -134,6 +145,8 @@ class ObstacleContactEnergy : public EnergyTerm {
   void set_impact_density(double areal_density) { m_impact_density = areal_density; }
   /// Barrier stiffness in force for the current step [Pa] (>= ContactParams::stiffness).
   double step_stiffness() const { return m_stiffness; }
+  /// Writes the step's stiffness to state.contact_stiffness (the load rule carries it on).
+  void end_step(SheetState& state) const override;
 
   /// Number of vertices with friction active in the current step.
   int active_friction() const { return static_cast<int>(m_friction.size()); }

@@ -8,6 +8,7 @@
 #include <limits>
 #include <string>
 
+#include "simulation/sheet_state.hpp"
 #include "simulation/sparse_matrix.hpp"
 
 namespace papersim::simulation {
@@ -18,6 +19,7 @@ struct StepContext {
   double h = 1e-3;       ///< step length [s]
   const Eigen::VectorXd* x_t0 = nullptr;  ///< positions at the step start (3N) [m]
   const Eigen::VectorXd* v_t0 = nullptr;  ///< velocities at the step start (3N) [m/s]
+  double contact_stiffness = 0.0;  ///< SheetState::contact_stiffness at the step start [Pa]
   double time_t1() const { return time_t0 + h; }
 };
 
@@ -40,6 +42,9 @@ class EnergyTerm {
   virtual void add_dynamic_pattern(SparsityBuilder& /*pattern*/) const {}
   /// Called once at the start of each time step (lagged quantities, active sets).
   virtual void begin_step(const StepContext& /*ctx*/, const Eigen::VectorXd& /*x_t0*/) {}
+  /// Called on the state a step (or part step) was accepted with: a term that carries a
+  /// quantity from step to step writes it there (the obstacle barrier's stiffness).
+  virtual void end_step(SheetState& /*state*/) const {}
   /// Value [J]; +infinity when x is infeasible for this term.
   virtual double value(const Eigen::VectorXd& x) const = 0;
   /// Adds the gradient [J/m] to `gradient` and, when `hessian` is not null, PSD element

@@ -5,7 +5,9 @@
 #include <cstdio>
 #include <limits>
 
+#include "collision/barrier.hpp"
 #include "collision/collider_factory.hpp"
+#include "simulation/energies/contact_energy.hpp"
 #include "simulation/errors.hpp"
 #include "simulation/integrator.hpp"
 #include "simulation/run.hpp"
@@ -267,6 +269,56 @@ TEST(ObstacleContact, CoupledBodyDerivativesMatchFiniteDifferences) {
   EXPECT_GT(alpha, 0.0);
   EXPECT_TRUE(std::isfinite(e.value(x + alpha * dx)));
   EXPECT_LT(alpha * 1e-3, 0.05026 - 0.05 - 2e-5);  // within the smallest gap (0.04 mm)
+}
+
+// The load rule (ObstacleContactEnergy, "Load rule"): the stiffness carried in from the last
+// step falls only as far as still holds the present contact force at dhat / 100, never rises by
+// the rule, and falls to the scene's stiffness when the sheet is out of contact or the rule off.
+TEST(ObstacleContact, CarriedStiffnessFallsOnlyAsFarAsHoldsTheLoadAtAHundredthOfTheThickness) {
+  collision::ColliderSpec spec;
+  spec.kind = collision::ColliderKind::box;
+  spec.half_extents = Eigen::Vector3d::Constant(0.05);  // top face at z = 0.05
+  spec.friction = 0.0;
+  const std::vector<std::shared_ptr<const collision::Collider>> obstacles{collision::make_collider(spec)};
+  ContactParams params;  // dhat 0.3 mm, stiffness 1 Pa
+  const double dhat = params.dhat, carried = 1000.0, area = 1e-4;
+  const auto stiffness_at = [&](double gap, bool hold_load, Eigen::VectorXd* force = nullptr) {
+    ContactParams p = params;
+    p.hold_load = hold_load;
+    ObstacleContactEnergy e(Eigen::VectorXd::Constant(1, area), obstacles, p);
+    Eigen::VectorXd x(3);
+    x << 0.0, 0.0, 0.05 + gap;
+    const Eigen::VectorXd v0 = Eigen::VectorXd::Zero(3);
+    StepContext ctx;
+    ctx.h = 1e-3;
+    ctx.x_t0 = &x;
+    ctx.v_t0 = &v0;
+    ctx.contact_stiffness = carried;
+    e.begin_step(ctx, x);
+    SheetState end;
+    e.end_step(end);
+    EXPECT_EQ(end.contact_stiffness, e.step_stiffness()) << "end_step carries the step's stiffness on";
+    if (force) {  // the barrier's force on the vertex at dhat / 100 with this step's stiffness
+      Eigen::VectorXd y = x;
+      y[2] = 0.05 + dhat / 100;
+      *force = Eigen::VectorXd::Zero(3);
+      e.add_derivatives(y, *force, nullptr);
+    }
+    return e.step_stiffness();
+  };
+  // At half the thickness the carried stiffness is more than the load needs: it falls, to the
+  // stiffness whose force at dhat / 100 is the carried stiffness's force now.
+  Eigen::VectorXd held;
+  const double k = stiffness_at(dhat / 2, true, &held);
+  EXPECT_LT(k, carried);
+  EXPECT_GT(k, params.stiffness);
+  const double now = carried / dhat * area * std::abs(collision::barrier_first_derivative(dhat / 2, dhat));
+  EXPECT_NEAR(-held[2], now, 1e-9 * now);  // the gaps are z - 0.05, rounded
+  // Closer than dhat / 100 the load needs more than it has: the rule keeps it, it does not raise it.
+  EXPECT_EQ(stiffness_at(dhat / 200, true), carried);
+  // Out of contact, or the rule off: the scene's stiffness.
+  EXPECT_EQ(stiffness_at(1.5 * dhat, true), params.stiffness);
+  EXPECT_EQ(stiffness_at(dhat / 200, false), params.stiffness);
 }
 
 // Many spheres against a sheet by its faces: with 8 or more such obstacles the term finds the
