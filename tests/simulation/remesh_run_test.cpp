@@ -509,22 +509,41 @@ TEST(RemeshRun, DrapedSheetRemeshesWithoutDegenerateFaces) {
   EXPECT_NO_THROW(build_terms(mesh, setup));
 }
 
+namespace {
+
+/// fall-sphere seed 25 remeshed as in the safety study: 8-100 mm from the reference's 11 x 11
+/// grid, a pass after every step, no obstacle criterion.
+Scene remeshed_fall_sphere_25() {
+  Scene s = make_scenario("fall-sphere", 25);
+  s.sheet.edge_length = 0.021;
+  s.remesh.enabled = true;
+  s.remesh.params.size_min = 0.008;
+  s.remesh.params.size_max = 0.1;
+  return s;
+}
+
+/// After every step: no self-intersection, within the strain limit, outside every obstacle.
+void check_step(const StepReport& r) {
+  EXPECT_EQ(papersim::collision::count_self_intersections(r.state->positions_matrix(), r.mesh->faces()), 0)
+      << "step " << r.step;
+  EXPECT_LT(r.max_stretch, 1.005) << "step " << r.step;
+  for (double d : r.obstacle_distance) EXPECT_GT(d, 0.0) << "step " << r.step;
+}
+
+}  // namespace
+
 // Rescue (remesh.rescue_distance): fall-sphere seed 25 remeshed 8:100 mm from the 21 mm grid
 // without the obstacle criterion lands on its 4 cm sphere at about 7 m/s on a 105-vertex mesh
-// whose faces are larger than the sphere; at t = 0.145 s the barrier is back at its weight-scaled
-// stiffness while one face carries the falling sheet's load onto the sphere, Newton pushes that
-// face to picometres from it and crawls (every step cut short by the sphere's collision bound,
+// whose faces are larger than the sphere; at t = 0.145 s, without the load rule, the barrier is
+// back at its weight-scaled stiffness while one face carries the falling sheet's load onto the
+// sphere, Newton pushes that face to picometres from it and crawls (every step cut short by the sphere's collision bound,
 // docs/remeshing.md), and the step cannot be taken with 6 halvings, nor (found by the safety
 // study) with the 10 the solver allows. The run turns the obstacle
 // criterion on, remeshes from the step's start and takes the step again: it goes on past the
 // impact on a mesh refined at the sphere, free of self-intersection, outside the obstacles and
 // within the strain limit.
 TEST(RemeshRun, AStepThatFailsOnACoarseMeshIsTakenAgainRefinedNearTheObstacles) {
-  Scene s = make_scenario("fall-sphere", 25);
-  s.sheet.edge_length = 0.021;
-  s.remesh.enabled = true;
-  s.remesh.params.size_min = 0.008;
-  s.remesh.params.size_max = 0.1;
+  Scene s = remeshed_fall_sphere_25();
   // Without the load rule the barrier softens right after the impact and this step crawls
   // (the next test); the rescue is what is tested here.
   s.contact.hold_load = false;
@@ -535,10 +554,7 @@ TEST(RemeshRun, AStepThatFailsOnACoarseMeshIsTakenAgainRefinedNearTheObstacles) 
   RunOptions o;
   o.on_step = [&](const StepReport& r) {
     if (r.step == 145) vertices_before = r.mesh->num_vertices();
-    EXPECT_EQ(papersim::collision::count_self_intersections(r.state->positions_matrix(), r.mesh->faces()), 0)
-        << "step " << r.step;
-    EXPECT_LT(r.max_stretch, 1.005) << "step " << r.step;
-    for (double d : r.obstacle_distance) EXPECT_GT(d, 0.0) << "step " << r.step;
+    check_step(r);
   };
   const RunResult r = run_scene(s, o);
   ASSERT_TRUE(r.remesh.has_value());
@@ -561,11 +577,7 @@ TEST(RemeshRun, AStepThatFailsOnACoarseMeshIsTakenAgainRefinedNearTheObstacles) 
 // one just after the impact ends in the same state to the bit, and one continued from the
 // weight's stiffness (a checkpoint without the figure, as written before the rule) does not.
 TEST(RemeshRun, AfterTheImpactTheBarrierHoldsTheLoadSoACoarseMeshFinishesTheFall) {
-  Scene s = make_scenario("fall-sphere", 25);
-  s.sheet.edge_length = 0.021;
-  s.remesh.enabled = true;
-  s.remesh.params.size_min = 0.008;
-  s.remesh.params.size_max = 0.1;
+  Scene s = remeshed_fall_sphere_25();
   s.remesh.rescue_distance = 0;
   ASSERT_TRUE(s.contact.hold_load);
   double held = 0;  // the largest carried stiffness over the steps after the impact [Pa]
@@ -575,10 +587,7 @@ TEST(RemeshRun, AfterTheImpactTheBarrierHoldsTheLoadSoACoarseMeshFinishesTheFall
   o.checkpoint_every = 146;
   o.on_step = [&](const StepReport& r) {
     if (r.step > 145) held = std::max(held, r.state->contact_stiffness);
-    EXPECT_EQ(papersim::collision::count_self_intersections(r.state->positions_matrix(), r.mesh->faces()), 0)
-        << "step " << r.step;
-    EXPECT_LT(r.max_stretch, 1.005) << "step " << r.step;
-    for (double d : r.obstacle_distance) EXPECT_GT(d, 0.0) << "step " << r.step;
+    check_step(r);
   };
   const RunResult r = run_scene(s, o);
   ASSERT_TRUE(r.remesh.has_value());
