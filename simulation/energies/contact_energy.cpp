@@ -397,9 +397,9 @@ void ObstacleContactEnergy::update_bounds() {
 }
 
 // Every barrier contact of the sheet at x against the obstacles at time t (only obstacle `only`
-// when >= 0): visit(fp, lambda, p, n) with the contact's vertices and weights in fp (fp.obstacle
-// set), its normal force lambda [N], the contact point p on the sheet and the unit normal n
-// pointing from the obstacle to the sheet.
+// when >= 0): visit(fp, lambda, p, n, d) with the contact's vertices and weights in fp
+// (fp.obstacle set), its normal force lambda [N], the contact point p on the sheet, the unit
+// normal n pointing from the obstacle to the sheet and the gap d of the contact's term [m].
 template <class F>
 void ObstacleContactEnergy::for_each_contact(const Eigen::VectorXd& x, double t, F&& visit, int only) const {
   const int nv = static_cast<int>(m_area.size());
@@ -496,7 +496,8 @@ void ObstacleContactEnergy::begin_step(const StepContext& ctx, const Eigen::Vect
         approach = std::max(approach, -n.dot(vel));
       }
     }
-    stiffness = std::max(stiffness, m_impact_density * approach * approach / (2 * m_params.dhat * std::log(100.0)));
+    stiffness = std::max(stiffness, m_impact_density * approach * approach /
+                                        (2 * m_params.dhat * std::log(100.0)));
   }
   // Contacts at the step start, their forces at the stiffness that holds them there.
   struct Contact {
@@ -509,11 +510,12 @@ void ObstacleContactEnergy::begin_step(const StepContext& ctx, const Eigen::Vect
   m_stiffness = carried;
   m_features.assign(m_obstacles.size(), {});
   for (int o = 0; o < num_obstacles(); ++o) m_features[o] = world_features(o, m_time);
-  for_each_contact(x_t0, ctx.time_t0,
-                   [&](const FrictionPoint& fp, double lambda, const Eigen::Vector3d& p, const Eigen::Vector3d& n, double d) {
-                     contacts.push_back({fp, lambda, p, n});
-                     gap = std::min(gap, d);
-                   });
+  const auto collect = [&](const FrictionPoint& fp, double lambda, const Eigen::Vector3d& p,
+                           const Eigen::Vector3d& n, double d) {
+    contacts.push_back({fp, lambda, p, n});
+    gap = std::min(gap, d);
+  };
+  for_each_contact(x_t0, ctx.time_t0, collect);
   if (m_params.hold_load && gap < m_params.dhat) {
     // Load rule (header): the stiffness falls only as far as still holds the present contact
     // pressure at dhat / 100 or farther.
@@ -547,7 +549,8 @@ Eigen::Vector3d ObstacleContactEnergy::obstacle_load(int o, const Eigen::VectorX
   Eigen::Vector3d load = Eigen::Vector3d::Zero();
   for_each_contact(
       x, m_time,
-      [&](const FrictionPoint&, double lambda, const Eigen::Vector3d&, const Eigen::Vector3d& n, double) { load -= lambda * n; },
+      [&](const FrictionPoint&, double lambda, const Eigen::Vector3d&, const Eigen::Vector3d& n,
+          double) { load -= lambda * n; },
       o);
   return load;
 }

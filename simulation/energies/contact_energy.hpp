@@ -55,9 +55,10 @@
 /// Load rule (ContactParams::hold_load): once an impact has raised the stiffness, the sheet's
 /// load may rest on a few vertices or faces at about dhat / 100. Falling back at once to the
 /// weight's stiffness would let that load push them to nanometres from the surface, where the
-/// continuous collision detection cuts every step short and Newton crawls. So the stiffness the last step ended with
-/// (SheetState::contact_stiffness, carried in StepContext) falls at a step start only as far as
-/// still holds the largest contact pressure at the step start at dhat / 100 or farther:
+/// continuous collision detection cuts every step short and Newton crawls. So the stiffness the
+/// last step ended with (SheetState::contact_stiffness, carried in StepContext) falls at a step
+/// start only as far as still holds the largest contact pressure at the step start at dhat / 100
+/// or farther:
 /// stiffness >= carried x min(1, b'(d_min) / b'(dhat / 100)), d_min the smallest gap of any
 /// contact term. It never rises by this rule (a rise would push the sheet off in one step), and
 /// it falls to the scene's stiffness once the load eases or the sheet leaves the obstacles.

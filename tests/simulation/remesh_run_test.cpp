@@ -536,9 +536,9 @@ void check_step(const StepReport& r) {
 // without the obstacle criterion lands on its 4 cm sphere at about 7 m/s on a 105-vertex mesh
 // whose faces are larger than the sphere; at t = 0.145 s, without the load rule, the barrier is
 // back at its weight-scaled stiffness while one face carries the falling sheet's load onto the
-// sphere, Newton pushes that face to picometres from it and crawls (every step cut short by the sphere's collision bound,
-// docs/remeshing.md), and the step cannot be taken with 6 halvings, nor (found by the safety
-// study) with the 10 the solver allows. The run turns the obstacle
+// sphere, Newton pushes that face to picometres from it and crawls (every step cut short by the
+// sphere's collision bound, docs/remeshing.md), and the step cannot be taken with 6 halvings,
+// nor (found by the safety study) with the 10 the solver allows. The run turns the obstacle
 // criterion on, remeshes from the step's start and takes the step again: it goes on past the
 // impact on a mesh refined at the sphere, free of self-intersection, outside the obstacles and
 // within the strain limit.
