@@ -351,6 +351,7 @@ Scene scene_from_json(const json& j, const std::string& source) {
     s.contact.eps_velocity = c.number("static_velocity", s.contact.eps_velocity, 0, 10, true);
     s.contact.faces = c.boolean("faces", s.contact.faces);
     s.contact.hold_load = c.boolean("hold_load", s.contact.hold_load);
+    s.contact.load_raise = c.number("load_raise", s.contact.load_raise, 1, 1e3);
     c.finish();
   }
   {
@@ -505,7 +506,8 @@ json scene_to_json(const Scene& s, bool every_key) {
                   {"stiffness", s.contact.stiffness},
                   {"static_velocity", s.contact.eps_velocity},
                   {"faces", s.contact.faces},
-                  {"hold_load", s.contact.hold_load}};
+                  {"hold_load", s.contact.hold_load},
+                  {"load_raise", s.contact.load_raise}};
   j["self_contact"] = {{"enabled", s.self_contact.enabled},
                        {"thickness", s.self_contact.dhat},
                        {"stiffness", s.self_contact.stiffness},

@@ -517,11 +517,11 @@ void ObstacleContactEnergy::begin_step(const StepContext& ctx, const Eigen::Vect
   };
   for_each_contact(x_t0, ctx.time_t0, collect);
   if (m_params.hold_load && gap < m_params.dhat) {
-    // Load rule (header): the stiffness falls only as far as still holds the present contact
-    // pressure at dhat / 100 or farther.
+    // Load rule (header): the stiffness moves to the one that holds the present contact
+    // pressure at dhat / 100; it falls that far at once and rises by at most load_raise.
     const double ratio = barrier_first_derivative(gap, m_params.dhat) /
                          barrier_first_derivative(m_params.dhat / 100, m_params.dhat);
-    stiffness = std::max(stiffness, carried * std::min(1.0, ratio));
+    stiffness = std::max(stiffness, carried * std::min(m_params.load_raise, ratio));
   }
   m_stiffness = stiffness;
   // Lagged friction: normal force and tangent plane at the step start (IPC Sec. 5).

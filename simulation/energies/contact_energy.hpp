@@ -56,12 +56,15 @@
 /// load may rest on a few vertices or faces at about dhat / 100. Falling back at once to the
 /// weight's stiffness would let that load push them to nanometres from the surface, where the
 /// continuous collision detection cuts every step short and Newton crawls. So the stiffness the
-/// last step ended with (SheetState::contact_stiffness, carried in StepContext) falls at a step
-/// start only as far as still holds the largest contact pressure at the step start at dhat / 100
-/// or farther:
-/// stiffness >= carried x min(1, b'(d_min) / b'(dhat / 100)), d_min the smallest gap of any
-/// contact term. It never rises by this rule (a rise would push the sheet off in one step), and
-/// it falls to the scene's stiffness once the load eases or the sheet leaves the obstacles.
+/// last step ended with (SheetState::contact_stiffness, carried in StepContext) moves at a step
+/// start towards the one that holds the largest contact pressure at the step start at dhat / 100:
+/// stiffness >= carried x min(load_raise, b'(d_min) / b'(dhat / 100)), d_min the smallest gap
+/// of any contact term. Above dhat / 100 it falls that far at once; it falls to the scene's
+/// stiffness once the load eases or the sheet leaves the obstacles. A load that grows after the
+/// impact presses the sheet below dhat / 100; then the stiffness rises, by at most load_raise
+/// per step (2: IPC's adaptive stiffness doubles it while the gap shrinks, Li et al. 2020), so
+/// that no step starts with a barrier much stiffer than the one the sheet rests on, which would
+/// push the sheet off in one step.
 #include <array>
 #include <memory>
 #include <vector>
@@ -78,6 +81,9 @@ struct ContactParams {
   double stiffness = 1.0;      ///< pressure scale of the barrier [Pa] (see above)
   double eps_velocity = 1e-3;  ///< slip speed below which friction is static-like [m/s]
   bool hold_load = true;       ///< the load rule (above)
+  /// Largest factor by which the load rule raises the stiffness at one step start, when the
+  /// load has pressed the sheet closer than dhat / 100 (1: it never raises it).
+  double load_raise = 2.0;
   /// Contact on sheet faces against obstacles other than planes (set_faces), for features
   /// smaller than the sheet's edges; off: vertices only.
   bool faces = false;

@@ -272,9 +272,10 @@ TEST(ObstacleContact, CoupledBodyDerivativesMatchFiniteDifferences) {
 }
 
 // The load rule (ObstacleContactEnergy, "Load rule"): the stiffness carried in from the last
-// step falls only as far as still holds the present contact force at dhat / 100, never rises by
-// the rule, and falls to the scene's stiffness when the sheet is out of contact or the rule off.
-TEST(ObstacleContact, CarriedStiffnessFallsOnlyAsFarAsHoldsTheLoadAtAHundredthOfTheThickness) {
+// step moves to the one that holds the present contact force at dhat / 100: it falls that far
+// at once, rises by at most ContactParams::load_raise per step, and falls to the scene's
+// stiffness when the sheet is out of contact or the rule off.
+TEST(ObstacleContact, CarriedStiffnessMovesToHoldTheLoadAtAHundredthOfTheThickness) {
   collision::ColliderSpec spec;
   spec.kind = collision::ColliderKind::box;
   spec.half_extents = Eigen::Vector3d::Constant(0.05);  // top face at z = 0.05
@@ -282,9 +283,11 @@ TEST(ObstacleContact, CarriedStiffnessFallsOnlyAsFarAsHoldsTheLoadAtAHundredthOf
   const std::vector<std::shared_ptr<const collision::Collider>> obstacles{collision::make_collider(spec)};
   ContactParams params;  // dhat 0.3 mm, stiffness 1 Pa
   const double dhat = params.dhat, carried = 1000.0, area = 1e-4;
-  const auto stiffness_at = [&](double gap, bool hold_load, Eigen::VectorXd* force = nullptr) {
+  const auto stiffness_at = [&](double gap, bool hold_load, Eigen::VectorXd* force = nullptr,
+                                double load_raise = 2.0) {
     ContactParams p = params;
     p.hold_load = hold_load;
+    p.load_raise = load_raise;
     ObstacleContactEnergy e(Eigen::VectorXd::Constant(1, area), obstacles, p);
     Eigen::VectorXd x(3);
     x << 0.0, 0.0, 0.05 + gap;
@@ -306,16 +309,28 @@ TEST(ObstacleContact, CarriedStiffnessFallsOnlyAsFarAsHoldsTheLoadAtAHundredthOf
     }
     return e.step_stiffness();
   };
+  // The carried stiffness's force on the vertex at a gap.
+  const auto force_now = [&](double gap) {
+    return carried / dhat * area * std::abs(collision::barrier_first_derivative(gap, dhat));
+  };
   // At half the thickness the carried stiffness is more than the load needs: it falls, to the
   // stiffness whose force at dhat / 100 is the carried stiffness's force now.
   Eigen::VectorXd held;
   const double k = stiffness_at(dhat / 2, true, &held);
   EXPECT_LT(k, carried);
   EXPECT_GT(k, params.stiffness);
-  const double now = carried / dhat * area * std::abs(collision::barrier_first_derivative(dhat / 2, dhat));
-  EXPECT_NEAR(-held[2], now, 1e-9 * now);  // the gaps are z - 0.05, rounded
-  // Closer than dhat / 100 the load needs more than it has: the rule keeps it, it does not raise it.
-  EXPECT_EQ(stiffness_at(dhat / 200, true), carried);
+  EXPECT_NEAR(-held[2], force_now(dhat / 2), 1e-9 * force_now(dhat / 2));  // the gaps are z - 0.05, rounded
+  // At dhat / 200 the load needs 1.93 times the carried stiffness to be held at dhat / 100: it
+  // rises that far, within the bound of 2.
+  const double k200 = stiffness_at(dhat / 200, true, &held);
+  EXPECT_GT(k200, 1.5 * carried);
+  EXPECT_LT(k200, 2 * carried);
+  EXPECT_NEAR(-held[2], force_now(dhat / 200), 1e-9 * force_now(dhat / 200));
+  // At dhat / 2000 it would need about 19 times: it rises by the bound, per step.
+  EXPECT_NEAR(stiffness_at(dhat / 2000, true), 2 * carried, 1e-12 * carried);
+  EXPECT_NEAR(stiffness_at(dhat / 2000, true, nullptr, 4.0), 4 * carried, 1e-12 * carried);
+  // With a bound of 1 the rule keeps the carried stiffness there, it does not raise it.
+  EXPECT_EQ(stiffness_at(dhat / 200, true, nullptr, 1.0), carried);
   // Out of contact, or the rule off: the scene's stiffness.
   EXPECT_EQ(stiffness_at(1.5 * dhat, true), params.stiffness);
   EXPECT_EQ(stiffness_at(dhat / 200, false), params.stiffness);
