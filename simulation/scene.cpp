@@ -352,6 +352,7 @@ Scene scene_from_json(const json& j, const std::string& source) {
     s.contact.faces = c.boolean("faces", s.contact.faces);
     s.contact.hold_load = c.boolean("hold_load", s.contact.hold_load);
     s.contact.load_raise = c.number("load_raise", s.contact.load_raise, 1, 1e3);
+    s.contact.raise_limit = c.number("raise_limit", s.contact.raise_limit, 1, 1e12);
     c.finish();
   }
   {
@@ -507,7 +508,8 @@ json scene_to_json(const Scene& s, bool every_key) {
                   {"static_velocity", s.contact.eps_velocity},
                   {"faces", s.contact.faces},
                   {"hold_load", s.contact.hold_load},
-                  {"load_raise", s.contact.load_raise}};
+                  {"load_raise", s.contact.load_raise},
+                  {"raise_limit", s.contact.raise_limit}};
   j["self_contact"] = {{"enabled", s.self_contact.enabled},
                        {"thickness", s.self_contact.dhat},
                        {"stiffness", s.self_contact.stiffness},

@@ -521,7 +521,10 @@ void ObstacleContactEnergy::begin_step(const StepContext& ctx, const Eigen::Vect
     // pressure at dhat / 100; it falls that far at once and rises by at most load_raise.
     const double ratio = barrier_first_derivative(gap, m_params.dhat) /
                          barrier_first_derivative(m_params.dhat / 100, m_params.dhat);
-    stiffness = std::max(stiffness, carried * std::min(m_params.load_raise, ratio));
+    double target = carried * std::min(m_params.load_raise, ratio);
+    if (target > carried)  // a raise stops at raise_limit times the scene's stiffness
+      target = std::max(carried, std::min(target, m_params.raise_limit * m_params.stiffness));
+    stiffness = std::max(stiffness, target);
   }
   m_stiffness = stiffness;
   // Lagged friction: normal force and tangent plane at the step start (IPC Sec. 5).

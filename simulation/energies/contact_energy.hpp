@@ -64,7 +64,8 @@
 /// impact presses the sheet below dhat / 100; then the stiffness rises, by at most load_raise
 /// per step (2: IPC's adaptive stiffness doubles it while the gap shrinks, Li et al. 2020), so
 /// that no step starts with a barrier much stiffer than the one the sheet rests on, which would
-/// push the sheet off in one step.
+/// push the sheet off in one step. A raise stops at raise_limit times the scene's stiffness (IPC
+/// bounds its adaptive stiffness too); the impact rule is not bound by it.
 #include <array>
 #include <memory>
 #include <vector>
@@ -84,6 +85,10 @@ struct ContactParams {
   /// Largest factor by which the load rule raises the stiffness at one step start, when the
   /// load has pressed the sheet closer than dhat / 100 (1: it never raises it).
   double load_raise = 2.0;
+  /// The load rule never raises the stiffness above this many times `stiffness`: a load that
+  /// needs more is a jam (a rigid obstacle pressing on a held point), which fails the step rather
+  /// than growing the barrier without bound.
+  double raise_limit = 10.0;
   /// Contact on sheet faces against obstacles other than planes (set_faces), for features
   /// smaller than the sheet's edges; off: vertices only.
   bool faces = false;

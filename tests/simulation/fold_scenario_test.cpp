@@ -204,7 +204,8 @@ TEST(FoldRun, GripGivesWayToTheRollerOverTheHeldPoint) {
   EXPECT_GT(r.quality.min_obstacle_distance.at(0), 0.0);
   EXPECT_LT(r.quality.max_principal_stretch, 1.0 + s.sheet.material.strain_limit);
 
-  // A rigid grip and a rigid roller cannot both hold the point.
+  // A rigid grip and a rigid roller cannot both hold the point. (Without contact.raise_limit the
+  // load rule would raise the barrier 100-fold here and force the grip down at kilonewtons.)
   EXPECT_THROW(run_scene(crossing(1e6, fold.contact.stiffness), {}), NumericError);
 }
 

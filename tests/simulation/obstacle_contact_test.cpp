@@ -273,7 +273,8 @@ TEST(ObstacleContact, CoupledBodyDerivativesMatchFiniteDifferences) {
 
 // The load rule (ObstacleContactEnergy, "Load rule"): the stiffness carried in from the last
 // step moves to the one that holds the present contact force at dhat / 100: it falls that far
-// at once, rises by at most ContactParams::load_raise per step, and falls to the scene's
+// at once, rises by at most ContactParams::load_raise per step (and to at most raise_limit times
+// the scene's stiffness), and falls to the scene's
 // stiffness when the sheet is out of contact or the rule off.
 TEST(ObstacleContact, CarriedStiffnessMovesToHoldTheLoadAtAHundredthOfTheThickness) {
   collision::ColliderSpec spec;
@@ -284,10 +285,11 @@ TEST(ObstacleContact, CarriedStiffnessMovesToHoldTheLoadAtAHundredthOfTheThickne
   ContactParams params;  // dhat 0.3 mm, stiffness 1 Pa
   const double dhat = params.dhat, carried = 1000.0, area = 1e-4;
   const auto stiffness_at = [&](double gap, bool hold_load, Eigen::VectorXd* force = nullptr,
-                                double load_raise = 2.0) {
+                                double load_raise = 2.0, double raise_limit = 1e6) {
     ContactParams p = params;
     p.hold_load = hold_load;
     p.load_raise = load_raise;
+    p.raise_limit = raise_limit;
     ObstacleContactEnergy e(Eigen::VectorXd::Constant(1, area), obstacles, p);
     Eigen::VectorXd x(3);
     x << 0.0, 0.0, 0.05 + gap;
@@ -331,6 +333,10 @@ TEST(ObstacleContact, CarriedStiffnessMovesToHoldTheLoadAtAHundredthOfTheThickne
   EXPECT_NEAR(stiffness_at(dhat / 2000, true, nullptr, 4.0), 4 * carried, 1e-12 * carried);
   // With a bound of 1 the rule keeps the carried stiffness there, it does not raise it.
   EXPECT_EQ(stiffness_at(dhat / 200, true, nullptr, 1.0), carried);
+  // A raise stops at raise_limit times the scene's stiffness (1 Pa here), and a limit below the
+  // carried stiffness keeps the carried one.
+  EXPECT_EQ(stiffness_at(dhat / 2000, true, nullptr, 2.0, 1500.0), 1500.0);
+  EXPECT_EQ(stiffness_at(dhat / 2000, true, nullptr, 2.0, 10.0), carried);
   // Out of contact, or the rule off: the scene's stiffness.
   EXPECT_EQ(stiffness_at(1.5 * dhat, true), params.stiffness);
   EXPECT_EQ(stiffness_at(dhat / 200, false), params.stiffness);
