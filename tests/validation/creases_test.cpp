@@ -10,8 +10,7 @@ namespace papersim::validation {
 namespace {
 
 using test::PI;
-
-constexpr double ROUNDING = 1e-12;
+using test::ROUNDING;
 
 // A 0.2 x 0.1 sheet, 21 x 11 vertices (spacing 0.01), folded up by 90 degrees about x = 0.08,
 // a column of vertices: one crease line along the column, of length 0.1 and angle 90 degrees,

@@ -16,9 +16,8 @@ namespace papersim::validation {
 namespace {
 
 using test::PI;
+using test::ROUNDING;
 
-// Rounding of a few double operations on O(1) numbers; sums over a few hundred vertices.
-constexpr double ROUNDING = 1e-12;
 constexpr double GAUSS_BONNET_TOLERANCE = 1e-9;
 
 MeshMetrics measure(const Eigen::MatrixX2d& material, const Eigen::MatrixX3d& positions,

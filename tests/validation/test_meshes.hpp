@@ -9,6 +9,9 @@ namespace papersim::validation::test {
 
 constexpr double PI = 3.14159265358979323846;
 
+/// Rounding of a few double operations on O(1) numbers; sums over a few hundred vertices.
+constexpr double ROUNDING = 1e-12;
+
 /// A nx by ny grid of width x height [m]; vertex (i, j) has index j * nx + i. Every cell is
 /// split along the diagonal (i, j)-(i+1, j+1), counter-clockwise from +z.
 struct Grid {
