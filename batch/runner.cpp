@@ -21,6 +21,8 @@
 #include <thread>
 #include <unordered_set>
 
+#include "common/clock.hpp"
+
 namespace papersim::batch {
 namespace fs = std::filesystem;
 
@@ -52,10 +54,6 @@ class StopSignals {
  private:
   struct sigaction m_old_int {}, m_old_term {};
 };
-
-double seconds_since(Clock::time_point t0) {
-  return std::chrono::duration<double>(Clock::now() - t0).count();
-}
 
 /// An flock on ROOT/.locks/<task>.lock; released when every copy of the descriptor is closed
 /// (the child running the task holds a copy, so a lock outlives a killed batch only as long

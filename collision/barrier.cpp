@@ -5,13 +5,9 @@
 
 namespace papersim::collision {
 
-namespace {
-constexpr double INF = std::numeric_limits<double>::infinity();
-}  // namespace
-
 // Li et al. 2020, eq. 6: b(d) = -(d - dhat)^2 ln(d / dhat).
 double barrier(double d, double dhat) {
-  if (d <= 0.0) return INF;
+  if (d <= 0.0) return std::numeric_limits<double>::infinity();
   if (d >= dhat) return 0.0;
   const double s = d - dhat;
   return -s * s * std::log(d / dhat);
@@ -19,14 +15,14 @@ double barrier(double d, double dhat) {
 
 // b'(d) = (dhat - d) (2 ln(d/dhat) - dhat/d + 1).
 double barrier_first_derivative(double d, double dhat) {
-  if (d <= 0.0) return -INF;
+  if (d <= 0.0) return -std::numeric_limits<double>::infinity();
   if (d >= dhat) return 0.0;
   return (dhat - d) * (2.0 * std::log(d / dhat) - dhat / d + 1.0);
 }
 
 // b''(d) = -2 ln(d/dhat) + (dhat - d)(3 d + dhat) / d^2.
 double barrier_second_derivative(double d, double dhat) {
-  if (d <= 0.0) return INF;
+  if (d <= 0.0) return std::numeric_limits<double>::infinity();
   if (d >= dhat) return 0.0;
   return -2.0 * std::log(d / dhat) + (dhat - d) * (3.0 * d + dhat) / (d * d);
 }

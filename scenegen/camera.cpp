@@ -9,8 +9,6 @@
 namespace papersim::scenegen {
 namespace {
 
-constexpr double DEG = M_PI / 180.0;
-
 bool in_frame(const SheetMesh& mesh, const Camera& cam, double margin) {
   const double x0 = margin * cam.width, x1 = (1.0 - margin) * cam.width;
   const double y0 = margin * cam.height, y1 = (1.0 - margin) * cam.height;

@@ -1,5 +1,6 @@
 #pragma once
 /// Geometry on a sheet mesh: normals, centre of mass, ray casting and point location in UV.
+#include <cmath>
 #include <optional>
 #include <vector>
 
@@ -8,6 +9,9 @@
 #include "scenegen/sheet_obj.hpp"
 
 namespace papersim::scenegen {
+
+/// Degrees to radians.
+constexpr double DEG = M_PI / 180.0;
 
 /// #V by 3 unit vertex normals (area-weighted face normals; faces oriented by positive UV area,
 /// so normals point to the printed side).

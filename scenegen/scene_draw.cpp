@@ -4,11 +4,10 @@
 #include <cmath>
 
 #include "scenegen/errors.hpp"
+#include "scenegen/geometry.hpp"
 
 namespace papersim::scenegen {
 namespace {
-
-constexpr double DEG = M_PI / 180.0;
 
 Eigen::Vector3d noise_offset(std::uint32_t seed) {
   // A noise seed is a far translation of POV-Ray's (position-hashed) noise patterns.

@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <sstream>
 
+#include "common/clock.hpp"
 #include "remesh/errors.hpp"
 #include "simulation/errors.hpp"
 #include "simulation/steihaug.hpp"
@@ -14,10 +15,6 @@
 namespace papersim::simulation {
 
 namespace {
-
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
 
 double max_vertex_norm(const Eigen::VectorXd& d) {
   double m = 0;

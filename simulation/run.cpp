@@ -10,6 +10,7 @@
 
 #include "collision/errors.hpp"
 #include "collision/self_intersection.hpp"
+#include "common/clock.hpp"
 #include "remesh/errors.hpp"
 #include "remesh/sheet_io.hpp"
 #include "simulation/energies/vertex_energies.hpp"
@@ -317,10 +318,6 @@ void Run::resume(const remesh::SheetMesh& mesh, const SheetState& state, int ste
 }
 
 namespace {
-
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
 
 template <typename Map>
 void add_counts(Map& into, const Map& from) {

@@ -29,6 +29,7 @@
 #include <vector>
 
 #include "collision/collider.hpp"
+#include "common/clock.hpp"
 #include "remesh/sheet_generator.hpp"
 #include "simulation/energies/vertex_energies.hpp"
 #include "simulation/run.hpp"
@@ -39,6 +40,8 @@ namespace rm = papersim::remesh;
 namespace pc = papersim::collision;
 
 namespace {
+
+using papersim::seconds_since;
 
 constexpr double NOT_APPLICABLE = std::numeric_limits<double>::quiet_NaN();
 constexpr double PI = 3.14159265358979323846;
@@ -142,10 +145,6 @@ class Report {
 template <typename... Args>
 std::string fmt(const char* f, Args... args) {
   return Report::format(f, args...);
-}
-
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
 // ---------------------------------------------------------------------------------------------

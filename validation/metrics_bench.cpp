@@ -20,6 +20,7 @@
 #include <sstream>
 #include <unistd.h>
 
+#include "common/clock.hpp"
 #include "remesh/sheet_generator.hpp"
 #include "remesh/sheet_io.hpp"
 #include "validation/metrics_command.hpp"
@@ -27,6 +28,7 @@
 namespace {
 
 namespace fs = std::filesystem;
+using papersim::seconds_since;
 using papersim::remesh::SheetMesh;
 
 struct BenchOptions {
@@ -77,10 +79,6 @@ void write_meshes(const fs::path& dir, const BenchOptions& o) {
       papersim::remesh::write_obj(out, mesh, deform(mesh, 1000 + i), r.width, r.height);
     });
   });
-}
-
-double seconds_since(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
 }  // namespace

@@ -27,10 +27,7 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-json read_json(const fs::path& p) {
-  std::ifstream in(p);
-  return json::parse(in);
-}
+using test::read_json;
 
 /// One sample rendered for the whole suite: a sheet bent on a cylinder, smooth document.
 class RenderedSample : public ::testing::Test {

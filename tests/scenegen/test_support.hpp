@@ -1,6 +1,7 @@
 #pragma once
 // Helpers shared by the scenegen tests: temporary folders, meshes and documents on disk.
 #include <filesystem>
+#include <nlohmann/json_fwd.hpp>
 #include <string>
 
 #include "scenegen/example_sheets.hpp"
@@ -27,5 +28,8 @@ std::string write_example(const TempDir& dir, const std::string& kind, const std
 std::string write_smooth_document(const TempDir& dir, int width, int height);
 /// Whole file as bytes.
 std::string file_bytes(const std::filesystem::path& path);
+
+/// The JSON document in `path` (throws nlohmann::json::parse_error on a broken one).
+nlohmann::json read_json(const std::filesystem::path& path);
 
 }  // namespace papersim::scenegen::test

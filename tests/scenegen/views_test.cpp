@@ -23,10 +23,7 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-json read_json(const fs::path& p) {
-  std::ifstream in(p);
-  return json::parse(in);
-}
+using test::read_json;
 
 TEST(Views, FlippedUvIsTheMirrorAtTheSameMaterialPoint) {
   test::TempDir dir("flip");
