@@ -561,10 +561,14 @@ void Run::remesh_pass() {
   m_remesh.splits += st.splits;
   m_remesh.flips += st.flips;
   m_remesh.collapses += st.collapses;
-  const double jump = std::abs(energies().mechanical() - before);
+  const double after = energies().mechanical();
+  const double jump = std::abs(after - before);
   m_remesh.max_energy_jump = std::max(m_remesh.max_energy_jump, jump);
   const double range = m_energy_max - m_energy_min;
   if (range > 0) m_remesh.max_energy_jump_relative = std::max(m_remesh.max_energy_jump_relative, jump / range);
+  if (std::getenv("PAPERSIM_DEBUG_REMESH"))
+    std::fprintf(stderr, "remesh t %.6f: energy %.6g -> %.6g J (jump %.3g of the range so far, %.6g J)\n", m_state.time,
+                 before, after, range > 0 ? jump / range : 0.0, range);
   m_counts.vertices_max = std::max(m_counts.vertices_max, m_mesh.num_vertices());
   m_counts.faces_max = std::max(m_counts.faces_max, m_mesh.num_faces());
   m_remesh.seconds_rebuild += seconds_since(t0);
