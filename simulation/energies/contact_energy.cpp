@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 
 #include "collision/barrier.hpp"
 #include "collision/shapes.hpp"
@@ -527,6 +529,9 @@ void ObstacleContactEnergy::begin_step(const StepContext& ctx, const Eigen::Vect
     stiffness = std::max(stiffness, target);
   }
   m_stiffness = stiffness;
+  if (std::getenv("PAPERSIM_DEBUG_CONTACT"))
+    std::fprintf(stderr, "contact t %.6f h %.3e: %zu contacts, gap %.3e, stiffness %.4g -> %.4g Pa\n",
+                 ctx.time_t0, ctx.h, contacts.size(), gap, carried, stiffness);
   // Lagged friction: normal force and tangent plane at the step start (IPC Sec. 5).
   m_friction.clear();
   m_normal_force = 0.0;

@@ -3,9 +3,12 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <stdexcept>
 
 #include "collision/barrier.hpp"
+#include "collision/self_intersection.hpp"
 #include "simulation/energies/psd.hpp"
 #include "simulation/energies/scoped_timer.hpp"
 
@@ -18,7 +21,12 @@ using collision::Vector12d;
 
 namespace {
 
-
+/// The first nv vertices of flat positions x as rows.
+Eigen::MatrixX3d sheet_positions(const Eigen::VectorXd& x, int nv) {
+  Eigen::MatrixX3d p(nv, 3);
+  for (int v = 0; v < nv; ++v) p.row(v) = x.segment<3>(3 * v).transpose();
+  return p;
+}
 
 }  // namespace
 
@@ -183,6 +191,9 @@ double SelfContactEnergy::stencil_distance2(std::size_t k, const PairPoints& pts
 void SelfContactEnergy::begin_step(const StepContext& ctx, const Eigen::VectorXd& x_t0) {
   ScopedTimer timer(m_stats->seconds);
   m_eps = m_params.eps_velocity * ctx.h;
+  if (std::getenv("PAPERSIM_DEBUG_INTERSECT"))
+    std::fprintf(stderr, "self t %.6f h %.3e: %d intersecting pairs\n", ctx.time_t0, ctx.h,
+                 collision::count_self_intersections(sheet_positions(x_t0, m_mesh.num_vertices), m_mesh.faces));
   ensure_candidates(x_t0);
   m_friction.clear();
   m_friction_keys.clear();
@@ -335,6 +346,59 @@ void SelfContactEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::VectorX
   m_stats->max_active_pairs = std::max(m_stats->max_active_pairs, active);
 }
 
+void SelfContactEnergy::report_crossings(const Eigen::VectorXd& x, const Eigen::VectorXd& dx, double alpha) const {
+  const int nv = m_mesh.num_vertices;
+  const Eigen::VectorXd x1 = x + alpha * dx;
+  const int before = collision::count_self_intersections(sheet_positions(x, nv), m_mesh.faces);
+  const collision::SelfIntersections after = collision::find_self_intersections(sheet_positions(x1, nv), m_mesh.faces);
+  if (after.count() <= before) return;
+  std::fprintf(stderr, "self-contact CCD: %d -> %d intersecting pairs at step %.3e (%zu candidates)\n", before,
+               after.count(), alpha, m_candidates.size());
+  for (int k = 0; k < after.count(); ++k) {
+    const int fa = after.pairs(k, 0), fb = after.pairs(k, 1);
+    std::fprintf(stderr, "  faces %d and %d\n", fa, fb);
+    // The IPC pairs of the two faces: vertex-triangle both ways, and edge-edge.
+    std::vector<Pair> pairs;
+    std::vector<int> edges_a, edges_b;
+    for (int e = 0; e < m_mesh.edges.rows(); ++e) {
+      const auto holds = [&](int f) {
+        int n = 0;
+        for (int i = 0; i < 3; ++i) n += m_mesh.faces(f, i) == m_mesh.edges(e, 0) || m_mesh.faces(f, i) == m_mesh.edges(e, 1);
+        return n == 2;
+      };
+      if (holds(fa)) edges_a.push_back(e);
+      if (holds(fb)) edges_b.push_back(e);
+    }
+    for (int i = 0; i < 3; ++i) {
+      pairs.push_back({false, m_mesh.faces(fa, i), fb});
+      pairs.push_back({false, m_mesh.faces(fb, i), fa});
+    }
+    for (int ea : edges_a)
+      for (int eb : edges_b) pairs.push_back({true, std::min(ea, eb), std::max(ea, eb)});
+    for (const Pair& p : pairs) {
+      const std::array<int, 4> v = vertices(p);
+      const bool adjacent = p.edge_edge ? (v[0] == v[2] || v[0] == v[3] || v[1] == v[2] || v[1] == v[3])
+                                        : (v[0] == v[1] || v[0] == v[2] || v[0] == v[3]);
+      if (adjacent) continue;  // not an IPC pair
+      const bool candidate = std::any_of(m_candidates.begin(), m_candidates.end(), [&](const Pair& c) {
+        return c.edge_edge == p.edge_edge && c.a == p.a && c.b == p.b;
+      });
+      const PairPoints p0 = points(p, x), p1 = points(p, x1);
+      PairPoints d;
+      for (int k2 = 0; k2 < 4; ++k2) d[k2] = dx.segment<3>(3 * v[k2]);
+      const auto distance = [&](const PairPoints& pts) {
+        return std::sqrt(collision::distance_squared(
+            p.edge_edge ? collision::edge_edge_stencil(pts) : collision::point_triangle_stencil(pts), pts));
+      };
+      const double t = p.edge_edge ? collision::edge_edge_ccd(p0, d, 1.0, m_params.ccd_min_separation)
+                                   : collision::point_triangle_ccd(p0, d, 1.0, m_params.ccd_min_separation);
+      std::fprintf(stderr, "    %s (vertices %d %d %d %d): candidate %d, distance %.3e -> %.3e, CCD %.3e\n",
+                   p.edge_edge ? "edge-edge" : "vertex-triangle", v[0], v[1], v[2], v[3], candidate ? 1 : 0,
+                   distance(p0), distance(p1), t);
+    }
+  }
+}
+
 double SelfContactEnergy::max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const {
   ScopedTimer timer(m_stats->seconds);
   // One broad phase over the swept boxes serves the CCD here (a superset of the pairs whose
@@ -349,6 +413,7 @@ double SelfContactEnergy::max_step(const Eigen::VectorXd& x, const Eigen::Vector
                 ? collision::edge_edge_ccd(points(p, x), d, alpha, m_params.ccd_min_separation)
                 : collision::point_triangle_ccd(points(p, x), d, alpha, m_params.ccd_min_separation);
   }
+  if (std::getenv("PAPERSIM_DEBUG_INTERSECT")) report_crossings(x, dx, alpha);
   return alpha;
 }
 

@@ -138,6 +138,9 @@ class SelfContactEnergy : public EnergyTerm {
   void add_pair(const Pair& p, const collision::PairPoints& pts, const collision::DistanceStencil& s,
                 Eigen::VectorXd& g, BlockSymmetricMatrix* H) const;
   void add_friction(const Eigen::VectorXd& x, Eigen::VectorXd& g, BlockSymmetricMatrix* H) const;
+  /// PAPERSIM_DEBUG_INTERSECT: when the step x -> x + alpha dx that max_step allows makes
+  /// triangles intersect, prints each new pair's IPC pairs (candidate or not, distances, CCD).
+  void report_crossings(const Eigen::VectorXd& x, const Eigen::VectorXd& dx, double alpha) const;
 
   collision::SelfContactMesh m_mesh;
   SelfContactParams m_params;
