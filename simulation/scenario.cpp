@@ -416,13 +416,6 @@ Scene crumple(std::uint64_t seed) {
   // Measured at 15 mm edges, seed 0 (docs/crumple.md): automatic stiffness, 1,304 split steps
   // in the first 0.05 s of shrinking; 40 Pa, stuck near t = 3.7 s; 400 Pa, past t = 4.6 s.
   s.contact.stiffness = 400.0;
-  // Self-contact barrier at 4,000 Pa, the load rule's cap (contact.raise_limit 10 x 400 Pa),
-  // not the contact's 400 Pa: in the last 0.3 s the load and impact rules raise the wall's
-  // barrier to 4-94 kPa, and at 400 Pa the layers it presses together close to picometres,
-  // where the self-contact's collision detection lets edges cross. Seed 0 (docs/crumple.md,
-  // "Why the end of the crush failed"): at 400 Pa it fails at t = 4.955 s (10 mm) and 4.970 s
-  // (15 mm) or ends with intersecting triangles; at 4,000 Pa it finishes both with none.
-  s.self_contact.stiffness = 4000.0;
   // Up to 200 Newton iterations per step (60 by default): once the cavity presses the sheet into
   // layers a step needs more; with 60 seed 0 at 15 mm edges failed at t = 4.994 s, with 200 it
   // finishes the 5 s at 15 mm and at 10 mm (docs/crumple.md). Steps that converge sooner are
