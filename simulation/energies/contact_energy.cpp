@@ -529,7 +529,8 @@ void ObstacleContactEnergy::begin_step(const StepContext& ctx, const Eigen::Vect
     stiffness = std::max(stiffness, target);
   }
   m_stiffness = stiffness;
-  if (std::getenv("PAPERSIM_DEBUG_CONTACT"))
+  static const bool debug = std::getenv("PAPERSIM_DEBUG_CONTACT") != nullptr;
+  if (debug)
     std::fprintf(stderr, "contact t %.6f h %.3e: %zu contacts, gap %.3e, stiffness %.4g -> %.4g Pa\n",
                  ctx.time_t0, ctx.h, contacts.size(), gap, carried, stiffness);
   // Lagged friction: normal force and tangent plane at the step start (IPC Sec. 5).

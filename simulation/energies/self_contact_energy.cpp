@@ -21,6 +21,12 @@ using collision::Vector12d;
 
 namespace {
 
+/// PAPERSIM_DEBUG_INTERSECT (SelfContactEnergy::report_crossings), read once.
+bool debug_intersect() {
+  static const bool debug = std::getenv("PAPERSIM_DEBUG_INTERSECT") != nullptr;
+  return debug;
+}
+
 /// The first nv vertices of flat positions x as rows.
 Eigen::MatrixX3d sheet_positions(const Eigen::VectorXd& x, int nv) {
   Eigen::MatrixX3d p(nv, 3);
@@ -191,7 +197,7 @@ double SelfContactEnergy::stencil_distance2(std::size_t k, const PairPoints& pts
 void SelfContactEnergy::begin_step(const StepContext& ctx, const Eigen::VectorXd& x_t0) {
   ScopedTimer timer(m_stats->seconds);
   m_eps = m_params.eps_velocity * ctx.h;
-  if (std::getenv("PAPERSIM_DEBUG_INTERSECT"))
+  if (debug_intersect())
     std::fprintf(stderr, "self t %.6f h %.3e: %d intersecting pairs\n", ctx.time_t0, ctx.h,
                  collision::count_self_intersections(sheet_positions(x_t0, m_mesh.num_vertices), m_mesh.faces));
   ensure_candidates(x_t0);
@@ -413,7 +419,7 @@ double SelfContactEnergy::max_step(const Eigen::VectorXd& x, const Eigen::Vector
                 ? collision::edge_edge_ccd(points(p, x), d, alpha, m_params.ccd_min_separation)
                 : collision::point_triangle_ccd(points(p, x), d, alpha, m_params.ccd_min_separation);
   }
-  if (std::getenv("PAPERSIM_DEBUG_INTERSECT")) report_crossings(x, dx, alpha);
+  if (debug_intersect()) report_crossings(x, dx, alpha);
   return alpha;
 }
 
