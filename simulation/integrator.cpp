@@ -129,6 +129,7 @@ double Integrator::start_energy(const SheetState& state, double h) {
   ctx.x_t0 = &x_t0;
   ctx.v_t0 = &v_t0;
   ctx.contact_stiffness = state.contact_stiffness;
+  ctx.self_contact_stiffness = state.self_contact_stiffness;
   begin_step(ctx, x_t0);
   const double e = energy(x_t0);
   m_following.clear();
@@ -244,6 +245,14 @@ NewtonResult Integrator::solve(const StepContext& ctx, Eigen::VectorXd& x, StepS
   int skip_exact = 0, backoff = 1;  // NewtonParams::exact_retry_skip_max
   for (r.iterations = 1; r.iterations <= m_params.max_iterations; ++r.iterations) {
     auto t0 = std::chrono::steady_clock::now();
+    if (r.iterations > 1) {
+      bool adapted = false;
+      for (const auto& t : m_terms) adapted = t->adapt(x) || adapted;
+      if (adapted) {
+        e = energy(x);  // the line searches compare energies of the same stiffness
+        may_reuse = false;
+      }
+    }
     update_pattern(x);
     const bool reuse = may_reuse && m_reused < m_params.max_factor_reuse && m_factor_pattern == m_pattern_id;
     m_reuse_next = false;
@@ -479,6 +488,7 @@ bool Integrator::advance(SheetState& state, double h, int depth, int max_depth, 
   ctx.x_t0 = &x_t0;
   ctx.v_t0 = &v_t0;
   ctx.contact_stiffness = state.contact_stiffness;
+  ctx.self_contact_stiffness = state.self_contact_stiffness;
   begin_step(ctx, x_t0);
   // Start from the explicit prediction x_t0 + h v_t0 when it is feasible (CCD-safe from x_t0
   // and finite energy): Newton then only corrects it, instead of producing the whole motion of

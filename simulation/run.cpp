@@ -532,6 +532,7 @@ void Run::remesh_pass() {
   state.velocities = flatten(rs.velocities);
   state.time = m_state.time;
   state.contact_stiffness = m_state.contact_stiffness;
+  state.self_contact_stiffness = m_state.self_contact_stiffness;
   Terms terms;
   if (failure.empty()) failure = check_remeshed(mesh, state, terms);
   std::unique_ptr<Integrator> integrator;

@@ -1,6 +1,7 @@
 #pragma once
 /// The sheet's dynamic state: world positions and velocities of the vertices, the time, and the
-/// obstacle barrier's stiffness the last step ended with (ObstacleContactEnergy, "Load rule").
+/// barrier stiffnesses the last step ended with (ObstacleContactEnergy, "Load rule";
+/// SelfContactEnergy, "Adaptive stiffness").
 #include <Eigen/Core>
 
 namespace papersim::simulation {
@@ -13,6 +14,10 @@ struct SheetState {
   /// (the scene's `contact.stiffness`). Carried into the next step, which lets it fall only as
   /// fast as the contact load allows.
   double contact_stiffness = 0.0;
+  /// Stiffness of the self-contact barrier over that step [Pa]; 0: none yet (the scene's
+  /// `self_contact.stiffness`). It only grows, where two layers were pressed to within a
+  /// nanometre-scale floor (SelfContactEnergy, "Adaptive stiffness").
+  double self_contact_stiffness = 0.0;
 
   int num_vertices() const { return static_cast<int>(positions.size() / 3); }
   /// Positions as #V by 3.

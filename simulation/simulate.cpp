@@ -92,7 +92,9 @@ ContactStatistics contact_from_json(const json& c) {
 json self_contact_json(const SelfContactStatistics& c) {
   return {{"seconds", c.seconds},
           {"max_active_pairs", c.max_active_pairs},
-          {"pattern_changes", c.pattern_changes}};
+          {"pattern_changes", c.pattern_changes},
+          {"stiffness_doublings", c.stiffness_doublings},
+          {"max_stiffness", c.max_stiffness}};
 }
 
 SelfContactStatistics self_contact_from_json(const json& c) {
@@ -100,6 +102,8 @@ SelfContactStatistics self_contact_from_json(const json& c) {
   o.seconds = c.at("seconds").get<double>();
   o.max_active_pairs = c.at("max_active_pairs").get<int>();
   o.pattern_changes = c.at("pattern_changes").get<int>();
+  o.stiffness_doublings = c.value("stiffness_doublings", 0);  // absent before the adaptive stiffness
+  o.max_stiffness = c.value("max_stiffness", 0.0);
   return o;
 }
 
@@ -262,7 +266,8 @@ void save_checkpoint(const std::string& dir, const Scene& scene, int step, const
                            scene.sheet.width, scene.sheet.height);
   json j = {{"format", CHECKPOINT_FORMAT}, {"step", step},        {"time", state.time},
             {"sheet", name.str()},         {"version", version()}, {"scene", scene_to_json(scene)},
-            {"contact_stiffness", state.contact_stiffness}};
+            {"contact_stiffness", state.contact_stiffness},
+            {"self_contact_stiffness", state.self_contact_stiffness}};
   if (tally) j["run"] = tally_to_json(*tally);
   common::write_text_atomically(d / "checkpoint.json", j.dump(1) + "\n");
   if (!previous.empty() && previous != name.str() && previous.find('/') == std::string::npos)
@@ -283,6 +288,7 @@ Checkpoint load_checkpoint(const std::string& dir) {
     c.step = j.at("step").get<int>();
     c.time = j.at("time").get<double>();
     c.state.contact_stiffness = j.value("contact_stiffness", 0.0);  // absent before the load rule
+    c.state.self_contact_stiffness = j.value("self_contact_stiffness", 0.0);  // and the adaptive stiffness
     sheet = j.at("sheet").get<std::string>();
     c.scene = j.at("scene");
     if (j.contains("run")) {

@@ -20,6 +20,7 @@ struct StepContext {
   const Eigen::VectorXd* x_t0 = nullptr;  ///< positions at the step start (3N) [m]
   const Eigen::VectorXd* v_t0 = nullptr;  ///< velocities at the step start (3N) [m/s]
   double contact_stiffness = 0.0;  ///< SheetState::contact_stiffness at the step start [Pa]
+  double self_contact_stiffness = 0.0;  ///< SheetState::self_contact_stiffness at the step start [Pa]
   double time_t1() const { return time_t0 + h; }
 };
 
@@ -42,8 +43,12 @@ class EnergyTerm {
   virtual void add_dynamic_pattern(SparsityBuilder& /*pattern*/) const {}
   /// Called once at the start of each time step (lagged quantities, active sets).
   virtual void begin_step(const StepContext& /*ctx*/, const Eigen::VectorXd& /*x_t0*/) {}
+  /// Called at the start of every Newton iteration but the first, at the iterate the last line
+  /// search accepted: a term whose stiffness adapts to the iterates (the self-contact barrier,
+  /// as in IPC) returns true when it changed, and the integrator evaluates the energy again.
+  virtual bool adapt(const Eigen::VectorXd& /*x*/) { return false; }
   /// Called on the state a step (or part step) was accepted with: a term that carries a
-  /// quantity from step to step writes it there (the obstacle barrier's stiffness).
+  /// quantity from step to step writes it there (the barriers' stiffnesses).
   virtual void end_step(SheetState& /*state*/) const {}
   /// Value [J]; +infinity when x is infeasible for this term.
   virtual double value(const Eigen::VectorXd& x) const = 0;

@@ -41,6 +41,7 @@ SelfContactEnergy::SelfContactEnergy(const Eigen::MatrixX2d& X, const Eigen::Mat
     : m_mesh(collision::SelfContactMesh::from_faces(F, static_cast<int>(X.rows()))), m_params(params) {
   if (!(params.dhat > 0)) throw std::invalid_argument("self contact: thickness must be positive");
   if (!(params.stiffness > 0)) throw std::invalid_argument("self contact: stiffness must be positive");
+  m_stiffness = params.stiffness;
   const Eigen::Index nv = X.rows(), ne = m_mesh.edges.rows();
   m_vertex_area = Eigen::VectorXd::Zero(nv);
   m_edge_area = Eigen::VectorXd::Zero(ne);
@@ -197,14 +198,20 @@ double SelfContactEnergy::stencil_distance2(std::size_t k, const PairPoints& pts
 void SelfContactEnergy::begin_step(const StepContext& ctx, const Eigen::VectorXd& x_t0) {
   ScopedTimer timer(m_stats->seconds);
   m_eps = m_params.eps_velocity * ctx.h;
+  m_stiffness = std::max(m_params.stiffness, ctx.self_contact_stiffness);
+  m_stats->max_stiffness = std::max(m_stats->max_stiffness, m_stiffness);
+  const int nv = m_mesh.num_vertices;
+  const Eigen::MatrixX3d p = sheet_positions(x_t0, nv);
+  m_floor = nv > 0 ? floor_fraction * (p.colwise().maxCoeff() - p.colwise().minCoeff()).norm() : 0.0;
   if (debug_intersect())
     std::fprintf(stderr, "self t %.6f h %.3e: %d intersecting pairs\n", ctx.time_t0, ctx.h,
                  collision::count_self_intersections(sheet_positions(x_t0, m_mesh.num_vertices), m_mesh.faces));
   ensure_candidates(x_t0);
+  m_last_below = distance_below(x_t0, m_floor);
   m_friction.clear();
   m_friction_keys.clear();
   if (m_params.friction <= 0) return;
-  const double dhat = m_params.dhat, kappa = m_params.stiffness / dhat;
+  const double dhat = m_params.dhat, kappa = m_stiffness / dhat;
   const Eigen::VectorXd moved = motions(x_t0);
   for (std::size_t k = 0; k < m_candidates.size(); ++k) {
     const Pair& p = m_candidates[k];
@@ -278,7 +285,7 @@ void SelfContactEnergy::add_dynamic_pattern(SparsityBuilder& pattern) const {
 double SelfContactEnergy::value(const Eigen::VectorXd& x) const {
   ScopedTimer timer(m_stats->seconds);
   ensure_candidates(x);
-  const double dhat = m_params.dhat, kappa = m_params.stiffness / dhat;
+  const double dhat = m_params.dhat, kappa = m_stiffness / dhat;
   double e = 0;
   const Eigen::VectorXd moved = motions(x);
   for (std::size_t k = 0; k < m_candidates.size(); ++k) {
@@ -301,7 +308,7 @@ double SelfContactEnergy::value(const Eigen::VectorXd& x) const {
 
 void SelfContactEnergy::add_pair(const Pair& p, const PairPoints& pts, const DistanceStencil& s,
                                  Eigen::VectorXd& g, BlockSymmetricMatrix* H) const {
-  const double scale = m_params.stiffness / m_params.dhat * weight(p);
+  const double scale = m_stiffness / m_params.dhat * weight(p);
   Vector12d grad;
   Matrix12d hess;
   collision::pair_barrier_derivatives(s, pts, m_params.dhat, p.edge_edge ? mollifier_eps(p) : 0.0, grad,
@@ -421,6 +428,30 @@ double SelfContactEnergy::max_step(const Eigen::VectorXd& x, const Eigen::Vector
   }
   if (debug_intersect()) report_crossings(x, dx, alpha);
   return alpha;
+}
+
+double SelfContactEnergy::distance_below(const Eigen::VectorXd& x, double floor) const {
+  ensure_candidates(x);
+  const double floor2 = floor * floor;
+  double best2 = floor2;
+  const Eigen::VectorXd moved = motions(x);
+  for (std::size_t k = 0; k < m_candidates.size(); ++k) {
+    DistanceStencil s;
+    best2 = std::min(best2, stencil_distance2(k, points(m_candidates[k], x), s, floor2, moved));
+  }
+  return best2 < floor2 ? std::sqrt(best2) : INF;
+}
+
+bool SelfContactEnergy::adapt(const Eigen::VectorXd& x) {
+  ScopedTimer timer(m_stats->seconds);
+  const double d = distance_below(x, m_floor), before = m_last_below;
+  m_last_below = d;
+  const double most = max_stiffness_factor * m_params.stiffness;
+  if (!(d < before) || before == INF || m_stiffness >= most) return false;  // INF: not below
+  m_stiffness = std::min(2 * m_stiffness, most);
+  m_stats->max_stiffness = std::max(m_stats->max_stiffness, m_stiffness);
+  ++m_stats->stiffness_doublings;
+  return true;
 }
 
 double SelfContactEnergy::min_distance(const Eigen::VectorXd& x, double radius) const {

@@ -20,6 +20,17 @@
 /// contact direction); the relative tangential slip u = T^T sum_i w_i (x_i - x_i,t0) pays
 /// mu lambda f0(|u|).
 ///
+/// Adaptive stiffness (IPC Sec. 4.3; ipc-toolkit's update_barrier_stiffness): where a load
+/// presses two layers together harder than the barrier at `stiffness` can hold (the crumple's
+/// end, under an obstacle barrier made stiff by its load and impact rules), Newton's iterates
+/// close a pair to picometres, where the floating-point distance can no longer tell the sides
+/// apart and the CCD lets the edges cross (docs/crumple.md). So, as in IPC, the stiffness
+/// doubles (up to 100 times `stiffness`) at a Newton iteration whose smallest pair distance and
+/// the one before it are both below a floor, 1e-9 of the sheet's bounding-box diagonal at the
+/// step start, and falling. The stiffness is carried from step to step
+/// (SheetState::self_contact_stiffness, checkpointed) and never falls; a run whose layers never
+/// come within the floor is unchanged.
+///
 /// Active set and Hessian pattern: candidate pairs come from a broad phase at base positions
 /// with a margin of 2 dhat; the set holds at every configuration within dhat of the base after
 /// removing the common translation, so that the line search, the next Newton iterations and,
@@ -56,6 +67,8 @@ struct SelfContactStatistics {
   double seconds = 0.0;     ///< wall time in the term (broad phase, barrier, friction, CCD) [s]
   int max_active_pairs = 0; ///< most pairs within dhat at one derivative evaluation
   int pattern_changes = 0;  ///< how often update_pattern() reported a change
+  int stiffness_doublings = 0;  ///< Newton iterations that doubled the stiffness (adapt)
+  double max_stiffness = 0;     ///< largest stiffness of a step [Pa]
 };
 
 class SelfContactEnergy : public EnergyTerm {
@@ -78,6 +91,17 @@ class SelfContactEnergy : public EnergyTerm {
                        BlockSymmetricMatrix* hessian) const override;
   void set_hessian_projection(bool project) override { m_project = project; }
   double max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const override;
+  /// Doubles the stiffness when the smallest pair distance at x and at the last iterate (or the
+  /// step start) are both below the floor and it fell (see "Adaptive stiffness").
+  bool adapt(const Eigen::VectorXd& x) override;
+  /// Writes the stiffness to state.self_contact_stiffness.
+  void end_step(SheetState& state) const override { state.self_contact_stiffness = m_stiffness; }
+  /// The barrier's stiffness in the current step [Pa] (params().stiffness or more).
+  double stiffness() const { return m_stiffness; }
+  /// Most the adaptive stiffness may reach, as a multiple of params().stiffness.
+  static constexpr double max_stiffness_factor = 100;
+  /// The floor of the adaptive stiffness, as a fraction of the bounding-box diagonal.
+  static constexpr double floor_fraction = 1e-9;
 
   /// Smallest distance between two parts of the sheet that are closer than `radius` [m]
   /// (vertex-triangle and edge-edge pairs), +inf when none is.
@@ -141,12 +165,17 @@ class SelfContactEnergy : public EnergyTerm {
   /// PAPERSIM_DEBUG_INTERSECT: when the step x -> x + alpha dx that max_step allows makes
   /// triangles intersect, prints each new pair's IPC pairs (candidate or not, distances, CCD).
   void report_crossings(const Eigen::VectorXd& x, const Eigen::VectorXd& dx, double alpha) const;
+  /// Smallest distance of a candidate pair at x when it is below `floor`, else +inf [m].
+  double distance_below(const Eigen::VectorXd& x, double floor) const;
 
   collision::SelfContactMesh m_mesh;
   SelfContactParams m_params;
   Eigen::VectorXd m_vertex_area, m_edge_area, m_edge_rest;
   bool m_project = true;
   double m_eps = 1e-6;  // friction smoothing: eps_velocity h [m]
+  double m_stiffness = 0;           // current stiffness [Pa] (Adaptive stiffness)
+  double m_floor = 0;               // floor of the step [m]
+  double m_last_below = 0;          // distance_below at the last iterate [m]
 
   // Candidates, found at the base positions m_base, either (a) every pair within 1.5 dhat +
   // m_margin there, or (b) every pair that comes within 1.5 dhat along the segment m_base ->

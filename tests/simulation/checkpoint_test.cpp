@@ -142,6 +142,22 @@ TEST(Checkpoint, RemeshedRunResumesToTheBit) {
 
 // The run figures survive the trip through checkpoint.json, infinite extremes (an obstacle not
 // met yet, an energy range not begun) included.
+// The barriers' stiffnesses the last step ended with are part of the state the next step reads
+// (the load rule's and the adaptive self-contact stiffness).
+TEST(Checkpoint, CarriesTheBarrierStiffnesses) {
+  const Scene scene = lifted_corner();
+  const fs::path dir = fresh_dir("stiffness");
+  run_scene(scene, saving_to(dir));
+  Checkpoint c = load_checkpoint(dir.string());
+  c.state.contact_stiffness = 123.5;
+  c.state.self_contact_stiffness = 800;
+  save_checkpoint(dir.string(), scene, c.step, c.mesh, c.state);
+  const Checkpoint d = load_checkpoint(dir.string());
+  EXPECT_EQ(d.state.contact_stiffness, 123.5);
+  EXPECT_EQ(d.state.self_contact_stiffness, 800);
+  fs::remove_all(dir);
+}
+
 TEST(Checkpoint, RunFiguresRoundTripThroughJson) {
   RunTally t;
   t.wall_seconds = 12.5;
@@ -153,6 +169,8 @@ TEST(Checkpoint, RunFiguresRoundTripThroughJson) {
   t.sheet = {96, 150, 0, 0, 120, 200};
   t.terms.contact.max_normal_force = 1.5;
   t.terms.self_contact.max_active_pairs = 9;
+  t.terms.self_contact.stiffness_doublings = 3;
+  t.terms.self_contact.max_stiffness = 3200;
   t.quality.max_principal_stretch = 1.004;
   t.quality.min_principal_stretch = 0.97;
   t.quality.min_obstacle_distance = {2e-7, INF};
@@ -175,6 +193,8 @@ TEST(Checkpoint, RunFiguresRoundTripThroughJson) {
   EXPECT_EQ(u.sheet.faces_max, 200);
   EXPECT_EQ(u.terms.contact.max_normal_force, 1.5);
   EXPECT_EQ(u.terms.self_contact.max_active_pairs, 9);
+  EXPECT_EQ(u.terms.self_contact.stiffness_doublings, 3);
+  EXPECT_EQ(u.terms.self_contact.max_stiffness, 3200);
   EXPECT_EQ(u.quality.max_principal_stretch, 1.004);
   EXPECT_EQ(u.quality.min_principal_stretch, 0.97);
   EXPECT_EQ(u.quality.min_obstacle_distance, t.quality.min_obstacle_distance);

@@ -781,6 +781,58 @@ TEST(EnergyDerivatives, SelfContactFrictionAndCcd) {
   EXPECT_LT(e.value(t.x + alpha * dx), INF);
 }
 
+TEST(SelfContactStiffness, DoublesOnlyWhileAPairBelowTheFloorKeepsClosing) {
+  // Vertex 0 of A over B's face at a gap g (the only pair nearer than 1 mm). The floor is 1e-9 of
+  // the bounding-box diagonal at the step start.
+  auto at_gap = [](double g) {
+    return two_triangles({{Eigen::Vector3d(0.002, 0.002, g), Eigen::Vector3d(0.004, 0.003, 0.008),
+                           Eigen::Vector3d(0.001, 0.004, 0.009)}}).x;
+  };
+  const TwoTriangles t = two_triangles({{Eigen::Vector3d(0.002, 0.002, 0), Eigen::Vector3d(0.004, 0.003, 0.008),
+                                         Eigen::Vector3d(0.001, 0.004, 0.009)}});
+  SelfContactParams params = self_params();
+  params.friction = 0;
+  SelfContactEnergy e(t.X, t.F, params);
+  const Eigen::VectorXd x0 = at_gap(1e-12), v = Eigen::VectorXd::Zero(18);
+  Eigen::MatrixX3d p(6, 3);
+  for (int k = 0; k < 6; ++k) p.row(k) = x0.segment<3>(3 * k).transpose();
+  const double floor = SelfContactEnergy::floor_fraction * (p.colwise().maxCoeff() - p.colwise().minCoeff()).norm();
+  ASSERT_GT(floor, 1e-11);  // about 1.6e-11 m: the gaps below are 1e-12 m and more apart
+  StepContext ctx;
+  ctx.x_t0 = &x0;
+  ctx.v_t0 = &v;
+  // Above the floor, a closing pair changes nothing.
+  e.begin_step(ctx, at_gap(1e-6));
+  for (double g : {1e-7, 1e-8, 1e-9, 1e-10}) EXPECT_FALSE(e.adapt(at_gap(g))) << g;
+  EXPECT_EQ(e.stiffness(), params.stiffness);
+  // Below the floor at the step start and closing: doubles, which doubles the barrier energy.
+  e.begin_step(ctx, x0);
+  const Eigen::VectorXd x1 = at_gap(0.5e-12);
+  const double before = e.value(x1);
+  EXPECT_TRUE(e.adapt(x1));
+  EXPECT_EQ(e.stiffness(), 2 * params.stiffness);
+  EXPECT_NEAR(e.value(x1), 2 * before, 1e-12 * before);
+  EXPECT_FALSE(e.adapt(at_gap(0.8e-12))) << "opening";
+  EXPECT_TRUE(e.adapt(at_gap(0.6e-12))) << "closing again, below the floor both times";
+  EXPECT_FALSE(e.adapt(at_gap(1e-9))) << "above the floor";
+  EXPECT_FALSE(e.adapt(at_gap(0.1e-12))) << "the iterate before was above the floor";
+  EXPECT_EQ(e.stiffness(), 4 * params.stiffness);
+  EXPECT_EQ(e.statistics().stiffness_doublings, 2);
+  // Carried to the next step through the state, and never beyond max_stiffness_factor.
+  SheetState state;
+  e.end_step(state);
+  EXPECT_EQ(state.self_contact_stiffness, 4 * params.stiffness);
+  SelfContactEnergy next(t.X, t.F, params);
+  ctx.self_contact_stiffness = state.self_contact_stiffness;
+  next.begin_step(ctx, at_gap(1e-6));
+  EXPECT_EQ(next.stiffness(), 4 * params.stiffness);
+  next.begin_step(ctx, x0);
+  double g = 1e-12;
+  for (int k = 0; k < 20; ++k) next.adapt(at_gap(g *= 0.7));
+  EXPECT_EQ(next.stiffness(), SelfContactEnergy::max_stiffness_factor * params.stiffness);
+  EXPECT_EQ(next.statistics().max_stiffness, SelfContactEnergy::max_stiffness_factor * params.stiffness);
+}
+
 TEST(EnergyDerivatives, SelfContactBoundsKeptBetweenEvaluationsRejectOnlyFarPairs) {
   // Two layers of a 9 x 9 grid of 2 mm cells, 0.7 mm apart (dhat 1 mm): every vertex is near the
   // other layer, and the mesh neighbours within a layer are candidates that are millimetres
