@@ -198,6 +198,7 @@ double SelfContactEnergy::stencil_distance2(std::size_t k, const PairPoints& pts
 void SelfContactEnergy::begin_step(const StepContext& ctx, const Eigen::VectorXd& x_t0) {
   ScopedTimer timer(m_stats->seconds);
   m_eps = m_params.eps_velocity * ctx.h;
+  m_t0 = ctx.time_t0;
   m_stiffness = std::max(m_params.stiffness, ctx.self_contact_stiffness);
   m_stats->max_stiffness = std::max(m_stats->max_stiffness, m_stiffness);
   const int nv = m_mesh.num_vertices;
@@ -451,6 +452,10 @@ bool SelfContactEnergy::adapt(const Eigen::VectorXd& x) {
   m_stiffness = std::min(2 * m_stiffness, most);
   m_stats->max_stiffness = std::max(m_stats->max_stiffness, m_stiffness);
   ++m_stats->stiffness_doublings;
+  static const bool debug = std::getenv("PAPERSIM_DEBUG_CONTACT") != nullptr;
+  if (debug)
+    std::fprintf(stderr, "self t %.6f: closest pair %.3e -> %.3e m (floor %.3e): stiffness %.4g Pa\n", m_t0, before,
+                 d, m_floor, m_stiffness);
   return true;
 }
 

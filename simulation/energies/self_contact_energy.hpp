@@ -175,6 +175,7 @@ class SelfContactEnergy : public EnergyTerm {
   double m_eps = 1e-6;  // friction smoothing: eps_velocity h [m]
   double m_stiffness = 0;           // current stiffness [Pa] (Adaptive stiffness)
   double m_floor = 0;               // floor of the step [m]
+  double m_t0 = 0;                  // start of the step [s] (debug output)
   double m_last_below = 0;          // distance_below at the last iterate [m]
 
   // Candidates, found at the base positions m_base, either (a) every pair within 1.5 dhat +
