@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cctype>
+#include <cstdio>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -29,10 +31,22 @@ using nlohmann::json;
 
 using test::read_json;
 
-/// One sample rendered for the whole suite: a sheet bent on a cylinder, smooth document.
+/// One sample rendered for the whole suite: a sheet bent on a cylinder, smooth document. When
+/// the render fails, every test of the suite fails with its message (an exception or a fatal
+/// failure in SetUpTestSuite would only skip them, which ctest reports as skipped).
 class RenderedSample : public ::testing::Test {
  protected:
+  void SetUp() override {
+    if (!s_error.empty()) FAIL() << "rendering the suite's sample failed: " << s_error;
+  }
   static void SetUpTestSuite() {
+    try {
+      render_suite_sample();
+    } catch (const std::exception& e) {
+      s_error = e.what();
+    }
+  }
+  static void render_suite_sample() {
     s_dir = std::make_unique<test::TempDir>("render");
     SampleOptions o;
     o.mesh_path = test::write_example(*s_dir, "cylinder", "cylinder.obj");
@@ -46,8 +60,10 @@ class RenderedSample : public ::testing::Test {
   static void TearDownTestSuite() { s_dir.reset(); }
   static fs::path sample() { return s_dir->path() / "sample"; }
   static std::unique_ptr<test::TempDir> s_dir;
+  static std::string s_error;
 };
 std::unique_ptr<test::TempDir> RenderedSample::s_dir;
+std::string RenderedSample::s_error;
 
 TEST_F(RenderedSample, WritesEveryFile) {
   for (const char* f : {"image.png", "shading.png", "albedo.png", "uv.exr", "coords.exr",
@@ -385,6 +401,98 @@ TEST(Render, UnreadableDocumentFails) {
   std::ofstream(dir.str("cut.png"), std::ios::binary) << bytes.substr(0, bytes.size() / 2);
   o.document = dir.str("cut.png");
   expect_failure_leaves_nothing<IoError>(o, dir, "cannot decode PNG");
+}
+
+/// Lines of a text file (0 when it does not exist).
+int count_lines(const fs::path& file) {
+  std::ifstream in(file);
+  int n = 0;
+  for (std::string line; std::getline(in, line);) ++n;
+  return n;
+}
+
+/// An executable shell script `bin/povray` in dir: it appends a line to NAME.starts in the job
+/// folder on every start, then runs `body`.
+std::string fake_povray(const test::TempDir& dir, const std::string& body) {
+  fs::create_directories(dir.path() / "bin");
+  const fs::path f = dir.path() / "bin" / "povray";
+  std::ofstream(f) << "#!/bin/sh\necho start >> \"$PWD/$1.starts\"\n" << body;
+  fs::permissions(f, fs::perms::owner_all, fs::perm_options::add);
+  return f.string();
+}
+
+/// The .ini files of a job folder.
+std::vector<std::string> job_inis(const fs::path& job) {
+  std::vector<std::string> v;
+  for (const auto& e : fs::directory_iterator(job))
+    if (e.path().extension() == ".ini") v.push_back(e.path().filename().string());
+  std::sort(v.begin(), v.end());
+  return v;
+}
+
+// POV-Ray 3.7 can fail before it renders anything when its worker threads do not start in time
+// on a loaded machine ("Timed out waiting for worker thread startup": seen once in the suite).
+// scenegen and the job's run.sh start such a render again, five starts at most; any other
+// failure fails at once.
+TEST(Render, APovrayStartupTimeoutIsStartedAgain) {
+  test::TempDir dir("startup");
+  std::string real;
+  {
+    FILE* p = popen("command -v povray", "r");
+    ASSERT_NE(p, nullptr);
+    char buf[512] = {};
+    if (fgets(buf, sizeof buf, p)) real = buf;
+    pclose(p);
+    while (!real.empty() && std::isspace(static_cast<unsigned char>(real.back()))) real.pop_back();
+  }
+  ASSERT_FALSE(real.empty()) << "povray is not on PATH";
+  const std::string timeout = "echo 'Timed out waiting for worker thread startup' >&2; exit 1\n";
+  SampleOptions o;
+  o.mesh_path = test::write_example(dir, "flat", "flat.obj");
+  o.width = 64;
+  o.height = 90;
+  RunOptions run;
+  // The first start of each render times out, the second renders.
+  run.povray = fake_povray(dir, "[ $(wc -l < \"$PWD/$1.starts\") -ge 2 ] || { " + timeout + "}\nexec " + real + " \"$@\"\n");
+  prepare_job(o, dir.str("job"));
+  const RunReport report = run_job(dir.str("job"), run);
+  const std::vector<std::string> inis = job_inis(dir.path() / "job");
+  ASSERT_GE(inis.size(), 3u);
+  EXPECT_EQ(report.seconds.size(), inis.size());
+  for (const std::string& ini : inis) EXPECT_EQ(count_lines(dir.path() / "job" / (ini + ".starts")), 2) << ini;
+  finish_job(dir.str("job"), dir.str("out"));
+  EXPECT_TRUE(fs::exists(dir.path() / "out" / "image.png"));
+  // The same through run.sh, with the fake first on PATH.
+  prepare_job(o, dir.str("job_sh"));
+  const std::string sh = "PATH=\"" + dir.str("bin") + ":$PATH\" sh " + dir.str("job_sh") + "/run.sh > " +
+                         dir.str("run_sh.log") + " 2>&1";
+  EXPECT_EQ(std::system(sh.c_str()), 0);
+  for (const std::string& ini : job_inis(dir.path() / "job_sh"))
+    EXPECT_EQ(count_lines(dir.path() / "job_sh" / (ini + ".starts")), 2) << ini;
+  // Timing out on every start: the job fails after five starts of the first render, with the
+  // message from its log.
+  run.povray = fake_povray(dir, timeout);
+  prepare_job(o, dir.str("job_fail"));
+  run.parallel = 1;
+  try {
+    run_job(dir.str("job_fail"), run);
+    ADD_FAILURE() << "no RenderError";
+  } catch (const RenderError& e) {
+    EXPECT_NE(std::string(e.what()).find("Timed out waiting for worker thread startup"), std::string::npos) << e.what();
+  }
+  int failed_starts = 0;  // one render at a time: the first fails the job
+  for (const std::string& ini : job_inis(dir.path() / "job_fail"))
+    failed_starts += count_lines(dir.path() / "job_fail" / (ini + ".starts"));
+  EXPECT_EQ(failed_starts, 5);
+  // Any other failure is not retried.
+  run.povray = fake_povray(dir, "echo 'Parse Error: no such file' >&2; exit 1\n");
+  prepare_job(o, dir.str("job_other"));
+  EXPECT_THROW(run_job(dir.str("job_other"), run), RenderError);
+  int starts = 0;
+  for (const std::string& ini : job_inis(dir.path() / "job_other"))
+    starts += count_lines(dir.path() / "job_other" / (ini + ".starts"));
+  EXPECT_EQ(starts, 1);
+  EXPECT_NE(std::system(("PATH=\"" + dir.str("bin") + ":$PATH\" sh " + dir.str("job_other") + "/run.sh > /dev/null 2>&1").c_str()), 0);
 }
 
 TEST(Render, NoValidCameraIsRecordedInMetaAndNothingElse) {
