@@ -6,7 +6,8 @@
 // counted as a rollback); the table adds the vertex counts (start, largest, end), the passes,
 // the rollbacks, the rescues (a failed step taken again after a pass with the obstacle
 // criterion on, remesh.rescue_distance) and the largest jump of the mechanical energy across a
-// pass.
+// pass. Every run also reports how often its self-contact stiffness doubled (two layers closing
+// below the adaptive stiffness's floor; docs/crumple.md, "The adaptive self-contact stiffness").
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cmath>
@@ -59,16 +60,16 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "fall_study: --remesh %g mm is larger than --remesh-max %g mm\n", size_min, size_max);
     return 2;
   }
-  std::printf("%-5s %-6s %-8s %-7s %-6s %-9s %-10s %-10s %-5s %-7s %-7s %-15s %-6s %-5s %-4s %-9s %s\n", "seed", "verts",
+  std::printf("%-5s %-6s %-8s %-7s %-6s %-9s %-10s %-10s %-5s %-7s %-7s %-15s %-6s %-5s %-4s %-9s %-4s %s\n", "seed", "verts",
               "wall_s", "newton", "halved", "max_s1", "min_obst", "min_ground", "self", "contact", "self_c",
-              "v_start/max", "passes", "rollb", "resc", "e_jump", "verdict (rollbacks by reason)");
+              "v_start/max", "passes", "rollb", "resc", "e_jump", "dbl", "verdict (rollbacks by reason)");
   std::ofstream out;
   if (!csv.empty()) {
     out.open(csv);
     out << "scenario,seed,vertices,wall_seconds,newton_iterations,failed_solves,max_stretch,min_obstacle,"
            "min_ground,self_intersections,contact_share,self_contact_share,vertices_start,vertices_max,"
            "remesh_passes,remesh_rollbacks,max_energy_jump,max_energy_jump_relative,verdict,rollback_reasons,"
-           "remesh_rescues\n";
+           "remesh_rescues,stiffness_doublings\n";
   }
   int failures = 0;
   std::vector<double> walls, shares, jumps;
@@ -87,6 +88,7 @@ int main(int argc, char** argv) {
     std::string verdict = "PASS";
     double wall = 0, s1 = 0, obstacle = INFINITY, ground = INFINITY, share = 0, self_share = 0;
     int newton = 0, halved = 0, verts = 0, self = -1, verts_start = 0, verts_max = 0, passes = 0, rollbacks = 0, rescues = 0;
+    int doublings = 0;  // self-contact stiffness doublings (adaptive barrier stiffness)
     double jump = 0, jump_relative = 0;
     std::string reasons;  // "obstacle 3 stretch 1"
     try {
@@ -113,7 +115,10 @@ int main(int argc, char** argv) {
       ground = gaps.ground;
       obstacle = gaps.obstacles;
       if (r.contact) share = r.contact->seconds / wall;
-      if (r.self_contact) self_share = r.self_contact->seconds / wall;
+      if (r.self_contact) {
+        self_share = r.self_contact->seconds / wall;
+        doublings = r.self_contact->stiffness_doublings;
+      }
       verdict = pv::safety_verdict(scene, r);
     } catch (const std::exception& e) {
       verdict = std::string("FAIL ") + e.what();
@@ -123,15 +128,15 @@ int main(int argc, char** argv) {
     shares.push_back(share + self_share);
     jumps.push_back(jump_relative);
     const std::string counts = std::to_string(verts_start) + "/" + std::to_string(verts_max);
-    std::printf("%-5d %-6d %-8.2f %-7d %-6d %-9.6f %-10.3g %-10.3g %-5d %-7.3f %-7.3f %-15s %-6d %-5d %-4d %-9.3g %s%s\n",
+    std::printf("%-5d %-6d %-8.2f %-7d %-6d %-9.6f %-10.3g %-10.3g %-5d %-7.3f %-7.3f %-15s %-6d %-5d %-4d %-9.3g %-4d %s%s\n",
                 seed, verts, wall, newton, halved, s1, obstacle, ground, self, share, self_share, counts.c_str(),
-                passes, rollbacks, rescues, jump, verdict.c_str(), reasons.empty() ? "" : (" (" + reasons + ")").c_str());
+                passes, rollbacks, rescues, jump, doublings, verdict.c_str(), reasons.empty() ? "" : (" (" + reasons + ")").c_str());
     std::fflush(stdout);
     if (out)
       out << name << ',' << seed << ',' << verts << ',' << wall << ',' << newton << ',' << halved << ',' << s1 << ','
           << obstacle << ',' << ground << ',' << self << ',' << share << ',' << self_share << ',' << verts_start << ','
           << verts_max << ',' << passes << ',' << rollbacks << ',' << jump << ',' << jump_relative << ',' << verdict
-          << ',' << reasons << ',' << rescues << '\n';
+          << ',' << reasons << ',' << rescues << ',' << doublings << '\n';
   }
   std::sort(walls.begin(), walls.end());
   if (size_min > 0)
