@@ -272,6 +272,14 @@ RemeshSpec read_remesh(Reader r) {
   return s;
 }
 
+/// An obstacle's `rotation_deg` (x, then y, then z, about fixed axes) as a quaternion.
+Eigen::Quaterniond to_q(const Eigen::Vector3d& deg) {
+  const Eigen::Vector3d a = deg * M_PI / 180;
+  return Eigen::Quaterniond(Eigen::AngleAxisd(a.z(), Eigen::Vector3d::UnitZ()) *
+                            Eigen::AngleAxisd(a.y(), Eigen::Vector3d::UnitY()) *
+                            Eigen::AngleAxisd(a.x(), Eigen::Vector3d::UnitX()));
+}
+
 collision::ColliderSpec read_obstacle(Reader r) {
   collision::ColliderSpec c;
   try {
@@ -299,17 +307,24 @@ collision::ColliderSpec read_obstacle(Reader r) {
   const Eigen::Vector3d t = r.vector<3>("position", Eigen::Vector3d::Zero());
   const Eigen::Vector3d rot = r.vector<3>("rotation_deg", Eigen::Vector3d::Zero());
   const double scale = r.number("scale", 1.0, 0, 1e6, true);
-  auto to_q = [](const Eigen::Vector3d& deg) {
-    const Eigen::Vector3d a = deg * M_PI / 180;
-    return Eigen::Quaterniond(Eigen::AngleAxisd(a.z(), Eigen::Vector3d::UnitZ()) *
-                              Eigen::AngleAxisd(a.y(), Eigen::Vector3d::UnitY()) *
-                              Eigen::AngleAxisd(a.x(), Eigen::Vector3d::UnitX()));
-  };
   for (Reader k : r.children("keyframes")) {
     collision::Keyframe f;
     f.time = k.number("time", 0.0, 0, 1e6);
     f.translation = k.vector<3>("position", t);
     f.rotation = to_q(k.vector<3>("rotation_deg", rot));
+    if (k.has("rotation_quaternion")) {
+      // The exact rotation, written where rotation_deg does not give it back to the bit.
+      const Eigen::Vector4d w = k.vector<4>("rotation_quaternion", Eigen::Vector4d::Zero());
+      const Eigen::Quaterniond q(w[0], w[1], w[2], w[3]);
+      if (!(std::abs(q.norm() - 1) <= 1e-9))
+        k.fail("rotation_quaternion", "expected a unit quaternion [w, x, y, z]; its norm is " +
+                                          common::format_number(q.norm()));
+      const double apart = q.angularDistance(f.rotation) * 180 / M_PI;
+      if (k.has("rotation_deg") && !(apart <= 1e-6))
+        k.fail("rotation_quaternion", "is " + common::format_number(apart) +
+                                          " degrees from rotation_deg; give one of the two, or both for one rotation");
+      f.rotation = q;
+    }
     f.scale = k.number("scale", scale, 0, 1e6, true);
     if (!c.keyframes.empty() && f.time <= c.keyframes.back().time)
       k.fail("time", "keyframe times must increase");
@@ -445,8 +460,13 @@ json obstacle_json(const collision::ColliderSpec& c) {
   json keys = json::array();
   for (const auto& k : c.keyframes) {
     const Eigen::Vector3d e = k.rotation.toRotationMatrix().eulerAngles(2, 1, 0) * 180 / M_PI;
-    keys.push_back({{"time", k.time}, {"position", vec(k.translation)},
-                    {"rotation_deg", vec(Eigen::Vector3d(e[2], e[1], e[0]))}, {"scale", k.scale}});
+    const Eigen::Vector3d deg(e[2], e[1], e[0]);
+    json key = {{"time", k.time}, {"position", vec(k.translation)}, {"rotation_deg", vec(deg)}, {"scale", k.scale}};
+    // Degrees rarely give a quaternion back to the bit, and a run that differs by a bit in its
+    // obstacle's pose can end elsewhere: the file then also carries the exact rotation.
+    if (to_q(deg).coeffs() != k.rotation.coeffs())
+      key["rotation_quaternion"] = {k.rotation.w(), k.rotation.x(), k.rotation.y(), k.rotation.z()};
+    keys.push_back(key);
   }
   o["keyframes"] = keys;
   return o;

@@ -98,7 +98,9 @@ nlohmann::json parse_scene_text(std::istream& in, const std::string& source);
 /// @throw SceneError when the file is missing, not valid JSON or repeats a key, or as
 ///        scene_from_json.
 Scene load_scene(const std::string& path);
-/// Every field of the scene, so that scene_from_json(scene_to_json(s)) == s. A key that is
+/// Every field of the scene, so that scene_from_json(scene_to_json(s)) == s to the bit (an
+/// obstacle keyframe whose rotation_deg does not give its quaternion back exactly also carries
+/// rotation_quaternion, so a run of the written file is the run of s). A key that is
 /// written only when not at its default (sheet.material.membrane_model) is written at its
 /// default too with `every_key` (so that an override can name it).
 nlohmann::json scene_to_json(const Scene& scene, bool every_key = false);

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
 #include <sstream>
 #include <nlohmann/json.hpp>
 
@@ -92,6 +93,60 @@ TEST(Scene, JsonRoundTripIsExact) {
   const json once = scene_to_json(s);
   const json twice = scene_to_json(scene_from_json(once, "round trip"));
   EXPECT_EQ(once, twice);
+}
+
+// What `papersim scenario` simulates, `papersim run` of the scene.json it wrote simulates to the
+// bit (as a batch's samples do): the written text gives back every obstacle pose exactly. Euler
+// degrees rarely give a quaternion back to the bit (a fall-gable run then ended 48 Newton
+// iterations apart), so a keyframe whose degrees do not also carries `rotation_quaternion`.
+TEST(Scene, ScenarioScenesRoundTripToTheBitThroughTheirText) {
+  int exact_keys = 0, keys = 0;
+  for (const std::string& name : scenario_names())
+    for (int seed = 0; seed < 10; ++seed) {
+      SCOPED_TRACE(name + " seed " + std::to_string(seed));
+      const Scene s = make_scenario(name, seed);
+      std::ostringstream text;
+      text << std::setw(2) << scene_to_json(s) << '\n';
+      const Scene back = scene_from_json(json::parse(text.str()), "scene.json");
+      EXPECT_EQ(scene_to_json(back), scene_to_json(s));
+      ASSERT_EQ(back.obstacles.size(), s.obstacles.size());
+      for (std::size_t o = 0; o < s.obstacles.size(); ++o) {
+        ASSERT_EQ(back.obstacles[o].keyframes.size(), s.obstacles[o].keyframes.size());
+        for (std::size_t k = 0; k < s.obstacles[o].keyframes.size(); ++k) {
+          const auto& a = s.obstacles[o].keyframes[k];
+          const auto& b = back.obstacles[o].keyframes[k];
+          EXPECT_EQ(a.rotation.coeffs(), b.rotation.coeffs()) << "obstacle " << o << " keyframe " << k;
+          EXPECT_EQ(a.translation, b.translation);
+          EXPECT_EQ(a.scale, b.scale);
+          EXPECT_EQ(a.time, b.time);
+          ++keys;
+          exact_keys += scene_to_json(s)["obstacles"][o]["keyframes"][k].contains("rotation_quaternion");
+        }
+      }
+    }
+  EXPECT_GT(exact_keys, 0) << "no scenario needed the exact rotation: the check above proves nothing new";
+  EXPECT_LT(exact_keys, keys) << "identity rotations give their degrees back exactly and need no quaternion";
+}
+
+// `rotation_quaternion` is read as [w, x, y, z], must be a unit quaternion and, with
+// rotation_deg beside it, the same rotation; errors name the key.
+TEST(Scene, RotationQuaternionIsCheckedAgainstItsDegrees) {
+  const auto with = [](const json& key) {
+    return json{{"obstacles", {{{"kind", "cylinder"}, {"keyframes", {key}}}}}};
+  };
+  const double c = std::cos(M_PI / 8), sn = std::sin(M_PI / 8);  // 45 degrees about z
+  const Scene s = scene_from_json(with({{"rotation_deg", {0, 0, 45}}, {"rotation_quaternion", {c, 0, 0, sn}}}), "s.json");
+  EXPECT_EQ(s.obstacles[0].keyframes[0].rotation.coeffs(), Eigen::Quaterniond(c, 0, 0, sn).coeffs());
+  const Scene alone = scene_from_json(with({{"rotation_quaternion", {c, 0, 0, sn}}}), "s.json");
+  EXPECT_EQ(alone.obstacles[0].keyframes[0].rotation.coeffs(), Eigen::Quaterniond(c, 0, 0, sn).coeffs());
+  EXPECT_NE(error_of(with({{"rotation_deg", {0, 0, 50}}, {"rotation_quaternion", {c, 0, 0, sn}}}))
+                .find("key 'obstacles[0].keyframes[0].rotation_quaternion': is 5 degrees from rotation_deg"),
+            std::string::npos)
+      << error_of(with({{"rotation_deg", {0, 0, 50}}, {"rotation_quaternion", {c, 0, 0, sn}}}));
+  EXPECT_NE(error_of(with({{"rotation_quaternion", {1, 0, 0, 0.1}}})).find("expected a unit quaternion"),
+            std::string::npos);
+  EXPECT_NE(error_of(with({{"rotation_quaternion", {1, 0, 0}}})).find("'obstacles[0].keyframes[0].rotation_quaternion'"),
+            std::string::npos);
 }
 
 // Obstacle `scale` (uniform scale of the shape, per keyframe or for the whole obstacle): read,
