@@ -89,7 +89,12 @@ ps::RunQuality quality_from_meta(const nlohmann::json& q) {
 /// --measure: the crease of finished runs (DIR/sheet.ply, and the scene from DIR/scene.json or
 /// else DIR/meta.json); with DIR/meta.json also the run's figures and the study's verdict.
 /// Returns 1 when a verdict is FAIL.
-int measure(const std::vector<std::string>& dirs, double crease_angle) {
+/// With `csv`, the table is also written there as CSV (the columns of the table), through a
+/// temporary name renamed once every row is written.
+int measure(const std::vector<std::string>& dirs, double crease_angle, const std::string& csv) {
+  std::ostringstream rows;
+  rows << "seed,wall_s,newton,max_s1,min_roller,min_ground,self,lines,longest_m,creased_m,line_m,rest_deg,"
+          "mean_deg,network,offset_mm,turn_deg,run,verdict\n";
   std::printf("%-5s %-8s %-7s %-9s %-10s %-10s %-5s %-6s %-9s %-9s %-9s %-9s %-8s %-8s %-9s %-8s %-24s %s\n",
               "seed", "wall_s", "newton", "max_s1", "min_roller", "min_ground", "self", "lines", "longest_m",
               "creased_m", "line_m", "rest_deg", "mean_deg", "network", "offset_mm", "turn_deg", "run",
@@ -138,6 +143,20 @@ int measure(const std::vector<std::string>& dirs, double crease_angle) {
                 scene.seed, wall.c_str(), newton.c_str(), s1.c_str(), roller.c_str(), ground.c_str(), self.c_str(),
                 f.crease.lines, f.crease.longest, f.crease.creased, f.line.chord, f.crease.angle * 180 / M_PI,
                 f.crease.mean_all * 180 / M_PI, f.network, f.offset * 1e3, f.turn, dir.c_str(), verdict.c_str());
+    char row[512];
+    std::snprintf(row, sizeof row, "%lld,%s,%s,%s,%s,%s,%s,%d,%.4f,%.4f,%.4f,%.1f,%.1f,%d,%.1f,%.2f,", scene.seed,
+                  wall.c_str(), newton.c_str(), s1.c_str(), roller.c_str(), ground.c_str(), self.c_str(),
+                  f.crease.lines, f.crease.longest, f.crease.creased, f.line.chord, f.crease.angle * 180 / M_PI,
+                  f.crease.mean_all * 180 / M_PI, f.network, f.offset * 1e3, f.turn);
+    rows << row << dir << ',' << verdict << '\n';
+  }
+  if (!csv.empty()) {
+    const std::string tmp = csv + ".tmp";
+    std::ofstream out(tmp);
+    out << rows.str();
+    out.close();
+    if (!out) throw std::runtime_error(tmp + ": cannot be written");
+    std::filesystem::rename(tmp, csv);
   }
   return failures == 0 ? 0 : 1;
 }
@@ -172,7 +191,7 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   if (!measure_dirs.empty()) {
     try {
-      return measure(measure_dirs, crease_angle);
+      return measure(measure_dirs, crease_angle, csv);
     } catch (const std::exception& e) {
       std::fprintf(stderr, "papersim_fold_study: %s\n", e.what());
       return 2;
