@@ -92,13 +92,28 @@ ps::RunQuality quality_from_meta(const nlohmann::json& q) {
 /// With `csv`, the table is also written there as CSV (the columns of the table), through a
 /// temporary name renamed once every row is written.
 int measure(const std::vector<std::string>& dirs, double crease_angle, const std::string& csv) {
+  // One list of columns for both the table and the CSV: name and table width.
+  static const std::vector<std::pair<const char*, int>> columns = {
+      {"seed", 5},      {"wall_s", 8},    {"newton", 7},   {"max_s1", 9},   {"min_roller", 10}, {"min_ground", 10},
+      {"self", 5},      {"lines", 6},     {"longest_m", 9}, {"creased_m", 9}, {"line_m", 9},       {"rest_deg", 9},
+      {"mean_deg", 8},  {"network", 8},   {"offset_mm", 9}, {"turn_deg", 8},  {"run", 24},         {"verdict", 0}};
   std::ostringstream rows;
-  rows << "seed,wall_s,newton,max_s1,min_roller,min_ground,self,lines,longest_m,creased_m,line_m,rest_deg,"
-          "mean_deg,network,offset_mm,turn_deg,run,verdict\n";
-  std::printf("%-5s %-8s %-7s %-9s %-10s %-10s %-5s %-6s %-9s %-9s %-9s %-9s %-8s %-8s %-9s %-8s %-24s %s\n",
-              "seed", "wall_s", "newton", "max_s1", "min_roller", "min_ground", "self", "lines", "longest_m",
-              "creased_m", "line_m", "rest_deg", "mean_deg", "network", "offset_mm", "turn_deg", "run",
-              "verdict");
+  const auto emit = [&](const std::vector<std::string>& cells) {
+    for (std::size_t c = 0; c < columns.size(); ++c) {
+      std::printf(c + 1 < columns.size() ? "%-*s " : "%-*s\n", columns[c].second, cells[c].c_str());
+      rows << cells[c] << (c + 1 < columns.size() ? ',' : '\n');
+    }
+  };
+  {
+    std::vector<std::string> names;
+    for (const auto& [name, width] : columns) names.emplace_back(name);
+    emit(names);
+  }
+  const auto fixed = [](const char* format, double v) {
+    char b[64];
+    std::snprintf(b, sizeof b, format, v);
+    return std::string(b);
+  };
   int failures = 0;
   for (const std::string& dir : dirs) {
     nlohmann::json meta;
@@ -122,16 +137,11 @@ int measure(const std::vector<std::string>& dirs, double crease_angle, const std
       try {
         const ps::RunQuality q = quality_from_meta(meta.at("quality"));
         const pv::ObstacleGaps gaps = pv::obstacle_gaps(scene, q);
-        char b[64];
-        std::snprintf(b, sizeof b, "%.1f", meta.at("run").at("wall_seconds").get<double>());
-        wall = b;
+        wall = fixed("%.1f", meta.at("run").at("wall_seconds").get<double>());
         newton = std::to_string(meta.at("run").at("newton_iterations").get<int>());
-        std::snprintf(b, sizeof b, "%.6f", q.max_principal_stretch);
-        s1 = b;
-        std::snprintf(b, sizeof b, "%.3g", gaps.obstacles);
-        roller = b;
-        std::snprintf(b, sizeof b, "%.3g", gaps.ground);
-        ground = b;
+        s1 = fixed("%.6f", q.max_principal_stretch);
+        roller = fixed("%.3g", gaps.obstacles);
+        ground = fixed("%.3g", gaps.ground);
         self = std::to_string(q.self_intersections);
         verdict = crease_verdict(pv::safety_verdict(scene, q, sheet.positions.allFinite()), f);
       } catch (const nlohmann::json::exception& e) {
@@ -139,16 +149,10 @@ int measure(const std::vector<std::string>& dirs, double crease_angle, const std
       }
       if (verdict != "PASS") ++failures;
     }
-    std::printf("%-5lld %-8s %-7s %-9s %-10s %-10s %-5s %-6d %-9.4f %-9.4f %-9.4f %-9.1f %-8.1f %-8d %-9.1f %-8.2f %-24s %s\n",
-                scene.seed, wall.c_str(), newton.c_str(), s1.c_str(), roller.c_str(), ground.c_str(), self.c_str(),
-                f.crease.lines, f.crease.longest, f.crease.creased, f.line.chord, f.crease.angle * 180 / M_PI,
-                f.crease.mean_all * 180 / M_PI, f.network, f.offset * 1e3, f.turn, dir.c_str(), verdict.c_str());
-    char row[512];
-    std::snprintf(row, sizeof row, "%lld,%s,%s,%s,%s,%s,%s,%d,%.4f,%.4f,%.4f,%.1f,%.1f,%d,%.1f,%.2f,", scene.seed,
-                  wall.c_str(), newton.c_str(), s1.c_str(), roller.c_str(), ground.c_str(), self.c_str(),
-                  f.crease.lines, f.crease.longest, f.crease.creased, f.line.chord, f.crease.angle * 180 / M_PI,
-                  f.crease.mean_all * 180 / M_PI, f.network, f.offset * 1e3, f.turn);
-    rows << row << dir << ',' << verdict << '\n';
+    emit({std::to_string(scene.seed), wall, newton, s1, roller, ground, self, std::to_string(f.crease.lines),
+          fixed("%.4f", f.crease.longest), fixed("%.4f", f.crease.creased), fixed("%.4f", f.line.chord),
+          fixed("%.1f", f.crease.angle * 180 / M_PI), fixed("%.1f", f.crease.mean_all * 180 / M_PI),
+          std::to_string(f.network), fixed("%.1f", f.offset * 1e3), fixed("%.2f", f.turn), dir, verdict});
   }
   if (!csv.empty()) {
     const std::string tmp = csv + ".tmp";
