@@ -92,6 +92,9 @@ ps::RunQuality quality_from_meta(const nlohmann::json& q) {
 /// With `csv`, the table is also written there as CSV (the columns of the table), through a
 /// temporary name renamed once every row is written.
 int measure(const std::vector<std::string>& dirs, double crease_angle, const std::string& csv) {
+  for (const std::string& dir : dirs)
+    if (!std::filesystem::exists(dir + "/sheet.ply"))
+      throw std::runtime_error(dir + ": not a finished run (no sheet.ply)");
   // One list of columns for both the table and the CSV: name and table width.
   static const std::vector<std::pair<const char*, int>> columns = {
       {"seed", 5},      {"wall_s", 8},    {"newton", 7},   {"max_s1", 9},   {"min_roller", 10}, {"min_ground", 10},
