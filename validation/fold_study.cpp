@@ -20,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "common/atomic_file.hpp"
 #include "remesh/sheet_io.hpp"
 #include "simulation/scenario.hpp"
 #include "simulation/simulate.hpp"
@@ -102,6 +103,7 @@ int measure(const std::vector<std::string>& dirs, double crease_angle, const std
       {"mean_deg", 8},  {"network", 8},   {"offset_mm", 9}, {"turn_deg", 8},  {"run", 24},         {"verdict", 0}};
   std::ostringstream rows;
   const auto emit = [&](const std::vector<std::string>& cells) {
+    if (cells.size() != columns.size()) throw std::logic_error("fold_study: a row of the wrong width");
     for (std::size_t c = 0; c < columns.size(); ++c) {
       std::printf(c + 1 < columns.size() ? "%-*s " : "%-*s\n", columns[c].second, cells[c].c_str());
       rows << cells[c] << (c + 1 < columns.size() ? ',' : '\n');
@@ -157,14 +159,7 @@ int measure(const std::vector<std::string>& dirs, double crease_angle, const std
           fixed("%.1f", f.crease.angle * 180 / M_PI), fixed("%.1f", f.crease.mean_all * 180 / M_PI),
           std::to_string(f.network), fixed("%.1f", f.offset * 1e3), fixed("%.2f", f.turn), dir, verdict});
   }
-  if (!csv.empty()) {
-    const std::string tmp = csv + ".tmp";
-    std::ofstream out(tmp);
-    out << rows.str();
-    out.close();
-    if (!out) throw std::runtime_error(tmp + ": cannot be written");
-    std::filesystem::rename(tmp, csv);
-  }
+  if (!csv.empty()) papersim::common::write_text_atomically(csv, rows.str());
   return failures == 0 ? 0 : 1;
 }
 
