@@ -389,6 +389,11 @@ SelfContactCandidates find_self_contact_candidates(const SelfContactMesh& mesh,
       if (a0 == b0 || a0 == b1 || a1 == b0 || a1 == b1) return;
       out.edge_edge.push_back({{a, b}});
     }, a);
+  // The grid reports a vertex's faces in the order of its cells; sorted, the pairs near each
+  // other are summed in the same order whatever positions the set was found at (a run continued
+  // from a checkpoint finds its set at other positions than the run it continues).
+  std::sort(out.point_triangle.begin(), out.point_triangle.end());
+  std::sort(out.edge_edge.begin(), out.edge_edge.end());
   return out;
 }
 

@@ -41,8 +41,9 @@ struct SelfContactCandidates {
 
 /// Every pair whose primitives may come within `radius` of each other while the vertices move
 /// linearly from x0 to x1 (bounding boxes of both positions, grown by radius / 2, overlap);
-/// a superset of the pairs within `radius`. Uniform-grid broad phase, O(#F + #pairs) for
-/// boxes of about the cell size.
+/// a superset of the pairs within `radius`, each list sorted (so sums over the pairs near each
+/// other come in one order whatever positions the set was found at). Uniform-grid broad phase,
+/// O(#F + #pairs) for boxes of about the cell size, and a sort of the pairs.
 /// @param x0, x1 flat positions (3N: vertex v at 3v..3v+2) [m]; pass x0 twice for a static test
 /// @param radius [m], >= 0
 SelfContactCandidates find_self_contact_candidates(const SelfContactMesh& mesh,

@@ -93,13 +93,22 @@ void Integrator::update_pattern(const Eigen::VectorXd& x) {
   bool changed = false;
   for (const auto& t : m_terms) changed = t->update_pattern(x) || changed;
   if (!changed) return;
-  SparsityBuilder pattern(m_static_pattern);
-  for (const auto& t : m_terms) t->add_dynamic_pattern(pattern);
-  m_hessian = BlockSymmetricMatrix(pattern.finish());
+  build_matrix();
   ++m_pattern_id;  // the solver redoes its symbolic analysis
   if (std::getenv("PAPERSIM_DEBUG_SOLVER"))
     std::fprintf(stderr, "pattern %ld nnz %zu (structure %zu)\n", m_pattern_id,
                  m_hessian.values().size(), m_hessian.structure_rows().size());
+}
+
+void Integrator::adopt_dynamic_patterns() {
+  PAPERSIM_ASSERT(m_factor_pattern < 0, "Integrator::adopt_dynamic_patterns: after a factorisation");
+  build_matrix();
+}
+
+void Integrator::build_matrix() {
+  SparsityBuilder pattern(m_static_pattern);
+  for (const auto& t : m_terms) t->add_dynamic_pattern(pattern);
+  m_hessian = BlockSymmetricMatrix(pattern.finish());
 }
 
 EnergyTerm* Integrator::find(const std::string& name) const {

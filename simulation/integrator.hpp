@@ -125,6 +125,10 @@ class Integrator {
   double energy(const Eigen::VectorXd& x) const;
   const std::vector<std::unique_ptr<EnergyTerm>>& terms() const { return m_terms; }
   EnergyTerm* find(const std::string& name) const;
+  /// Builds the matrix from every term's present dynamic pattern (a pattern restored from a
+  /// checkpoint, SelfContactEnergy::restore_pattern), before the first factorisation; not a
+  /// pattern change (pattern_id() stays).
+  void adopt_dynamic_patterns();
   /// Names the current Hessian sparsity pattern; it grows by one whenever a term's dynamic
   /// pattern changed (statistics and tests).
   long pattern_id() const { return m_pattern_id; }
@@ -158,6 +162,8 @@ class Integrator {
                             StepStats& stats, bool skip_exact = false);
   /// Asks every term whether its dynamic pattern changed at x and rebuilds the matrix if so.
   void update_pattern(const Eigen::VectorXd& x);
+  /// The matrix of the static pattern and every term's dynamic pattern.
+  void build_matrix();
   void debug_model(const Eigen::VectorXd& x, const Eigen::VectorXd& sol, bool project);
   /// The sheet's positions (or velocities) followed by the rigid blocks'.
   Eigen::VectorXd with_rigid(const Eigen::VectorXd& sheet, const Eigen::VectorXd& rigid) const;

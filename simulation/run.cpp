@@ -256,8 +256,12 @@ void Run::check_state(const std::string& what) const {
                          (m_scene.ground ? " (0 is the ground)" : ""));
 }
 
+std::vector<std::array<int, 3>> Run::self_contact_pattern() const {
+  return m_terms.self_contact ? m_terms.self_contact->pattern_pairs() : std::vector<std::array<int, 3>>{};
+}
+
 void Run::resume(const remesh::SheetMesh& mesh, const SheetState& state, int step, const Scene* saved,
-                 const RunTally* tally) {
+                 const RunTally* tally, const std::vector<std::array<int, 3>>* self_contact_pattern) {
   if (state.positions.size() != 3 * mesh.num_vertices() || state.velocities.size() != state.positions.size())
     throw SceneError("resume: the state has " + std::to_string(state.positions.size() / 3) +
                      " vertices, the mesh " + std::to_string(mesh.num_vertices()));
@@ -282,6 +286,15 @@ void Run::resume(const remesh::SheetMesh& mesh, const SheetState& state, int ste
   m_state = state;
   m_step = step;
   rebuild();
+  // (A scene continued without self-contact has no use for the pattern.)
+  if (self_contact_pattern && !self_contact_pattern->empty() && m_terms.self_contact) {
+    try {
+      m_terms.self_contact->restore_pattern(*self_contact_pattern);
+    } catch (const std::invalid_argument& e) {
+      throw SceneError(std::string("resume: ") + e.what());
+    }
+    m_integrator->adopt_dynamic_patterns();
+  }
   check_state("resumes");
   m_counts.vertices_start = m_counts.vertices_max = m_mesh.num_vertices();
   m_counts.faces_start = m_counts.faces_max = m_mesh.num_faces();

@@ -7,6 +7,7 @@
 /// built for a given mesh by build_terms(), which the CLI, the validation programs and the tests
 /// all use; a run rebuilds them whenever its mesh changes, and the statistics, kept in the run,
 /// survive the rebuild.
+#include <array>
 #include <functional>
 #include <map>
 #include <memory>
@@ -219,9 +220,14 @@ class Run {
   ///        time is not step x time_step, the state fails a check, or `tally` is for another
   ///        number of obstacles
   /// `saved`: the scene the checkpoint was saved with (Run::scene() of that run); obstacles that
-  /// yield upwards continue on the motion saved there.
+  /// yield upwards continue on the motion saved there. `self_contact_pattern`: the saved run's
+  /// (self_contact_pattern()), so that the continued run factors the matrices it would have.
   void resume(const remesh::SheetMesh& mesh, const SheetState& state, int step, const Scene* saved = nullptr,
-              const RunTally* tally = nullptr);
+              const RunTally* tally = nullptr,
+              const std::vector<std::array<int, 3>>* self_contact_pattern = nullptr);
+  /// The self-contact term's Hessian pattern pairs (SelfContactEnergy::pattern_pairs; empty
+  /// without self-contact), for a checkpoint.
+  std::vector<std::array<int, 3>> self_contact_pattern() const;
 
   /// Advance by one time step of the scene, remeshing before the first step, after it and then
   /// after every `remesh.every` steps when the scene remeshes. A remeshed run whose step fails

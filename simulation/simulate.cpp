@@ -250,7 +250,8 @@ RunTally tally_from_json(const json& j) {
 }
 
 void save_checkpoint(const std::string& dir, const Scene& scene, int step, const remesh::SheetMesh& mesh,
-                     const SheetState& state, const RunTally* tally) {
+                     const SheetState& state, const RunTally* tally,
+                     const std::vector<std::array<int, 3>>* self_contact_pattern) {
   const fs::path d(dir);
   std::error_code ec;
   fs::create_directories(d, ec);
@@ -269,6 +270,7 @@ void save_checkpoint(const std::string& dir, const Scene& scene, int step, const
             {"contact_stiffness", state.contact_stiffness},
             {"self_contact_stiffness", state.self_contact_stiffness}};
   if (tally) j["run"] = tally_to_json(*tally);
+  if (self_contact_pattern && !self_contact_pattern->empty()) j["self_contact_pattern"] = *self_contact_pattern;
   common::write_text_atomically(d / "checkpoint.json", j.dump(1) + "\n");
   if (!previous.empty() && previous != name.str() && previous.find('/') == std::string::npos)
     fs::remove(d / previous, ec);
@@ -291,6 +293,13 @@ Checkpoint load_checkpoint(const std::string& dir) {
     c.state.self_contact_stiffness = j.value("self_contact_stiffness", 0.0);  // and the adaptive stiffness
     sheet = j.at("sheet").get<std::string>();
     c.scene = j.at("scene");
+    if (j.contains("self_contact_pattern")) {  // absent before it was saved, and when empty
+      try {
+        c.self_contact_pattern = j.at("self_contact_pattern").get<std::vector<std::array<int, 3>>>();
+      } catch (const json::exception& e) {
+        throw SceneError(where + "key 'self_contact_pattern': " + e.what());
+      }
+    }
     if (j.contains("run")) {
       try {
         c.tally = tally_from_json(j.at("run"));
@@ -330,7 +339,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
     // a time that is not a whole number of the scene's steps).
     const int step = saved.time_step == scene.time_step ? c.step
                                                          : static_cast<int>(std::lround(c.time / run.time_step()));
-    run.resume(c.mesh, c.state, step, &saved, c.tally ? &*c.tally : nullptr);
+    run.resume(c.mesh, c.state, step, &saved, c.tally ? &*c.tally : nullptr, &c.self_contact_pattern);
     if (c.tally) wall_before = c.tally->wall_seconds;
     // Numbers that differ only in rounding are not changes: the keyframes of an obstacle that
     // yields are rebuilt from its motion, whose Euler angles come back within 1e-13 degrees.
@@ -360,7 +369,8 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
     if (options.poll_stop) options.poll_stop();
     if (options.checkpoint_every > 0 && k % options.checkpoint_every == 0 && k < steps) {
       const RunTally tally = run.tally(wall_before + elapsed());
-      save_checkpoint(options.checkpoint_dir, run.scene(), k, run.mesh(), run.state(), &tally);
+      const std::vector<std::array<int, 3>> pattern = run.self_contact_pattern();
+      save_checkpoint(options.checkpoint_dir, run.scene(), k, run.mesh(), run.state(), &tally, &pattern);
     }
     if (options.on_step) {
       StepReport report;

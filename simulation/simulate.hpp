@@ -1,6 +1,7 @@
 #pragma once
 /// Running a scene end to end: build the sheet and the incremental potential, integrate, and
 /// write sheet.obj, sheet.ply, meta.json (and frames) into an output folder.
+#include <array>
 #include <functional>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -71,6 +72,9 @@ struct Checkpoint {
   SheetState state;
   nlohmann::json scene;  ///< scene_to_json of the run that saved it
   std::optional<RunTally> tally;  ///< absent in checkpoints that do not have `run`
+  /// The self-contact term's Hessian pattern pairs (Run::self_contact_pattern); empty when it
+  /// had none, or in checkpoints written before it was saved.
+  std::vector<std::array<int, 3>> self_contact_pattern;
 };
 
 /// Writes the checkpoint atomically: the sheet file under a new name, then checkpoint.json
@@ -78,7 +82,8 @@ struct Checkpoint {
 /// complete checkpoint (the new or the previous one).
 /// @throw common::OutputError when a file cannot be written
 void save_checkpoint(const std::string& dir, const Scene& scene, int step, const remesh::SheetMesh& mesh,
-                     const SheetState& state, const RunTally* tally = nullptr);
+                     const SheetState& state, const RunTally* tally = nullptr,
+                     const std::vector<std::array<int, 3>>* self_contact_pattern = nullptr);
 
 /// The checkpoint's `run` object, and back (non-finite extremes are written as null).
 /// @throw nlohmann::json::exception for a malformed object

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <stdexcept>
+#include <string>
 
 #include "collision/barrier.hpp"
 #include "collision/self_intersection.hpp"
@@ -273,6 +274,32 @@ bool SelfContactEnergy::update_pattern(const Eigen::VectorXd& x) {
   m_pattern.erase(std::unique(m_pattern.begin(), m_pattern.end()), m_pattern.end());
   ++m_stats->pattern_changes;
   return true;
+}
+
+std::vector<std::array<int, 3>> SelfContactEnergy::pattern_pairs() const {
+  std::vector<std::array<int, 3>> out;
+  out.reserve(m_pattern.size());
+  for (const std::uint64_t k : m_pattern)
+    out.push_back({{static_cast<int>(k >> 62), static_cast<int>((k >> 31) & 0x7fffffff), static_cast<int>(k & 0x7fffffff)}});
+  return out;
+}
+
+void SelfContactEnergy::restore_pattern(const std::vector<std::array<int, 3>>& pairs) {
+  std::vector<Pair> restored;
+  restored.reserve(pairs.size());
+  for (const auto& [kind, a, b] : pairs) {
+    const int na = kind == 1 ? static_cast<int>(m_mesh.edges.rows()) : m_mesh.num_vertices;
+    const int nb = static_cast<int>(kind == 1 ? m_mesh.edges.rows() : m_mesh.faces.rows());
+    if ((kind != 0 && kind != 1) || a < 0 || a >= na || b < 0 || b >= nb)
+      throw std::invalid_argument("self-contact pattern pair (" + std::to_string(kind) + ", " + std::to_string(a) +
+                                  ", " + std::to_string(b) + ") is not a pair of this mesh");
+    restored.push_back({kind == 1, a, b});
+  }
+  m_pattern_pairs = restored;
+  m_pattern.clear();
+  for (const Pair& p : restored) m_pattern.push_back(key(p));
+  std::sort(m_pattern.begin(), m_pattern.end());
+  m_pattern.erase(std::unique(m_pattern.begin(), m_pattern.end()), m_pattern.end());
 }
 
 void SelfContactEnergy::add_dynamic_pattern(SparsityBuilder& pattern) const {

@@ -115,6 +115,16 @@ class SelfContactEnergy : public EnergyTerm {
   const SelfContactStatistics& statistics() const { return *m_stats; }
   const SelfContactParams& params() const { return m_params; }
 
+  /// The pairs of the Hessian's dynamic pattern, as (kind, a, b): kind 0 a vertex a and face b,
+  /// kind 1 edges a and b (the mesh's sorted edge list). The pattern is built when a pair closes
+  /// in and holds until the pairs change; the positions do not determine it, so a checkpoint
+  /// carries it.
+  std::vector<std::array<int, 3>> pattern_pairs() const;
+  /// Takes the pattern of a checkpoint (pattern_pairs()), before the first step; the integrator
+  /// then builds its matrix with it (Integrator::adopt_dynamic_patterns).
+  /// @throw std::invalid_argument for a kind or an index out of range
+  void restore_pattern(const std::vector<std::array<int, 3>>& pairs);
+
  private:
   /// A pair: a vertex-triangle (a = vertex, b = face) or an edge-edge (a, b edges) pair.
   struct Pair {

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <map>
 #include <random>
+#include <algorithm>
 #include <set>
 
 #include <Eigen/Geometry>
@@ -306,6 +307,42 @@ TEST(SelfContactBroadPhase, MatchesBruteForceBoxesAndHoldsEveryClosePair) {
     }
   EXPECT_GT(check_broad_phase_against_brute_force(F, x0, x1, 0.15), 100u)
       << "the test sheet really comes close to itself";
+}
+
+// The energy sums over the candidate pairs in the order of the list, so that order must not
+// depend on where the set was found: a run continued from a checkpoint finds its set at the
+// checkpoint's positions, the run it continues found its set at other ones. The same crumpled
+// sheet, found at x0 and along x0 -> x1 (another grid: other boxes, other cells), gives lists
+// that list the pairs they share in one order (each list sorted).
+TEST(SelfContactBroadPhase, PairsComeInOneOrderWhereverTheSetWasFound) {
+  const int n = 12;
+  const Eigen::MatrixX3i F = grid_faces(n, n);
+  const SelfContactMesh mesh = SelfContactMesh::from_faces(F, n * n);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-0.3, 0.3);
+  Eigen::VectorXd x0(3 * n * n), x1(3 * n * n);
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      const double s = double(j) / (n - 1), a = 3.0 * s;
+      x0.segment<3>(3 * (i * n + j)) << std::cos(a) * (1 - 0.5 * s), double(i) / (n - 1), std::sin(a) * (1 - 0.5 * s) + 0.05 * u(rng);
+      x1.segment<3>(3 * (i * n + j)) = x0.segment<3>(3 * (i * n + j)) + 0.2 * Eigen::Vector3d(u(rng), u(rng), u(rng));
+    }
+  const SelfContactCandidates still = find_self_contact_candidates(mesh, x0, x0, 0.15);
+  const SelfContactCandidates swept = find_self_contact_candidates(mesh, x0, x1, 0.15);
+  ASSERT_GT(still.point_triangle.size(), 100u);
+  ASSERT_GT(swept.point_triangle.size(), still.point_triangle.size()) << "another set";
+  // The pairs of the smaller set, in the order the larger one lists them.
+  const auto shared_in_order = [](const std::vector<std::array<int, 2>>& of, const std::vector<std::array<int, 2>>& in) {
+    const std::set<std::array<int, 2>> keep(of.begin(), of.end());
+    std::vector<std::array<int, 2>> out;
+    for (const auto& p : in)
+      if (keep.count(p)) out.push_back(p);
+    return out;
+  };
+  EXPECT_EQ(shared_in_order(still.point_triangle, swept.point_triangle), still.point_triangle);
+  EXPECT_EQ(shared_in_order(still.edge_edge, swept.edge_edge), still.edge_edge);
+  EXPECT_TRUE(std::is_sorted(swept.point_triangle.begin(), swept.point_triangle.end()));
+  EXPECT_TRUE(std::is_sorted(swept.edge_edge.begin(), swept.edge_edge.end()));
 }
 
 TEST(SelfContactBroadPhase, AStripAlongTheDiagonalOfAHugeBoxMatchesBruteForce) {
