@@ -10,6 +10,7 @@
 #include "collision/self_contact.hpp"
 #include "collision/self_intersection.hpp"
 #include "simulation/simulate.hpp"
+#include "tests/simulation/folded_sheet_scene.hpp"
 
 using namespace papersim;
 using namespace papersim::simulation;
@@ -121,36 +122,9 @@ TEST(SelfContact, StripOverRodEndsCrossWithoutIntersecting) {
 }
 
 TEST(SelfContact, SheetFoldedOntoItself) {
-  // A 12 x 4 cm sheet on the ground; the two corners of its right edge are lifted, carried over
-  // and brought down above the left half. At 0.5 s they are let go vertically (still held in x
-  // and y): the top half falls onto the bottom half and rests on it.
-  Scene s;
-  s.name = "fold";
-  s.sheet.width = 0.12;
-  s.sheet.height = 0.04;
-  // 4 mm edges, ten faces across: the fold's radius (a few mm) is resolved. At 8 mm (five faces)
-  // the fold is sharper than the mesh, where the morley model is soft and the sheet slides
-  // sideways instead of rolling over (docs/elastica_30deg_diagnosis.md section 6).
-  s.sheet.edge_length = 0.004;
-  s.sheet.material.bending_stiffness = 2e-6;
-  s.sheet.position = Eigen::Vector3d(0, 0, 1e-3);
-  for (double y : {0.0, 0.04})
-    for (int vertical : {1, 0}) {
-      HandleSpec h;
-      h.material_point = Eigen::Vector2d(0.12, y);
-      h.keyframes = {{0.0, Eigen::Vector3d::Zero()},
-                     {0.2, Eigen::Vector3d(-0.04, 0, 0.04)},
-                     {0.4, Eigen::Vector3d(-0.1, 0, 0.015)},
-                     {0.5, Eigen::Vector3d(-0.105, 0, 0.01)}};
-      if (vertical) {
-        h.release_time = 0.5;
-      } else {
-        h.axes = Eigen::Vector3d(1, 1, 0);
-      }
-      s.handles.push_back(h);
-    }
-  s.duration = 0.8;
-  s.time_step = 0.005;
+  // The top half of a sheet carried over its bottom half and let go there falls onto it and
+  // rests on it (test_scenes::sheet_folded_onto_itself).
+  const Scene s = test_scenes::sheet_folded_onto_itself(0.004, 0.8);
   const Watched w = watch(s);
   report("fold", w);
   EXPECT_EQ(w.max_intersections, 0) << "first at step " << w.first_bad_step;
