@@ -13,6 +13,7 @@
 
 #include "collision/errors.hpp"
 #include "common/atomic_file.hpp"
+#include "common/eta.hpp"
 #include "common/exit_status.hpp"
 #include "common/interrupt.hpp"
 #include "remesh/errors.hpp"
@@ -38,16 +39,17 @@ namespace {
 
 /// Progress with an ETA on stderr: a redrawn line on a terminal; otherwise a line per 10%, and
 /// one every 5 minutes of wall time while a run's steps are slow (with the percent to a tenth).
+/// The ETA is the rest of the steps at the rate of the last tenth of them (common::RecentRateEta).
 ps::ProgressFn progress_printer(const std::string& label) {
   const bool tty = isatty(fileno(stderr));
-  return [label, tty, last = -1, printed = 0.0](double f, double seconds) mutable {
+  return [label, tty, last = -1, printed = 0.0, rate = common::RecentRateEta()](double f, double seconds) mutable {
+    const double eta = rate.update(f, seconds);
     const int percent = static_cast<int>(100 * f);
     const bool slow = seconds - printed >= 300.0;
     if (!tty && percent / 10 == last / 10 && percent != 100 && !slow) return;
     const bool tenth = !tty && percent / 10 == last / 10 && percent != 100;  // a line for the time only
     last = percent;
     printed = seconds;
-    const double eta = f > 0 ? seconds * (1 - f) / f : 0;
     char amount[16];
     if (tenth)
       std::snprintf(amount, sizeof amount, "%5.1f", 100 * f);
