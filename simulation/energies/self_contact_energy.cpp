@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include "collision/barrier.hpp"
 #include "collision/self_intersection.hpp"
@@ -90,6 +91,10 @@ double SelfContactEnergy::mollifier_eps(const Pair& p) const {
 
 std::uint64_t SelfContactEnergy::key(const Pair& p) {
   return (std::uint64_t(p.edge_edge) << 62) | (std::uint64_t(p.a) << 31) | std::uint64_t(p.b);
+}
+
+SelfContactEnergy::Pair SelfContactEnergy::pair_of(std::uint64_t key) {
+  return {(key >> 62) != 0, static_cast<int>((key >> 31) & 0x7fffffff), static_cast<int>(key & 0x7fffffff)};
 }
 
 namespace {
@@ -266,21 +271,27 @@ bool SelfContactEnergy::update_pattern(const Eigen::VectorXd& x) {
   if (!missing && !excess) return false;
   // Rebuild with the pairs within 2 dhat and the friction pairs: the pattern then holds until
   // a pair closes from 2 dhat to dhat.
-  m_pattern_pairs = near;
-  m_pattern.clear();
-  for (const Pair& p : near) m_pattern.push_back(key(p));
-  m_pattern.insert(m_pattern.end(), m_friction_keys.begin(), m_friction_keys.end());
-  std::sort(m_pattern.begin(), m_pattern.end());
-  m_pattern.erase(std::unique(m_pattern.begin(), m_pattern.end()), m_pattern.end());
+  set_pattern(std::move(near), m_friction_keys);
   ++m_stats->pattern_changes;
   return true;
+}
+
+void SelfContactEnergy::set_pattern(std::vector<Pair> pairs, const std::vector<std::uint64_t>& extra_keys) {
+  m_pattern.clear();
+  for (const Pair& p : pairs) m_pattern.push_back(key(p));
+  m_pattern.insert(m_pattern.end(), extra_keys.begin(), extra_keys.end());
+  std::sort(m_pattern.begin(), m_pattern.end());
+  m_pattern.erase(std::unique(m_pattern.begin(), m_pattern.end()), m_pattern.end());
+  m_pattern_pairs = std::move(pairs);
 }
 
 std::vector<std::array<int, 3>> SelfContactEnergy::pattern_pairs() const {
   std::vector<std::array<int, 3>> out;
   out.reserve(m_pattern.size());
-  for (const std::uint64_t k : m_pattern)
-    out.push_back({{static_cast<int>(k >> 62), static_cast<int>((k >> 31) & 0x7fffffff), static_cast<int>(k & 0x7fffffff)}});
+  for (const std::uint64_t k : m_pattern) {
+    const Pair p = pair_of(k);
+    out.push_back({{p.edge_edge ? 1 : 0, p.a, p.b}});
+  }
   return out;
 }
 
@@ -295,11 +306,7 @@ void SelfContactEnergy::restore_pattern(const std::vector<std::array<int, 3>>& p
                                   ", " + std::to_string(b) + ") is not a pair of this mesh");
     restored.push_back({kind == 1, a, b});
   }
-  m_pattern_pairs = restored;
-  m_pattern.clear();
-  for (const Pair& p : restored) m_pattern.push_back(key(p));
-  std::sort(m_pattern.begin(), m_pattern.end());
-  m_pattern.erase(std::unique(m_pattern.begin(), m_pattern.end()), m_pattern.end());
+  set_pattern(std::move(restored), {});
 }
 
 void SelfContactEnergy::add_dynamic_pattern(SparsityBuilder& pattern) const {

@@ -149,6 +149,10 @@ class SelfContactEnergy : public EnergyTerm {
   double weight(const Pair& p) const;
   double mollifier_eps(const Pair& p) const;
   static std::uint64_t key(const Pair& p);
+  static Pair pair_of(std::uint64_t key);  ///< key()'s inverse
+  /// The Hessian pattern: these pairs and the pairs of `extra_keys` (m_pattern), and the pairs
+  /// whose cliques the matrix gets (m_pattern_pairs).
+  void set_pattern(std::vector<Pair> pairs, const std::vector<std::uint64_t>& extra_keys);
   /// Candidate pairs for every configuration on the segment x -> x + dx (the current set when
   /// it covers the segment).
   void build_candidates(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const;
