@@ -6,6 +6,8 @@
 #include <cstdio>
 #include <cstdlib>
 #include <sstream>
+#include <stdexcept>
+#include <string>
 
 #include "common/clock.hpp"
 #include "remesh/errors.hpp"
@@ -103,6 +105,35 @@ void Integrator::update_pattern(const Eigen::VectorXd& x) {
 void Integrator::adopt_dynamic_patterns() {
   PAPERSIM_ASSERT(m_factor_pattern < 0, "Integrator::adopt_dynamic_patterns: after a factorisation");
   build_matrix();
+}
+
+std::optional<ReusableFactor> Integrator::reusable_factor() const {
+  if (!m_reuse_next || m_params.max_factor_reuse <= 0 || m_factor_pattern != m_pattern_id) return std::nullopt;
+  // m_hessian still holds the factored matrix: a converged solve with m_reuse_next set factored
+  // the exact Hessian last (or reused the one before), and nothing assembles between steps.
+  return ReusableFactor{m_factor_h, m_reused, m_hessian.values()};
+}
+
+void Integrator::adopt_factor(const ReusableFactor& f) {
+  PAPERSIM_ASSERT(m_factor_pattern < 0, "Integrator::adopt_factor: after a factorisation");
+  if (f.values.size() != m_hessian.values().size())
+    throw std::invalid_argument("the saved factorisation's matrix has " + std::to_string(f.values.size()) +
+                                " entries, this run's " + std::to_string(m_hessian.values().size()));
+  if (!(f.h > 0) || f.reused < 0)
+    throw std::invalid_argument("the saved factorisation has time step " + std::to_string(f.h) + " s and " +
+                                std::to_string(f.reused) + " reuses");
+  if (!std::all_of(f.values.begin(), f.values.end(), [](double a) { return std::isfinite(a); }))
+    throw std::invalid_argument("the saved factorisation's matrix holds NaN or inf");
+  for (int k : m_hessian.outside_positions())
+    if (f.values[k] != 0.0)
+      throw std::invalid_argument("the saved factorisation's matrix has an entry outside this run's pattern");
+  m_hessian.values() = f.values;
+  if (!m_solver.factorize(m_hessian, m_pattern_id))
+    throw std::invalid_argument("the saved factorisation's matrix is not positive definite");
+  m_factor_pattern = m_pattern_id;
+  m_factor_h = f.h;
+  m_reused = f.reused;
+  m_reuse_next = true;
 }
 
 void Integrator::build_matrix() {

@@ -3,6 +3,7 @@
 /// 2000), solved by Newton's method with PSD element Hessians, a sparse Cholesky solve, CCD
 /// filtered backtracking line search, and step halving when Newton fails.
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -69,6 +70,16 @@ struct NewtonResult {
   std::string failure;    ///< why it did not converge
 };
 
+/// The factorisation a quiet step leaves for the next one (NewtonParams::max_factor_reuse), as
+/// a checkpoint saves it: the matrix that was factored and how far it has been reused.
+struct ReusableFactor {
+  double h = 0;    ///< time step of the factored matrix [s]
+  int reused = 0;  ///< consecutive iterations that have reused it so far
+  /// The matrix's stored entries (BlockSymmetricMatrix::values) on the Hessian pattern the run
+  /// had when it was saved.
+  std::vector<double> values;
+};
+
 /// Statistics of one accepted time step (accumulated over substeps).
 struct StepStats {
   int substeps = 0;
@@ -129,6 +140,17 @@ class Integrator {
   /// checkpoint, SelfContactEnergy::restore_pattern), before the first factorisation; not a
   /// pattern change (pattern_id() stays).
   void adopt_dynamic_patterns();
+  /// The factorisation the next step may start from (NewtonParams::max_factor_reuse), if any:
+  /// the last step converged within 2 iterations on the exact Hessian and the pattern has not
+  /// changed since.
+  std::optional<ReusableFactor> reusable_factor() const;
+  /// Factors `f`'s matrix on the present pattern and lets the next step start from it as the
+  /// run that saved it would have, before the first factorisation (after
+  /// adopt_dynamic_patterns when the pattern was restored). The same matrix on the same pattern
+  /// gives the same factor, so a run continued from a checkpoint takes the same steps.
+  /// @throw std::invalid_argument when `f` holds another number of entries than the matrix, or
+  ///        its matrix is not positive definite
+  void adopt_factor(const ReusableFactor& f);
   /// Names the current Hessian sparsity pattern; it grows by one whenever a term's dynamic
   /// pattern changed (statistics and tests).
   long pattern_id() const { return m_pattern_id; }

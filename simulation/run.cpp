@@ -260,6 +260,16 @@ std::vector<std::array<int, 3>> Run::self_contact_pattern() const {
   return m_terms.self_contact ? m_terms.self_contact->pattern_pairs() : std::vector<std::array<int, 3>>{};
 }
 
+std::optional<ReusableFactor> Run::reusable_factor() const { return m_integrator->reusable_factor(); }
+
+void Run::adopt_factor(const ReusableFactor& factor) {
+  try {
+    m_integrator->adopt_factor(factor);
+  } catch (const std::invalid_argument& e) {
+    throw SceneError(std::string("resume: ") + e.what());
+  }
+}
+
 void Run::resume(const remesh::SheetMesh& mesh, const SheetState& state, int step, const Scene* saved,
                  const RunTally* tally, const std::vector<std::array<int, 3>>* self_contact_pattern) {
   if (state.positions.size() != 3 * mesh.num_vertices() || state.velocities.size() != state.positions.size())

@@ -228,6 +228,14 @@ class Run {
   /// The self-contact term's Hessian pattern pairs (SelfContactEnergy::pattern_pairs; empty
   /// without self-contact), for a checkpoint.
   std::vector<std::array<int, 3>> self_contact_pattern() const;
+  /// The factorisation the next step may start from (Integrator::reusable_factor), for a
+  /// checkpoint; none unless the scene reuses factorisations (`solver.max_factor_reuse`) and the
+  /// last step was quiet.
+  std::optional<ReusableFactor> reusable_factor() const;
+  /// After resume(): lets the next step start from the saved run's factorisation, so a run of
+  /// the same scene continued from a checkpoint takes the steps the uninterrupted run takes.
+  /// @throw SceneError when it does not fit this run's matrix (Integrator::adopt_factor)
+  void adopt_factor(const ReusableFactor& factor);
 
   /// Advance by one time step of the scene, remeshing before the first step, after it and then
   /// after every `remesh.every` steps when the scene remeshes. A remeshed run whose step fails

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
@@ -249,31 +250,83 @@ RunTally tally_from_json(const json& j) {
   return t;
 }
 
+namespace {
+
+// The matrix of a checkpoint's reusable factorisation: this header, the number of entries
+// (uint64), then the entries (doubles), both in the machine's byte order.
+constexpr char MATRIX_HEADER[] = "papersim matrix 1\n";
+constexpr size_t MATRIX_HEADER_SIZE = sizeof MATRIX_HEADER - 1;
+
+void write_matrix_file(const fs::path& file, const std::vector<double>& values) {
+  common::write_file_atomically(file, [&](std::ostream& out) {
+    const std::uint64_t n = values.size();
+    out.write(MATRIX_HEADER, MATRIX_HEADER_SIZE);
+    out.write(reinterpret_cast<const char*>(&n), sizeof n);
+    out.write(reinterpret_cast<const char*>(values.data()), static_cast<std::streamsize>(n * sizeof(double)));
+  });
+}
+
+/// @throw std::runtime_error saying what is wrong with the file
+std::vector<double> read_matrix_file(const fs::path& file, std::uint64_t entries) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw std::runtime_error("cannot be read");
+  std::string header(MATRIX_HEADER_SIZE, '\0');
+  std::uint64_t n = 0;
+  in.read(header.data(), static_cast<std::streamsize>(header.size()));
+  in.read(reinterpret_cast<char*>(&n), sizeof n);
+  if (!in || header != MATRIX_HEADER) throw std::runtime_error("is not a papersim matrix file");
+  if (n != entries)
+    throw std::runtime_error("holds " + std::to_string(n) + " entries, checkpoint.json says " + std::to_string(entries));
+  std::vector<double> values(n);
+  in.read(reinterpret_cast<char*>(values.data()), static_cast<std::streamsize>(n * sizeof(double)));
+  if (!in || in.peek() != std::ifstream::traits_type::eof())
+    throw std::runtime_error("is not " + std::to_string(n) + " entries long");
+  return values;
+}
+
+std::string checkpoint_file_name(int step, const char* extension) {
+  std::ostringstream name;
+  name << "checkpoint_" << std::setw(8) << std::setfill('0') << step << extension;
+  return name.str();
+}
+
+}  // namespace
+
 void save_checkpoint(const std::string& dir, const Scene& scene, int step, const remesh::SheetMesh& mesh,
                      const SheetState& state, const RunTally* tally,
-                     const std::vector<std::array<int, 3>>* self_contact_pattern) {
+                     const std::vector<std::array<int, 3>>* self_contact_pattern, const ReusableFactor* factor) {
   const fs::path d(dir);
   std::error_code ec;
   fs::create_directories(d, ec);
   if (ec) throw common::OutputError(dir + ": cannot create the checkpoint folder: " + ec.message());
-  std::string previous;
+  std::vector<std::string> previous;  // the files the checkpoint it replaces names
   try {
-    previous = json::parse(std::ifstream(d / "checkpoint.json")).at("sheet").get<std::string>();
+    const json p = json::parse(std::ifstream(d / "checkpoint.json"));
+    previous.push_back(p.at("sheet").get<std::string>());
+    if (p.contains("reusable_factor")) previous.push_back(p.at("reusable_factor").at("file").get<std::string>());
   } catch (const std::exception&) {
   }
-  std::ostringstream name;
-  name << "checkpoint_" << std::setw(8) << std::setfill('0') << step << ".ply";
-  remesh::write_sheet_file((d / name.str()).string(), mesh, state.positions_matrix(), state.velocities_matrix(),
+  const std::string name = checkpoint_file_name(step, ".ply");
+  remesh::write_sheet_file((d / name).string(), mesh, state.positions_matrix(), state.velocities_matrix(),
                            scene.sheet.width, scene.sheet.height);
   json j = {{"format", CHECKPOINT_FORMAT}, {"step", step},        {"time", state.time},
-            {"sheet", name.str()},         {"version", version()}, {"scene", scene_to_json(scene)},
+            {"sheet", name},               {"version", version()}, {"scene", scene_to_json(scene)},
             {"contact_stiffness", state.contact_stiffness},
             {"self_contact_stiffness", state.self_contact_stiffness}};
   if (tally) j["run"] = tally_to_json(*tally);
   if (self_contact_pattern && !self_contact_pattern->empty()) j["self_contact_pattern"] = *self_contact_pattern;
+  std::vector<std::string> current = {name};
+  if (factor) {
+    const std::string matrix = checkpoint_file_name(step, ".factor");
+    write_matrix_file(d / matrix, factor->values);
+    j["reusable_factor"] = {
+        {"file", matrix}, {"h", factor->h}, {"reused", factor->reused}, {"entries", factor->values.size()}};
+    current.push_back(matrix);
+  }
   common::write_text_atomically(d / "checkpoint.json", j.dump(1) + "\n");
-  if (!previous.empty() && previous != name.str() && previous.find('/') == std::string::npos)
-    fs::remove(d / previous, ec);
+  for (const std::string& p : previous)
+    if (!p.empty() && p.find('/') == std::string::npos && std::find(current.begin(), current.end(), p) == current.end())
+      fs::remove(d / p, ec);
 }
 
 Checkpoint load_checkpoint(const std::string& dir) {
@@ -298,6 +351,26 @@ Checkpoint load_checkpoint(const std::string& dir) {
         c.self_contact_pattern = j.at("self_contact_pattern").get<std::vector<std::array<int, 3>>>();
       } catch (const json::exception& e) {
         throw SceneError(where + "key 'self_contact_pattern': " + e.what());
+      }
+    }
+    if (j.contains("reusable_factor")) {  // absent without one, and before it was saved
+      const std::string key = where + "key 'reusable_factor': ";
+      std::string file;
+      std::uint64_t entries = 0;
+      try {
+        const json& f = j.at("reusable_factor");
+        file = f.at("file").get<std::string>();
+        entries = f.at("entries").get<std::uint64_t>();
+        c.factor = ReusableFactor{f.at("h").get<double>(), f.at("reused").get<int>(), {}};
+      } catch (const json::exception& e) {
+        throw SceneError(key + e.what());
+      }
+      if (file.empty() || file.find('/') != std::string::npos)
+        throw SceneError(key + "'file' is not a file name in the checkpoint folder");
+      try {
+        c.factor->values = read_matrix_file(fs::path(dir) / file, entries);
+      } catch (const std::runtime_error& e) {
+        throw SceneError(key + file + " " + e.what());
       }
     }
     if (j.contains("run")) {
@@ -353,6 +426,9 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
       }
       changes.push_back(patch.at("path"));
     }
+    // The same scene's next step starts from the factorisation the saved run would have
+    // started from; a changed scene (other solver settings or time step) factors its own.
+    if (c.factor && changes.empty()) run.adopt_factor(*c.factor);
     resumed = {{"from", options.resume_from}, {"step", step}, {"time", c.time}, {"scene_changes", changes},
                {"whole_run", c.tally.has_value()}};
   }
@@ -370,7 +446,9 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
     if (options.checkpoint_every > 0 && k % options.checkpoint_every == 0 && k < steps) {
       const RunTally tally = run.tally(wall_before + elapsed());
       const std::vector<std::array<int, 3>> pattern = run.self_contact_pattern();
-      save_checkpoint(options.checkpoint_dir, run.scene(), k, run.mesh(), run.state(), &tally, &pattern);
+      const std::optional<ReusableFactor> factor = run.reusable_factor();
+      save_checkpoint(options.checkpoint_dir, run.scene(), k, run.mesh(), run.state(), &tally, &pattern,
+                      factor ? &*factor : nullptr);
     }
     if (options.on_step) {
       StepReport report;

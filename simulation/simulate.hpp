@@ -75,15 +75,21 @@ struct Checkpoint {
   /// The self-contact term's Hessian pattern pairs (Run::self_contact_pattern); empty when it
   /// had none, or in checkpoints written before it was saved.
   std::vector<std::array<int, 3>> self_contact_pattern;
+  /// The factorisation the next step may start from (Run::reusable_factor), from the file
+  /// `reusable_factor.file` names; absent when the run had none to pass on, or in checkpoints
+  /// written before it was saved.
+  std::optional<ReusableFactor> factor;
 };
 
-/// Writes the checkpoint atomically: the sheet file under a new name, then checkpoint.json
-/// naming it, then the previous sheet file is removed; a run stopped at any moment leaves a
-/// complete checkpoint (the new or the previous one).
+/// Writes the checkpoint atomically: the sheet file (and the factorisation's matrix, when
+/// `factor` is given: checkpoint_NNNNNNNN.factor, the entries as raw doubles after a header) under
+/// new names, then checkpoint.json naming them, then the previous ones are removed; a run
+/// stopped at any moment leaves a complete checkpoint (the new or the previous one).
 /// @throw common::OutputError when a file cannot be written
 void save_checkpoint(const std::string& dir, const Scene& scene, int step, const remesh::SheetMesh& mesh,
                      const SheetState& state, const RunTally* tally = nullptr,
-                     const std::vector<std::array<int, 3>>* self_contact_pattern = nullptr);
+                     const std::vector<std::array<int, 3>>* self_contact_pattern = nullptr,
+                     const ReusableFactor* factor = nullptr);
 
 /// The checkpoint's `run` object, and back (non-finite extremes are written as null).
 /// @throw nlohmann::json::exception for a malformed object

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "simulation/errors.hpp"
+#include "simulation/scenario.hpp"
 #include "simulation/simulate.hpp"
 #include "tests/simulation/folded_sheet_scene.hpp"
 
@@ -184,6 +185,82 @@ TEST(Checkpoint, SelfContactRunResumesToTheBit) {
   EXPECT_NE(refused({{0, 5, 100000}}).find("self-contact pattern pair (0, 5, 100000)"), std::string::npos);
   EXPECT_NE(refused({{2, 5, 6}}).find("self-contact pattern pair (2, 5, 6)"), std::string::npos);
   EXPECT_NE(refused({{1, 2}}).find("key 'self_contact_pattern'"), std::string::npos);
+  fs::remove_all(dir);
+}
+
+// With solver.max_factor_reuse a quiet step may start from the factorisation the last step
+// ended with (modified Newton), so where the step ends depends on that matrix, which the
+// positions at the checkpoint do not give. The checkpoint saves it (checkpoint_NNNNNNNN.factor) and
+// the continued run factors it again: it takes the uninterrupted run's steps to the bit, with the
+// same reuses. (Without it the continued run refactors at its first step, ending elsewhere within
+// the Newton tolerance: below.)
+// The scene: fall-spheres seed 0 (which sets solver.max_factor_reuse 4) at 20 mm edges, 200
+// steps of 0.5 ms; the last checkpoint, at step 150, is taken in a quiet phase, between two
+// steps that share a factorisation.
+TEST(Checkpoint, FactorReuseRunResumesToTheBit) {
+  Scene scene = make_scenario("fall-spheres", 0);
+  scene.sheet.edge_length = 0.02;
+  ASSERT_EQ(scene.newton.max_factor_reuse, 4);
+  const fs::path dir = fresh_dir("factor_reuse");
+  RunOptions save = saving_to(dir);
+  save.checkpoint_every = 50;
+  const RunResult whole = run_scene(scene, save);
+  ASSERT_EQ(whole.steps, 200);
+  EXPECT_GT(whole.totals.reused_factorizations, 0);
+  const nlohmann::json j = nlohmann::json::parse(std::ifstream(dir / "checkpoint.json"));
+  ASSERT_TRUE(j.contains("reusable_factor"));
+  EXPECT_EQ(j.at("reusable_factor").at("file"), "checkpoint_00000150.factor");
+  EXPECT_TRUE(fs::exists(dir / "checkpoint_00000150.factor"));
+  EXPECT_FALSE(fs::exists(dir / "checkpoint_00000100.factor"));  // replaced with its checkpoint
+  const Checkpoint c = load_checkpoint(dir.string());
+  ASSERT_TRUE(c.factor.has_value());
+  EXPECT_EQ(c.factor->h, scene.time_step);
+  EXPECT_EQ(c.factor->values.size(), j.at("reusable_factor").at("entries").get<size_t>());
+
+  const RunResult continued = run_scene(scene, resuming_from(dir));
+  ASSERT_EQ(continued.state.positions.size(), whole.state.positions.size());
+  EXPECT_EQ((continued.state.positions - whole.state.positions).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_EQ((continued.state.velocities - whole.state.velocities).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_EQ(continued.totals.newton_iterations, whole.totals.newton_iterations);
+  EXPECT_EQ(continued.totals.reused_factorizations, whole.totals.reused_factorizations);
+
+  // The checkpoint without it (as written before it was saved) continues with a fresh
+  // factorisation: fewer reuses and another end state.
+  const auto write = [&](const nlohmann::json& k) { std::ofstream(dir / "checkpoint.json") << k.dump(1); };
+  nlohmann::json without = j;
+  without.erase("reusable_factor");
+  write(without);
+  const RunResult refactored = run_scene(scene, resuming_from(dir));
+  const double apart = (refactored.state.positions - whole.state.positions).cwiseAbs().maxCoeff();
+  std::printf("continued without the saved factorisation: %d reuses against %d, end %.3g m apart\n",
+              refactored.totals.reused_factorizations, whole.totals.reused_factorizations, apart);
+  EXPECT_LT(refactored.totals.reused_factorizations, whole.totals.reused_factorizations);
+  EXPECT_GT(apart, 0.0);
+
+  // A matrix file that does not match its record, or a record naming no file in the folder, is
+  // refused by name; so is a matrix of another size than the run's.
+  const auto refused = [&](const nlohmann::json& k) {
+    write(k);
+    try {
+      run_scene(scene, resuming_from(dir));
+    } catch (const SceneError& e) {
+      return std::string(e.what());
+    }
+    return std::string("(accepted)");
+  };
+  nlohmann::json wrong_count = j;
+  wrong_count["reusable_factor"]["entries"] = 7;
+  EXPECT_NE(refused(wrong_count).find("checkpoint_00000150.factor holds"), std::string::npos);
+  nlohmann::json elsewhere = j;
+  elsewhere["reusable_factor"]["file"] = "../x.factor";
+  EXPECT_NE(refused(elsewhere).find("key 'reusable_factor': 'file'"), std::string::npos);
+  fs::resize_file(dir / "checkpoint_00000150.factor", fs::file_size(dir / "checkpoint_00000150.factor") - 8);
+  EXPECT_NE(refused(j).find("entries long"), std::string::npos);
+  Checkpoint small = c;
+  small.factor->values.resize(9);
+  save_checkpoint(dir.string(), scene, small.step, small.mesh, small.state, nullptr, nullptr, &*small.factor);
+  EXPECT_NE(refused(nlohmann::json::parse(std::ifstream(dir / "checkpoint.json"))).find("matrix has 9 entries"),
+            std::string::npos);
   fs::remove_all(dir);
 }
 
