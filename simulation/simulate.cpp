@@ -277,10 +277,15 @@ std::vector<double> read_matrix_file(const fs::path& file, std::uint64_t entries
   if (!in || header != MATRIX_HEADER) throw std::runtime_error("is not a papersim matrix file");
   if (n != entries)
     throw std::runtime_error("holds " + std::to_string(n) + " entries, checkpoint.json says " + std::to_string(entries));
+  // The size first, so that a count no file could hold allocates nothing.
+  std::error_code ec;
+  const std::uintmax_t size = fs::file_size(file, ec);
+  if (ec || n > (size - MATRIX_HEADER_SIZE - sizeof n) / sizeof(double) ||
+      size != MATRIX_HEADER_SIZE + sizeof n + n * sizeof(double))
+    throw std::runtime_error("is not " + std::to_string(n) + " entries long");
   std::vector<double> values(n);
   in.read(reinterpret_cast<char*>(values.data()), static_cast<std::streamsize>(n * sizeof(double)));
-  if (!in || in.peek() != std::ifstream::traits_type::eof())
-    throw std::runtime_error("is not " + std::to_string(n) + " entries long");
+  if (!in) throw std::runtime_error("is not " + std::to_string(n) + " entries long");
   return values;
 }
 

@@ -4,6 +4,7 @@
 // had counted, so the continued run reports the whole run.
 #include <gtest/gtest.h>
 
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -256,6 +257,16 @@ TEST(Checkpoint, FactorReuseRunResumesToTheBit) {
   EXPECT_NE(refused(elsewhere).find("key 'reusable_factor': 'file'"), std::string::npos);
   fs::resize_file(dir / "checkpoint_00000150.factor", fs::file_size(dir / "checkpoint_00000150.factor") - 8);
   EXPECT_NE(refused(j).find("entries long"), std::string::npos);
+  {  // a count no file holds is refused before anything is allocated for it
+    const std::uint64_t huge = std::uint64_t(1) << 60;
+    std::ofstream f(dir / "huge.factor", std::ios::binary);
+    f << "papersim matrix 1\n";
+    f.write(reinterpret_cast<const char*>(&huge), sizeof huge);
+  }
+  nlohmann::json too_many = j;
+  too_many["reusable_factor"]["file"] = "huge.factor";
+  too_many["reusable_factor"]["entries"] = std::uint64_t(1) << 60;
+  EXPECT_NE(refused(too_many).find("huge.factor is not 1152921504606846976 entries long"), std::string::npos);
   Checkpoint small = c;
   small.factor->values.resize(9);
   save_checkpoint(dir.string(), scene, small.step, small.mesh, small.state, nullptr, nullptr, &*small.factor);
