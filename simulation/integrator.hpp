@@ -148,8 +148,9 @@ class Integrator {
   /// run that saved it would have, before the first factorisation (after
   /// adopt_dynamic_patterns when the pattern was restored). The same matrix on the same pattern
   /// gives the same factor, so a run continued from a checkpoint takes the same steps.
-  /// @throw std::invalid_argument when `f` holds another number of entries than the matrix, or
-  ///        its matrix is not positive definite
+  /// @throw std::invalid_argument when `f` does not fit the matrix (another number of entries,
+  ///        one outside the pattern, NaN or inf, a time step not above 0) or its matrix is not
+  ///        positive definite
   void adopt_factor(const ReusableFactor& f);
   /// Names the current Hessian sparsity pattern; it grows by one whenever a term's dynamic
   /// pattern changed (statistics and tests).
