@@ -13,6 +13,7 @@
 #include "common/clock.hpp"
 #include "remesh/errors.hpp"
 #include "remesh/sheet_io.hpp"
+#include "remesh/sizing.hpp"
 #include "simulation/energies/vertex_energies.hpp"
 #include "simulation/errors.hpp"
 #include "simulation/plasticity.hpp"
@@ -88,6 +89,24 @@ void add_contact_terms(const remesh::SheetMesh& mesh, const PhysicsSetup& setup,
     t.self_contact = c.get();
     t.list.push_back(std::move(c));
   }
+}
+
+/// The error for a sheet read from a file (key `sheet.mesh`, a checkpoint) whose terms cannot be
+/// built, e.g. a bending system that cannot be factored on faces far thinner or larger than the
+/// rest: an input error naming the sheet and its thinnest face in material space.
+SceneError unusable_sheet(const std::string& sheet, const remesh::SheetMesh& mesh, const NumericError& e) {
+  const Eigen::MatrixX2d X = mesh.material_coords();
+  const Eigen::MatrixX3i F = mesh.faces();
+  double thinnest = INF;
+  int face = -1;
+  for (int f = 0; f < F.rows(); ++f) {
+    const double a = remesh::aspect_ratio(X.row(F(f, 0)), X.row(F(f, 1)), X.row(F(f, 2)));
+    if (a < thinnest) thinnest = a, face = f;
+  }
+  char what[160];
+  std::snprintf(what, sizeof what, " (its thinnest face in material space is face %d, of aspect ratio %.3g; 1: equilateral)",
+                face, thinnest);
+  return SceneError(sheet + " cannot be simulated: " + e.what() + what);
 }
 
 }  // namespace
@@ -228,7 +247,14 @@ EnergyBreakdown energy_breakdown(const Terms& terms, const Eigen::Vector3d& grav
 Run::Run(const Scene& scene) : m_scene(scene) {
   initial_sheet(scene, m_mesh, m_state);
   m_setup = physics_setup(scene, m_mesh, m_state);
-  rebuild();
+  try {
+    rebuild();
+  } catch (const NumericError& e) {
+    if (scene.sheet.mesh_path.empty()) throw;
+    throw unusable_sheet((scene.source.empty() ? std::string("scene") : scene.source) + ": key 'sheet.mesh': " +
+                             scene.sheet.mesh_path,
+                         m_mesh, e);
+  }
   check_state("starts");
   m_steps = std::max(1, static_cast<int>(std::lround(scene.duration / scene.time_step)));
   m_h = scene.duration / m_steps;
@@ -267,6 +293,8 @@ void Run::adopt_factor(const ReusableFactor& factor) {
     m_integrator->adopt_factor(factor);
   } catch (const std::invalid_argument& e) {
     throw SceneError(std::string("resume: ") + e.what());
+  } catch (const NumericError& e) {  // CHOLMOD failed on it for another reason
+    throw SceneError(std::string("resume: the saved factorisation's matrix: ") + e.what());
   }
 }
 
@@ -295,7 +323,11 @@ void Run::resume(const remesh::SheetMesh& mesh, const SheetState& state, int ste
   m_mesh = mesh;
   m_state = state;
   m_step = step;
-  rebuild();
+  try {
+    rebuild();
+  } catch (const NumericError& e) {
+    throw unusable_sheet("resume: the saved sheet", m_mesh, e);
+  }
   // (A scene continued without self-contact has no use for the pattern.)
   if (self_contact_pattern && !self_contact_pattern->empty() && m_terms.self_contact) {
     try {

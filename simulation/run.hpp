@@ -205,7 +205,9 @@ class Run {
  public:
   /// Builds the sheet in its initial pose, the obstacles and the terms; checks that the sheet
   /// starts outside every obstacle and, with self-contact, outside itself.
-  /// @throw SceneError, remesh::IoError, remesh::MeshError
+  /// @throw SceneError (also for a sheet read from `sheet.mesh` on which the terms cannot be
+  ///        built, such as a bending system that cannot be factored), remesh::IoError,
+  ///        remesh::MeshError
   explicit Run(const Scene& scene);
   ~Run();
   Run(const Run&) = delete;
@@ -217,8 +219,8 @@ class Run {
   /// from `tally` (what the saved run had counted, Run::tally), else they count from here on.
   /// Checked like a start (outside every obstacle, free of self-intersection).
   /// @throw SceneError when the state does not fit the mesh, the step is out of range or its
-  ///        time is not step x time_step, the state fails a check, or `tally` is for another
-  ///        number of obstacles
+  ///        time is not step x time_step, the terms cannot be built on the mesh, the state
+  ///        fails a check, or `tally` is for another number of obstacles
   /// `saved`: the scene the checkpoint was saved with (Run::scene() of that run); obstacles that
   /// yield upwards continue on the motion saved there. `self_contact_pattern`: the saved run's
   /// (self_contact_pattern()), so that the continued run factors the matrices it would have.
@@ -234,7 +236,8 @@ class Run {
   std::optional<ReusableFactor> reusable_factor() const;
   /// After resume(): lets the next step start from the saved run's factorisation, so a run of
   /// the same scene continued from a checkpoint takes the steps the uninterrupted run takes.
-  /// @throw SceneError when it does not fit this run's matrix (Integrator::adopt_factor)
+  /// @throw SceneError when it does not fit this run's matrix or cannot be factored
+  ///        (Integrator::adopt_factor)
   void adopt_factor(const ReusableFactor& factor);
 
   /// Advance by one time step of the scene, remeshing before the first step, after it and then
