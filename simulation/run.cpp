@@ -91,6 +91,11 @@ void add_contact_terms(const remesh::SheetMesh& mesh, const PhysicsSetup& setup,
   }
 }
 
+/// How errors about the key `sheet.mesh` begin: "SCENE_FILE: key 'sheet.mesh': ".
+std::string sheet_mesh_key(const Scene& scene) {
+  return (scene.source.empty() ? std::string("scene") : scene.source) + ": key 'sheet.mesh': ";
+}
+
 /// The error for a sheet read from a file (key `sheet.mesh`, a checkpoint) whose terms cannot be
 /// built, e.g. a bending system that cannot be factored on faces far thinner or larger than the
 /// rest: an input error naming the sheet and its thinnest face in material space.
@@ -115,8 +120,7 @@ void initial_sheet(const Scene& scene, remesh::SheetMesh& mesh, SheetState& stat
   const SheetSpec& sp = scene.sheet;
   Eigen::MatrixX3d x;
   if (!sp.mesh_path.empty()) {
-    const std::string key = (scene.source.empty() ? std::string("scene") : scene.source) +
-                            ": key 'sheet.mesh': ";
+    const std::string key = sheet_mesh_key(scene);
     remesh::SheetData d;
     try {
       d = remesh::read_sheet(sp.mesh_path);
@@ -251,9 +255,7 @@ Run::Run(const Scene& scene) : m_scene(scene) {
     rebuild();
   } catch (const NumericError& e) {
     if (scene.sheet.mesh_path.empty()) throw;
-    throw unusable_sheet((scene.source.empty() ? std::string("scene") : scene.source) + ": key 'sheet.mesh': " +
-                             scene.sheet.mesh_path,
-                         m_mesh, e);
+    throw unusable_sheet(sheet_mesh_key(scene) + scene.sheet.mesh_path, m_mesh, e);
   }
   check_state("starts");
   m_steps = std::max(1, static_cast<int>(std::lround(scene.duration / scene.time_step)));
