@@ -163,19 +163,20 @@ double Integrator::energy(const Eigen::VectorXd& x) const {
 
 double Integrator::start_energy(const SheetState& state, double h) {
   Eigen::VectorXd x_t0, v_t0;
-  begin_step(state, h, x_t0, v_t0);
+  begin_step(state, h, h, x_t0, v_t0);
   const double e = energy(x_t0);
   m_following.clear();
   return e;
 }
 
-StepContext Integrator::begin_step(const SheetState& state, double h, Eigen::VectorXd& x_t0,
+StepContext Integrator::begin_step(const SheetState& state, double h, double h_whole, Eigen::VectorXd& x_t0,
                                    Eigen::VectorXd& v_t0) {
   x_t0 = with_rigid(state.positions, m_rigid_x);
   v_t0 = with_rigid(state.velocities, m_rigid_v);
   StepContext ctx;
   ctx.time_t0 = state.time;
   ctx.h = h;
+  ctx.h_whole = h_whole;
   ctx.x_t0 = &x_t0;
   ctx.v_t0 = &v_t0;
   ctx.contact_stiffness = state.contact_stiffness;
@@ -530,7 +531,8 @@ bool Integrator::follow_obstacles(const StepContext& ctx, Eigen::VectorXd& x, do
 
 bool Integrator::advance(SheetState& state, double h, int depth, int max_depth, StepStats& stats) {
   Eigen::VectorXd x_t0, v_t0;
-  const StepContext ctx = begin_step(state, h, x_t0, v_t0);
+  // A split step is h = h_whole / 2^depth (exact in binary floating point).
+  const StepContext ctx = begin_step(state, h, std::ldexp(h, depth), x_t0, v_t0);
   // Start from the explicit prediction x_t0 + h v_t0 when it is feasible (CCD-safe from x_t0
   // and finite energy): Newton then only corrects it, instead of producing the whole motion of
   // the step from rest (measured: about half the iterations on a falling sheet).

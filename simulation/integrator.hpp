@@ -170,7 +170,9 @@ class Integrator {
   void begin_step(const StepContext& ctx, const Eigen::VectorXd& x_t0);
   /// Sets x_t0 and v_t0 to the step start of `state` (the sheet's, then the rigid blocks'),
   /// begins a step of length h there, and returns its context (which points into x_t0, v_t0).
-  StepContext begin_step(const SheetState& state, double h, Eigen::VectorXd& x_t0, Eigen::VectorXd& v_t0);
+  /// h_whole: StepContext::h_whole.
+  StepContext begin_step(const SheetState& state, double h, double h_whole, Eigen::VectorXd& x_t0,
+                         Eigen::VectorXd& v_t0);
   bool advance(SheetState& state, double h, int depth, int max_depth, StepStats& stats);
   /// The gradient of the incremental potential at x into g (no Hessian).
   void assemble_gradient(const Eigen::VectorXd& x, Eigen::VectorXd& g) const;

@@ -199,6 +199,7 @@ PhysicsSetup physics_setup(const Scene& scene, const remesh::SheetMesh& mesh, co
   if (s.self_contact_params.dhat <= 0) s.self_contact_params.dhat = s.contact.dhat;
   if (s.self_contact_params.stiffness <= 0) s.self_contact_params.stiffness = s.contact.stiffness;
   s.self_contact_params.eps_velocity = s.contact.eps_velocity;
+  s.self_contact_params.static_whole_step = s.contact.static_whole_step;
   return s;
 }
 

@@ -421,6 +421,12 @@ Scene crumple(std::uint64_t seed) {
   // finishes the 5 s at 15 mm and at 10 mm (docs/crumple.md). Steps that converge sooner are
   // unaffected.
   s.newton.max_iterations = 200;
+  // Friction's static zone is that of the whole 2 ms step (2 micrometres) also in the steps the
+  // solver splits. With the zone of the split step (IPC's), it narrows to nanometres at the
+  // microsecond steps of the end of the crush, where the layers' friction reaches 538 N per pair
+  // (10 kN in all), and Newton crawls across it: seed 3 failed at t = 4.9186 s (docs/crumple.md,
+  // "Friction's static zone in split steps"). Steps that are not split are unaffected.
+  s.contact.static_whole_step = true;
   const Eigen::Vector3d centre(0, 0, 0.25);
   Draw pose(seed, "pose");
   const double tilt_x = pose.uniform(-3, 3), tilt_y = pose.uniform(-3, 3), turn = pose.uniform(0, 360);

@@ -364,6 +364,7 @@ Scene scene_from_json(const json& j, const std::string& source) {
     s.contact.dhat = c.number("thickness", s.contact.dhat, 0, 0.1, true);
     s.contact.stiffness = c.number("stiffness", 0.0, 0, 1e12);
     s.contact.eps_velocity = c.number("static_velocity", s.contact.eps_velocity, 0, 10, true);
+    s.contact.static_whole_step = c.boolean("static_whole_step", s.contact.static_whole_step);
     s.contact.faces = c.boolean("faces", s.contact.faces);
     s.contact.hold_load = c.boolean("hold_load", s.contact.hold_load);
     s.contact.load_raise = c.number("load_raise", s.contact.load_raise, 1, 1e3);
@@ -526,6 +527,7 @@ json scene_to_json(const Scene& s, bool every_key) {
   j["contact"] = {{"thickness", s.contact.dhat},
                   {"stiffness", s.contact.stiffness},
                   {"static_velocity", s.contact.eps_velocity},
+                  {"static_whole_step", s.contact.static_whole_step},
                   {"faces", s.contact.faces},
                   {"hold_load", s.contact.hold_load},
                   {"load_raise", s.contact.load_raise},

@@ -78,8 +78,8 @@ struct Scene {
   /// Contact thickness, pressure scale and slip speed; stiffness <= 0 (the default, as in
   /// scene files) means automatic: rho_A max(|g|, 1).
   ContactParams contact = automatic_contact();
-  /// Sheet against itself; thickness and stiffness 0 mean: as `contact` (eps_velocity is
-  /// always contact.eps_velocity).
+  /// Sheet against itself; thickness and stiffness 0 mean: as `contact` (eps_velocity and
+  /// static_whole_step are always contact's).
   SelfContactParams self_contact;
   NewtonParams newton;
   RemeshSpec remesh;

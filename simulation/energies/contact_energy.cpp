@@ -476,7 +476,7 @@ void ObstacleContactEnergy::begin_step(const StepContext& ctx, const Eigen::Vect
   ScopedTimer timer(m_stats->seconds);
   m_t0 = ctx.time_t0;
   m_t1 = m_time = ctx.time_t1();
-  m_eps = m_params.eps_velocity * ctx.h;
+  m_eps = m_params.eps_velocity * (m_params.static_whole_step ? ctx.whole_step() : ctx.h);
   update_bounds();
   m_moving.clear();
   for (const auto& o : m_obstacles) m_moving.push_back(o->motion.moves_during(m_t0, m_t1));

@@ -81,6 +81,12 @@ struct ContactParams {
   double dhat = 3e-4;          ///< barrier activation distance (contact thickness) [m]
   double stiffness = 1.0;      ///< pressure scale of the barrier [Pa] (see above)
   double eps_velocity = 1e-3;  ///< slip speed below which friction is static-like [m/s]
+  /// Friction's static zone is the slip eps_velocity times the step: false, the step being
+  /// solved (IPC); true, the whole step the run asked for (StepContext::whole_step), so that a step
+  /// the solver splits keeps the zone of the whole step instead of narrowing it with every
+  /// halving (docs/crumple.md, "Friction's static zone in split steps"). Obstacle and
+  /// self-contact friction alike.
+  bool static_whole_step = false;
   bool hold_load = true;       ///< the load rule (above)
   /// Largest factor by which the load rule raises the stiffness at one step start, when the
   /// load has pressed the sheet closer than dhat / 100 (1: it never raises it).

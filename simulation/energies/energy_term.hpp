@@ -17,11 +17,15 @@ namespace papersim::simulation {
 struct StepContext {
   double time_t0 = 0.0;  ///< start of the step [s]
   double h = 1e-3;       ///< step length [s]
+  /// The step the run asked for, of which this one is a part when the solver split it
+  /// (Integrator::step) [s]; 0: h (not split).
+  double h_whole = 0.0;
   const Eigen::VectorXd* x_t0 = nullptr;  ///< positions at the step start (3N) [m]
   const Eigen::VectorXd* v_t0 = nullptr;  ///< velocities at the step start (3N) [m/s]
   double contact_stiffness = 0.0;  ///< SheetState::contact_stiffness at the step start [Pa]
   double self_contact_stiffness = 0.0;  ///< SheetState::self_contact_stiffness at the step start [Pa]
   double time_t1() const { return time_t0 + h; }
+  double whole_step() const { return h_whole > 0 ? h_whole : h; }
 };
 
 class EnergyTerm {

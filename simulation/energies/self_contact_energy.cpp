@@ -203,7 +203,7 @@ double SelfContactEnergy::stencil_distance2(std::size_t k, const PairPoints& pts
 
 void SelfContactEnergy::begin_step(const StepContext& ctx, const Eigen::VectorXd& x_t0) {
   ScopedTimer timer(m_stats->seconds);
-  m_eps = m_params.eps_velocity * ctx.h;
+  m_eps = m_params.eps_velocity * (m_params.static_whole_step ? ctx.whole_step() : ctx.h);
   m_t0 = ctx.time_t0;
   m_stiffness = std::max(m_params.stiffness, ctx.self_contact_stiffness);
   m_stats->max_stiffness = std::max(m_stats->max_stiffness, m_stiffness);
@@ -244,6 +244,13 @@ void SelfContactEnergy::begin_step(const StepContext& ctx, const Eigen::VectorXd
     m_friction_keys.push_back(key(p));
   }
   std::sort(m_friction_keys.begin(), m_friction_keys.end());
+  static const bool debug = std::getenv("PAPERSIM_DEBUG_CONTACT") != nullptr;
+  if (debug) {
+    double largest = 0, total = 0;
+    for (const FrictionPair& fp : m_friction) largest = std::max(largest, fp.mu_lambda), total += fp.mu_lambda;
+    std::fprintf(stderr, "self t %.6f h %.3e: %zu friction pairs, mu lambda largest %.3e N, sum %.3e N, static zone %.3e m\n",
+                 ctx.time_t0, ctx.h, m_friction.size(), largest, total, m_eps);
+  }
 }
 
 bool SelfContactEnergy::update_pattern(const Eigen::VectorXd& x) {

@@ -58,6 +58,7 @@ struct SelfContactParams {
   double stiffness = 0.0;
   double friction = 0.6;        ///< Coulomb coefficient sheet-sheet [-] (SCENARIOS.md)
   double eps_velocity = 1e-3;   ///< slip speed below which friction is static-like [m/s]
+  bool static_whole_step = false;  ///< as ContactParams::static_whole_step
   /// The line search never closes more than this fraction of a pair's gap in one step.
   double ccd_min_separation = 0.1;
 };
@@ -186,7 +187,7 @@ class SelfContactEnergy : public EnergyTerm {
   SelfContactParams m_params;
   Eigen::VectorXd m_vertex_area, m_edge_area, m_edge_rest;
   bool m_project = true;
-  double m_eps = 1e-6;  // friction smoothing: eps_velocity h [m]
+  double m_eps = 1e-6;  // friction smoothing: eps_velocity h (or h_whole) [m]
   double m_stiffness = 0;           // current stiffness [Pa] (Adaptive stiffness)
   double m_floor = 0;               // floor of the step [m]
   double m_t0 = 0;                  // start of the step [s] (debug output)

@@ -781,6 +781,76 @@ TEST(EnergyDerivatives, SelfContactFrictionAndCcd) {
   EXPECT_LT(e.value(t.x + alpha * dx), INF);
 }
 
+// Friction's static zone in a step the solver split (ContactParams::static_whole_step): vertices
+// slide 0.5 mm in a step of 1/8 ms, split from a whole step of 1 ms, with eps_velocity 1 m/s. The
+// zone is the slip eps_velocity h: 0.125 mm for the split step, so the slide is past it and the
+// friction force is the whole mu lambda; 1 mm for the whole step, in whose smoothing
+// f1(y) = 2 y / eps - y^2 / eps^2 a slide of half the zone gets 0.75 of it. Sheet-sheet (vertex 0
+// of A over B's face) and against the ground (every vertex within the barrier range); the slide
+// is along x, where the barriers have no component, so the x-components are friction alone.
+// The derivatives match finite differences with the whole step's zone too.
+TEST(EnergyDerivatives, FrictionKeepsTheWholeStepsStaticZoneInASplitStep) {
+  const Eigen::VectorXd v0 = Eigen::VectorXd::Zero(18);
+  StepContext ctx;
+  ctx.h = 1e-3 / 8;
+  ctx.h_whole = 1e-3;
+  ctx.v_t0 = &v0;
+  const TwoTriangles t = two_triangles({{Eigen::Vector3d(0.002, 0.002, 5e-4), Eigen::Vector3d(0.004, 0.003, 0.008),
+                                         Eigen::Vector3d(0.001, 0.004, 0.009)}});
+  Eigen::VectorXd x = t.x;
+  x[0] += 5e-4;
+  ctx.x_t0 = &t.x;
+  auto self_friction = [&](bool whole) {
+    SelfContactParams p = self_params();
+    p.static_whole_step = whole;
+    SelfContactEnergy e(t.X, t.F, p);
+    e.set_hessian_projection(false);
+    e.begin_step(ctx, t.x);
+    EXPECT_EQ(e.active_friction(), 1);
+    if (whole) check_derivatives(e, 6, x, 1e-6, 1e-5, true, 1e-9);
+    Eigen::VectorXd g = Eigen::VectorXd::Zero(18);
+    e.add_derivatives(x, g, nullptr);
+    return g[0];
+  };
+  const double split = self_friction(false);
+  EXPECT_GT(split, 0.0);
+  EXPECT_NEAR(self_friction(true) / split, 0.75, 1e-12);
+
+  Fixture f = make_fixture();
+  const int nv = f.mesh.num_vertices();
+  const double dhat = ContactParams{}.dhat;
+  Eigen::VectorXd y0 = f.x0, y = f.x0;
+  for (int k = 0; k < nv; ++k) {
+    y0[3 * k + 2] = y[3 * k + 2] = 0.5 * dhat;
+    y[3 * k] += 5e-4;
+  }
+  const Eigen::VectorXd v = Eigen::VectorXd::Zero(y.size());
+  ctx.x_t0 = &y0;
+  ctx.v_t0 = &v;
+  auto ground_friction = [&](bool whole) {
+    auto ground = std::make_shared<collision::PlaneCollider>();
+    ground->friction = 0.4;
+    ContactParams p;
+    p.eps_velocity = 1.0;
+    p.static_whole_step = whole;
+    ObstacleContactEnergy e(Eigen::VectorXd::Constant(nv, 4e-4), {ground}, p);
+    e.begin_step(ctx, y0);
+    EXPECT_EQ(e.active_friction(), nv);
+    if (whole) check_derivatives(e, nv, y, 1e-6, 1e-4, true, 1e-8);
+    Eigen::VectorXd g = Eigen::VectorXd::Zero(y.size());
+    e.add_derivatives(y, g, nullptr);
+    double sum = 0;
+    for (int k = 0; k < nv; ++k) sum += g[3 * k];
+    return sum;
+  };
+  const double ground_split = ground_friction(false);
+  EXPECT_GT(ground_split, 0.0);
+  EXPECT_NEAR(ground_friction(true) / ground_split, 0.75, 1e-12);
+  // Not split (h_whole unset): the zone is the step's, with the flag or without.
+  ctx.h_whole = 0;
+  EXPECT_NEAR(ground_friction(true) / ground_split, 1.0, 1e-12);
+}
+
 TEST(SelfContactStiffness, DoublesOnlyWhileAPairBelowTheFloorKeepsClosing) {
   // Vertex 0 of A over B's face at a gap g (the only pair nearer than 1 mm). The floor is 1e-9 of
   // the bounding-box diagonal at the step start.
