@@ -8,6 +8,7 @@
 // criterion on, remesh.rescue_distance) and the largest jump of the mechanical energy across a
 // pass. Every run also reports how often its self-contact stiffness doubled (two layers closing
 // below the adaptive stiffness's floor; docs/crumple.md, "The adaptive self-contact stiffness").
+// --set KEY=VALUE changes a scene key of every run (e.g. contact.static_whole_step=true).
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cmath>
@@ -16,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "simulation/batch.hpp"
 #include "simulation/scenario.hpp"
 #include "simulation/simulate.hpp"
 #include "validation/safety.hpp"
@@ -55,7 +57,19 @@ int main(int argc, char** argv) {
   app.add_option("--trust-region-cg", trust_region_cg,
                  "solver.trust_region_cg (default: the scenario's)")
       ->check(CLI::Range(0, 1000));
+  std::vector<std::string> set_pairs;
+  app.add_option("--set", set_pairs,
+                 "KEY=VALUE: set a scene key of every run (dotted, e.g. contact.static_whole_step=true; the "
+                 "value is JSON), before the options above; repeatable");
   CLI11_PARSE(app, argc, argv);
+  nlohmann::json overrides;
+  try {
+    overrides = ps::parse_overrides(set_pairs);
+    ps::apply_overrides(ps::make_scenario(name, first), overrides, "--set");  // a bad key fails before any run
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "fall_study: %s\n", e.what());
+    return 2;
+  }
   if (size_min > size_max) {
     std::fprintf(stderr, "fall_study: --remesh %g mm is larger than --remesh-max %g mm\n", size_min, size_max);
     return 2;
@@ -75,6 +89,7 @@ int main(int argc, char** argv) {
   std::vector<double> walls, shares, jumps;
   for (int seed = first; seed < first + seeds; ++seed) {
     ps::Scene scene = ps::make_scenario(name, seed);
+    if (!set_pairs.empty()) scene = ps::apply_overrides(scene, overrides, "--set");
     if (start_edge > 0) scene.sheet.edge_length = 1e-3 * start_edge;
     if (step > 0) scene.time_step = 1e-3 * step;
     if (trust_region_cg >= 0) scene.newton.trust_region_cg = trust_region_cg;
