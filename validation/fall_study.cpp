@@ -13,15 +13,17 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
+#include <sstream>
 #include <string>
 #include <vector>
 
+#include "common/errors.hpp"
 #include "simulation/batch.hpp"
 #include "simulation/scenario.hpp"
 #include "simulation/simulate.hpp"
 #include "validation/safety.hpp"
 #include "validation/statistics.hpp"
+#include "validation/study_table.hpp"
 
 namespace ps = papersim::simulation;
 namespace pv = papersim::validation;
@@ -32,7 +34,8 @@ using papersim::validation::median;
 
 }  // namespace
 
-int main(int argc, char** argv) {
+// The study; main turns an unwritable --csv into exit status 5.
+static int study(int argc, char** argv) {
   CLI::App app{"fall_study: a fall scenario over seeds, with its acceptance checks"};
   std::string name = "fall-sphere", csv;
   int seeds = 20, first = 0, trust_region_cg = -1;
@@ -74,17 +77,14 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "fall_study: --remesh %g mm is larger than --remesh-max %g mm\n", size_min, size_max);
     return 2;
   }
+  pv::StudyTable table(csv,
+                       "scenario,seed,vertices,wall_seconds,newton_iterations,failed_solves,max_stretch,"
+                       "min_obstacle,min_ground,self_intersections,contact_share,self_contact_share,"
+                       "vertices_start,vertices_max,remesh_passes,remesh_rollbacks,max_energy_jump,"
+                       "max_energy_jump_relative,verdict,rollback_reasons,remesh_rescues,stiffness_doublings");
   std::printf("%-5s %-6s %-8s %-7s %-6s %-9s %-10s %-10s %-5s %-7s %-7s %-15s %-6s %-5s %-4s %-9s %-4s %s\n", "seed", "verts",
               "wall_s", "newton", "halved", "max_s1", "min_obst", "min_ground", "self", "contact", "self_c",
               "v_start/max", "passes", "rollb", "resc", "e_jump", "dbl", "verdict (rollbacks by reason)");
-  std::ofstream out;
-  if (!csv.empty()) {
-    out.open(csv);
-    out << "scenario,seed,vertices,wall_seconds,newton_iterations,failed_solves,max_stretch,min_obstacle,"
-           "min_ground,self_intersections,contact_share,self_contact_share,vertices_start,vertices_max,"
-           "remesh_passes,remesh_rollbacks,max_energy_jump,max_energy_jump_relative,verdict,rollback_reasons,"
-           "remesh_rescues,stiffness_doublings\n";
-  }
   int failures = 0;
   std::vector<double> walls, shares, jumps;
   for (int seed = first; seed < first + seeds; ++seed) {
@@ -147,11 +147,14 @@ int main(int argc, char** argv) {
                 seed, verts, wall, newton, halved, s1, obstacle, ground, self, share, self_share, counts.c_str(),
                 passes, rollbacks, rescues, jump, doublings, verdict.c_str(), reasons.empty() ? "" : (" (" + reasons + ")").c_str());
     std::fflush(stdout);
-    if (out)
-      out << name << ',' << seed << ',' << verts << ',' << wall << ',' << newton << ',' << halved << ',' << s1 << ','
+    if (table.enabled()) {
+      std::ostringstream row;
+      row << name << ',' << seed << ',' << verts << ',' << wall << ',' << newton << ',' << halved << ',' << s1 << ','
           << obstacle << ',' << ground << ',' << self << ',' << share << ',' << self_share << ',' << verts_start << ','
           << verts_max << ',' << passes << ',' << rollbacks << ',' << jump << ',' << jump_relative << ',' << verdict
-          << ',' << reasons << ',' << rescues << ',' << doublings << '\n';
+          << ',' << reasons << ',' << rescues << ',' << doublings;
+      table.add(row.str());
+    }
   }
   std::sort(walls.begin(), walls.end());
   if (size_min > 0)
@@ -162,4 +165,13 @@ int main(int argc, char** argv) {
               "median %.0f%% of the wall time\n",
               name.c_str(), seeds, failures, median(walls), walls.back(), 100 * median(shares));
   return failures == 0 ? 0 : 1;
+}
+
+int main(int argc, char** argv) {
+  try {
+    return study(argc, argv);
+  } catch (const papersim::common::OutputError& e) {  // --csv cannot be written
+    std::fprintf(stderr, "fall_study: %s\n", e.what());
+    return 5;
+  }
 }

@@ -14,7 +14,6 @@
 
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -23,6 +22,7 @@
 
 #include "simulation/simulate.hpp"
 #include "validation/fold_scene.hpp"
+#include "validation/study_table.hpp"
 
 namespace ps = papersim::simulation;
 
@@ -102,13 +102,8 @@ int main(int argc, char** argv) {
   app.add_option("--csv", csv, "also write the table as CSV");
   CLI11_PARSE(app, argc, argv);
   try {
-    std::vector<Row> rows;
-    for (double e : numbers(edges_text, "--edges")) {
-      char label[32];
-      std::snprintf(label, sizeof label, "uniform %g mm", e);
-      rows.push_back(run(label,
-                         papersim::validation::fold_180_scene(1e-3 * e)));
-    }
+    // Every setting is read, and the CSV's path written, before the first run.
+    std::vector<std::pair<double, double>> remeshes;
     std::stringstream in(remesh_text);
     std::string item;
     while (std::getline(in, item, ',')) {
@@ -117,38 +112,48 @@ int main(int argc, char** argv) {
       if (std::sscanf(item.c_str(), "%lf:%lf%n", &lo, &hi, &used) != 2 || used != static_cast<int>(item.size()) ||
           !(lo > 0) || !(hi >= lo) || !std::isfinite(hi))
         throw std::runtime_error("--remesh: '" + item + "' is not MIN:MAX in mm with 0 < MIN <= MAX");
+      remeshes.emplace_back(lo, hi);
+    }
+    const std::vector<double> edges = numbers(edges_text, "--edges");
+    papersim::validation::StudyTable table(
+        csv, "mesh,vertices,vertices_max,cpu_seconds,bending_energy_J,radius_m,continuum_J,ratio,"
+             "self_intersections,max_stretch,min_ground_m,remesh_rollbacks,failure");
+    std::vector<Row> rows;
+    for (double e : edges) {
+      char label[32];
+      std::snprintf(label, sizeof label, "uniform %g mm", e);
+      rows.push_back(run(label, papersim::validation::fold_180_scene(1e-3 * e)));
+    }
+    for (const auto& [lo, hi] : remeshes) {
       ps::Scene s = papersim::validation::fold_180_scene(1e-3 * start_edge);
       s.remesh.enabled = true;
       s.remesh.params.size_min = 1e-3 * lo;
       s.remesh.params.size_max = 1e-3 * hi;
-      rows.push_back(run("remesh " + item, s));
+      char label[64];
+      std::snprintf(label, sizeof label, "remesh %g:%g", lo, hi);
+      rows.push_back(run(label, s));
     }
     std::printf("%-16s %8s %8s %8s %12s %9s %12s %7s %5s %10s %10s %6s\n", "mesh", "vertices", "max_vert", "cpu_s",
                 "bend_J", "radius_mm", "continuum_J", "ratio", "self", "max_s1", "ground_mm", "rollb");
-    std::ofstream out;
-    if (!csv.empty()) {
-      out.open(csv);
-      out << "mesh,vertices,vertices_max,cpu_seconds,bending_energy_J,radius_m,continuum_J,ratio,self_intersections,"
-             "max_stretch,min_ground_m,remesh_rollbacks,failure\n";
-    }
     bool safe = true;
     for (const Row& r : rows) {
+      std::ostringstream out;
       if (!r.failure.empty()) {
         std::printf("%-16s FAILED after %.1f s of CPU: %s\n", r.mesh.c_str(), r.cpu, r.failure.c_str());
-        if (out) out << r.mesh << ",,," << r.cpu << ",,,,,,,,,\"" << r.failure << "\"\n";
+        out << r.mesh << ",,," << r.cpu << ",,,,,,,,,\"" << r.failure << '"';
+        table.add(out.str());
         safe = false;
         continue;
       }
       std::printf("%-16s %8d %8d %8.1f %12.4g %9.2f %12.4g %7.3f %5d %10.6f %10.4f %6d\n", r.mesh.c_str(), r.vertices,
                   r.vertices_max, r.cpu, r.bend, 1e3 * r.radius, r.continuum, r.bend / r.continuum, r.self, r.stretch,
                   1e3 * r.ground, r.rollbacks);
-      if (out)
-        out << r.mesh << ',' << r.vertices << ',' << r.vertices_max << ',' << r.cpu << ',' << r.bend << ','
-            << r.radius << ',' << r.continuum << ',' << r.bend / r.continuum << ',' << r.self << ',' << r.stretch
-            << ',' << r.ground << ',' << r.rollbacks << ",\n";
+      out << r.mesh << ',' << r.vertices << ',' << r.vertices_max << ',' << r.cpu << ',' << r.bend << ','
+          << r.radius << ',' << r.continuum << ',' << r.bend / r.continuum << ',' << r.self << ',' << r.stretch
+          << ',' << r.ground << ',' << r.rollbacks << ',';
+      table.add(out.str());
       safe = safe && r.self == 0 && r.ground > 0 && r.stretch <= 1 + r.limit;
     }
-    if (out && !out.flush()) throw std::runtime_error("cannot write " + csv);
     return safe ? 0 : 1;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "papersim_fold_remesh: %s\n", e.what());

@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "common/atomic_file.hpp"
+#include "common/errors.hpp"
 #include "remesh/sheet_io.hpp"
 #include "simulation/scenario.hpp"
 #include "simulation/simulate.hpp"
@@ -28,6 +29,7 @@
 #include "validation/metrics.hpp"
 #include "validation/safety.hpp"
 #include "validation/statistics.hpp"
+#include "validation/study_table.hpp"
 
 namespace ps = papersim::simulation;
 namespace pv = papersim::validation;
@@ -165,7 +167,8 @@ int measure(const std::vector<std::string>& dirs, double crease_angle, const std
 
 }  // namespace
 
-int main(int argc, char** argv) {
+// The study; main turns an unwritable --csv into exit status 5.
+static int study(int argc, char** argv) {
   CLI::App app{"papersim_fold_study: the fold scenario over seeds, with its acceptance checks"};
   std::string csv, keep;
   std::vector<std::string> measure_dirs;
@@ -199,20 +202,17 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
+  pv::StudyTable table(csv,
+                       "seed,vertices,wall_seconds,newton_iterations,failed_solves,max_stretch,"
+                       "min_roller,min_ground,self_intersections,crease_lines,longest_crease,"
+                       "creased_length,fold_length,crease_rest_angle_deg,fold_mean_rest_angle_deg,"
+                       "plastic_network_lines,crease_offset_m,crease_turn_deg,verdict");
   std::printf(
       "%-5s %-6s %-8s %-7s %-6s %-9s %-10s %-10s %-5s %-6s %-9s %-9s %-9s %-8s %-8s %-7s %-9s %-8s "
       "%s\n",
       "seed", "verts", "wall_s", "newton", "halved", "max_s1", "min_roller", "min_ground", "self",
       "lines", "longest_m", "creased_m", "fold_m", "rest_deg", "mean_deg", "network", "offset_mm",
       "turn_deg", "verdict");
-  std::ofstream out;
-  if (!csv.empty()) {
-    out.open(csv);
-    out << "seed,vertices,wall_seconds,newton_iterations,failed_solves,max_stretch,"
-           "min_roller,min_ground,self_intersections,crease_lines,longest_crease,"
-           "creased_length,fold_length,crease_rest_angle_deg,fold_mean_rest_angle_deg,"
-           "plastic_network_lines,crease_offset_m,crease_turn_deg,verdict\n";
-  }
   int failures = 0;
   std::vector<double> walls;
   for (int seed = first; seed < first + seeds; ++seed) {
@@ -278,16 +278,26 @@ int main(int argc, char** argv) {
         crease.creased, line.chord, crease.angle * deg, crease.mean_all * deg, found.network,
         offset * 1e3, turn, verdict.c_str());
     std::fflush(stdout);
-    if (out)
-      out << seed << ',' << verts << ',' << wall << ',' << newton << ',' << halved << ',' << s1
-          << ',' << roller << ',' << ground << ',' << self << ',' << crease.lines << ','
-          << crease.longest << ',' << crease.creased << ',' << line.chord << ','
-          << crease.angle * deg << ',' << crease.mean_all * deg << ',' << found.network << ','
-          << offset << ',' << turn << ',' << verdict
-          << std::endl;  // flushed: a stopped study keeps the seeds it finished
+    if (table.enabled()) {  // rewritten whole after every seed: a stopped study keeps the seeds it finished
+      std::ostringstream row;
+      row << seed << ',' << verts << ',' << wall << ',' << newton << ',' << halved << ',' << s1 << ',' << roller
+          << ',' << ground << ',' << self << ',' << crease.lines << ',' << crease.longest << ',' << crease.creased
+          << ',' << line.chord << ',' << crease.angle * deg << ',' << crease.mean_all * deg << ','
+          << found.network << ',' << offset << ',' << turn << ',' << verdict;
+      table.add(row.str());
+    }
   }
   std::sort(walls.begin(), walls.end());
   std::printf("fold: %d seeds, %d failed; wall time median %.1f s, worst %.1f s\n", seeds, failures,
               pv::median(walls), walls.back());
   return failures == 0 ? 0 : 1;
+}
+
+int main(int argc, char** argv) {
+  try {
+    return study(argc, argv);
+  } catch (const papersim::common::OutputError& e) {  // --csv cannot be written
+    std::fprintf(stderr, "fold_study: %s\n", e.what());
+    return 5;
+  }
 }

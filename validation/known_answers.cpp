@@ -19,7 +19,6 @@
 #include <complex>
 #include <cstdio>
 #include <cstdlib>
-#include <fstream>
 #include <functional>
 #include <limits>
 #include <memory>
@@ -29,6 +28,7 @@
 #include <vector>
 
 #include "collision/collider.hpp"
+#include "common/atomic_file.hpp"
 #include "common/clock.hpp"
 #include "remesh/sheet_generator.hpp"
 #include "simulation/energies/vertex_energies.hpp"
@@ -118,17 +118,17 @@ class Report {
     for (const Row& r : m_rows)
       if (r.verdict == "FAIL") std::printf("  FAIL  %s\n", r.name.c_str());
   }
-  /// @throw std::runtime_error when the file cannot be written.
+  /// Written through a temporary name: the file appears complete or not at all.
+  /// @throw common::OutputError naming the file when it cannot be written.
   void write_csv(const std::string& path) const {
-    std::ofstream out(path);
-    if (!out) throw std::runtime_error("cannot write " + path);
-    out << "group,case,expected,measured,rel_error,tolerance,verdict\n";
-    out.precision(10);
-    for (const Row& r : m_rows)
-      out << r.group << ",\"" << r.name << "\"," << r.expected << ',' << r.measured << ','
-          << (std::isnan(r.rel_error) ? std::string() : format("%.6g", r.rel_error)) << ",\""
-          << r.tolerance << "\"," << r.verdict << '\n';
-    if (!out) throw std::runtime_error("cannot write " + path);
+    papersim::common::write_file_atomically(path, [&](std::ostream& out) {
+      out << "group,case,expected,measured,rel_error,tolerance,verdict\n";
+      out.precision(10);
+      for (const Row& r : m_rows)
+        out << r.group << ",\"" << r.name << "\"," << r.expected << ',' << r.measured << ','
+            << (std::isnan(r.rel_error) ? std::string() : format("%.6g", r.rel_error)) << ",\""
+            << r.tolerance << "\"," << r.verdict << '\n';
+    });
   }
 
   template <typename... Args>

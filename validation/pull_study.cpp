@@ -7,18 +7,22 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
+#include <sstream>
+#include <string>
 #include <vector>
 
+#include "common/errors.hpp"
 #include "simulation/errors.hpp"
 #include "simulation/scenario.hpp"
 #include "simulation/simulate.hpp"
 #include "validation/metrics.hpp"
 #include "validation/statistics.hpp"
+#include "validation/study_table.hpp"
 
 namespace ps = papersim::simulation;
 
-int main(int argc, char** argv) {
+// The study; main turns an unwritable --csv into exit status 5.
+static int study(int argc, char** argv) {
   CLI::App app{"pull_study: the pull scenario over seeds, with its acceptance checks"};
   int seeds = 20, first = 0;
   std::string csv;
@@ -26,13 +30,10 @@ int main(int argc, char** argv) {
   app.add_option("--first", first, "first seed (seeds first .. first + N - 1)")->check(CLI::NonNegativeNumber);
   app.add_option("--csv", csv, "also write the table as CSV");
   CLI11_PARSE(app, argc, argv);
+  papersim::validation::StudyTable table(
+      csv, "seed,vertices,wall_seconds,newton_iterations,max_stretch,handle_error,min_ground,gauss_bonnet,points,verdict");
   std::printf("%-5s %-7s %-9s %-10s %-11s %-11s %-11s %-10s %-8s %s\n", "seed", "verts", "wall_s",
               "newton", "max_s1", "handle_err", "min_ground", "gauss_bon", "points", "verdict");
-  std::ofstream out;
-  if (!csv.empty()) {
-    out.open(csv);
-    out << "seed,vertices,wall_seconds,newton_iterations,max_stretch,handle_error,min_ground,gauss_bonnet,points,verdict\n";
-  }
   int failures = 0;
   std::vector<double> walls;
   for (int seed = first; seed < first + seeds; ++seed) {
@@ -72,11 +73,24 @@ int main(int argc, char** argv) {
     std::printf("%-5d %-7d %-9.2f %-10d %-11.6f %-11.3g %-11.3g %-10.2g %-8zu %s\n", seed, verts, wall,
                 newton, s1, herr, ground, gauss_bonnet, scene.handles.size(), verdict.c_str());
     std::fflush(stdout);
-    if (out) out << seed << ',' << verts << ',' << wall << ',' << newton << ',' << s1 << ',' << herr
-                 << ',' << ground << ',' << gauss_bonnet << ',' << scene.handles.size() << ',' << verdict << '\n';
+    if (table.enabled()) {
+      std::ostringstream row;
+      row << seed << ',' << verts << ',' << wall << ',' << newton << ',' << s1 << ',' << herr << ',' << ground << ','
+          << gauss_bonnet << ',' << scene.handles.size() << ',' << verdict;
+      table.add(row.str());
+    }
   }
   std::sort(walls.begin(), walls.end());
   std::printf("%d seeds, %d failed; wall time median %.2f s, worst %.2f s\n", seeds, failures,
               papersim::validation::median(walls), walls.back());
   return failures == 0 ? 0 : 1;
+}
+
+int main(int argc, char** argv) {
+  try {
+    return study(argc, argv);
+  } catch (const papersim::common::OutputError& e) {  // --csv cannot be written
+    std::fprintf(stderr, "pull_study: %s\n", e.what());
+    return 5;
+  }
 }

@@ -25,11 +25,11 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <functional>
 #include <limits>
 #include <memory>
 #include <set>
+#include <sstream>
 #include <string>
 #include <unistd.h>
 #include <vector>
@@ -41,6 +41,7 @@
 #include "remesh/sheet_io.hpp"
 #include "simulation/simulate.hpp"
 #include "validation/fold_scene.hpp"
+#include "validation/study_table.hpp"
 
 namespace fs = std::filesystem;
 namespace ps = papersim::simulation;
@@ -297,19 +298,35 @@ int main(int argc, char** argv) {
   };
   std::printf("%-22s %-5s %-6s %-22s %-22s %-18s %-8s %-20s %7s %s\n", "case", "steps", "nan", "vertices min d [m]",
               "faces min d [m]", "strain max s1", "self", "energy growth/scale", "wall s", "verdict");
-  std::ofstream out_csv;
-  if (!csv.empty()) {
-    out_csv.open(csv);
-    out_csv << "case,what,steps,finite,min_vertex_distance,min_face_distance,max_stretch,self_intersections,"
-               "energy_growth_ratio,seconds,verdict,failed_checks\n";
+  std::unique_ptr<papersim::validation::StudyTable> table;
+  try {
+    table = std::make_unique<papersim::validation::StudyTable>(
+        csv, "case,what,steps,finite,min_vertex_distance,min_face_distance,max_stretch,self_intersections,"
+             "energy_growth_ratio,seconds,verdict,failed_checks");
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "papersim_stress_suite: %s\n", e.what());
+    fs::remove_all(work);
+    return 5;
   }
+  const auto add_row = [&](const std::string& row) {  // false (and said) when the CSV cannot be written
+    try {
+      table->add(row);
+      return true;
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "papersim_stress_suite: %s\n", e.what());
+      return false;
+    }
+  };
   int failures = 0, run = 0;
   const auto t0 = std::chrono::steady_clock::now();
   for (const Case& c : cases) {
     if (!wanted(c.name)) continue;
     if (!c.not_run_reason.empty()) {
       std::printf("%-22s not run: %s\n", c.name.c_str(), c.not_run_reason.c_str());
-      if (out_csv) out_csv << '"' << c.name << "\",\"" << c.what << "\",,,,,,,,,not run,\"" << c.not_run_reason << "\"\n";
+      if (!add_row('"' + c.name + "\",\"" + c.what + "\",,,,,,,,,not run,\"" + c.not_run_reason + '"')) {
+        fs::remove_all(work);
+        return 5;
+      }
       continue;
     }
     ++run;
@@ -335,11 +352,17 @@ int main(int argc, char** argv) {
                 o.finite ? "none" : "NaN", o.min_vertex_distance, faces_text, o.max_stretch, o.self_intersections,
                 growth, o.seconds, verdict.c_str(), reasons.empty() ? "" : ": ", reasons.c_str());
     std::fflush(stdout);
-    if (out_csv)
-      out_csv << '"' << c.name << "\",\"" << c.what << "\"," << o.steps << ',' << o.finite << ','
-              << o.min_vertex_distance << ',' << o.min_face_distance << ',' << o.max_stretch << ','
-              << o.self_intersections << ',' << growth << ',' << o.seconds << ',' << verdict << ",\"" << reasons
-              << "\"\n";
+    if (table->enabled()) {
+      std::ostringstream row;
+      row << '"' << c.name << "\",\"" << c.what << "\"," << o.steps << ',' << o.finite << ','
+          << o.min_vertex_distance << ',' << o.min_face_distance << ',' << o.max_stretch << ','
+          << o.self_intersections << ',' << growth << ',' << o.seconds << ',' << verdict << ",\"" << reasons
+          << '"';
+      if (!add_row(row.str())) {
+        fs::remove_all(work);
+        return 5;
+      }
+    }
   }
   fs::remove_all(work);
   std::printf("\n%d cases run, %d failed; wall time %.1f s\n", run, failures,
