@@ -19,7 +19,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <set>
 #include <sstream>
 #include <string>
@@ -28,6 +27,7 @@
 #include <Eigen/Eigenvalues>
 #include <sys/resource.h>
 
+#include "common/atomic_file.hpp"
 #include "remesh/remesh.hpp"
 #include "remesh/sheet_io.hpp"
 #include "remesh/sizing.hpp"
@@ -62,12 +62,9 @@ void report(const ps::Run& run, const rm::RemeshParams& p, const std::string& du
   std::printf("step %d (t = %.3f s): %d vertices, %d faces, loop height %.1f mm\n", run.steps_done(),
               run.state().time, mesh.num_vertices(), mesh.num_faces(), 1e3 * (zmax - zmin));
   const char* names[5] = {"curvature", "plastic", "compression", "velocity", "obstacle"};
-  std::FILE* out = nullptr;
-  if (!dump.empty()) {
-    out = std::fopen((dump + "/faces_" + std::to_string(run.steps_done()) + ".csv").c_str(), "w");
-    if (!out) throw std::runtime_error("cannot write to " + dump);
-    std::fprintf(out, "mx,my,wx,wy,wz,l_curvature,l_plastic,l_compression,kp_xx,kp_yy,kp_xy,size\n");
-  }
+  // --dump: the faces' table, written at the end of this step through a temporary name.
+  const bool dumping = !dump.empty();
+  std::string faces_csv = "mx,my,wx,wy,wz,l_curvature,l_plastic,l_compression,kp_xx,kp_yy,kp_xy,size\n";
   const Eigen::MatrixX3d kp = mesh.plastic_curvature();
   const double at_min = 1.0 / (p.size_min * p.size_min) * (1 - 1e-9);
   std::vector<int> finest(5, 0), dominant(5, 0);
@@ -92,7 +89,7 @@ void report(const ps::Run& run, const rm::RemeshParams& p, const std::string& du
       if (l > best_l) best_l = l, best = k;
     }
     if (best >= 0) ++dominant[best];
-    if (out) {
+    if (dumping) {
       Eigen::Vector2d mc = Eigen::Vector2d::Zero();
       Eigen::Vector3d wc = Eigen::Vector3d::Zero();
       double size = 0;
@@ -105,8 +102,10 @@ void report(const ps::Run& run, const rm::RemeshParams& p, const std::string& du
         const double l = largest_eigenvalue(m[k]);
         return l > 0 ? 1 / std::sqrt(l) : INFINITY;
       };
-      std::fprintf(out, "%.6g,%.6g,%.6g,%.6g,%.6g,%.4g,%.4g,%.4g,%.4g,%.4g,%.4g,%.4g\n", mc.x(), mc.y(), wc.x(), wc.y(),
-                   wc.z(), len(0), len(1), len(2), kp(i, 0), kp(i, 1), kp(i, 2), size);
+      char line[256];
+      std::snprintf(line, sizeof line, "%.6g,%.6g,%.6g,%.6g,%.6g,%.4g,%.4g,%.4g,%.4g,%.4g,%.4g,%.4g\n", mc.x(),
+                    mc.y(), wc.x(), wc.y(), wc.z(), len(0), len(1), len(2), kp(i, 0), kp(i, 1), kp(i, 2), size);
+      faces_csv += line;
     }
     const Eigen::Vector2d a = mesh.material_coord(f(i, 0)), b = mesh.material_coord(f(i, 1)),
                           c = mesh.material_coord(f(i, 2));
@@ -126,10 +125,12 @@ void report(const ps::Run& run, const rm::RemeshParams& p, const std::string& du
     green_min = std::min(green_min, g);
     if (g < -1e-3) ++compressed;
   }
-  if (out) {
-    std::fclose(out);
-    std::ofstream obj(dump + "/sheet_" + std::to_string(run.steps_done()) + ".obj");
-    rm::write_obj(obj, mesh, x, run.scene().sheet.width, run.scene().sheet.height);
+  if (dumping) {
+    const std::string step = std::to_string(run.steps_done());
+    papersim::common::write_text_atomically(dump + "/faces_" + step + ".csv", faces_csv);
+    papersim::common::write_file_atomically(dump + "/sheet_" + step + ".obj", [&](std::ostream& obj) {
+      rm::write_obj(obj, mesh, x, run.scene().sheet.width, run.scene().sheet.height);
+    });
   }
   if (run.scene().remesh.enabled) {
     const ps::RunResult r = run.result(0);
