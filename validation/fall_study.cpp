@@ -17,7 +17,6 @@
 #include <string>
 #include <vector>
 
-#include "common/errors.hpp"
 #include "simulation/batch.hpp"
 #include "simulation/scenario.hpp"
 #include "simulation/simulate.hpp"
@@ -167,11 +166,4 @@ static int study(int argc, char** argv) {
   return failures == 0 ? 0 : 1;
 }
 
-int main(int argc, char** argv) {
-  try {
-    return study(argc, argv);
-  } catch (const papersim::common::OutputError& e) {  // --csv cannot be written
-    std::fprintf(stderr, "fall_study: %s\n", e.what());
-    return 5;
-  }
-}
+int main(int argc, char** argv) { return papersim::validation::run_study("fall_study", study, argc, argv); }

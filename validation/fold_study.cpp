@@ -21,7 +21,6 @@
 #include <vector>
 
 #include "common/atomic_file.hpp"
-#include "common/errors.hpp"
 #include "remesh/sheet_io.hpp"
 #include "simulation/scenario.hpp"
 #include "simulation/simulate.hpp"
@@ -293,11 +292,4 @@ static int study(int argc, char** argv) {
   return failures == 0 ? 0 : 1;
 }
 
-int main(int argc, char** argv) {
-  try {
-    return study(argc, argv);
-  } catch (const papersim::common::OutputError& e) {  // --csv cannot be written
-    std::fprintf(stderr, "fold_study: %s\n", e.what());
-    return 5;
-  }
-}
+int main(int argc, char** argv) { return papersim::validation::run_study("fold_study", study, argc, argv); }

@@ -11,7 +11,6 @@
 #include <string>
 #include <vector>
 
-#include "common/errors.hpp"
 #include "simulation/errors.hpp"
 #include "simulation/scenario.hpp"
 #include "simulation/simulate.hpp"
@@ -86,11 +85,4 @@ static int study(int argc, char** argv) {
   return failures == 0 ? 0 : 1;
 }
 
-int main(int argc, char** argv) {
-  try {
-    return study(argc, argv);
-  } catch (const papersim::common::OutputError& e) {  // --csv cannot be written
-    std::fprintf(stderr, "pull_study: %s\n", e.what());
-    return 5;
-  }
-}
+int main(int argc, char** argv) { return papersim::validation::run_study("pull_study", study, argc, argv); }

@@ -26,4 +26,8 @@ class StudyTable {
   std::string text_;
 };
 
+/// The main of a study program: `study(argc, argv)`, with a table that cannot be written
+/// (common::OutputError) turned into a message prefixed by `program` and exit status 5.
+int run_study(const char* program, int (*study)(int, char**), int argc, char** argv);
+
 }  // namespace papersim::validation
