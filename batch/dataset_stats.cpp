@@ -102,6 +102,24 @@ std::string gp_quoted(const std::string& text) {
   return out + "'";
 }
 
+/// Write `text` to `path`, flushed, closed and checked. @throw std::runtime_error naming the file
+void write_checked(const fs::path& path, const std::string& text) {
+  std::ofstream out(path, std::ios::binary);
+  out << text;
+  out.close();
+  if (!out) throw std::runtime_error("dataset-stats: cannot write '" + path.string() + "'");
+}
+
+/// Whether `path` is a whole SVG file (gnuplot closes it with </svg>).
+bool whole_svg(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  const std::string text = s.str();
+  const auto end = text.find_last_not_of(" \n");
+  return end != std::string::npos && end >= 5 && text.compare(end - 5, 6, "</svg>") == 0;
+}
+
 /// One histogram file: bin centre, then one count column per scenario.
 std::string write_histogram(const fs::path& dat, const std::map<std::string, std::vector<double>>& per, int bins) {
   double lo = INFINITY, hi = -INFINITY;
@@ -116,13 +134,13 @@ std::string write_histogram(const fs::path& dat, const std::map<std::string, std
       ++counts[k][std::min(static_cast<std::size_t>(bins - 1), static_cast<std::size_t>((x - lo) / w))];
     ++k;
   }
-  std::ofstream out(dat);
+  std::ostringstream text;
   for (int b = 0; b < bins; ++b) {
-    out << lo + (b + 0.5) * w;
-    for (const auto& c : counts) out << ' ' << c[static_cast<std::size_t>(b)];
-    out << '\n';
+    text << lo + (b + 0.5) * w;
+    for (const auto& c : counts) text << ' ' << c[static_cast<std::size_t>(b)];
+    text << '\n';
   }
-  if (!out.flush()) throw std::runtime_error("dataset-stats: cannot write '" + dat.string() + "'");
+  write_checked(dat, text.str());
   return fmt(w);
 }
 
@@ -193,31 +211,60 @@ std::vector<std::string> write_dataset_plots(const fs::path& dir, const std::vec
   std::error_code ec;
   fs::create_directories(dir, ec);
   if (ec) throw std::runtime_error("dataset-stats: cannot create '" + dir.string() + "': " + ec.message());
-  std::ostringstream gp;
-  gp << "set terminal svg size 800,500 dynamic\nset style fill transparent solid 0.4 border -1\n"
-     << "set ylabel 'samples'\nset grid\nset key top right\n";
-  std::vector<std::string> written;
-  for (const auto& p : parts) {
-    for (const auto& [figure, per] : p.values) {
-      const std::string name = p.name + "_" + figure;
-      const std::string width = write_histogram(dir / (name + ".dat"), per, bins);
-      gp << "set output " << gp_quoted(name + ".svg") << "\nset title " << gp_quoted(p.name + ": " + figure)
-         << "\nset xlabel " << gp_quoted(figure) << "\nset boxwidth " << width << "\nplot ";
-      int col = 2;
-      for (const auto& [s, v] : per) {
-        gp << (col > 2 ? ", " : "") << gp_quoted(name + ".dat") << " using 1:" << col
-           << " with boxes title " << gp_quoted(s);
-        ++col;
+  // Every file is made in a staging folder inside `dir` and moved into `dir` only once all of
+  // them are whole: a failure (full disk, gnuplot missing or failing) leaves `dir` as it was.
+  const fs::path stage = dir / ".dataset-stats-partial";
+  fs::remove_all(stage, ec);
+  fs::create_directories(stage, ec);
+  if (ec) throw std::runtime_error("dataset-stats: cannot create '" + stage.string() + "': " + ec.message());
+  std::vector<std::string> written, names;
+  try {
+    std::ostringstream gp;
+    gp << "set terminal svg size 800,500 dynamic\nset style fill transparent solid 0.4 border -1\n"
+       << "set ylabel 'samples'\nset grid\nset key top right\n";
+    for (const auto& p : parts) {
+      for (const auto& [figure, per] : p.values) {
+        const std::string name = p.name + "_" + figure;
+        const std::string width = write_histogram(stage / (name + ".dat"), per, bins);
+        gp << "set output " << gp_quoted(name + ".svg") << "\nset title " << gp_quoted(p.name + ": " + figure)
+           << "\nset xlabel " << gp_quoted(figure) << "\nset boxwidth " << width << "\nplot ";
+        int col = 2;
+        for (const auto& [s, v] : per) {
+          gp << (col > 2 ? ", " : "") << gp_quoted(name + ".dat") << " using 1:" << col
+             << " with boxes title " << gp_quoted(s);
+          ++col;
+        }
+        gp << "\n";
+        names.push_back(name);
       }
-      gp << "\n";
-      written.push_back((dir / (name + ".svg")).string());
     }
+    if (!names.empty()) {
+      write_checked(stage / "stats.gp", gp.str());
+      const std::string command = "cd " + shell_quote(stage.string()) + " && gnuplot stats.gp 2> gnuplot.log";
+      if (std::system(command.c_str()) != 0) {
+        std::ifstream log(stage / "gnuplot.log");
+        std::stringstream text;
+        text << log.rdbuf();
+        throw std::runtime_error("dataset-stats: gnuplot failed: " + text.str());
+      }
+      for (const auto& name : names)
+        if (!whole_svg(stage / (name + ".svg")))
+          throw std::runtime_error("dataset-stats: gnuplot did not write '" + (dir / (name + ".svg")).string() +
+                                   "' whole (a full disk?)");
+      for (const auto& name : names)
+        for (const char* ext : {".dat", ".svg"}) {
+          fs::rename(stage / (name + ext), dir / (name + ext), ec);
+          if (ec) throw std::runtime_error("dataset-stats: cannot write '" + (dir / (name + ext)).string() + "': " + ec.message());
+        }
+      fs::rename(stage / "stats.gp", dir / "stats.gp", ec);
+      if (ec) throw std::runtime_error("dataset-stats: cannot write '" + (dir / "stats.gp").string() + "': " + ec.message());
+      for (const auto& name : names) written.push_back((dir / (name + ".svg")).string());
+    }
+  } catch (...) {
+    fs::remove_all(stage, ec);
+    throw;
   }
-  if (written.empty()) return written;
-  std::ofstream(dir / "stats.gp") << gp.str();
-  const std::string command = "cd " + shell_quote(dir.string()) + " && gnuplot stats.gp 2> gnuplot.log";
-  if (std::system(command.c_str()) != 0)
-    throw std::runtime_error("dataset-stats: gnuplot failed; see '" + (dir / "gnuplot.log").string() + "'");
+  fs::remove_all(stage, ec);
   return written;
 }
 

@@ -43,8 +43,10 @@ std::vector<PartStats> read_dataset(const std::filesystem::path& root);
 /// The report as text tables.
 void write_dataset_report(std::ostream& out, const std::vector<PartStats>& parts);
 
-/// Histograms per figure (one series per scenario) as SVG files in `dir` via gnuplot; returns
-/// the files written.
+/// Histograms per figure (one series per scenario) as SVG files in `dir` via gnuplot, with
+/// their data (.dat) and the gnuplot script (stats.gp); returns the SVG files written. All are
+/// made in a staging folder and moved into `dir` only when every one is whole, so a failure
+/// leaves `dir` as it was.
 /// @throw std::runtime_error when the folder cannot be written or gnuplot fails
 std::vector<std::string> write_dataset_plots(const std::filesystem::path& dir,
                                              const std::vector<PartStats>& parts, int bins = 30);

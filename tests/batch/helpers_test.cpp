@@ -2,7 +2,10 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <cstdlib>
 #include <fstream>
+#include <set>
+#include <sstream>
 
 #include "batch/dataset_stats.hpp"
 #include "batch/runner.hpp"
@@ -165,5 +168,44 @@ TEST(DatasetStats, CountsLatestStatePerSampleAndQuantiles) {
   EXPECT_DOUBLE_EQ(d.median, 3.0);
   EXPECT_DOUBLE_EQ(d.p90, 4.6);
   EXPECT_DOUBLE_EQ(d.sum, 15.0);
+  fs::remove_all(root);
+}
+
+// The plots appear whole or not at all: with gnuplot at hand every SVG, its data and the script
+// are in the folder and no staging folder is left; with no gnuplot on the PATH the call fails
+// and the folder holds only what it held before.
+TEST(DatasetStats, PlotsAppearWholeOrNotAtAll) {
+  const fs::path root = fs::temp_directory_path() / ("papersim_stats_plots_" + std::to_string(getpid()));
+  fs::remove_all(root);
+  fs::create_directories(root);
+  for (int i = 0; i < 5; ++i)
+    papersim::batch::append_line(root / "manifest.jsonl",
+                                 json{{"key", "p" + std::to_string(i)}, {"scenario", "pull"}, {"wall_seconds", i + 1.0}}.dump());
+  const auto parts = papersim::batch::read_dataset(root);
+  const auto names = [](const fs::path& dir) {
+    std::set<std::string> n;
+    for (const auto& e : fs::directory_iterator(dir)) n.insert(e.path().filename().string());
+    return n;
+  };
+
+  const fs::path failed = root / "failed";
+  fs::create_directories(failed);
+  std::ofstream(failed / "kept.txt") << "from before\n";
+  const char* path = std::getenv("PATH");
+  const std::string saved = path ? path : "";
+  ::setenv("PATH", "/nonexistent", 1);
+  EXPECT_THROW(papersim::batch::write_dataset_plots(failed, parts), std::runtime_error);
+  ::setenv("PATH", saved.c_str(), 1);
+  EXPECT_EQ(names(failed), (std::set<std::string>{"kept.txt"}));
+
+  if (std::system("command -v gnuplot > /dev/null 2>&1") != 0) GTEST_SKIP() << "no gnuplot";
+  const fs::path plots = root / "plots";
+  const auto written = papersim::batch::write_dataset_plots(plots, parts);
+  ASSERT_EQ(written.size(), 1u);
+  EXPECT_EQ(names(plots), (std::set<std::string>{"meshes_wall_seconds.dat", "meshes_wall_seconds.svg", "stats.gp"}));
+  std::ifstream svg(written[0]);
+  std::stringstream text;
+  text << svg.rdbuf();
+  EXPECT_NE(text.str().find("</svg>"), std::string::npos);
   fs::remove_all(root);
 }
