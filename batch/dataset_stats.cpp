@@ -33,6 +33,29 @@ double quantile(const std::vector<double>& sorted, double q) {
 
 std::string scenario_of(const json& row) { return row.value("scenario", std::string("?")); }
 
+/// Whether a row's "key" is a string, and its "scenario" and "reason" are strings where present.
+bool well_formed(const json& row) {
+  if (!row.contains("key") || !row["key"].is_string()) return false;
+  for (const char* k : {"scenario", "reason"})
+    if (row.contains(k) && !row[k].is_string()) return false;
+  return true;
+}
+
+/// The well-formed rows of a JSON-lines file (none when it is missing); `skipped` counts the
+/// other non-empty lines.
+std::vector<json> rows_of(const fs::path& path, long long& skipped) {
+  std::vector<json> rows;
+  std::ifstream in(path);
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
+    json j = json::parse(line, nullptr, false);
+    if (!j.is_discarded() && j.is_object() && well_formed(j)) rows.push_back(std::move(j));
+    else ++skipped;
+  }
+  return rows;
+}
+
 std::string fmt(double v) {
   char b[32];
   std::snprintf(b, sizeof b, "%.4g", v);
@@ -59,6 +82,9 @@ void write_counts(std::ostream& out, const PartStats& p) {
   std::snprintf(line, sizeof line, "  %-16s %10lld %10lld %11.1f%%\n", "all", td, tf,
                 td + tf > 0 ? 100.0 * static_cast<double>(tf) / static_cast<double>(td + tf) : 0.0);
   out << line;
+  if (p.skipped_lines > 0)
+    out << p.name << ": " << p.skipped_lines
+        << " lines left out: not a JSON object with a string key (cut short, or edited by hand)\n";
   if (!p.reasons.empty()) {
     out << p.name << ": failures by reason (" << p.failed_attempts << " failed attempts in all)\n";
     for (const auto& [r, n] : p.reasons) {
@@ -102,12 +128,12 @@ std::string gp_quoted(const std::string& text) {
   return out + "'";
 }
 
-/// Write `text` to `path`, flushed, closed and checked. @throw std::runtime_error naming the file
+/// Write `text` to `path`, flushed, closed and checked. @throw PlotsOutputError naming the file
 void write_checked(const fs::path& path, const std::string& text) {
   std::ofstream out(path, std::ios::binary);
   out << text;
   out.close();
-  if (!out) throw std::runtime_error("dataset-stats: cannot write '" + path.string() + "'");
+  if (!out) throw PlotsOutputError("cannot write '" + path.string() + "'");
 }
 
 /// Whether `path` is a whole SVG file (gnuplot closes it with </svg>).
@@ -166,17 +192,17 @@ PartStats read_part(const std::string& name, const fs::path& manifest, const fs:
   PartStats p;
   p.name = name;
   std::set<std::string> done_keys;
-  for (const auto& row : read_json_lines(manifest)) {
-    if (!done_keys.insert(row.value("key", std::string())).second) continue;
+  for (const auto& row : rows_of(manifest, p.skipped_lines)) {
+    if (!done_keys.insert(row["key"].get<std::string>()).second) continue;
     const std::string s = scenario_of(row);
     ++p.done[s];
     for (const auto& f : figures)
       if (row.contains(f) && row[f].is_number()) p.values[f][s].push_back(row[f].get<double>());
   }
   std::map<std::string, json> latest_failure;
-  for (const auto& row : read_json_lines(failures)) {
+  for (const auto& row : rows_of(failures, p.skipped_lines)) {
     ++p.failed_attempts;
-    latest_failure[row.value("key", std::string())] = row;
+    latest_failure[row["key"].get<std::string>()] = row;
   }
   for (const auto& [key, row] : latest_failure) {
     if (done_keys.count(key)) continue;
@@ -187,7 +213,7 @@ PartStats read_part(const std::string& name, const fs::path& manifest, const fs:
 }
 
 std::vector<PartStats> read_dataset(const fs::path& root) {
-  if (!fs::is_directory(root)) throw std::runtime_error("dataset-stats: '" + root.string() + "' is not a folder");
+  if (!fs::is_directory(root)) throw DatasetError("'" + root.string() + "' is not a folder");
   std::vector<PartStats> parts;
   const auto add = [&](const std::string& name, const char* manifest, const char* failures,
                        const std::vector<std::string>& figures) {
@@ -210,13 +236,13 @@ void write_dataset_report(std::ostream& out, const std::vector<PartStats>& parts
 std::vector<std::string> write_dataset_plots(const fs::path& dir, const std::vector<PartStats>& parts, int bins) {
   std::error_code ec;
   fs::create_directories(dir, ec);
-  if (ec) throw std::runtime_error("dataset-stats: cannot create '" + dir.string() + "': " + ec.message());
+  if (ec) throw PlotsOutputError("cannot create '" + dir.string() + "': " + ec.message());
   // Every file is made in a staging folder inside `dir` and moved into `dir` only once all of
   // them are whole: a failure (full disk, gnuplot missing or failing) leaves `dir` as it was.
   const fs::path stage = dir / ".dataset-stats-partial";
   fs::remove_all(stage, ec);
   fs::create_directories(stage, ec);
-  if (ec) throw std::runtime_error("dataset-stats: cannot create '" + stage.string() + "': " + ec.message());
+  if (ec) throw PlotsOutputError("cannot create '" + stage.string() + "': " + ec.message());
   std::vector<std::string> written, names;
   try {
     std::ostringstream gp;
@@ -245,19 +271,21 @@ std::vector<std::string> write_dataset_plots(const fs::path& dir, const std::vec
         std::ifstream log(stage / "gnuplot.log");
         std::stringstream text;
         text << log.rdbuf();
-        throw std::runtime_error("dataset-stats: gnuplot failed: " + text.str());
+        std::string log_text = text.str();
+        if (log_text.size() > 600) log_text = "..." + log_text.substr(log_text.size() - 600);
+        throw GnuplotError("gnuplot failed: " + log_text);
       }
       for (const auto& name : names)
         if (!whole_svg(stage / (name + ".svg")))
-          throw std::runtime_error("dataset-stats: gnuplot did not write '" + (dir / (name + ".svg")).string() +
-                                   "' whole (a full disk?)");
+          throw PlotsOutputError("gnuplot did not write '" + (dir / (name + ".svg")).string() +
+                                 "' whole (a full disk?)");
       for (const auto& name : names)
         for (const char* ext : {".dat", ".svg"}) {
           fs::rename(stage / (name + ext), dir / (name + ext), ec);
-          if (ec) throw std::runtime_error("dataset-stats: cannot write '" + (dir / (name + ext)).string() + "': " + ec.message());
+          if (ec) throw PlotsOutputError("cannot write '" + (dir / (name + ext)).string() + "': " + ec.message());
         }
       fs::rename(stage / "stats.gp", dir / "stats.gp", ec);
-      if (ec) throw std::runtime_error("dataset-stats: cannot write '" + (dir / "stats.gp").string() + "': " + ec.message());
+      if (ec) throw PlotsOutputError("cannot write '" + (dir / "stats.gp").string() + "': " + ec.message());
       for (const auto& name : names) written.push_back((dir / (name + ".svg")).string());
     }
   } catch (...) {

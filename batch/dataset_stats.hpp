@@ -5,10 +5,27 @@
 #include <filesystem>
 #include <iosfwd>
 #include <map>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
 namespace papersim::batch {
+
+/// A dataset that cannot be read: a path that is not a folder. Exit status 2.
+struct DatasetError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+/// The plots' folder or one of their files cannot be written (full disk, permission, a file in
+/// the way). Exit status 5.
+struct PlotsOutputError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+/// gnuplot is missing or failed. Exit status 6.
+struct GnuplotError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
 
 /// Distribution of one figure over samples.
 struct Distribution {
@@ -26,6 +43,10 @@ struct PartStats {
   std::map<std::string, long long> failed;       ///< samples whose latest state is failed, per scenario
   std::map<std::string, long long> reasons;      ///< those failures by reason
   long long failed_attempts = 0;                 ///< every failure row, retried ones included
+  /// Lines of the two files that are not a JSON object with a string "key" (and a string
+  /// "scenario" and "reason" where present), left out and counted: a line cut short by a
+  /// killed writer, or a file edited by hand.
+  long long skipped_lines = 0;
   /// figure -> scenario -> values over finished samples (wall_seconds, max_stretch, ...)
   std::map<std::string, std::map<std::string, std::vector<double>>> values;
 };
@@ -37,7 +58,7 @@ PartStats read_part(const std::string& name, const std::filesystem::path& manife
 
 /// The meshes (manifest.jsonl, failures.jsonl) and renders (renders.jsonl,
 /// renders_failures.jsonl) of a dataset; a part with no file at all is left out.
-/// @throw std::runtime_error when `root` is not a folder
+/// @throw DatasetError when `root` is not a folder
 std::vector<PartStats> read_dataset(const std::filesystem::path& root);
 
 /// The report as text tables.
@@ -47,7 +68,8 @@ void write_dataset_report(std::ostream& out, const std::vector<PartStats>& parts
 /// their data (.dat) and the gnuplot script (stats.gp); returns the SVG files written. All are
 /// made in a staging folder and moved into `dir` only when every one is whole, so a failure
 /// leaves `dir` as it was.
-/// @throw std::runtime_error when the folder cannot be written or gnuplot fails
+/// @throw PlotsOutputError when the folder or a file cannot be written; GnuplotError when
+/// gnuplot is missing or fails
 std::vector<std::string> write_dataset_plots(const std::filesystem::path& dir,
                                              const std::vector<PartStats>& parts, int bins = 30);
 

@@ -200,9 +200,9 @@ class Runner {
 void Runner::scan() {
   std::unordered_set<std::string> rows, failed;
   for (const auto& j : read_json_lines(manifest()))
-    if (j.contains("key")) rows.insert(j["key"].get<std::string>());
+    if (j.contains("key") && j["key"].is_string()) rows.insert(j["key"].get<std::string>());
   for (const auto& j : read_json_lines(failures()))
-    if (j.contains("key")) failed.insert(j["key"].get<std::string>());
+    if (j.contains("key") && j["key"].is_string()) failed.insert(j["key"].get<std::string>());
   std::vector<std::size_t> missing_rows;
   for (std::size_t i = 0; i < m_tasks.size(); ++i) {
     const Task& t = m_tasks[i];
@@ -229,7 +229,7 @@ void Runner::repair(const std::vector<std::size_t>& missing_rows) {
   }
   std::unordered_set<std::string> rows;
   for (const auto& j : read_json_lines(manifest()))
-    if (j.contains("key")) rows.insert(j["key"].get<std::string>());
+    if (j.contains("key") && j["key"].is_string()) rows.insert(j["key"].get<std::string>());
   for (auto& [i, lock] : held) {
     if (rows.count(m_tasks[i].key)) continue;
     append_manifest_row(m_tasks[i], -1.0, -1.0);

@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "batch/dataset_stats.hpp"
+#include "common/exit_status.hpp"
 #include "simulation/batch.hpp"
 #include "simulation/errors.hpp"
 #include "simulation/scenario.hpp"
@@ -60,14 +61,25 @@ int run_mesh_batch(const BatchCommand& c, bool with_metrics, std::ostream& out, 
   return s.done == s.total ? 0 : 1;
 }
 
-int run_stats(const BatchCommand& c, std::ostream& out) {
-  const auto parts = batch::read_dataset(c.dataset);
-  batch::write_dataset_report(out, parts);
-  if (!c.plots.empty()) {
-    const auto files = batch::write_dataset_plots(c.plots, parts);
-    out << "wrote " << files.size() << " plots in " << c.plots << '\n';
+int run_stats(const BatchCommand& c, std::ostream& out, std::ostream& err) {
+  try {
+    const auto parts = batch::read_dataset(c.dataset);
+    batch::write_dataset_report(out, parts);
+    if (!c.plots.empty()) {
+      const auto files = batch::write_dataset_plots(c.plots, parts);
+      out << "wrote " << files.size() << " plots in " << c.plots << '\n';
+    }
+    return 0;
+  } catch (const batch::DatasetError& e) {
+    err << "papersim dataset-stats: " << e.what() << '\n';
+    return common::EXIT_BAD_INPUT;
+  } catch (const batch::PlotsOutputError& e) {
+    err << "papersim dataset-stats: " << e.what() << '\n';
+    return common::EXIT_OUTPUT;
+  } catch (const batch::GnuplotError& e) {
+    err << "papersim dataset-stats: " << e.what() << '\n';
+    return common::EXIT_EXTERNAL;
   }
-  return 0;
 }
 
 }  // namespace
@@ -105,7 +117,7 @@ void add_batch_subcommands(CLI::App& app, BatchCommand& c) {
 }
 
 int run_batch_subcommand(const BatchCommand& c, bool with_metrics, std::ostream& out, std::ostream& err) {
-  if (c.stats->parsed()) return run_stats(c, out);
+  if (c.stats->parsed()) return run_stats(c, out, err);
   try {
     return run_mesh_batch(c, with_metrics, out, err);
   } catch (const SceneError& e) {  // a bad option or override: name it, no sample has run

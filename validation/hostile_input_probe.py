@@ -303,7 +303,7 @@ def options(p, quick):
     for opt in [["--size", "128x180junk"], ["--size", "128"], ["--size", "0x0"], ["--size", "-128x180"],
                 ["--size", "x"], ["--seed", "-1"], ["--seed", "1.5"], ["--seed", "abc"],
                 ["--threads", "-1"], ["--dpi", "0"], ["--dpi", "-5"], ["--backward-grid", "3x3junk"],
-                ["--passes", "nope"], ["--quality", "best"], ["--rig", "nope"], ["--out", ""]]:
+                ["--passes", "nope"], ["--quality", "ultra"], ["--rig", "nope"], ["--out", ""]]:
         cases.append([p.scenegen, "prepare", mesh, "--out", os.path.join(d, "job")] + opt)
     cases.append([p.scenegen, "render", mesh, "--out", out, "--parallel", "-1"])
     for argv in cases:
@@ -362,11 +362,16 @@ def full_disk(p, quick):
     d = p.fresh("fullinputs")
     mesh = write(os.path.join(d, "c.obj"), p.example("cylinder"))
     scene = write(os.path.join(d, "s.json"), json.dumps(p.small_scene()))
+    dataset = os.path.join(d, "dataset")  # a dataset's manifest, for dataset-stats --plots
+    os.makedirs(dataset)
+    write(os.path.join(dataset, "manifest.jsonl"),
+          "".join(json.dumps({"key": "pull/%d" % i, "scenario": "pull", "wall_seconds": 1.0 + i}) + "\n" for i in range(5)))
     cases = [
         ("papersim run", [p.papersim, "run", scene, "--out", os.path.join(mnt, "run"), "--quiet"], os.path.join(mnt, "run")),
         ("papersim scenario --draw-only", [p.papersim, "scenario", "pull", "--seed", "1", "--draw-only", "--out", os.path.join(mnt, "drawn")], os.path.join(mnt, "drawn")),
         ("papersim metrics --csv", [p.papersim, "metrics", mesh, "--csv", os.path.join(mnt, "m.csv")], None),
         ("papersim metrics --plots", [p.papersim, "metrics", mesh, "--plots", os.path.join(mnt, "plots")], None),
+        ("papersim dataset-stats --plots", [p.papersim, "dataset-stats", dataset, "--plots", os.path.join(mnt, "stats")], None),
         ("scenegen example", [p.scenegen, "example", "flat", "--out", os.path.join(mnt, "flat.obj")], None),
         ("scenegen render", [p.scenegen, "render", mesh, "--out", os.path.join(mnt, "sample"), "--size", "32x48", "--quality", "draft", "--quiet"], os.path.join(mnt, "sample")),
     ]

@@ -194,7 +194,7 @@ TEST(DatasetStats, PlotsAppearWholeOrNotAtAll) {
   const char* path = std::getenv("PATH");
   const std::string saved = path ? path : "";
   ::setenv("PATH", "/nonexistent", 1);
-  EXPECT_THROW(papersim::batch::write_dataset_plots(failed, parts), std::runtime_error);
+  EXPECT_THROW(papersim::batch::write_dataset_plots(failed, parts), papersim::batch::GnuplotError);
   ::setenv("PATH", saved.c_str(), 1);
   EXPECT_EQ(names(failed), (std::set<std::string>{"kept.txt"}));
 
@@ -207,5 +207,32 @@ TEST(DatasetStats, PlotsAppearWholeOrNotAtAll) {
   std::stringstream text;
   text << svg.rdbuf();
   EXPECT_NE(text.str().find("</svg>"), std::string::npos);
+  // A file where the folder should be: an output error naming it, and the file left alone.
+  EXPECT_THROW(papersim::batch::write_dataset_plots(root / "manifest.jsonl", parts), papersim::batch::PlotsOutputError);
+  EXPECT_EQ(papersim::batch::read_dataset(root).at(0).done.at("pull"), 5);
+  fs::remove_all(root);
+}
+
+// Lines that are not a JSON object with a string key (a line cut short by a killed writer, a
+// hand edit) are left out and counted, never a crash; a dataset path that is not a folder is a
+// DatasetError.
+TEST(DatasetStats, LeavesOutAndCountsMalformedLines) {
+  const fs::path root = fs::temp_directory_path() / ("papersim_stats_bad_" + std::to_string(getpid()));
+  fs::remove_all(root);
+  fs::create_directories(root);
+  std::ofstream(root / "manifest.jsonl") << "{\"key\": \"a\", \"scenario\": \"pull\", \"wall_seconds\": 1}\n"
+                                         << "{\"key\": 5, \"scenario\": \"pull\"}\n"
+                                         << "{\"key\": \"b\", \"scenario\": 7}\n"
+                                         << "[1, 2]\n\n{\"key\": \"c\", \"scen";
+  std::ofstream(root / "failures.jsonl") << "{\"key\": \"d\", \"scenario\": \"pull\", \"reason\": 3}\n";
+  const auto parts = papersim::batch::read_dataset(root);
+  ASSERT_EQ(parts.size(), 1u);
+  EXPECT_EQ(parts[0].done.at("pull"), 1);
+  EXPECT_EQ(parts[0].failed_attempts, 0);
+  EXPECT_EQ(parts[0].skipped_lines, 5);
+  std::ostringstream report;
+  papersim::batch::write_dataset_report(report, parts);
+  EXPECT_NE(report.str().find("5 lines left out"), std::string::npos) << report.str();
+  EXPECT_THROW(papersim::batch::read_dataset(root / "manifest.jsonl"), papersim::batch::DatasetError);
   fs::remove_all(root);
 }
