@@ -13,7 +13,7 @@ full disk, re-runs into a used folder - and counts what went wrong:
   fulldisk0   exit status 0 on a full disk
   badstatus   an exit status outside the documented table (0-6, 130, 143)
   badmessage  a message that misleads: "stoi", a number of more than 30 digits, "(0 triangle
-              pairs)", a log path in a deleted folder
+              pairs)", a log path in a deleted folder, "internal error" for the user's input
 
 Usage: validation/hostile_input_probe.py --papersim BIN --scenegen BIN [--quick]
 The full disk is a filled 256 KiB tmpfs when this process may mount one (root), else a file
@@ -127,7 +127,7 @@ class Probe:
 
 def misleading(err):
     return ("stoi" in err or re.search(r"\d{31,}", err) is not None or "(0 triangle pairs)" in err
-            or ".scenegen-job/" in err)
+            or ".scenegen-job/" in err or "internal error" in err)
 
 
 def leftovers(out, before):
@@ -299,6 +299,8 @@ def options(p, quick):
         [p.scenegen], [p.scenegen, "nope"], [p.scenegen, "render", mesh],
         [p.scenegen, "example", "nope", "--out", os.path.join(d, "e.obj")],
         [p.scenegen, "example", "flat", "--out", ""],
+        [p.papersim, "dataset-stats", mesh], [p.papersim, "dataset-stats", os.path.join(d, "missing")],
+        [p.papersim, "dataset-stats", d, "--plots", mesh],
     ]
     for opt in [["--size", "128x180junk"], ["--size", "128"], ["--size", "0x0"], ["--size", "-128x180"],
                 ["--size", "x"], ["--seed", "-1"], ["--seed", "1.5"], ["--seed", "abc"],
