@@ -36,23 +36,65 @@ bool starts_with(const std::string& path, const unsigned char* sig, std::size_t 
   return std::memcmp(buf.data(), sig, n) == 0;
 }
 
+// libpng reports errors by longjmp to the last setjmp. A longjmp must not cross a frame that
+// holds C++ objects with destructors (it skips them: a leak at best), so every libpng call that
+// can fail runs in one of these small functions, which hold none: each sets its own jump point
+// and returns false when libpng failed, and the caller (which owns the buffers) cleans up.
+
+/// png_read_info up to png_read_update_info, with the transformations decode wants.
+bool png_read_header(png_structp png, png_infop info, FILE* fp) {
+  if (setjmp(png_jmpbuf(png))) return false;
+  png_init_io(png, fp);
+  png_read_info(png, info);
+  png_set_expand(png);  // palette -> RGB, low-bit grey -> 8 bit, tRNS -> alpha
+  png_set_swap(png);    // 16-bit samples in host (little-endian) order
+  png_read_update_info(png, info);
+  return true;
+}
+
+bool png_read_rows(png_structp png, png_bytep* rows) {
+  if (setjmp(png_jmpbuf(png))) return false;
+  png_read_image(png, rows);
+  return true;
+}
+
+/// png_init_io, the header and png_write_info.
+bool png_write_header(png_structp png, png_infop info, FILE* fp, int width, int height, int bits, int type) {
+  if (setjmp(png_jmpbuf(png))) return false;
+  png_init_io(png, fp);
+  png_set_IHDR(png, info, static_cast<png_uint_32>(width), static_cast<png_uint_32>(height), bits, type,
+               PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+  // zlib's fastest level: a whole sample writes four full-size PNGs, and the default level
+  // costs about three times the CPU for files ~10% smaller.
+  png_set_compression_level(png, 1);
+  png_write_info(png, info);
+  return true;
+}
+
+bool png_write_one_row(png_structp png, png_const_bytep row) {
+  if (setjmp(png_jmpbuf(png))) return false;
+  png_write_row(png, row);
+  return true;
+}
+
+bool png_write_finish(png_structp png) {
+  if (setjmp(png_jmpbuf(png))) return false;
+  png_write_end(png, nullptr);
+  return true;
+}
+
 /// Decode a PNG into 16-bit samples (8-bit samples are widened by x257).
 std::vector<std::uint16_t> decode(const std::string& path, int& w, int& h, int& c, int& bits) {
   std::unique_ptr<FILE, FileCloser> fp(std::fopen(path.c_str(), "rb"));
   if (!fp) throw IoError("cannot open image '" + path + "'");
   if (!is_png_file(path)) throw IoError("'" + path + "' is not a PNG file");
   png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, nullptr, png_error_quiet, png_warning_quiet);
-  png_infop info = png_create_info_struct(png);
-  std::vector<std::uint16_t> out;
-  if (setjmp(png_jmpbuf(png))) {
+  png_infop info = png ? png_create_info_struct(png) : nullptr;
+  const auto fail = [&] {
     png_destroy_read_struct(&png, &info, nullptr);
-    throw IoError("cannot decode PNG '" + path + "'");
-  }
-  png_init_io(png, fp.get());
-  png_read_info(png, info);
-  png_set_expand(png);  // palette -> RGB, low-bit grey -> 8 bit, tRNS -> alpha
-  png_set_swap(png);    // 16-bit samples in host (little-endian) order
-  png_read_update_info(png, info);
+    return IoError("cannot decode PNG '" + path + "'");
+  };
+  if (!png || !info || !png_read_header(png, info, fp.get())) throw fail();
   w = static_cast<int>(png_get_image_width(png, info));
   h = static_cast<int>(png_get_image_height(png, info));
   c = png_get_channels(png, info);
@@ -61,9 +103,9 @@ std::vector<std::uint16_t> decode(const std::string& path, int& w, int& h, int& 
   std::vector<unsigned char> buf(rowbytes * h);
   std::vector<png_bytep> rows(h);
   for (int y = 0; y < h; ++y) rows[y] = buf.data() + rowbytes * y;
-  png_read_image(png, rows.data());
+  if (!png_read_rows(png, rows.data())) throw fail();
   png_destroy_read_struct(&png, &info, nullptr);
-  out.resize(std::size_t(w) * h * c);
+  std::vector<std::uint16_t> out(std::size_t(w) * h * c);
   for (std::size_t i = 0; i < out.size(); ++i) {
     if (bits == 16) {
       std::uint16_t v;
@@ -105,20 +147,14 @@ void write_png(const std::string& path, const ImageF& image, int bits) {
   std::unique_ptr<FILE, FileCloser> fp(std::fopen(path.c_str(), "wb"));
   if (!fp) throw common::OutputError("cannot write image '" + path + "'");
   png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, png_error_quiet, png_warning_quiet);
-  png_infop info = png_create_info_struct(png);
-  if (setjmp(png_jmpbuf(png))) {
+  png_infop info = png ? png_create_info_struct(png) : nullptr;
+  const auto fail = [&] {
     png_destroy_write_struct(&png, &info);
-    throw common::OutputError("cannot write PNG '" + path + "'");
-  }
-  png_init_io(png, fp.get());
+    return common::OutputError("cannot write PNG '" + path + "'");
+  };
   const int type = image.channels == 1 ? PNG_COLOR_TYPE_GRAY
                    : image.channels == 3 ? PNG_COLOR_TYPE_RGB : PNG_COLOR_TYPE_RGBA;
-  png_set_IHDR(png, info, image.width, image.height, bits, type, PNG_INTERLACE_NONE,
-               PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
-  // zlib's fastest level: a whole sample writes four full-size PNGs, and the default level
-  // costs about three times the CPU for files ~10% smaller.
-  png_set_compression_level(png, 1);
-  png_write_info(png, info);
+  if (!png || !info || !png_write_header(png, info, fp.get(), image.width, image.height, bits, type)) throw fail();
   const int bytes = bits / 8;
   const double maxv = bits == 16 ? 65535.0 : 255.0;
   std::vector<unsigned char> row(std::size_t(image.width) * image.channels * bytes);
@@ -133,9 +169,9 @@ void write_png(const std::string& path, const ImageF& image, int bits) {
         row[i] = static_cast<unsigned char>(q);
       }
     }
-    png_write_row(png, row.data());
+    if (!png_write_one_row(png, row.data())) throw fail();
   }
-  png_write_end(png, nullptr);
+  if (!png_write_finish(png)) throw fail();
   png_destroy_write_struct(&png, &info);
   // fclose writes what the buffer still holds: a full disk shows there at the latest.
   const bool flushed = std::fflush(fp.get()) == 0;
