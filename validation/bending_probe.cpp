@@ -10,20 +10,18 @@
 //     fit-residual part;
 //   - the same sag under a linear Morley plate (one normal slope unknown per edge), with free or
 //     extrapolated boundary edges and with or without the slopes clamped in the clamp band, and
-//     (PROBE_CYLINDER) its energy of a small-slope cylinder on a 15 cm wide sheet: the
+//     (--cylinder) its energy of a small-slope cylinder on a 15 cm wide sheet: the
 //     consistent discretisation docs/elastica_30deg_diagnosis.md section 5 measures.
-// Usage: papersim_bending_probe [edge [m], default 2.5e-3] [width [m], default 0.01]
-// Environment: PROBE_ANGLE (lattice angle [deg], 30), PROBE_BINS (energy and K_xx by x bins),
-// PROBE_SAG_ONLY, PROBE_MODE_SHAPE (print the first mode's displacements), PROBE_CYLINDER,
-// PROBE_MODES (zero modes and twist of the Morley plate on a 12 x 4 cm sheet), PROBE_FOLD=r
-// (a 180-degree fold of radius r [m] under both bending models).
+// Usage: papersim_bending_probe [--edge H] [--width W] [--angle DEG] [--bins] [--sag-only]
+// [--mode-shape] [--cylinder]; papersim_bending_probe --modes; papersim_bending_probe --fold R
+// (--help lists them).
+#include <CLI/CLI.hpp>
 #include <Eigen/LU>
 #include <Eigen/Sparse>
 #include <map>
 #include <array>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <functional>
 #include <string>
 #include <vector>
@@ -41,6 +39,20 @@ namespace {
 
 constexpr double L = 0.1, W = 0.01;
 
+/// The command line's choices, read once in main.
+struct ProbeOptions {
+  double edge = 2.5e-3;    // [m]
+  double width = W;        // [m]
+  double angle = 30;       // lattice angle [deg]
+  bool bins = false;       // energy and K_xx by x bins
+  bool sag_only = false;   // the sags alone, no energies of prescribed shapes
+  bool mode_shape = false; // the first mode's displacements
+  bool cylinder = false;   // the Morley plate's cylinder energies
+  bool modes = false;      // zero modes and twist of the Morley plate
+  double fold = 0;         // > 0: a 180-degree fold of this radius [m]
+};
+ProbeOptions options;
+
 rm::SheetMesh strip(bool rotated, double h, double width) {
   const double c = 2 * h;
   if (!rotated) {
@@ -56,7 +68,7 @@ rm::SheetMesh strip(bool rotated, double h, double width) {
   o.width = L + c;
   o.height = width;
   o.edge_length = h;
-  o.angle = std::atof(std::getenv("PROBE_ANGLE") ? std::getenv("PROBE_ANGLE") : "30") * M_PI / 180;
+  o.angle = options.angle * M_PI / 180;
   o.lines_x = {c};
   return rm::make_rotated_lattice(o);
 }
@@ -166,7 +178,7 @@ void probe(const char* label, const rm::SheetMesh& mesh, double clamp, double wi
     area[b] += A;
   }
   std::printf("%-34s E/Ec = %.4f  fit/Ec = %.4f  resid/Ec = %.4f\n", label, E / Ec, Efit / Ec, (E - Efit) / Ec);
-  if (std::getenv("PROBE_BINS")) {
+  if (options.bins) {
     for (int b = 0; b < nb; ++b)
       std::printf("    bin %d x=[%.3f,%.3f]  fit/cont(centroid) %.4f   Kxx/kappa %.4f\n", b, b * xmax / nb,
                   (b + 1) * xmax / nb, fit[b] / cont[b], kd[b] / kc[b]);
@@ -218,7 +230,7 @@ void linear_sag(const char* label, const rm::SheetMesh& mesh, double clamp, doub
   std::printf("%-28s linear sag / (G/8) = %.4f   omega_k/omega_beam1:", label, drop / (G / 8));
   for (int k = 0; k < 6; ++k) std::printf(" %.3f", std::sqrt(std::max(0.0, es.eigenvalues()[k])) / w1);
   std::printf("\n");
-  if (std::getenv("PROBE_MODE_SHAPE")) {
+  if (options.mode_shape) {
     const Eigen::VectorXd v = Mi.asDiagonal() * es.eigenvectors().col(0);
     for (int i = 0; i < n; ++i)
       std::printf("  x=%.5f y=%.5f w=%.5f\n", X(free[i], 0), X(free[i], 1), v[i] / v.cwiseAbs().maxCoeff());
@@ -394,14 +406,43 @@ void morley_report(const char* label, const rm::SheetMesh& mesh, double clamp) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (std::getenv("PROBE_FOLD")) {
+  CLI::App app{"papersim_bending_probe: the discrete bending energies against the elastica strips of "
+               "papersim_known_answers, and the linear Morley plate (docs/elastica_30deg_diagnosis.md)"};
+  ProbeOptions& o = options;
+  app.add_option("--edge", o.edge, "edge length of the strips [m]")->check(CLI::Range(5e-4, 0.02));
+  app.add_option("--width", o.width, "width of the strips [m]")->check(CLI::Range(2e-3, 0.2));
+  app.add_option("--angle", o.angle, "angle of the rotated lattice [deg]")->check(CLI::Range(0.0, 90.0));
+  app.add_flag("--bins", o.bins, "print the energy and K_xx in bins along the strip");
+  app.add_flag("--sag-only", o.sag_only, "the sags alone, without the energies of prescribed shapes");
+  app.add_flag("--mode-shape", o.mode_shape, "print the first mode's displacements");
+  app.add_flag("--cylinder", o.cylinder, "the Morley plate's energy of a small-slope cylinder on a 15 cm wide sheet");
+  auto* modes = app.add_flag("--modes", o.modes, "only: zero modes and twist of the Morley plate on a 12 x 4 cm sheet");
+  auto* fold = app.add_option("--fold", o.fold, "only: a 180-degree fold of this radius [m] under both bending models")
+                   ->check(CLI::Range(1e-3, 0.05));
+  modes->excludes(fold);
+  CLI11_PARSE(app, argc, argv);
+  if (o.edge > o.width / 2) {
+    std::fprintf(stderr, "papersim_bending_probe: --edge %g leaves fewer than two faces across --width %g\n", o.edge,
+                 o.width);
+    return 2;
+  }
+  // The linear sag solves a dense eigenproblem in the strip's free vertices: bound their count.
+  const double strip_vertices = ((L + 2 * o.edge) / o.edge + 1) * (o.width / o.edge + 1);
+  if (strip_vertices > 3000) {
+    std::fprintf(stderr,
+                 "papersim_bending_probe: --edge %g on --width %g makes about %.0f vertices, more than the 3000 "
+                 "the dense eigenproblem is made for\n",
+                 o.edge, o.width, strip_vertices);
+    return 2;
+  }
+  if (o.fold > 0) {
     // A 180-degree fold of radius r (isometric) on a 12 x 4 cm sheet at 8 mm, its start x0 swept
     // over two edge lengths: bending energy of both models over the continuum pi D w / r.
     rm::RectangleOptions o;
     o.width = 0.12; o.height = 0.04; o.nx = 16; o.ny = 6;
     const rm::SheetMesh mesh = rm::make_rectangle(o);
     const Eigen::MatrixX2d X = mesh.material_coords();
-    const double r = std::atof(std::getenv("PROBE_FOLD"));
+    const double r = options.fold;
     for (ps::BendingModel model : {ps::BendingModel::fit, ps::BendingModel::morley}) {
       ps::Material m;
       m.bending_model = model;
@@ -424,7 +465,7 @@ int main(int argc, char** argv) {
     }
     return 0;
   }
-  if (std::getenv("PROBE_MODES")) {
+  if (o.modes) {
     // smallest eigenvalues of the condensed Morley stiffness on a free sheet
     rm::RectangleOptions o;
     o.width = 0.12; o.height = 0.04; o.nx = 16; o.ny = 6;
@@ -453,14 +494,14 @@ int main(int argc, char** argv) {
     }
     return 0;
   }
-  const double h = argc > 1 ? std::atof(argv[1]) : 2.5e-3;
-  const double width = argc > 2 ? std::atof(argv[2]) : W;
+  const double h = o.edge;
+  const double width = o.width;
   const double c = 2 * h;
   for (bool rotated : {false, true}) {
     const rm::SheetMesh mesh = strip(rotated, h, width);
     linear_sag(rotated ? "rot  linear sag" : "grid linear sag", mesh, c, width);
     morley_report(rotated ? "rot  Morley" : "grid Morley", mesh, c);
-    if (std::getenv("PROBE_CYLINDER")) {
+    if (o.cylinder) {
       // A sheet of width x 15 cm, every mesh: cylinder energies at 0, 30, 45, 90 degrees.
       rm::SheetMesh sheet = rotated ? strip(true, h, 0.15) : strip(false, h, 0.15);
       for (bool ex : {false, true}) {
@@ -469,7 +510,7 @@ int main(int argc, char** argv) {
         std::printf("\n");
       }
     }
-    if (std::getenv("PROBE_SAG_ONLY")) continue;
+    if (o.sag_only) continue;
     const std::string tag = rotated ? "rot " : "grid";
     const double k0 = 5.0;  // [1/m]
     probe((tag + " constant").c_str(), mesh, c, width, [&](double) { return k0; });
