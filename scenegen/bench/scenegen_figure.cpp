@@ -7,6 +7,7 @@
 // Each panel is shrunk by an integer factor (box filter); panels are 4 pixels apart on white.
 #include <algorithm>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <string>
@@ -78,10 +79,28 @@ std::vector<sg::ImageF> pass_panels(const fs::path& dir) {
 
 }  // namespace
 
+/// A whole positive integer, or 0 (not one).
+int positive_int(const char* text) {
+  char* end = nullptr;
+  const long v = std::strtol(text, &end, 10);
+  return (end != text && *end == '\0' && v >= 1 && v <= 1000) ? static_cast<int>(v) : 0;
+}
+
+constexpr const char* usage =
+    "usage: scenegen_figure passes SAMPLE_DIR --out FILE.png [--shrink N]\n"
+    "       scenegen_figure photos DIR... --out FILE.png [--shrink N] [--columns C]\n"
+    "A figure of one sample's photo, albedo, shading, UV, normals and world coordinates side by\n"
+    "side, or of the photos of several samples in a grid; --shrink N averages N x N pixels\n"
+    "(default 4), --columns C puts C photos in a row (default all).\n";
+
 int main(int argc, char** argv) {
+  for (int i = 1; i < argc; ++i)
+    if (!std::strcmp(argv[i], "--help") || !std::strcmp(argv[i], "-h")) {
+      std::fputs(usage, stdout);
+      return 0;
+    }
   if (argc < 3 || (std::strcmp(argv[1], "passes") && std::strcmp(argv[1], "photos"))) {
-    std::fprintf(stderr, "usage: scenegen_figure passes SAMPLE_DIR --out FILE.png [--shrink N]\n"
-                         "       scenegen_figure photos DIR... --out FILE.png [--shrink N] [--columns C]\n");
+    std::fputs(usage, stderr);
     return 2;
   }
   const bool passes = !std::strcmp(argv[1], "passes");
@@ -95,9 +114,18 @@ int main(int argc, char** argv) {
       return 2;
     }
     if (a == "--out") out = argv[++i];
-    else if (a == "--shrink") n = std::max(1, std::atoi(argv[++i]));
-    else if (a == "--columns") columns = std::max(1, std::atoi(argv[++i]));
-    else dirs.push_back(a);
+    else if (a == "--shrink" || a == "--columns") {
+      const int v = positive_int(argv[++i]);
+      if (v == 0) {
+        std::fprintf(stderr, "scenegen_figure: option '%s' needs a whole number from 1 to 1000, not '%s'\n", a.c_str(),
+                     argv[i]);
+        return 2;
+      }
+      (a == "--shrink" ? n : columns) = v;
+    } else if (a.rfind("--", 0) == 0) {
+      std::fprintf(stderr, "scenegen_figure: unknown option '%s'\n", a.c_str());
+      return 2;
+    } else dirs.push_back(a);
   }
   if (out.empty() || dirs.empty() || (passes && dirs.size() != 1)) {
     std::fprintf(stderr, "scenegen_figure: give --out FILE.png and %s\n", passes ? "one sample folder" : "sample folders");
