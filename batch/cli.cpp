@@ -10,6 +10,8 @@
 #include <sstream>
 #include <thread>
 
+#include "common/cli_checks.hpp"
+
 namespace papersim::batch {
 namespace fs = std::filesystem;
 
@@ -28,21 +30,21 @@ std::string duration_text(double s) {
 
 void add_batch_cli_options(CLI::App* app, BatchCliOptions& o) {
   app->add_option("--jobs,-j", o.jobs, "samples at once, one child process each (0: one per core)")
-      ->check(CLI::NonNegativeNumber)->capture_default_str();
+      ->check(papersim::common::non_negative())->capture_default_str();
   app->add_option("--time-limit", o.time_limit, "seconds per sample; a sample over it is killed and recorded as failed (0: none)")
-      ->check(CLI::NonNegativeNumber)->capture_default_str();
+      ->check(papersim::common::non_negative())->capture_default_str();
   app->add_option("--shard", o.shard, "run only slice I of N (0 <= I < N): the samples at positions p with p % N == I");
   app->add_flag("--retry-failed", o.retry_failed, "run samples recorded in the failures file again");
   app->add_flag("--quiet", o.quiet, "no progress line");
   app->add_option("--slurm", o.slurm_shards, "write DATASET/slurm/*.sbatch, a job array of this many shards, and print how to submit it (nothing runs)")
-      ->check(CLI::PositiveNumber);
+      ->check(papersim::common::positive());
   app->add_option("--slurm-cpus", o.slurm.cpus_per_task, "cores per array task (= samples at once in it)")
-      ->check(CLI::PositiveNumber)->capture_default_str();
+      ->check(papersim::common::positive())->capture_default_str();
   app->add_option("--slurm-mem", o.slurm.mem, "memory per array task (sbatch --mem)")->capture_default_str();
   app->add_option("--slurm-time", o.slurm.time, "time limit per array task (sbatch --time)")->capture_default_str();
   app->add_option("--slurm-partition", o.slurm.partition, "sbatch --partition (default: the cluster's)");
   app->add_option("--slurm-max-running", o.slurm.max_running, "at most this many array tasks at once (0: no limit)")
-      ->check(CLI::NonNegativeNumber)->capture_default_str();
+      ->check(papersim::common::non_negative())->capture_default_str();
 }
 
 ProgressFn progress_printer(std::ostream& out, bool tty, const std::string& label) {

@@ -3,6 +3,7 @@
 #include <CLI/CLI.hpp>
 #include <ostream>
 
+#include "common/cli_checks.hpp"
 #include "scenegen/errors.hpp"
 #include "scenegen/passes.hpp"
 #include "scenegen/pov_writer.hpp"
@@ -67,7 +68,7 @@ void add_render_batch_subcommand(CLI::App& app, RenderBatchCommand& c) {
                "recorded and skipped. Writes DATASET/renders/.../view<k>/, renders.jsonl, renders_failures.jsonl.");
   c.app->add_option("dataset", c.dataset, "dataset folder")->required();
   c.app->add_option("--views", c.render.views, "renders per mesh, each with its own seed")
-      ->check(CLI::PositiveNumber)->capture_default_str();
+      ->check(papersim::common::positive())->capture_default_str();
   c.app->add_flag("--flip", c.render.flip, "odd views show the sheet turned over (u -> 1 - u, printed side up)");
   c.app->add_option("--size", c.render.size, "image size WIDTHxHEIGHT [pixels]")->capture_default_str();
   c.app->add_option("--quality", c.render.quality, "draft | final | best (final with smooth penumbrae)")->capture_default_str();
@@ -75,9 +76,9 @@ void add_render_batch_subcommand(CLI::App& app, RenderBatchCommand& c) {
   c.app->add_option("--documents", c.render.documents_dir, "folder of PNG/JPEG pages to draw from");
   c.app->add_option("--backgrounds", c.render.backgrounds_dir, "folder of PNG/JPEG background images");
   c.app->add_option("--dpi", c.render.dpi, "built-in page resolution [dpi] (0: scenegen render's default)")
-      ->check(CLI::NonNegativeNumber)->capture_default_str();
+      ->check(papersim::common::non_negative())->capture_default_str();
   c.app->add_option("--threads", c.render.threads, "POV-Ray threads per view (1 keeps radiosity reproducible)")
-      ->check(CLI::PositiveNumber)->capture_default_str();
+      ->check(papersim::common::positive())->capture_default_str();
   batch::add_batch_cli_options(c.app, c.common);
 }
 

@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "batch/dataset_stats.hpp"
+#include "common/cli_checks.hpp"
 #include "common/exit_status.hpp"
 #include "simulation/batch.hpp"
 #include "simulation/errors.hpp"
@@ -107,7 +108,7 @@ void add_batch_subcommands(CLI::App& app, BatchCommand& c) {
           "again (with --retry-failed for a recorded failure), to the same mesh; the progress line "
           "then shows how far "
           "the running samples are, and an ETA from that before any sample has ended")
-      ->check(CLI::NonNegativeNumber)
+      ->check(papersim::common::non_negative())
       ->capture_default_str();
   batch::add_batch_cli_options(c.batch, c.common);
   c.stats = app.add_subcommand("dataset-stats", "Counts per scenario, failure rate by reason, run-time and quality "

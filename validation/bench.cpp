@@ -43,6 +43,7 @@
 #include <vector>
 
 #include "common/atomic_file.hpp"
+#include "common/cli_checks.hpp"
 #include "remesh/sheet_io.hpp"
 #include "validation/compare.hpp"
 #include "validation/statistics.hpp"
@@ -561,15 +562,15 @@ int main(int argc, char** argv) {
   app.add_option("--make-references", make_references, "make the references of the draws in this folder (the converged "
                  "settings of docs/performance.md, each checked one refinement finer) and stop");
   app.add_option("--target", o.target_mm, "with --make-references: a reference holds when the check run is within "
-                 "this RMS distance [mm]")->capture_default_str()->check(CLI::PositiveNumber);
+                 "this RMS distance [mm]")->capture_default_str()->check(papersim::common::positive());
   app.add_option("--reference-edge", o.reference_override.edge_mm, "override the references' edge length [mm]")
-      ->check(CLI::PositiveNumber);
+      ->check(papersim::common::positive());
   app.add_option("--reference-step", o.reference_override.step_ms, "override the references' time step [ms]")
-      ->check(CLI::PositiveNumber);
+      ->check(papersim::common::positive());
   app.add_option("--check-edge", o.reference_override.check_edge_mm, "override the checks' edge length [mm]")
-      ->check(CLI::PositiveNumber);
+      ->check(papersim::common::positive());
   app.add_option("--duration", o.duration, "override every scene's duration [s] (short runs for tests)")
-      ->check(CLI::PositiveNumber);
+      ->check(papersim::common::positive());
   app.add_option("--repeat", o.repeat,
                  "run every draw K times with each binary, interleaved, and keep the fastest "
                  "run's wall and CPU time (the other results are the first run's; a repeat with "

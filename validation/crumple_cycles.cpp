@@ -36,6 +36,7 @@
 
 #include "collision/collider_factory.hpp"
 #include "common/atomic_file.hpp"
+#include "common/cli_checks.hpp"
 #include "remesh/sheet_io.hpp"
 #include "simulation/run.hpp"
 #include "simulation/scenario.hpp"
@@ -322,7 +323,7 @@ int main(int argc, char** argv) {
   CLI::App app{"papersim_crumple_cycles: crumple, open and lay down the crumple scenario's sheet K times; the "
                "plastic crease network after each cycle"};
   Options o;
-  app.add_option("--seed", o.seed, "scenario seed")->check(CLI::NonNegativeNumber);
+  app.add_option("--seed", o.seed, "scenario seed")->check(papersim::common::non_negative());
   app.add_option("--cycles", o.cycles, "number of crumple-and-open cycles")->check(CLI::Range(1, 50));
   app.add_option("--edge", o.edge, "edge length [m] (0: the scenario's 10 mm)")->check(CLI::Range(0.0, 0.05));
   app.add_option("--time-step", o.time_step, "time step [s] (0: the scenario's 2 ms)")->check(CLI::Range(0.0, 0.01));

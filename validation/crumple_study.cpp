@@ -16,6 +16,7 @@
 
 #include "collision/self_intersection.hpp"
 #include "common/atomic_file.hpp"
+#include "common/cli_checks.hpp"
 #include "remesh/sheet_io.hpp"
 #include "simulation/run.hpp"
 #include "simulation/scenario.hpp"
@@ -94,7 +95,7 @@ void print_creases(const ps::Run& run, double crease_angle) {
 int main(int argc, char** argv) {
   CLI::App app{"papersim_crumple_study: the crumple scenario, one seed, with progress and crease statistics"};
   Options o;
-  app.add_option("--seed", o.seed, "scenario seed")->check(CLI::NonNegativeNumber);
+  app.add_option("--seed", o.seed, "scenario seed")->check(papersim::common::non_negative());
   app.add_option("--edge", o.edge, "initial edge length [m] (0: the scenario's 10 mm)")->check(CLI::Range(0.0, 0.05));
   app.add_option("--time-step", o.time_step, "time step [s] (0: the scenario's 2 ms)")->check(CLI::Range(0.0, 0.01));
   app.add_option("--duration", o.duration, "simulated time [s] (0: the scenario's 5 s)")->check(CLI::Range(0.0, 100.0));

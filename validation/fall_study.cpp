@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "common/cli_checks.hpp"
 #include "simulation/batch.hpp"
 #include "simulation/scenario.hpp"
 #include "simulation/simulate.hpp"
@@ -42,19 +43,19 @@ static int study(int argc, char** argv) {
   app.add_option("--scenario", name, "fall-cylinder, fall-gable, fall-sphere, fall-spheres or pull")
       ->check(CLI::IsMember({"fall-cylinder", "fall-gable", "fall-sphere", "fall-spheres", "pull"}));
   app.add_option("--remesh", size_min, "remesh with this remesh.size_min [mm] (0: the scenario's setting)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(papersim::common::non_negative());
   app.add_option("--remesh-max", size_max, "remesh.size_max with --remesh [mm]")->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(papersim::common::positive());
   app.add_option("--remesh-angle", angle, "remesh.refine_angle with --remesh [rad] (0: the scene's)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(papersim::common::non_negative());
   app.add_option("--rescue-distance", rescue,
                  "remesh.rescue_distance with --remesh [mm] (0: no rescue; default: the scene's)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(papersim::common::non_negative());
   app.add_option("--start-edge", start_edge, "start mesh edge length [mm] (0: the scenario's)")
-      ->check(CLI::NonNegativeNumber);
-  app.add_option("--step", step, "time step [ms] (0: the scenario's)")->check(CLI::NonNegativeNumber);
-  app.add_option("--seeds", seeds, "number of seeds")->check(CLI::PositiveNumber);
-  app.add_option("--first", first, "first seed (seeds first .. first + N - 1)")->check(CLI::NonNegativeNumber);
+      ->check(papersim::common::non_negative());
+  app.add_option("--step", step, "time step [ms] (0: the scenario's)")->check(papersim::common::non_negative());
+  app.add_option("--seeds", seeds, "number of seeds")->check(papersim::common::positive());
+  app.add_option("--first", first, "first seed (seeds first .. first + N - 1)")->check(papersim::common::non_negative());
   app.add_option("--csv", csv, "also write the table as CSV");
   app.add_option("--trust-region-cg", trust_region_cg,
                  "solver.trust_region_cg (default: the scenario's)")

@@ -20,6 +20,7 @@
 
 #include <sys/resource.h>
 
+#include "common/cli_checks.hpp"
 #include "simulation/simulate.hpp"
 #include "validation/fold_scene.hpp"
 #include "validation/study_table.hpp"
@@ -98,7 +99,7 @@ int main(int argc, char** argv) {
                  "remeshed runs, comma separated MIN:MAX (remesh.size_min and size_max [mm]); empty: none")
       ->capture_default_str();
   app.add_option("--start-edge", start_edge, "start mesh of the remeshed runs [mm]")->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(papersim::common::positive());
   app.add_option("--csv", csv, "also write the table as CSV");
   CLI11_PARSE(app, argc, argv);
   try {

@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "common/atomic_file.hpp"
+#include "common/cli_checks.hpp"
 #include "remesh/sheet_io.hpp"
 #include "simulation/scenario.hpp"
 #include "simulation/simulate.hpp"
@@ -173,9 +174,9 @@ static int study(int argc, char** argv) {
   std::vector<std::string> measure_dirs;
   int seeds = 20, first = 0;
   double crease_angle = 30.0, edge = 0.0;
-  app.add_option("--seeds", seeds, "number of seeds")->check(CLI::PositiveNumber);
+  app.add_option("--seeds", seeds, "number of seeds")->check(papersim::common::positive());
   app.add_option("--first", first, "first seed (seeds first .. first + N - 1)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(papersim::common::non_negative());
   app.add_option("--crease-angle", crease_angle,
                  "crease threshold of the residual rest angle [deg]")
       ->check(CLI::Range(0.1, 179.0));

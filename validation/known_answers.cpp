@@ -29,6 +29,7 @@
 
 #include "collision/collider.hpp"
 #include "common/atomic_file.hpp"
+#include "common/cli_checks.hpp"
 #include "common/clock.hpp"
 #include "remesh/sheet_generator.hpp"
 #include "simulation/energies/vertex_energies.hpp"
@@ -1045,7 +1046,7 @@ int main(int argc, char** argv) {
   app.add_option("--stretch-stiffness", g_stretch_stiffness,
                  "membrane stiffness of the strips [N/m] (default: the material's, 5e5); the strain "
                  "limit stays. With 'thin': how much of the stiffening is membrane locking")
-      ->check(CLI::PositiveNumber);
+      ->check(papersim::common::positive());
   std::string membrane = "chord";
   app.add_option("--membrane", membrane,
                  "membrane discretisation of the beams and strips: chord (the simulator's default) or "

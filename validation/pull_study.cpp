@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "common/cli_checks.hpp"
 #include "simulation/errors.hpp"
 #include "simulation/scenario.hpp"
 #include "simulation/simulate.hpp"
@@ -25,8 +26,8 @@ static int study(int argc, char** argv) {
   CLI::App app{"pull_study: the pull scenario over seeds, with its acceptance checks"};
   int seeds = 20, first = 0;
   std::string csv;
-  app.add_option("--seeds", seeds, "number of seeds")->check(CLI::PositiveNumber);
-  app.add_option("--first", first, "first seed (seeds first .. first + N - 1)")->check(CLI::NonNegativeNumber);
+  app.add_option("--seeds", seeds, "number of seeds")->check(papersim::common::positive());
+  app.add_option("--first", first, "first seed (seeds first .. first + N - 1)")->check(papersim::common::non_negative());
   app.add_option("--csv", csv, "also write the table as CSV");
   CLI11_PARSE(app, argc, argv);
   papersim::validation::StudyTable table(

@@ -53,6 +53,7 @@
 #include <sys/resource.h>
 #include <unistd.h>
 
+#include "common/cli_checks.hpp"
 #include "remesh/sheet_io.hpp"
 #include "simulation/batch.hpp"
 #include "simulation/scenario.hpp"
@@ -536,7 +537,7 @@ int main(int argc, char** argv) {
                  "(remesh.size_min and size_max in mm, refine_angle in rad, remesh.every in "
                  "steps; run at every --steps, from a uniform start mesh of --remesh-start)");
   app.add_option("--remesh-start", remesh_start, "edge length of the remeshed runs' start mesh [mm]")
-      ->capture_default_str()->check(CLI::PositiveNumber);
+      ->capture_default_str()->check(papersim::common::positive());
   std::string mark_text;
   app.add_option("--mark", mark_text, "EDGE:STEP: circle this uniform setting on the plot as the old default (mm, ms)");
   std::vector<std::string> set_pairs;

@@ -294,6 +294,19 @@ TEST(HostileInput, RangeErrorsPrintShortNumbers) {
                               dir.str("out"), "--frames", "-1"});
   EXPECT_EQ(frames.status, 2);
   EXPECT_LT(frames.err.size(), 200u) << frames.err;
+  // The batch runners' counts: the bad value named, nothing started.
+  for (const auto& [args, message] : std::vector<std::pair<std::vector<std::string>, std::string>>{
+           {{PAPERSIM, "batch", "--out", dir.str("ds"), "--scenarios", "pull", "--seeds", "0-1", "--jobs", "-2"},
+            "--jobs: '-2' must be >= 0"},
+           {{PAPERSIM, "batch", "--out", dir.str("ds"), "--scenarios", "pull", "--seeds", "0-1", "--time-limit", "nan"},
+            "--time-limit: 'nan' is not a number"},
+           {{SCENEGEN, "batch", dir.str("ds"), "--views", "0"}, "--views: '0' must be > 0"}}) {
+    const Outcome b = run(args);
+    EXPECT_EQ(b.status, 2) << b.err;
+    EXPECT_TRUE(contains(b.err, message)) << b.err;
+    EXPECT_LT(b.err.size(), 200u) << b.err;
+  }
+  EXPECT_FALSE(fs::exists(dir.str("ds")));
 }
 
 TEST(HostileInput, PovrayFailureDoesNotPointIntoADeletedFolder) {
