@@ -86,11 +86,11 @@ void write_meshes(const fs::path& dir, const BenchOptions& o) {
 int main(int argc, char** argv) {
   BenchOptions o;
   CLI::App app{"Time the metrics command on many generated meshes"};
-  app.add_option("--meshes", o.meshes, "number of meshes")->capture_default_str();
-  app.add_option("--nx", o.nx, "vertices along the sheet width")->capture_default_str();
-  app.add_option("--ny", o.ny, "vertices along the sheet height")->capture_default_str();
-  app.add_option("--threads", o.threads, "worker threads")->capture_default_str();
-  app.add_option("--target", o.target_seconds, "target time [s]")->capture_default_str();
+  app.add_option("--meshes", o.meshes, "number of meshes")->capture_default_str()->check(CLI::Range(1, 1000000));
+  app.add_option("--nx", o.nx, "vertices along the sheet width")->capture_default_str()->check(CLI::Range(2, 10000));
+  app.add_option("--ny", o.ny, "vertices along the sheet height")->capture_default_str()->check(CLI::Range(2, 10000));
+  app.add_option("--threads", o.threads, "worker threads")->capture_default_str()->check(CLI::Range(1, 1024));
+  app.add_option("--target", o.target_seconds, "target time [s]")->capture_default_str()->check(CLI::Range(0.0, 1e6));
   app.add_option("--keep", o.keep_dir, "write the meshes to this folder and keep them");
   CLI11_PARSE(app, argc, argv);
   try {

@@ -296,6 +296,15 @@ int main(int argc, char** argv) {
     if (only.empty()) return true;
     return std::any_of(only.begin(), only.end(), [&](const std::string& p) { return name.rfind(p, 0) == 0; });
   };
+  for (const std::string& p : only)
+    if (std::none_of(cases.begin(), cases.end(), [&](const Case& c) { return c.name.rfind(p, 0) == 0; })) {
+      std::string names;
+      for (const Case& c : cases) names += (names.empty() ? "" : ", ") + c.name;
+      std::fprintf(stderr, "papersim_stress_suite: --only '%s' starts no case's name (the cases: %s)\n", p.c_str(),
+                   names.c_str());
+      fs::remove_all(work);
+      return 2;
+    }
   std::printf("%-22s %-5s %-6s %-22s %-22s %-18s %-8s %-20s %7s %s\n", "case", "steps", "nan", "vertices min d [m]",
               "faces min d [m]", "strain max s1", "self", "energy growth/scale", "wall s", "verdict");
   std::unique_ptr<papersim::validation::StudyTable> table;
