@@ -40,6 +40,7 @@
 #include "scenegen/random.hpp"
 #include "scenegen/edge_lift.hpp"
 #include "scenegen/smooth_surface.hpp"
+#include "bench_args.hpp"
 #include "image_error.hpp"
 
 namespace fs = std::filesystem;
@@ -195,9 +196,9 @@ Args parse(int argc, char** argv) {
     if (k == "--help" || k == "-h") { a.help = true; return a; }
     if (i + 1 >= argc) throw std::runtime_error("option '" + k + "' needs a value");
     const char* v = argv[++i];
-    if (k == "--size") { if (std::sscanf(v, "%dx%d", &a.width, &a.height) != 2) throw std::runtime_error("bad --size '" + std::string(v) + "'"); }
-    else if (k == "--seed") a.seed = std::stoull(v);
-    else if (k == "--runs") a.runs = std::stoi(v);
+    if (k == "--size") sg::bench::image_size(k, v, a.width, a.height);
+    else if (k == "--seed") a.seed = sg::bench::whole_number(k, v, 0, 9223372036854775807ULL);
+    else if (k == "--runs") a.runs = static_cast<int>(sg::bench::whole_number(k, v, 1, 1000));
     else if (k == "--mesh") a.kind = v;
     else if (k == "--keep") a.keep = v;
     else if (k == "--baseline") a.baseline = fs::absolute(v).string();
@@ -205,7 +206,9 @@ Args parse(int argc, char** argv) {
     else throw std::runtime_error("unknown option '" + k + "'");
   }
   if (a.baseline.empty()) throw std::runtime_error("--baseline EXE is required (a scenegen built from the baseline commit)");
-  if (a.runs < 1) throw std::runtime_error("--runs must be at least 1");
+  for (const auto& [option, exe] : {std::pair<std::string, std::string>{"--baseline", a.baseline}, {"--scenegen", a.scenegen}})
+    if (!fs::is_regular_file(exe) || ::access(exe.c_str(), X_OK) != 0)
+      throw std::runtime_error(option + " '" + exe + "' is not an executable file");
   return a;
 }
 
@@ -233,8 +236,14 @@ sg::ImageF reference_photo(const Args& a, const std::string& mesh, int level, co
 }  // namespace
 
 int main(int argc, char** argv) {
+  Args a;
   try {
-    const Args a = parse(argc, argv);
+    a = parse(argc, argv);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "scenegen_bench: %s\n", e.what());
+    return 2;
+  }
+  try {
     if (a.help) {
       std::fputs(USAGE, stdout);
       return 0;

@@ -17,6 +17,7 @@
 #include "scenegen/example_sheets.hpp"
 #include "scenegen/image_io.hpp"
 #include "scenegen/job.hpp"
+#include "bench_args.hpp"
 #include "image_error.hpp"
 
 namespace fs = std::filesystem;
@@ -217,20 +218,20 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "scenegen_quality_study: option '%s' needs a value\n%s", argv[i], usage);
       return 2;
     }
-    if (!std::strcmp(argv[i], "--size")) {
-      char rest = 0;
-      if (std::sscanf(argv[i + 1], "%dx%d%c", &width, &height, &rest) != 2 || width < 8 || height < 8) {
-        std::fprintf(stderr, "scenegen_quality_study: --size '%s' is not WIDTHxHEIGHT of at least 8x8\n", argv[i + 1]);
+    try {
+      if (!std::strcmp(argv[i], "--size")) sg::bench::image_size("--size", argv[i + 1], width, height);
+      else if (!std::strcmp(argv[i], "--seed")) seed = sg::bench::whole_number("--seed", argv[i + 1], 0, 9223372036854775807ULL);
+      else if (!std::strcmp(argv[i], "--mesh")) kind = argv[i + 1];
+      else if (!std::strcmp(argv[i], "--csv")) csv = argv[i + 1];
+      else if (!std::strcmp(argv[i], "--subdivision")) level = static_cast<int>(sg::bench::whole_number("--subdivision", argv[i + 1], 0, 4));
+      else if (!std::strcmp(argv[i], "--reference")) reference_png = argv[i + 1];
+      else if (!std::strcmp(argv[i], "--match")) match = argv[i + 1];
+      else {
+        std::fprintf(stderr, "scenegen_quality_study: unknown option '%s'\n%s", argv[i], usage);
         return 2;
       }
-    } else if (!std::strcmp(argv[i], "--seed")) seed = std::stoull(argv[i + 1]);
-    else if (!std::strcmp(argv[i], "--mesh")) kind = argv[i + 1];
-    else if (!std::strcmp(argv[i], "--csv")) csv = argv[i + 1];
-    else if (!std::strcmp(argv[i], "--subdivision")) level = std::atoi(argv[i + 1]);
-    else if (!std::strcmp(argv[i], "--reference")) reference_png = argv[i + 1];
-    else if (!std::strcmp(argv[i], "--match")) match = argv[i + 1];
-    else {
-      std::fprintf(stderr, "scenegen_quality_study: unknown option '%s'\n%s", argv[i], usage);
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "scenegen_quality_study: %s\n", e.what());
       return 2;
     }
   }
