@@ -111,6 +111,7 @@ int main(int argc, char** argv) {
   if (o.duration > 0) scene.duration = o.duration;
   if (o.stiffness > 0) scene.contact.stiffness = o.stiffness;
   try {
+    if (!o.out.empty()) std::filesystem::create_directories(o.out);  // a folder that cannot be made fails before the run
     const auto start = std::chrono::steady_clock::now();
     const auto wall = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
     ps::Run run(scene);
