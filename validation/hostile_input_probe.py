@@ -308,6 +308,16 @@ def options(p, quick):
                 ["--passes", "nope"], ["--quality", "ultra"], ["--rig", "nope"], ["--out", ""]]:
         cases.append([p.scenegen, "prepare", mesh, "--out", os.path.join(d, "job")] + opt)
     cases.append([p.scenegen, "render", mesh, "--out", out, "--parallel", "-1"])
+    batch = [p.papersim, "batch", "--out", out, "--scenarios", "pull", "--seeds", "0-1"]
+    for opt in [["--jobs", "-2"], ["--jobs", "x"], ["--time-limit", "nan"], ["--time-limit", "-1"],
+                ["--checkpoint-every", "-1"], ["--shard", "2/2"], ["--shard", "x"], ["--slurm", "0"],
+                ["--slurm-cpus", "0"], ["--slurm-max-running", "-1"]]:
+        cases.append(batch + opt)
+    for scenarios, seeds in [("pull", "x"), ("pull", "5-1"), ("pull", ""), ("nope", "0-1"), ("", "0-1")]:
+        cases.append(batch[:4] + ["--scenarios", scenarios, "--seeds", seeds])
+    for opt in [["--views", "0"], ["--views", "-1"], ["--threads", "0"], ["--dpi", "-1"], ["--size", "0x0"],
+                ["--jobs", "-1"], ["--quality", "ultra"], ["--passes", "nope"]]:
+        cases.append([p.scenegen, "batch", d] + opt)
     for argv in cases:
         target = out if os.path.basename(argv[0]) == "papersim" else os.path.join(d, "job")
         shutil.rmtree(out, ignore_errors=True)
