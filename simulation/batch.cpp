@@ -172,6 +172,17 @@ std::vector<SampleDraw> draw_samples(const MeshBatchSelection& sel) {
       mix.overrides.push_back(json::object());
     }
   }
+  // Every sample is drawn (and by each array task) before the first runs: bound their number.
+  const std::uint64_t per_seed = sel.mix_path.empty() ? mix.scenarios.size() : 1;
+  std::uint64_t samples = 0;
+  for (const auto& [first, last] : sel.seeds) {
+    const std::uint64_t n = last - first;  // one less than the range's seeds; no overflow
+    if (n >= MAX_BATCH_SAMPLES || (samples += (n + 1) * per_seed) > MAX_BATCH_SAMPLES)
+      throw SceneError("--seeds: more than " + std::to_string(MAX_BATCH_SAMPLES) +
+                       " samples in one batch command (each is drawn before the first runs); split the seeds "
+                       "over several commands on the same dataset, each with at most " +
+                       std::to_string(MAX_BATCH_SAMPLES) + " samples");
+  }
   std::vector<json> merged(mix.scenarios.size());
   for (std::size_t i = 0; i < merged.size(); ++i) {
     merged[i] = mix.common;

@@ -60,9 +60,13 @@ struct MeshBatchSelection {
   nlohmann::json overrides = nlohmann::json::object();  ///< --set, over the mix's
 };
 
+/// The most samples one batch command draws (each about 150 bytes and 1-2 microseconds).
+inline constexpr std::uint64_t MAX_BATCH_SAMPLES = 10'000'000;
+
 /// The samples of a selection, seeds in order (and scenarios in the given order per seed).
 /// Checks every distinct scenario and override set once by drawing its first seed.
-/// @throw SceneError for an unknown scenario, a bad mix file or an invalid override
+/// @throw SceneError for an unknown scenario, a bad mix file, an invalid override or more than
+/// MAX_BATCH_SAMPLES samples
 std::vector<SampleDraw> draw_samples(const MeshBatchSelection& selection);
 
 /// The runner tasks of `draws`: key and folder meshes/<scenario>/<seed/1000>/<seed>.

@@ -2,8 +2,10 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <chrono>
 #include <cstdlib>
 #include <fstream>
+#include <limits>
 #include <set>
 #include <sstream>
 
@@ -120,6 +122,33 @@ TEST(Selection, SeedListsDrawTheirSeedsInOrderAndRefuseOverlaps) {
     EXPECT_NE(e.find("--seeds"), std::string::npos) << bad << ": " << e;
     EXPECT_NE(e.find(part), std::string::npos) << bad << ": " << e;
   }
+}
+
+// A batch command draws every sample before the first runs, so a selection of more than
+// MAX_BATCH_SAMPLES is refused before any is drawn: a typo of ten billion seeds, seed ranges whose
+// sum passes the bound, and two scenarios that double a range below it. Each is refused at once.
+TEST(Selection, MoreSamplesThanOneCommandDrawsAreRefusedBeforeAnyIsDrawn) {
+  const std::uint64_t max = ps::MAX_BATCH_SAMPLES;
+  const std::uint64_t top = std::numeric_limits<std::uint64_t>::max();
+  for (const auto& [scenarios, seeds] :
+       std::vector<std::pair<std::vector<std::string>, std::vector<std::pair<std::uint64_t, std::uint64_t>>>>{
+           {{"pull"}, {{0, 9999999999u}}},
+           {{"pull"}, {{0, top}}},
+           {{"pull"}, {{0, max / 2 - 1}, {max, max + max / 2}}},
+           {{"pull", "fold"}, {{0, max / 2}}}}) {
+    ps::MeshBatchSelection sel;
+    sel.scenarios = scenarios;
+    sel.seeds = seeds;
+    const auto start = std::chrono::steady_clock::now();
+    const std::string e = scene_error([&] { ps::draw_samples(sel); });
+    EXPECT_NE(e.find("--seeds: more than 10000000 samples"), std::string::npos) << e;
+    EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 1.0);
+  }
+  // The largest seed alone is one sample.
+  ps::MeshBatchSelection one;
+  one.scenarios = {"pull"};
+  one.seeds = {{top, top}};
+  EXPECT_EQ(ps::draw_samples(one).size(), 1u);
 }
 
 // With checkpoints, a running sample's share done is its last checkpoint's time over the
