@@ -7,13 +7,13 @@
 // Each panel is shrunk by an integer factor (box filter); panels are 4 pixels apart on white.
 #include <algorithm>
 #include <cstdio>
-#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <string>
 #include <vector>
 
 #include "scenegen/image_io.hpp"
+#include "bench_args.hpp"
 
 namespace fs = std::filesystem;
 namespace sg = papersim::scenegen;
@@ -79,13 +79,6 @@ std::vector<sg::ImageF> pass_panels(const fs::path& dir) {
 
 }  // namespace
 
-/// A whole positive integer, or 0 (not one).
-int positive_int(const char* text) {
-  char* end = nullptr;
-  const long v = std::strtol(text, &end, 10);
-  return (end != text && *end == '\0' && v >= 1 && v <= 1000) ? static_cast<int>(v) : 0;
-}
-
 constexpr const char* usage =
     "usage: scenegen_figure passes SAMPLE_DIR --out FILE.png [--shrink N]\n"
     "       scenegen_figure photos DIR... --out FILE.png [--shrink N] [--columns C]\n"
@@ -115,13 +108,12 @@ int main(int argc, char** argv) {
     }
     if (a == "--out") out = argv[++i];
     else if (a == "--shrink" || a == "--columns") {
-      const int v = positive_int(argv[++i]);
-      if (v == 0) {
-        std::fprintf(stderr, "scenegen_figure: option '%s' needs a whole number from 1 to 1000, not '%s'\n", a.c_str(),
-                     argv[i]);
+      try {
+        (a == "--shrink" ? n : columns) = static_cast<int>(sg::bench::whole_number(a, argv[++i], 1, 1000));
+      } catch (const std::exception& e) {
+        std::fprintf(stderr, "scenegen_figure: %s\n", e.what());
         return 2;
       }
-      (a == "--shrink" ? n : columns) = v;
     } else if (a.rfind("--", 0) == 0) {
       std::fprintf(stderr, "scenegen_figure: unknown option '%s'\n", a.c_str());
       return 2;
