@@ -29,8 +29,8 @@ std::string duration_text(double s) {
 }  // namespace
 
 void add_batch_cli_options(CLI::App* app, BatchCliOptions& o) {
-  app->add_option("--jobs,-j", o.jobs, "samples at once, one child process each (0: one per core)")
-      ->check(papersim::common::non_negative())->capture_default_str();
+  app->add_option("--jobs,-j", o.jobs, "samples at once, one child process each (0: one per core; at most 1024)")
+      ->check(CLI::Range(0, 1024))->capture_default_str();
   app->add_option("--time-limit", o.time_limit, "seconds per sample; a sample over it is killed and recorded as failed (0: none)")
       ->check(papersim::common::non_negative())->capture_default_str();
   app->add_option("--shard", o.shard, "run only slice I of N (0 <= I < N): the samples at positions p with p % N == I");
@@ -38,8 +38,8 @@ void add_batch_cli_options(CLI::App* app, BatchCliOptions& o) {
   app->add_flag("--quiet", o.quiet, "no progress line");
   app->add_option("--slurm", o.slurm_shards, "write DATASET/slurm/*.sbatch, a job array of this many shards, and print how to submit it (nothing runs)")
       ->check(papersim::common::positive());
-  app->add_option("--slurm-cpus", o.slurm.cpus_per_task, "cores per array task (= samples at once in it)")
-      ->check(papersim::common::positive())->capture_default_str();
+  app->add_option("--slurm-cpus", o.slurm.cpus_per_task, "cores per array task (= samples at once in it; at most 1024)")
+      ->check(CLI::Range(1, 1024))->capture_default_str();
   app->add_option("--slurm-mem", o.slurm.mem, "memory per array task (sbatch --mem)")->capture_default_str();
   app->add_option("--slurm-time", o.slurm.time, "time limit per array task (sbatch --time)")->capture_default_str();
   app->add_option("--slurm-partition", o.slurm.partition, "sbatch --partition (default: the cluster's)");

@@ -297,7 +297,7 @@ TEST(HostileInput, RangeErrorsPrintShortNumbers) {
   // The batch runners' counts: the bad value named, nothing started.
   for (const auto& [args, message] : std::vector<std::pair<std::vector<std::string>, std::string>>{
            {{PAPERSIM, "batch", "--out", dir.str("ds"), "--scenarios", "pull", "--seeds", "0-1", "--jobs", "-2"},
-            "--jobs: '-2' must be >= 0"},
+            "--jobs: Value -2 not in range 0 to 1024"},
            {{PAPERSIM, "batch", "--out", dir.str("ds"), "--scenarios", "pull", "--seeds", "0-1", "--time-limit", "nan"},
             "--time-limit: 'nan' is not a number"},
            {{SCENEGEN, "batch", dir.str("ds"), "--views", "0"}, "--views: '0' must be > 0"}}) {
