@@ -22,6 +22,8 @@
 #include <unordered_set>
 
 #include "common/clock.hpp"
+#include "common/errors.hpp"
+#include "common/exit_status.hpp"
 
 namespace papersim::batch {
 namespace fs = std::filesystem;
@@ -79,11 +81,11 @@ class TaskLock {
     m_fd = -1;
   }
 
-  /// @throw std::runtime_error when the lock file cannot be opened
+  /// @throw common::OutputError when the lock file cannot be opened
   static TaskLock try_take(const fs::path& file) {
     const int fd = open(file.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
     if (fd < 0)
-      throw std::runtime_error("cannot open lock file '" + file.string() + "': " + std::strerror(errno));
+      throw common::OutputError("cannot open lock file '" + file.string() + "': " + std::strerror(errno));
     if (flock(fd, LOCK_EX | LOCK_NB) != 0) {
       close(fd);
       return TaskLock();
@@ -285,6 +287,10 @@ bool Runner::try_start(std::size_t task) {
   try {
     if (m_spec.prepare) m_spec.prepare(t, s->stage);
     s->commands = m_spec.commands(t, s->stage);
+  } catch (const common::OutputError&) {
+    std::error_code ec;
+    fs::remove_all(s->stage, ec);
+    throw;  // as a child that cannot write: the batch stops (Runner::run)
   } catch (const std::exception& e) {
     fail(*s, "prepare", e.what());
     return true;
@@ -351,6 +357,14 @@ void Runner::on_exit(Slot& s, int status) {
     return;
   }
   const int code = WEXITSTATUS(status);
+  if (code == common::EXIT_OUTPUT) {
+    // The child could not write its output (a full disk, a file size limit, no permission): every
+    // later sample would fail the same way at its end, so the batch stops, and records nothing for
+    // this sample, which the same command runs again once there is room.
+    throw common::OutputError(m_tasks[s.task].key + ": " + last_line(s.log) +
+                              " (the batch stopped; nothing is recorded for this sample: free space and "
+                              "run the same command again)");
+  }
   if (code != 0) {
     const std::string line = last_line(s.log);
     std::string reason = m_spec.failure_reason ? m_spec.failure_reason(code, line) : "";
@@ -371,6 +385,8 @@ void Runner::finish(Slot& s) {
   fs::path product;
   try {
     product = m_spec.finalize(t, attempt);
+  } catch (const common::OutputError&) {
+    throw;  // as a child that cannot write: the batch stops (Runner::run)
   } catch (const std::exception& e) {
     fail(s, "outputs", e.what());
     return;
@@ -471,16 +487,29 @@ BatchSummary Runner::run() {
   StopSignals signals;
   scan();
   m_last_wait_check = Clock::now() - std::chrono::seconds(1);
-  while (!m_pending.empty() || !m_waiting.empty() || !m_slots.empty()) {
-    if (g_stop_signal) {
-      stop_all();
-      break;
+  try {
+    while (!m_pending.empty() || !m_waiting.empty() || !m_slots.empty()) {
+      if (g_stop_signal) {
+        stop_all();
+        break;
+      }
+      fill_slots();
+      poll();
+      report(false);
+      // Tasks another process held may have finished meanwhile: fill_slots counts them then.
+      std::this_thread::sleep_for(std::chrono::milliseconds(m_slots.empty() ? 100 : 20));
     }
-    fill_slots();
-    poll();
-    report(false);
-    // Tasks another process held may have finished meanwhile: fill_slots counts them then.
-    std::this_thread::sleep_for(std::chrono::milliseconds(m_slots.empty() ? 100 : 20));
+  } catch (...) {
+    // The manifest, the failures file or a sample's folder cannot be written (a full disk):
+    // stop every running sample and remove this process's staging folders, also one whose
+    // failure could not be recorded; the finished samples and whole lines stay, and the same
+    // command later runs the rest.
+    stop_all();
+    const std::string mine = "." + std::to_string(getpid()) + ".";
+    std::error_code ec;
+    for (const auto& e : fs::directory_iterator(m_spec.root / ".staging", ec))
+      if (e.path().filename().string().find(mine) != std::string::npos) fs::remove_all(e.path(), ec);
+    throw;
   }
   m_sum.elapsed = seconds_since(m_t0);
   report(true);
@@ -540,14 +569,26 @@ BatchSummary run_batch(const std::vector<Task>& tasks, const BatchSpec& spec) {
 void append_line(const fs::path& path, const std::string& text) {
   const std::string line = text + "\n";
   const int fd = open(path.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
-  if (fd < 0) throw std::runtime_error("cannot open '" + path.string() + "': " + std::strerror(errno));
+  if (fd < 0) throw common::OutputError("cannot open '" + path.string() + "': " + std::strerror(errno));
+  // Appenders of other processes wait here, so a line cut short (a full disk) can be cut off
+  // again before another is appended after it.
+  while (flock(fd, LOCK_EX) != 0 && errno == EINTR) {
+  }
+  struct stat before {};
+  const bool sized = fstat(fd, &before) == 0;
   const ssize_t w = write(fd, line.data(), line.size());
   const int write_errno = errno;
-  const bool synced = fdatasync(fd) == 0;
-  close(fd);
-  if (w != static_cast<ssize_t>(line.size()) || !synced)
-    throw std::runtime_error("cannot append to '" + path.string() + "': " +
-                             (w < 0 ? std::strerror(write_errno) : "short write"));
+  const bool synced = w == static_cast<ssize_t>(line.size()) && fdatasync(fd) == 0;
+  const int sync_errno = errno;
+  if (!synced && sized) {
+    if (ftruncate(fd, before.st_size) == 0) fdatasync(fd);
+  }
+  close(fd);  // releases the lock
+  if (!synced)
+    throw common::OutputError("cannot append to '" + path.string() + "': " +
+                              (w < 0                                        ? std::strerror(write_errno)
+                               : w != static_cast<ssize_t>(line.size()) ? "short write (the disk is full?)"
+                                                                            : std::strerror(sync_errno)));
 }
 
 std::vector<nlohmann::json> read_json_lines(const fs::path& path) {
@@ -563,21 +604,26 @@ std::vector<nlohmann::json> read_json_lines(const fs::path& path) {
 }
 
 void write_file_atomically(const fs::path& path, const std::string& text) {
+  // The process id in the temporary name: two batches on one dataset may write the same file.
   const fs::path tmp = path.string() + ".tmp" + std::to_string(getpid());
   {
+    errno = 0;
     std::ofstream out(tmp, std::ios::binary);
     out << text;
-    if (!out.flush()) {
+    out.close();
+    if (!out) {
+      const int error = errno;
       std::error_code ec;
       fs::remove(tmp, ec);
-      throw std::runtime_error("cannot write '" + path.string() + "'");
+      throw common::OutputError("cannot write '" + path.string() +
+                                "': " + (error != 0 ? std::strerror(error) : "write failed"));
     }
   }
   std::error_code ec;
   fs::rename(tmp, path, ec);
   if (ec) {
     fs::remove(tmp, ec);
-    throw std::runtime_error("cannot write '" + path.string() + "': " + ec.message());
+    throw common::OutputError("cannot write '" + path.string() + "': " + ec.message());
   }
 }
 

@@ -126,12 +126,17 @@ struct BatchSummary {
 /// so the same call later resumes. Children die with this process (PR_SET_PDEATHSIG), and each
 /// holds its task's lock, so a second batch on the same root never runs a task twice: it waits
 /// for tasks another process holds and counts them when they appear.
-/// @throw std::runtime_error when the root, the lock folder or the manifest cannot be written
+/// A child that exits with status 5 (common::EXIT_OUTPUT: it cannot write its output) or a
+/// sample whose outputs cannot be moved in stops the batch the same way, records nothing for that
+/// sample, and throws.
+/// @throw common::OutputError when a child or the batch cannot write (the manifest, the failures
+/// file, a lock, a sample's folder)
 BatchSummary run_batch(const std::vector<Task>& tasks, const BatchSpec& spec);
 
-/// Append one line (text + '\n') to `path` with a single write on an O_APPEND descriptor, then
-/// fdatasync: concurrent writers never interleave inside a line.
-/// @throw std::runtime_error naming the file when it cannot be opened or fully written
+/// Append one line (text + '\n') to `path` with a single write on an O_APPEND descriptor under
+/// an exclusive flock, then fdatasync: concurrent writers never interleave inside a line, and a
+/// line that cannot be written whole (a full disk) is cut off again, so the file keeps whole lines.
+/// @throw common::OutputError naming the file when it cannot be opened or fully written
 void append_line(const std::filesystem::path& path, const std::string& text);
 
 /// Every JSON object of a JSON-lines file, in order; a missing file gives none. A line that is
@@ -139,7 +144,7 @@ void append_line(const std::filesystem::path& path, const std::string& text);
 std::vector<nlohmann::json> read_json_lines(const std::filesystem::path& path);
 
 /// Write `text` to `path` through a temporary file in the same folder and a rename.
-/// @throw std::runtime_error naming the file when it cannot be written
+/// @throw common::OutputError naming the file when it cannot be written
 void write_file_atomically(const std::filesystem::path& path, const std::string& text);
 
 /// A task key as one file name ('/' and ' ' become '_'), as in ROOT/.locks/<name>.lock.

@@ -4,16 +4,19 @@
 #include "batch/runner.hpp"
 
 #include <gtest/gtest.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <chrono>
+#include <csignal>
 #include <fstream>
 #include <set>
 #include <sstream>
 
 #include "batch/cli.hpp"
 #include "batch/slurm.hpp"
+#include "common/errors.hpp"
 
 namespace fs = std::filesystem;
 using papersim::batch::BatchSpec;
@@ -215,6 +218,73 @@ TEST(Runner, AFailedOutputCheckIsRecordedAndLeavesNoFolder) {
   ASSERT_EQ(f.size(), 2u);
   EXPECT_EQ(f[0]["reason"], "outputs");
   EXPECT_FALSE(fs::exists(root / "t"));
+  fs::remove_all(root);
+}
+
+// A child that exits with status 5 cannot write its output (a full disk): every later sample
+// would fail the same way at its end, so the batch stops at once, records nothing for it, kills
+// the sample running beside it and removes its staging folders; the same call later finishes
+// every task.
+TEST(Runner, AChildThatCannotWriteStopsTheBatchAndRecordsNoFailure) {
+  const fs::path root = fresh_dir("nospace");
+  const auto tasks = numbered_tasks(6);
+  const fs::path full = root / "full";  // the disk is full while this file exists
+  const auto spec = shell_spec(root, "if [ -e '" + full.string() + "' ]; then if [ $2 = 1 ]; then "
+                                     "echo 'cannot write output: No space left on device' >&2; exit 5; fi; sleep 30; fi; "
+                                     "echo ok > \"$1/value\"");
+  fs::create_directories(root);
+  std::ofstream(full) << "";
+  const auto start = std::chrono::steady_clock::now();
+  try {
+    papersim::batch::run_batch(tasks, spec);
+    ADD_FAILURE() << "the batch went on after a child could not write";
+  } catch (const papersim::common::OutputError& e) {
+    EXPECT_NE(std::string(e.what()).find("t/1: cannot write output: No space left on device"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 10.0)
+      << "the sample running beside it was not stopped";
+  EXPECT_TRUE(papersim::batch::read_json_lines(root / "failures.jsonl").empty());
+  EXPECT_TRUE(papersim::batch::read_json_lines(root / "manifest.jsonl").empty());
+  EXPECT_TRUE(fs::is_empty(root / ".staging"));
+  EXPECT_EQ(lines(root / "runs.txt").size(), 2u) << "a task started after the batch should have stopped";
+  fs::remove(full);
+  const auto again = papersim::batch::run_batch(tasks, spec);
+  EXPECT_EQ(again.done_now, 6);
+  EXPECT_EQ(again.failed, 0);
+  fs::remove_all(root);
+}
+
+// A line that cannot be written whole (here a file size limit 100 bytes above the file's size;
+// on a full disk the same short write) is cut off again: the file keeps its whole lines, and a
+// line appended later is read back.
+TEST(Runner, AnAppendThatCannotBeWrittenWholeLeavesOnlyWholeLines) {
+  const fs::path root = fresh_dir("shortappend");
+  fs::create_directories(root);
+  const fs::path file = root / "rows.jsonl";
+  papersim::batch::append_line(file, json{{"i", 0}}.dump());
+  const auto size = fs::file_size(file);
+  const pid_t pid = fork();
+  if (pid == 0) {
+    signal(SIGXFSZ, SIG_IGN);
+    const rlimit limit{size + 100, size + 100};
+    setrlimit(RLIMIT_FSIZE, &limit);
+    try {
+      papersim::batch::append_line(file, json{{"i", 1}, {"pad", std::string(3000, 'x')}}.dump());
+    } catch (const papersim::common::OutputError&) {
+      _exit(7);
+    }
+    _exit(0);
+  }
+  int status = 0;
+  waitpid(pid, &status, 0);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 7) << "the short append was not reported";
+  EXPECT_EQ(fs::file_size(file), size) << "the cut line was left in the file";
+  papersim::batch::append_line(file, json{{"i", 2}}.dump());
+  const auto rows = papersim::batch::read_json_lines(file);
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_EQ(rows[1]["i"], 2);
   fs::remove_all(root);
 }
 

@@ -117,5 +117,27 @@ TEST_F(FullDiskTest, ScenegenRenderAndExampleFailWithStatus5AndWriteNothing) {
   EXPECT_EQ(left_behind(disk.path()), std::vector<std::string>{}) << disk.method();
 }
 
+// A batch on a full disk stops at its first sample that cannot write (every later one would fail
+// the same way at its end), exit status 5, and records no failure: the same command runs every
+// sample once there is room. It leaves no sample folder, no row and no staging folder.
+TEST_F(FullDiskTest, PapersimBatchStopsWithStatus5AndRecordsNoFailure) {
+  const fs::path ds = disk.path() / "ds";
+  const Outcome r = run({PAPERSIM, "batch", "--out", ds.string(), "--scenarios", "pull", "--seeds", "0-3", "--set",
+                         "duration=0.05", "--set", "sheet.edge_length=0.02", "--quiet"},
+                        disk.fsize_limit());
+  EXPECT_EQ(r.status, 5) << disk.method() << ": " << r.err;
+  EXPECT_NE(r.err.find("cannot"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("internal error"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(ds / "meshes"));
+  for (const char* rows : {"manifest.jsonl", "failures.jsonl"}) {
+    if (fs::exists(ds / rows)) {
+      EXPECT_EQ(fs::file_size(ds / rows), 0u) << rows;
+    }
+  }
+  if (fs::exists(ds / ".staging")) {
+    EXPECT_TRUE(fs::is_empty(ds / ".staging"));
+  }
+}
+
 }  // namespace
 }  // namespace papersim::test
