@@ -386,11 +386,22 @@ def full_disk(p, quick):
         ("papersim dataset-stats --plots", [p.papersim, "dataset-stats", dataset, "--plots", os.path.join(mnt, "stats")], None),
         ("scenegen example", [p.scenegen, "example", "flat", "--out", os.path.join(mnt, "flat.obj")], None),
         ("scenegen render", [p.scenegen, "render", mesh, "--out", os.path.join(mnt, "sample"), "--size", "32x48", "--quality", "draft", "--quiet"], os.path.join(mnt, "sample")),
+        ("papersim batch", [p.papersim, "batch", "--out", os.path.join(mnt, "ds"), "--scenarios", "pull", "--seeds", "0-3",
+                            "--set", "duration=0.05", "--set", "sheet.edge_length=0.02", "--quiet"], None),
     ]
     for what, argv, out in cases:
         r = p.run(argv, fsize=fsize)
         p.judge("full disk", what, r, False, out, full_disk=True)
-        files = [n for n in leftovers(mnt, ["filler"]) if not os.path.isdir(os.path.join(mnt, n))]
+        ds = os.path.join(mnt, "ds")  # a batch: no sample folder, no row, no staging folder left
+        if os.path.isdir(ds):
+            left = [n for n in ("meshes", "manifest.jsonl", "failures.jsonl")
+                    if os.path.exists(os.path.join(ds, n)) and (os.path.isdir(os.path.join(ds, n)) or os.path.getsize(os.path.join(ds, n)) > 0)]
+            left += [os.path.join(".staging", n) for n in os.listdir(os.path.join(ds, ".staging"))] if os.path.isdir(os.path.join(ds, ".staging")) else []
+            if left:
+                p.count("full disk", "partial", "%s left %s" % (what, left[:3]))
+        # A dataset's empty lock files are its bookkeeping, kept by every batch (docs/batch.md).
+        files = [n for n in leftovers(mnt, ["filler"]) if not os.path.isdir(os.path.join(mnt, n))
+                 and not n.startswith(os.path.join("ds", ".locks") + os.sep)]
         if files:
             p.count("full disk", "partial", "%s left %s" % (what, files[:3]))
         for n in os.listdir(mnt):
