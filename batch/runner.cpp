@@ -572,10 +572,11 @@ void append_line(const fs::path& path, const std::string& text) {
   if (fd < 0) throw common::OutputError("cannot open '" + path.string() + "': " + std::strerror(errno));
   // Appenders of other processes wait here, so a line cut short (a full disk) can be cut off
   // again before another is appended after it.
-  while (flock(fd, LOCK_EX) != 0 && errno == EINTR) {
+  int locked = -1;
+  while ((locked = flock(fd, LOCK_EX)) != 0 && errno == EINTR) {
   }
   struct stat before {};
-  const bool sized = fstat(fd, &before) == 0;
+  const bool sized = locked == 0 && fstat(fd, &before) == 0;  // unlocked (ENOLCK): never cut
   const ssize_t w = write(fd, line.data(), line.size());
   const int write_errno = errno;
   const bool synced = w == static_cast<ssize_t>(line.size()) && fdatasync(fd) == 0;
