@@ -65,7 +65,9 @@ void add_render_batch_subcommand(CLI::App& app, RenderBatchCommand& c) {
   c.app = app.add_subcommand(
       "batch", "Render every finished mesh of a dataset (DATASET/meshes/, from papersim batch) --views times, one "
                "child scenegen render per view, --jobs at once; resumable (run the same command again), failures "
-               "recorded and skipped. Writes DATASET/renders/.../view<k>/, renders.jsonl, renders_failures.jsonl.");
+               "recorded and skipped. Writes DATASET/renders/.../view<k>/, renders.jsonl, renders_failures.jsonl. "
+               "Exit status 1 when a view failed (renders_failures.jsonl); a full disk stops the batch with status 5 "
+               "and records nothing (docs/batch.md).");
   c.app->add_option("dataset", c.dataset, "dataset folder")->required();
   c.app->add_option("--views", c.render.views, "renders per mesh, each with its own seed")
       ->check(papersim::common::positive())->capture_default_str();

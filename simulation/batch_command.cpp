@@ -88,8 +88,10 @@ int run_stats(const BatchCommand& c, std::ostream& out, std::ostream& err) {
 void add_batch_subcommands(CLI::App& app, BatchCommand& c) {
   c.batch = app.add_subcommand(
       "batch", "Make a dataset: one child process per sample, --jobs at once; resumable (run the same "
-               "command again), failures recorded and skipped. Writes DATASET/meshes/<scenario>/<seed/1000>/<seed>/, "
-               "manifest.jsonl and failures.jsonl.");
+               "command again), failures recorded and skipped, at most 10,000,000 samples per command. Writes "
+               "DATASET/meshes/<scenario>/<seed/1000>/<seed>/, manifest.jsonl and failures.jsonl. Exit status 1 "
+               "when a sample failed (failures.jsonl); a full disk stops the batch with status 5 and records "
+               "nothing (docs/batch.md).");
   c.batch->add_option("--out", c.out, "dataset folder")->required();
   c.batch->add_option("--scenarios", c.scenarios, "comma list of scenarios; every one for every seed ("
                       + [] { std::string s; for (const auto& n : scenario_names()) s += (s.empty() ? "" : ", ") + n; return s; }() + ")");
