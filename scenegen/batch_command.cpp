@@ -69,8 +69,8 @@ void add_render_batch_subcommand(CLI::App& app, RenderBatchCommand& c) {
                "Exit status 1 when a view failed (renders_failures.jsonl); a full disk stops the batch with status 5 "
                "and records nothing (docs/batch.md).");
   c.app->add_option("dataset", c.dataset, "dataset folder")->required();
-  c.app->add_option("--views", c.render.views, "renders per mesh, each with its own seed")
-      ->check(papersim::common::positive())->capture_default_str();
+  c.app->add_option("--views", c.render.views, "renders per mesh, each with its own seed (at most 1000)")
+      ->check(CLI::Range(1, 1000))->capture_default_str();
   c.app->add_flag("--flip", c.render.flip, "odd views show the sheet turned over (u -> 1 - u, printed side up)");
   c.app->add_option("--size", c.render.size, "image size WIDTHxHEIGHT [pixels]")->capture_default_str();
   c.app->add_option("--quality", c.render.quality, "draft | final | best (final with smooth penumbrae)")->capture_default_str();

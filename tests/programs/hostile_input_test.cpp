@@ -300,7 +300,7 @@ TEST(HostileInput, RangeErrorsPrintShortNumbers) {
             "--jobs: Value -2 not in range 0 to 1024"},
            {{PAPERSIM, "batch", "--out", dir.str("ds"), "--scenarios", "pull", "--seeds", "0-1", "--time-limit", "nan"},
             "--time-limit: 'nan' is not a number"},
-           {{SCENEGEN, "batch", dir.str("ds"), "--views", "0"}, "--views: '0' must be > 0"}}) {
+           {{SCENEGEN, "batch", dir.str("ds"), "--views", "0"}, "--views: Value 0 not in range 1 to 1000"}}) {
     const Outcome b = run(args);
     EXPECT_EQ(b.status, 2) << b.err;
     EXPECT_TRUE(contains(b.err, message)) << b.err;
