@@ -63,20 +63,21 @@ ProgressFn progress_printer(std::ostream& out, bool tty, const std::string& labe
   };
 }
 
+Shard cli_shard(const BatchCliOptions& o) {
+  if (o.shard.empty()) return {};
+  const auto [index, count] = parse_shard(o.shard, "--shard");
+  return {index, count};
+}
+
 BatchSummary run_cli_batch(const std::vector<Task>& tasks, BatchSpec spec, const BatchCliOptions& o,
                            std::ostream& progress_out, const std::string& label) {
-  std::vector<Task> mine = tasks;
-  if (!o.shard.empty()) {
-    const auto [index, count] = parse_shard(o.shard, "--shard");
-    mine = select_shard(tasks, index, count);
-  }
   spec.jobs = o.jobs > 0 ? o.jobs : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   spec.time_limit = o.time_limit;
   spec.retry_failed = o.retry_failed;
   const bool tty = &progress_out == &std::cerr ? isatty(2) : false;
   spec.progress_every = tty ? 1.0 : 30.0;
   if (!o.quiet) spec.progress = progress_printer(progress_out, tty, label);
-  BatchSummary s = run_batch(mine, spec);
+  BatchSummary s = run_batch(tasks, spec);
   if (!o.quiet && tty) progress_out << '\n';
   return s;
 }

@@ -44,9 +44,13 @@ void add_batch_cli_options(CLI::App* app, BatchCliOptions& options);
 /// terminal, one line per `every_seconds` otherwise.
 ProgressFn progress_printer(std::ostream& out, bool tty, const std::string& label);
 
-/// Shard the tasks when --shard was given, fill jobs / time limit / retry / progress into the
-/// spec and run. --jobs 0 means one per core.
+/// The slice of --shard, or the whole list when it was not given.
 /// @throw std::invalid_argument naming --shard when it is malformed
+Shard cli_shard(const BatchCliOptions& options);
+
+/// Fill jobs / time limit / retry / progress into the spec and run `tasks`, which are the
+/// shard's alone: the caller makes only the tasks cli_shard() holds (an array task of a large
+/// dataset then holds 1/N of its tasks in memory). --jobs 0 means one per core.
 BatchSummary run_cli_batch(const std::vector<Task>& tasks, BatchSpec spec, const BatchCliOptions& options,
                            std::ostream& progress_out, const std::string& label);
 

@@ -41,6 +41,16 @@ struct Attempt {
   double cpu_seconds = 0.0;     ///< user + system time of the commands (and children they waited for) [s]
 };
 
+/// A slice of a task list: the tasks whose position p has p % count == index (0 <= index <
+/// count). The default is the whole list.
+struct Shard {
+  int index = 0;
+  int count = 1;
+  bool holds(std::size_t position) const {
+    return position % static_cast<std::size_t>(count) == static_cast<std::size_t>(index);
+  }
+};
+
 /// The slice `index` of `count` (0 <= index < count): tasks whose position p in the list has
 /// p % count == index. Round robin, so every shard gets a similar mix of scenarios.
 /// @throw std::invalid_argument when count < 1 or index is outside [0, count)

@@ -74,12 +74,14 @@ std::uint64_t view_seed(const std::string& scenario, std::uint64_t seed, int vie
   return batch::splitmix64(fnv1a(scenario) ^ batch::splitmix64(seed * 64 + static_cast<std::uint64_t>(view))) >> 33;
 }
 
-std::vector<batch::Task> render_tasks(const fs::path& root, const RenderBatchOptions& o) {
+std::vector<batch::Task> render_tasks(const fs::path& root, const RenderBatchOptions& o, const batch::Shard& shard) {
   if (o.views < 1) throw InputError("--views must be >= 1");
   std::vector<batch::Task> tasks;
+  std::size_t position = 0;
   for (const MeshEntry& m : finished_meshes(root)) {
     const fs::path bucket = fs::path(std::to_string(m.seed / 1000)) / std::to_string(m.seed);
     for (int k = 0; k < o.views; ++k) {
+      if (!shard.holds(position++)) continue;
       batch::Task t;
       t.final_dir = fs::path("renders") / m.scenario / bucket / ("view" + std::to_string(k));
       t.key = t.final_dir.generic_string();

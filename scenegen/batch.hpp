@@ -35,9 +35,10 @@ SheetMesh flipped_sheet(const SheetMesh& mesh);
 std::uint64_t view_seed(const std::string& scenario, std::uint64_t seed, int view);
 
 /// One task per (finished mesh, view) under root/meshes/<scenario>/<bucket>/<seed>/sheet.obj,
-/// sorted by scenario, then seed, then view.
+/// sorted by scenario, then seed, then view; of these, the positions `shard` holds.
 /// @throw InputError when views < 1
-std::vector<batch::Task> render_tasks(const std::filesystem::path& root, const RenderBatchOptions& options);
+std::vector<batch::Task> render_tasks(const std::filesystem::path& root, const RenderBatchOptions& options,
+                                      const batch::Shard& shard = {});
 
 /// Hooks: prepare writes the flipped OBJ for flipped views, the command is
 /// `scenegen render MESH --out ... --seed S --parallel 1 --threads T --quiet ...`.

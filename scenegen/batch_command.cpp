@@ -86,7 +86,9 @@ void add_render_batch_subcommand(CLI::App& app, RenderBatchCommand& c) {
 
 int run_render_batch(const RenderBatchCommand& c, std::ostream& out, std::ostream& err) {
   check_options(c);
-  const std::vector<batch::Task> tasks = render_tasks(c.dataset, c.render);
+  // An array task makes only its shard's tasks; the script's line counts them all.
+  const std::vector<batch::Task> tasks =
+      render_tasks(c.dataset, c.render, c.common.slurm_shards > 0 ? batch::Shard{} : batch::cli_shard(c.common));
   if (c.common.slurm_shards > 0) {
     const fs::path script = batch::write_slurm_script(c.dataset, "scenegen-batch", shard_command(c), c.common);
     out << "wrote " << script.string() << " (" << c.common.slurm_shards << " array tasks over " << tasks.size()

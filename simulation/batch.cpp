@@ -191,6 +191,7 @@ std::vector<SampleDraw> draw_samples(const MeshBatchSelection& sel) {
   }
   std::vector<SampleDraw> draws;
   std::set<std::size_t> checked;
+  std::size_t position = 0;  // in the whole selection, for the shard
   const auto draw_seed = [&](std::uint64_t seed) {
     std::vector<std::size_t> picks;
     if (sel.mix_path.empty()) {
@@ -203,7 +204,7 @@ std::vector<SampleDraw> draw_samples(const MeshBatchSelection& sel) {
       if (checked.insert(i).second)
         apply_overrides(make_scenario(mix.scenarios[i], seed), merged[i],
                         sel.mix_path.empty() ? "--set" : sel.mix_path + " / --set");
-      draws.push_back({mix.scenarios[i], seed, merged[i]});
+      if (sel.shard.holds(position++)) draws.push_back({mix.scenarios[i], seed, merged[i]});
     }
   };
   // Each range to `last` inclusive, which may be the largest seed.

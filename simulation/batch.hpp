@@ -58,13 +58,15 @@ struct MeshBatchSelection {
   /// Inclusive seed ranges, drawn in this order (parse_seeds); none may overlap another.
   std::vector<std::pair<std::uint64_t, std::uint64_t>> seeds;
   nlohmann::json overrides = nlohmann::json::object();  ///< --set, over the mix's
+  batch::Shard shard;  ///< only the samples at these positions of the whole selection are made
 };
 
 /// The most samples one batch command draws (each about 150 bytes and 1-2 microseconds).
 inline constexpr std::uint64_t MAX_BATCH_SAMPLES = 10'000'000;
 
-/// The samples of a selection, seeds in order (and scenarios in the given order per seed).
-/// Checks every distinct scenario and override set once by drawing its first seed.
+/// The samples of a selection, seeds in order (and scenarios in the given order per seed), those
+/// of `selection.shard` alone. Checks every distinct scenario and override set once by drawing
+/// its first seed (also when it falls in another shard).
 /// @throw SceneError for an unknown scenario, a bad mix file, an invalid override or more than
 /// MAX_BATCH_SAMPLES samples
 std::vector<SampleDraw> draw_samples(const MeshBatchSelection& selection);

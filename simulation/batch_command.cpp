@@ -45,8 +45,9 @@ int run_mesh_batch(const BatchCommand& c, bool with_metrics, std::ostream& out, 
   sel.mix_path = c.mix;
   sel.seeds = parse_seeds(c.seeds);
   sel.overrides = parse_overrides(c.set);
+  const batch::Shard shard = batch::cli_shard(c.common);  // a malformed --shard is refused here
+  if (c.common.slurm_shards == 0) sel.shard = shard;       // the script's line counts them all
   const std::vector<SampleDraw> draws = draw_samples(sel);  // checks every option first
-  if (!c.common.shard.empty()) batch::parse_shard(c.common.shard, "--shard");
   if (c.common.slurm_shards > 0) {
     const fs::path script = batch::write_slurm_script(c.out, "papersim-batch", shard_command(c), c.common);
     out << "wrote " << script.string() << " (" << c.common.slurm_shards << " array tasks over "

@@ -124,6 +124,32 @@ TEST(Selection, SeedListsDrawTheirSeedsInOrderAndRefuseOverlaps) {
   }
 }
 
+// An array task draws only its shard's samples: the same slice, task for task, as the shard
+// taken from the whole selection's tasks (select_shard), with a mix and with scenarios.
+TEST(Selection, AShardDrawnDirectlyIsTheSliceOfTheWholeSelection) {
+  for (const bool mix : {false, true}) {
+    ps::MeshBatchSelection sel;
+    if (mix)
+      sel.mix_path = TINY_MIX;
+    else
+      sel.scenarios = {"pull", "fall-gable", "fold"};
+    sel.seeds = ps::parse_seeds("3-9,20,100-104");
+    const auto all = ps::mesh_tasks(ps::draw_samples(sel));
+    ASSERT_EQ(all.size(), mix ? 13u : 39u);
+    for (int count : {1, 2, 5, 40})
+      for (int index = 0; index < count; ++index) {
+        sel.shard = {index, count};
+        const auto direct = ps::mesh_tasks(ps::draw_samples(sel));
+        const auto sliced = papersim::batch::select_shard(all, index, count);
+        ASSERT_EQ(direct.size(), sliced.size()) << index << "/" << count;
+        for (std::size_t i = 0; i < direct.size(); ++i) {
+          EXPECT_EQ(direct[i].key, sliced[i].key);
+          EXPECT_EQ(direct[i].info, sliced[i].info);
+        }
+      }
+  }
+}
+
 // A batch command draws every sample before the first runs, so a selection of more than
 // MAX_BATCH_SAMPLES is refused before any is drawn: a typo of ten billion seeds, seed ranges whose
 // sum passes the bound, and two scenarios that double a range below it. Each is refused at once.
