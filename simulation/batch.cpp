@@ -172,7 +172,7 @@ std::vector<SampleDraw> draw_samples(const MeshBatchSelection& sel) {
       mix.overrides.push_back(json::object());
     }
   }
-  // Every sample is drawn (and by each array task) before the first runs: bound their number.
+  // Every sample is drawn before the first runs (an array task keeps its shard's): bound their number.
   const std::uint64_t per_seed = sel.mix_path.empty() ? mix.scenarios.size() : 1;
   std::uint64_t samples = 0;
   for (const auto& [first, last] : sel.seeds) {
