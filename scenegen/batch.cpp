@@ -40,7 +40,10 @@ std::vector<MeshEntry> finished_meshes(const fs::path& root) {
       for (const auto& d : fs::directory_iterator(bucket.path(), ec)) {
         const std::string name = d.path().filename().string();
         if (!d.is_directory() || !all_digits(name) || !fs::exists(d.path() / "sheet.obj")) continue;
-        out.push_back({sc.path().filename().string(), std::stoull(name), fs::relative(d.path(), root)});
+        // The folder relative to the root, composed (fs::relative resolves links: 8 readlink
+        // calls a mesh, which dominated the walk over a large dataset).
+        const std::string scenario = sc.path().filename().string();
+        out.push_back({scenario, std::stoull(name), fs::path("meshes") / scenario / bucket.path().filename() / name});
       }
     }
   }
