@@ -621,6 +621,7 @@ void Run::remesh_pass() {
   m_remesh.flips += st.flips;
   m_remesh.collapses += st.collapses;
   const double after = energies().mechanical();
+  m_remesh_energy_change += after - before;
   const double jump = std::abs(after - before);
   m_remesh.max_energy_jump = std::max(m_remesh.max_energy_jump, jump);
   const double range = m_energy_max - m_energy_min;

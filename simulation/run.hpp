@@ -262,6 +262,9 @@ class Run {
   double step_stretch() const { return m_step_stretch; }
   /// Smallest surface distance to each obstacle at the current state [m].
   const std::vector<double>& step_obstacle_distance() const { return m_step_distance; }
+  /// Sum of the signed changes of the mechanical energy across the remeshing passes this Run
+  /// kept (after - before) [J]: the mechanical energy less it is what the steps alone changed.
+  double remesh_energy_change() const { return m_remesh_energy_change; }
 
   /// What a remeshing pass sizes the current mesh by: positions, velocities, each vertex's
   /// obstacle distance (with obstacles) and, under the arc membrane, the strain it measures (a
@@ -318,6 +321,7 @@ class Run {
   RunQuality m_quality;
   RemeshTotals m_remesh;
   double m_energy_min = INF, m_energy_max = -INF;  // mechanical energy's range over the run [J]
+  double m_remesh_energy_change = 0.0;             // remesh_energy_change() [J]
   double m_step_stretch = 1.0;
   std::vector<double> m_step_distance;
   int m_step = 0, m_steps = 0;

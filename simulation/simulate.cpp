@@ -461,6 +461,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
       report.state = &run.state();
       report.mesh = &run.mesh();
       report.mechanical_energy = run.energies().mechanical();
+      report.remesh_energy_change = run.remesh_energy_change();
       report.max_stretch = run.step_stretch();
       report.obstacle_distance = run.step_obstacle_distance();
       options.on_step(report);

@@ -27,6 +27,10 @@ struct StepReport {
   /// Kinetic + gravity + stretching (with the strain-limit barrier) + bending energy [J];
   /// contact and handle potentials are not included.
   double mechanical_energy = 0.0;
+  /// Sum of the signed changes of the mechanical energy across the remeshing passes so far
+  /// (after - before; 0 without remeshing) [J]: `mechanical_energy` less it is what the steps
+  /// alone changed. Counted from the start of this process's run (not across a resume).
+  double remesh_energy_change = 0.0;
   double max_stretch = 1.0;              ///< largest principal stretch at this step [-]
   /// Smallest signed distance of a sheet vertex to each obstacle (0 is the ground when the
   /// scene has one) at this step [m].

@@ -422,8 +422,12 @@ TEST(RemeshRun, LiftedSheetRemeshesAndKeepsEveryInvariant) {
   s.remesh.params.size_min = 4e-3;
   s.remesh.params.size_max = 0.04;
   int min_vertices = 1 << 30, max_vertices = 0;
+  std::vector<double> jumps;  // change of StepReport::remesh_energy_change over each step [J]
+  double energy_change = 0.0;
   RunOptions o;
   o.on_step = [&](const StepReport& r) {
+    jumps.push_back(r.remesh_energy_change - energy_change);
+    energy_change = r.remesh_energy_change;
     EXPECT_EQ(papersim::collision::count_self_intersections(r.state->positions_matrix(), r.mesh->faces()), 0)
         << "step " << r.step;
     EXPECT_LT(r.max_stretch, 1.005) << "step " << r.step;
@@ -442,6 +446,17 @@ TEST(RemeshRun, LiftedSheetRemeshesAndKeepsEveryInvariant) {
   EXPECT_LT(r.quality.max_handle_error.value(), 1e-3);
   EXPECT_EQ(r.quality.self_intersections, 0);
   EXPECT_LT(r.quality.max_principal_stretch, 1.005);
+  // The energy change across the passes reaches the observer: it moves only over the steps after
+  // which a pass runs (before step 1 and after it, then after every 2nd), by at most the largest
+  // jump a pass, and it did move.
+  ASSERT_EQ(jumps.size(), 20u);
+  double largest = 0.0;
+  for (size_t k = 0; k < jumps.size(); ++k) {
+    const int step = static_cast<int>(k) + 1, passes = step == 1 ? 2 : step % 2 == 0 && step < 20 ? 1 : 0;
+    EXPECT_LE(std::abs(jumps[k]), passes * r.remesh->max_energy_jump * (1 + 1e-12)) << "step " << step;
+    largest = std::max(largest, std::abs(jumps[k]));
+  }
+  EXPECT_GT(largest, 0.0);
   const nlohmann::json meta = meta_json(s, r);
   EXPECT_EQ(meta["run"]["remesh"]["passes"].get<int>(), r.remesh->passes);
   EXPECT_EQ(meta["sheet"]["vertices"].get<int>(), r.mesh.num_vertices());
