@@ -138,6 +138,20 @@ MeshEditor::EditCheck improves_check(const MeshEditor& ed) {
   };
 }
 
+/// Accepts a split only when its thinnest new face is no thinner than `threshold` or than the
+/// thinnest face it replaces ("thin split", RemeshParams::refuse_thin_splits).
+MeshEditor::EditCheck thick_split_check(const MeshEditor& ed, double threshold) {
+  return [&ed, threshold](const EditProposal& p) -> std::string {
+    double before = 1.0, after = 1.0;
+    for (int f : p.removed_faces)
+      before = std::min(before, face_aspect(ed, OpenMesh::FaceHandle(f)));
+    for (const auto& x : p.material)
+      after = std::min(
+          after, aspect_ratio(x.row(0).transpose(), x.row(1).transpose(), x.row(2).transpose()));
+    return after < std::min(threshold, before) ? std::string("thin split") : std::string();
+  };
+}
+
 /// Repairs sliver f by a collapse: the vertex opposite its longest edge into the nearer end of
 /// that edge, else into the farther end, else either end into the opposite vertex; the first
 /// collapse that makes the neighbourhood less thin wins. No flip: the Delaunay flips have had their
@@ -200,6 +214,9 @@ void flip_around(MeshEditor& ed, VertexHandle v, const RemeshParams& params) {
 /// one left was refused).
 void split_phase(MeshEditor& ed, const RemeshParams& params) {
   std::set<VertexPair> refused;
+  const MeshEditor::EditCheck thick = params.refuse_thin_splits
+                                          ? thick_split_check(ed, SLIVER_FRACTION * params.aspect_min)
+                                          : MeshEditor::EditCheck();
   for (;;) {
     std::vector<std::tuple<double, int, int>> bad;
     for (auto e : ed.mesh().edges()) {
@@ -215,7 +232,7 @@ void split_phase(MeshEditor& ed, const RemeshParams& params) {
       const VertexHandle a(ia), b(ib);
       const HalfedgeHandle h = ed.mesh().find_halfedge(a, b);
       if (!h.is_valid() || edge_size2(ed, a, b) <= 1.0) continue;
-      const VertexHandle v = ed.split(ed.mesh().edge_handle(h));
+      const VertexHandle v = ed.split(ed.mesh().edge_handle(h), thick);
       if (!v.is_valid()) {
         refused.insert(key(a, b));
         continue;

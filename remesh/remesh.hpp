@@ -51,6 +51,13 @@ struct RemeshParams {
   /// [rad] no flip across a hinge whose world dihedral angle (or the one the flip would create)
   /// exceeds this: a flip there would cut a crease (ArcSim 0.2 uses 40 degrees). In (0, pi].
   double flip_angle_max = 0.7;
+  /// Refuse a split that would make a face thinner than half of aspect_min (the sliver phase's
+  /// threshold) unless a face it replaces is thinner already ("thin split"). A midpoint split of
+  /// an edge that is not its face's longest halves the face across its length; where the flips
+  /// that would repair the halves are refused (across a sharp hinge, or by the caller's veto on a
+  /// bent or stretched sheet) repeated splits leave slivers down to the editor's floor, which the
+  /// sliver phase cannot collapse there either.
+  bool refuse_thin_splits = false;
 };
 
 /// The per-vertex state carried through the edits, indexed by vertex (#V rows).
@@ -99,7 +106,8 @@ using EditVeto = std::function<std::string(const EditProposal&)>;
 /// condition), "boundary" (would move a boundary vertex off the boundary or remove a corner of the
 /// sheet), "inverted" (a new face with non-positive area in material space), "degenerate" (a new
 /// face with aspect ratio below EDIT_ASPECT_MIN = 0.01, mesh_editor.hpp); of the remesh loop:
-/// "crease" (a flip across, or making, a hinge sharper than flip_angle_max), "too long" (a collapse
+/// "crease" (a flip across, or making, a hinge sharper than flip_angle_max), "thin split"
+/// (RemeshParams::refuse_thin_splits), "too long" (a collapse
 /// would make an edge longer than 0.9 under the metric), "too thin" (a collapse would make a face
 /// with aspect below aspect_min), "no better" (a sliver repair whose thinnest new face is no
 /// thicker than the thinnest face it removes); of the caller: "veto: <reason>". Counts are per

@@ -268,6 +268,7 @@ RemeshSpec read_remesh(Reader r) {
   if (p.size_max < p.size_min) r.fail("size_max", "smaller than size_min");
   p.aspect_min = r.number("aspect_min", p.aspect_min, 0, 1, true);
   p.flip_angle_max = r.number("flip_angle_max", p.flip_angle_max, 0, M_PI, true);
+  p.refuse_thin_splits = r.boolean("refuse_thin_splits", p.refuse_thin_splits);
   r.finish();
   return s;
 }
@@ -555,7 +556,8 @@ json scene_to_json(const Scene& s, bool every_key) {
                  {"size_min", rp.size_min},
                  {"size_max", rp.size_max},
                  {"aspect_min", rp.aspect_min},
-                 {"flip_angle_max", rp.flip_angle_max}};
+                 {"flip_angle_max", rp.flip_angle_max},
+                 {"refuse_thin_splits", rp.refuse_thin_splits}};
   j["output"] = {{"frames_every", s.output.frames_every}, {"ply", s.output.write_ply}};
   if (!s.scenario.empty()) j["scenario"] = s.scenario;
   if (s.seed >= 0) j["seed"] = s.seed;

@@ -19,7 +19,8 @@
 // it): the face check follows the changing mesh, every kept pass was checked exactly by the run
 // for self-intersection and stretch (a pass that fails is undone and counted), and the energy
 // check measures what the steps changed (the signed jumps across the kept passes taken out;
-// the largest jump is reported beside it, relative to the energy scale).
+// the largest jump is reported beside it, relative to the energy scale). --refuse-thin-splits
+// turns remesh.refuse_thin_splits on as well.
 // A case that cannot run yet is listed as not run, with the reason (none today).
 // Exit status 1 when a case fails.
 #include <CLI/CLI.hpp>
@@ -226,11 +227,12 @@ std::vector<Case> make_cases(const fs::path& work) {
 
 /// Remeshing on in every case (--remesh): edges from half the case's edge length, flat regions
 /// coarsened up to four times it.
-void enable_remeshing(Case& c) {
+void enable_remeshing(Case& c, bool refuse_thin_splits) {
   const double edge = c.scene.sheet.edge_length;
   c.scene.remesh.enabled = true;
   c.scene.remesh.params.size_min = 0.5 * edge;
   c.scene.remesh.params.size_max = 4.0 * edge;
+  c.scene.remesh.params.refuse_thin_splits = refuse_thin_splits;
 }
 
 Outcome run_case(const Case& c, const std::string& keep) {
@@ -315,6 +317,9 @@ int main(int argc, char** argv) {
   app.add_flag("--remesh", remesh,
                "every case remeshes (remesh.size_min half its edge, size_max four times it); reports the "
                "vertices, the passes kept and undone and the largest energy jump across a pass");
+  bool thin = false;
+  app.add_flag("--refuse-thin-splits", thin, "with --remesh: remesh.refuse_thin_splits on in every case")
+      ->needs("--remesh");
   CLI11_PARSE(app, argc, argv);
   const fs::path work = fs::temp_directory_path() / ("papersim_stress_" + std::to_string(::getpid()));
   fs::create_directories(work);
@@ -322,7 +327,7 @@ int main(int argc, char** argv) {
   try {
     cases = make_cases(work);
     if (remesh)
-      for (Case& c : cases) enable_remeshing(c);
+      for (Case& c : cases) enable_remeshing(c, thin);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "papersim_stress_suite: %s\n", e.what());
     return 2;

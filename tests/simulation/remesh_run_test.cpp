@@ -524,6 +524,64 @@ TEST(RemeshRun, DrapedSheetRemeshesWithoutDegenerateFaces) {
   EXPECT_NO_THROW(build_terms(mesh, setup));
 }
 
+// remesh.refuse_thin_splits: a 10 cm sheet (the stress suite's knife edge, `papersim_stress_suite
+// --remesh --only gable`) dropped at 4.5 m/s onto a gable whose ridge is 30 degrees, on the 111-vertex
+// mesh its first pass coarsened it to, just before the pass after its fifth step (dumped from the
+// run). Bent over the ridge and stretched by the impact, the sheet lets the run's veto refuse the
+// flips and collapses that would repair the children of midpoint splits, and the pass leaves
+// slivers along the ridge (as in the run: 69 splits, 36 flips, 5 collapses, aspect 0.012); with
+// the option no split makes a face thinner than half of aspect_min, and the pass still refines.
+TEST(RemeshVeto, ThinSplitsAreRefusedOnASheetBentOverAKnifeEdge) {
+  rm::SheetData d = rm::read_sheet(std::string(PAPERSIM_TEST_DATA_DIR) + "/remesh/gable_impact.ply");
+  std::vector<std::shared_ptr<const papersim::collision::Collider>> obstacles;
+  obstacles.push_back(std::make_shared<papersim::collision::PlaneCollider>());
+  papersim::collision::ColliderSpec gable;
+  gable.kind = papersim::collision::ColliderKind::gable;
+  gable.length = 0.15;
+  gable.height = 0.03;
+  gable.half_width = 0.03 * std::tan(15 * M_PI / 180);
+  obstacles.push_back(papersim::collision::make_collider(gable));
+  const int n = static_cast<int>(d.positions.rows());
+  ASSERT_EQ(n, 111);
+  rm::RemeshState start;
+  start.positions = d.positions;
+  start.velocities = d.velocities;
+  start.obstacle_distance = Eigen::VectorXd::Constant(n, std::numeric_limits<double>::infinity());
+  for (const auto& o : obstacles)
+    for (int v = 0; v < n; ++v)
+      start.obstacle_distance(v) =
+          std::min(start.obstacle_distance(v), o->distance(d.positions.row(v).transpose(), 0.0));
+  RemeshVetoParams vp;  // the run's: a tenth of the 0.3 mm contact thicknesses, the barrier's reach
+  vp.obstacle_gap = 3e-5;
+  vp.obstacle_reach = 3e-4;
+  vp.self_gap = 3e-5;
+  const RemeshVeto veto(obstacles, d.mesh, d.positions, vp);
+  rm::RemeshParams p;  // the stress suite's: half and four times the 5 mm edge
+  p.size_min = 0.0025;
+  p.size_max = 0.02;
+  double lo[2] = {1, 1};
+  int splits[2] = {0, 0};
+  for (int on = 0; on < 2; ++on) {
+    SCOPED_TRACE(on ? "refuse_thin_splits" : "default");
+    p.refuse_thin_splits = on == 1;
+    rm::SheetMesh mesh = d.mesh;
+    rm::RemeshState state = start;
+    const rm::RemeshStats st = rm::remesh(mesh, state, p, std::cref(veto));
+    splits[on] = st.splits;
+    EXPECT_EQ(st.refusals.count("thin split") > 0, on == 1);
+    const Eigen::MatrixX2d X = mesh.material_coords();
+    const Eigen::MatrixX3i F = mesh.faces();
+    for (int f = 0; f < F.rows(); ++f)
+      lo[on] = std::min(lo[on], rm::aspect_ratio(X.row(F(f, 0)).transpose(), X.row(F(f, 1)).transpose(),
+                                                 X.row(F(f, 2)).transpose()));
+  }
+  std::printf("knife-edge pass: thinnest face %.4f without refuse_thin_splits (%d splits), %.4f with (%d splits)\n",
+              lo[0], splits[0], lo[1], splits[1]);
+  EXPECT_LT(lo[0], 0.05) << "the default pass leaves slivers";
+  EXPECT_GE(lo[1], 0.5 * p.aspect_min);
+  EXPECT_GT(splits[1], splits[0] / 2) << "the pass still refines along the ridge";
+}
+
 namespace {
 
 /// fall-sphere seed 25 remeshed as in the safety study: 8-100 mm from the reference's 11 x 11
