@@ -124,16 +124,21 @@ double face_aspect(const MeshEditor& ed, OpenMesh::FaceHandle f) {
   return aspect_ratio(x[0], x[1], x[2]);
 }
 
+/// Smallest aspect ratio of the faces edit p removes, and of the faces it creates.
+std::pair<double, double> thinnest_before_after(const MeshEditor& ed, const EditProposal& p) {
+  double before = 1.0, after = 1.0;
+  for (int f : p.removed_faces)
+    before = std::min(before, face_aspect(ed, OpenMesh::FaceHandle(f)));
+  for (const auto& x : p.material)
+    after = std::min(after, aspect_ratio(x.row(0).transpose(), x.row(1).transpose(), x.row(2).transpose()));
+  return {before, after};
+}
+
 /// Accepts an edit only when its thinnest new face is thicker than the thinnest face it removes
 /// ("no better"): every sliver repair strictly raises the local minimum aspect ratio.
 MeshEditor::EditCheck improves_check(const MeshEditor& ed) {
   return [&ed](const EditProposal& p) -> std::string {
-    double before = 1.0, after = 1.0;
-    for (int f : p.removed_faces)
-      before = std::min(before, face_aspect(ed, OpenMesh::FaceHandle(f)));
-    for (const auto& x : p.material)
-      after = std::min(
-          after, aspect_ratio(x.row(0).transpose(), x.row(1).transpose(), x.row(2).transpose()));
+    const auto [before, after] = thinnest_before_after(ed, p);
     return after > before ? std::string() : std::string("no better");
   };
 }
@@ -142,12 +147,7 @@ MeshEditor::EditCheck improves_check(const MeshEditor& ed) {
 /// thinnest face it replaces ("thin split", RemeshParams::refuse_thin_splits).
 MeshEditor::EditCheck thick_split_check(const MeshEditor& ed, double threshold) {
   return [&ed, threshold](const EditProposal& p) -> std::string {
-    double before = 1.0, after = 1.0;
-    for (int f : p.removed_faces)
-      before = std::min(before, face_aspect(ed, OpenMesh::FaceHandle(f)));
-    for (const auto& x : p.material)
-      after = std::min(
-          after, aspect_ratio(x.row(0).transpose(), x.row(1).transpose(), x.row(2).transpose()));
+    const auto [before, after] = thinnest_before_after(ed, p);
     return after < std::min(threshold, before) ? std::string("thin split") : std::string();
   };
 }
