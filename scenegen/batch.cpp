@@ -2,9 +2,11 @@
 
 #include <algorithm>
 #include <fstream>
+#include <iterator>
 #include <sstream>
 
 #include "batch/cli.hpp"
+#include "common/atomic_file.hpp"
 #include "scenegen/errors.hpp"
 
 namespace papersim::scenegen {
@@ -29,7 +31,9 @@ struct MeshEntry {
   fs::path dir;  ///< relative to the root
 };
 
-/// Finished meshes: meshes/<scenario>/<bucket>/<seed>/ holding sheet.obj.
+/// Finished meshes: meshes/<scenario>/<bucket>/<seed>/ holding sheet.obj, sorted by scenario, then
+/// seed. One `stat` a mesh (sheet.obj's).
+/// @throw InputError when a seed of a scenario is in two bucket folders
 std::vector<MeshEntry> finished_meshes(const fs::path& root) {
   std::vector<MeshEntry> out;
   std::error_code ec;
@@ -47,9 +51,67 @@ std::vector<MeshEntry> finished_meshes(const fs::path& root) {
       }
     }
   }
-  std::sort(out.begin(), out.end(), [](const MeshEntry& a, const MeshEntry& b) {
+  const auto before = [](const MeshEntry& a, const MeshEntry& b) {
     return a.scenario != b.scenario ? a.scenario < b.scenario : a.seed < b.seed;
+  };
+  std::sort(out.begin(), out.end(), before);
+  const auto twin = std::adjacent_find(out.begin(), out.end(), [&](const MeshEntry& a, const MeshEntry& b) {
+    return !before(a, b);
   });
+  if (twin != out.end())
+    throw InputError("seed " + std::to_string(twin->seed) + " of scenario '" + twin->scenario + "' is in two folders: " +
+                     (root / twin->dir).string() + " and " + (root / std::next(twin)->dir).string());
+  return out;
+}
+
+constexpr const char* MESH_LIST_HEAD = "# scenegen batch mesh list: ";
+
+/// The entry of one line "meshes/<scenario>/<bucket>/<seed>" of a mesh list, or an empty scenario
+/// when the line is not one.
+MeshEntry parse_mesh_line(const std::string& line) {
+  std::vector<std::string> parts;
+  std::size_t start = 0;
+  for (std::size_t slash; (slash = line.find('/', start)) != std::string::npos; start = slash + 1)
+    parts.push_back(line.substr(start, slash - start));
+  parts.push_back(line.substr(start));
+  const auto name = [](const std::string& s) { return !s.empty() && s != "." && s != ".."; };
+  if (parts.size() != 4 || parts[0] != "meshes" || !name(parts[1]) || !name(parts[2]) || !all_digits(parts[3]))
+    return {};
+  return {parts[1], std::stoull(parts[3]), fs::path(line)};
+}
+
+/// The meshes of a list written by write_mesh_list, checked line by line (format, order, count).
+/// @throw InputError naming the file and the line
+std::vector<MeshEntry> read_mesh_list(const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw InputError("mesh list '" + file.string() + "' cannot be read");
+  std::string line;
+  std::getline(in, line);
+  const std::string head = MESH_LIST_HEAD;
+  std::size_t count = 0;
+  {
+    const std::string tail = line.compare(0, head.size(), head) == 0 ? line.substr(head.size()) : "";
+    const std::size_t space = tail.find(' ');
+    if (space == std::string::npos || !all_digits(tail.substr(0, space)) || tail.substr(space) != " meshes")
+      throw InputError("mesh list '" + file.string() + "': line 1 is not '" + head + "N meshes'");
+    count = std::stoull(tail.substr(0, space));
+  }
+  std::vector<MeshEntry> out;
+  out.reserve(std::min<std::size_t>(count, 10000000));
+  for (std::size_t n = 2; std::getline(in, line); ++n) {
+    MeshEntry e = parse_mesh_line(line);
+    const auto where = [&] { return "mesh list '" + file.string() + "', line " + std::to_string(n) + ": "; };
+    if (e.scenario.empty()) throw InputError(where() + "'" + line + "' is not meshes/<scenario>/<bucket>/<seed>");
+    if (!out.empty() && !(out.back().scenario < e.scenario ||
+                          (out.back().scenario == e.scenario && out.back().seed < e.seed)))
+      throw InputError(where() + "'" + line + "' is out of order (the list is sorted by scenario, then seed, " +
+                       "each once)");
+    out.push_back(std::move(e));
+  }
+  if (in.bad()) throw InputError("mesh list '" + file.string() + "' cannot be read");
+  if (out.size() != count)
+    throw InputError("mesh list '" + file.string() + "' announces " + std::to_string(count) + " meshes but holds " +
+                     std::to_string(out.size()) + " (cut short?)");
   return out;
 }
 
@@ -77,11 +139,25 @@ std::uint64_t view_seed(const std::string& scenario, std::uint64_t seed, int vie
   return batch::splitmix64(fnv1a(scenario) ^ batch::splitmix64(seed * 64 + static_cast<std::uint64_t>(view))) >> 33;
 }
 
-std::vector<batch::Task> render_tasks(const fs::path& root, const RenderBatchOptions& o, const batch::Shard& shard) {
+std::size_t write_mesh_list(const fs::path& root, const fs::path& file) {
+  const std::vector<MeshEntry> meshes = finished_meshes(root);
+  common::write_file_atomically(file, [&](std::ostream& out) {
+    out << MESH_LIST_HEAD << meshes.size() << " meshes\n";
+    for (const MeshEntry& m : meshes) out << m.dir.generic_string() << '\n';
+  });
+  return meshes.size();
+}
+
+std::size_t mesh_list_size(const fs::path& file) {
+  return read_mesh_list(file).size();
+}
+
+std::vector<batch::Task> render_tasks(const fs::path& root, const RenderBatchOptions& o, const batch::Shard& shard,
+                                      const fs::path& mesh_list) {
   if (o.views < 1) throw InputError("--views must be >= 1");
   std::vector<batch::Task> tasks;
   std::size_t position = 0;
-  for (const MeshEntry& m : finished_meshes(root)) {
+  for (const MeshEntry& m : mesh_list.empty() ? finished_meshes(root) : read_mesh_list(mesh_list)) {
     const fs::path bucket = fs::path(std::to_string(m.seed / 1000)) / std::to_string(m.seed);
     for (int k = 0; k < o.views; ++k) {
       if (!shard.holds(position++)) continue;

@@ -35,10 +35,25 @@ SheetMesh flipped_sheet(const SheetMesh& mesh);
 std::uint64_t view_seed(const std::string& scenario, std::uint64_t seed, int view);
 
 /// One task per (finished mesh, view) under root/meshes/<scenario>/<bucket>/<seed>/sheet.obj,
-/// sorted by scenario, then seed, then view; of these, the positions `shard` holds.
-/// @throw InputError when views < 1
+/// sorted by scenario, then seed, then view; of these, the positions `shard` holds. The meshes
+/// are those of `mesh_list` (write_mesh_list) when it is given, without a look at their folders;
+/// otherwise those found by walking root/meshes/ (one `stat` a mesh).
+/// @throw InputError when views < 1, when a seed is in two folders, or naming the line of
+///        `mesh_list` that is malformed or out of order
 std::vector<batch::Task> render_tasks(const std::filesystem::path& root, const RenderBatchOptions& options,
-                                      const batch::Shard& shard = {});
+                                      const batch::Shard& shard = {},
+                                      const std::filesystem::path& mesh_list = {});
+
+/// Walk root/meshes/ once and write its finished meshes to `file` (through a temporary and a
+/// rename): a first line "# scenegen batch mesh list: N meshes", then one
+/// "meshes/<scenario>/<bucket>/<seed>" a line, sorted by scenario, then seed. Every array task of
+/// a Slurm batch reads this list instead of walking the dataset, so all shard the same list.
+/// @return the number of meshes
+/// @throw InputError when a seed is in two folders; common::OutputError when `file` cannot be written
+std::size_t write_mesh_list(const std::filesystem::path& root, const std::filesystem::path& file);
+
+/// The number of meshes of a mesh list, checked as render_tasks checks it. @throw InputError
+std::size_t mesh_list_size(const std::filesystem::path& file);
 
 /// Hooks: prepare writes the flipped OBJ for flipped views, the command is
 /// `scenegen render MESH --out ... --seed S --parallel 1 --threads T --quiet ...`.

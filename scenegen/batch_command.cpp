@@ -4,6 +4,7 @@
 #include <ostream>
 
 #include "common/cli_checks.hpp"
+#include "common/errors.hpp"
 #include "scenegen/errors.hpp"
 #include "scenegen/passes.hpp"
 #include "scenegen/pov_writer.hpp"
@@ -13,11 +14,12 @@ namespace fs = std::filesystem;
 
 namespace {
 
-/// The same batch as a command line for the Slurm script: absolute paths, no --shard / --jobs.
-std::vector<std::string> shard_command(const RenderBatchCommand& c) {
+/// The same batch as a command line for the Slurm script: absolute paths, no --shard / --jobs, the
+/// meshes from `mesh_list`.
+std::vector<std::string> shard_command(const RenderBatchCommand& c, const fs::path& mesh_list) {
   const RenderBatchOptions& r = c.render;
   std::vector<std::string> cmd{batch::self_executable().string(), "batch", fs::absolute(c.dataset).string(),
-                               "--views", std::to_string(r.views), "--size", r.size, "--quality", r.quality,
+                               "--mesh-list", fs::absolute(mesh_list).string(), "--views", std::to_string(r.views), "--size", r.size, "--quality", r.quality,
                                "--passes", r.passes, "--threads", std::to_string(r.threads), "--quiet"};
   if (r.flip) cmd.push_back("--flip");
   if (r.dpi > 0) cmd.insert(cmd.end(), {"--dpi", std::to_string(r.dpi)});
@@ -47,6 +49,8 @@ void check_options(const RenderBatchCommand& c) {
   if (x == std::string::npos || c.render.size.find_first_not_of("0123456789x") != std::string::npos ||
       x == 0 || x + 1 == c.render.size.size())
     throw InputError("--size '" + c.render.size + "' is not WIDTHxHEIGHT");
+  if (!c.mesh_list.empty() && !fs::is_regular_file(c.mesh_list))
+    throw InputError("--mesh-list '" + c.mesh_list + "' is not a file");
   for (const auto& [opt, dir] : {std::pair<const char*, std::string>{"--documents", c.render.documents_dir},
                                  {"--backgrounds", c.render.backgrounds_dir}})
     if (!dir.empty() && !fs::is_directory(dir)) throw InputError(std::string(opt) + " '" + dir + "' is not a folder");
@@ -69,6 +73,10 @@ void add_render_batch_subcommand(CLI::App& app, RenderBatchCommand& c) {
                "Exit status 1 when a view failed (renders_failures.jsonl); a full disk stops the batch with status 5 "
                "and records nothing (docs/batch.md).");
   c.app->add_option("dataset", c.dataset, "dataset folder")->required();
+  c.app->add_option("--mesh-list", c.mesh_list,
+                    "render the meshes listed in FILE (as --slurm writes it: DATASET/slurm/scenegen-batch.meshes) "
+                    "instead of those found in DATASET/meshes/ now; no folder of the list is looked at before its "
+                    "views run");
   c.app->add_option("--views", c.render.views, "renders per mesh, each with its own seed (at most 1000)")
       ->check(CLI::Range(1, 1000))->capture_default_str();
   c.app->add_flag("--flip", c.render.flip, "odd views show the sheet turned over (u -> 1 - u, printed side up)");
@@ -86,16 +94,29 @@ void add_render_batch_subcommand(CLI::App& app, RenderBatchCommand& c) {
 
 int run_render_batch(const RenderBatchCommand& c, std::ostream& out, std::ostream& err) {
   check_options(c);
-  // An array task makes only its shard's tasks; the script's line counts them all.
-  const std::vector<batch::Task> tasks =
-      render_tasks(c.dataset, c.render, c.common.slurm_shards > 0 ? batch::Shard{} : batch::cli_shard(c.common));
   if (c.common.slurm_shards > 0) {
-    const fs::path script = batch::write_slurm_script(c.dataset, "scenegen-batch", shard_command(c), c.common);
-    out << "wrote " << script.string() << " (" << c.common.slurm_shards << " array tasks over " << tasks.size()
+    // The walk happens once, here: every array task reads the same list (no walk over the
+    // dataset per task, and the same shards even when meshes are added after this).
+    fs::path list = c.mesh_list;
+    std::size_t meshes = 0;
+    if (list.empty()) {
+      list = fs::path(c.dataset) / "slurm" / "scenegen-batch.meshes";
+      std::error_code ec;
+      fs::create_directories(list.parent_path(), ec);
+      if (ec) throw common::OutputError("cannot create '" + list.parent_path().string() + "': " + ec.message());
+      meshes = write_mesh_list(c.dataset, list);
+    } else {
+      meshes = mesh_list_size(list);
+    }
+    const fs::path script = batch::write_slurm_script(c.dataset, "scenegen-batch", shard_command(c, list), c.common);
+    out << "wrote " << list.string() << " (" << meshes << " meshes) and " << script.string() << " ("
+        << c.common.slurm_shards << " array tasks over " << meshes * static_cast<std::size_t>(c.render.views)
         << " views)\nsubmit it with:  sbatch " << script.string()
         << "\na task that died: sbatch --array=I " << script.string() << "  (it resumes shard I)\n";
     return 0;
   }
+  // Only the shard's tasks are made (an array task holds 1/N of the list in memory).
+  const std::vector<batch::Task> tasks = render_tasks(c.dataset, c.render, batch::cli_shard(c.common), c.mesh_list);
   const batch::BatchSpec spec = render_batch_spec(c.dataset, batch::self_executable(), c.render);
   const batch::BatchSummary s = batch::run_cli_batch(tasks, spec, c.common, err, "scenegen batch");
   out << batch::summary_line(s, c.dataset, spec) << '\n';

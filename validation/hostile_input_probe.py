@@ -318,6 +318,21 @@ def options(p, quick):
     for opt in [["--views", "0"], ["--views", "-1"], ["--threads", "0"], ["--dpi", "-1"], ["--size", "0x0"],
                 ["--jobs", "-1"], ["--quality", "ultra"], ["--passes", "nope"]]:
         cases.append([p.scenegen, "batch", d] + opt)
+    ds = os.path.join(d, "ds")  # a dataset of one mesh, for the mesh lists
+    os.makedirs(os.path.join(ds, "meshes", "pull", "0", "0"))
+    write(os.path.join(ds, "meshes", "pull", "0", "0", "sheet.obj"), p.example("flat"))
+    head = "# scenegen batch mesh list: %s meshes\n"
+    for name, content in [("empty", ""), ("no head", "meshes/pull/0/0\n"), ("dots", head % 1 + "meshes/pull/../0\n"),
+                          ("absolute", head % 1 + "/meshes/pull/0/0\n"), ("short", head % 2 + "meshes/pull/0/0\n"),
+                          ("long seed", head % 1 + "meshes/pull/0/" + "9" * 20 + "\n"),
+                          ("long count", head % ("9" * 20) + "meshes/pull/0/0\n"),
+                          ("twice", head % 2 + "meshes/pull/0/0\nmeshes/pull/0/0\n"),
+                          ("binary", head % 1 + "meshes/pull/0/\x00\n")]:
+        f = write(os.path.join(d, name.replace(" ", "_") + ".meshes"), content)
+        cases.append([p.scenegen, "batch", ds, "--mesh-list", f, "--shard", "0/2"])
+        cases.append([p.scenegen, "batch", ds, "--mesh-list", f, "--slurm", "2"])
+    for f in [os.path.join(d, "missing.meshes"), ds, mesh]:
+        cases.append([p.scenegen, "batch", ds, "--mesh-list", f])
     for argv in cases:
         target = out if os.path.basename(argv[0]) == "papersim" else os.path.join(d, "job")
         shutil.rmtree(out, ignore_errors=True)

@@ -341,4 +341,52 @@ TEST(ScenegenBatch, ResumedAfterSigkillEqualsAnUninterruptedBatch) {
   const auto diffs = pt::dataset_differences(a, b, "renders", "renders.jsonl");
   EXPECT_TRUE(diffs.empty()) << joined(diffs);
 }
+TEST(ScenegenBatch, SlurmWritesAMeshListAndTheTasksRenderItAlone) {
+  // Two meshes of the reference: --slurm lists them once; a third added afterwards is not
+  // rendered by the array's command line, which reads the list instead of the dataset's folders.
+  const fs::path d = work_dir() / "render_list";
+  fs::create_directories(d / "meshes" / "pull");
+  fs::copy(reference() / "meshes" / "pull", d / "meshes" / "pull", fs::copy_options::recursive);
+  std::vector<fs::path> all;
+  for (const auto& e : fs::recursive_directory_iterator(d / "meshes"))
+    if (e.path().filename() == "sheet.obj") all.push_back(e.path().parent_path());
+  std::sort(all.begin(), all.end());
+  ASSERT_GE(all.size(), 3u);
+  const fs::path later = d / "later";
+  fs::rename(all[2], later);
+  for (std::size_t i = 3; i < all.size(); ++i) fs::remove_all(all[i]);
+  const std::vector<std::string> options{"--views", "1", "--size", "48x64", "--quality", "draft",
+                                         "--passes", "image,mask", "--dpi", "30"};
+  std::vector<std::string> slurm{SCENEGEN_EXE, "batch", d.string(), "--slurm", "2"};
+  slurm.insert(slurm.end(), options.begin(), options.end());
+  ASSERT_EQ(run(slurm, work_dir() / "render_list.log"), 0) << pt::read_text(work_dir() / "render_list.log");
+  const fs::path list = d / "slurm" / "scenegen-batch.meshes";
+  EXPECT_EQ(pt::line_count(list), 3u);  // the head and two meshes
+  EXPECT_NE(pt::read_text(d / "slurm" / "scenegen-batch.sbatch").find("'--mesh-list' '" + fs::absolute(list).string() + "'"),
+            std::string::npos);
+  EXPECT_NE(pt::read_text(work_dir() / "render_list.log").find("(2 meshes)"), std::string::npos)
+      << pt::read_text(work_dir() / "render_list.log");
+  EXPECT_FALSE(fs::exists(d / "renders.jsonl"));
+  fs::rename(later, all[2]);
+  for (const char* shard : {"0/2", "1/2"}) {
+    std::vector<std::string> task{SCENEGEN_EXE, "batch", d.string(), "--mesh-list", list.string(), "--shard", shard};
+    task.insert(task.end(), options.begin(), options.end());
+    ASSERT_EQ(run(task, work_dir() / "render_list_task.log"), 0) << pt::read_text(work_dir() / "render_list_task.log");
+  }
+  EXPECT_EQ(pt::line_count(d / "renders.jsonl"), 2u);
+  const fs::path rendered = fs::path("renders") / "pull" / all[2].parent_path().filename() / all[2].filename();
+  EXPECT_FALSE(fs::exists(d / rendered)) << rendered;
+  // A missing or malformed list is refused before anything runs, naming it.
+  std::ofstream(d / "bad.meshes") << "# scenegen batch mesh list: 1 meshes\nmeshes/pull/x\n";
+  for (const auto& [file, named] : std::vector<std::pair<std::string, std::string>>{
+           {(d / "none.meshes").string(), "--mesh-list '" + (d / "none.meshes").string() + "' is not a file"},
+           {(d / "bad.meshes").string(), "line 2: 'meshes/pull/x' is not"}}) {
+    std::vector<std::string> task{SCENEGEN_EXE, "batch", d.string(), "--mesh-list", file, "--shard", "0/2"};
+    task.insert(task.end(), options.begin(), options.end());
+    EXPECT_EQ(run(task, work_dir() / "render_list_bad.log"), 2) << named;
+    EXPECT_NE(pt::read_text(work_dir() / "render_list_bad.log").find(named), std::string::npos)
+        << pt::read_text(work_dir() / "render_list_bad.log");
+  }
+  EXPECT_EQ(pt::line_count(d / "renders.jsonl"), 2u);
+}
 #endif
