@@ -141,6 +141,9 @@ std::uint64_t view_seed(const std::string& scenario, std::uint64_t seed, int vie
 
 std::size_t write_mesh_list(const fs::path& root, const fs::path& file) {
   const std::vector<MeshEntry> meshes = finished_meshes(root);
+  for (const MeshEntry& m : meshes)
+    if (m.dir.generic_string().find_first_of("\n\r") != std::string::npos)
+      throw InputError("mesh folder '" + (root / m.dir).string() + "' has a line break in its path: it cannot be listed");
   common::write_file_atomically(file, [&](std::ostream& out) {
     out << MESH_LIST_HEAD << meshes.size() << " meshes\n";
     for (const MeshEntry& m : meshes) out << m.dir.generic_string() << '\n';

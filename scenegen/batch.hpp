@@ -49,7 +49,8 @@ std::vector<batch::Task> render_tasks(const std::filesystem::path& root, const R
 /// "meshes/<scenario>/<bucket>/<seed>" a line, sorted by scenario, then seed. Every array task of
 /// a Slurm batch reads this list instead of walking the dataset, so all shard the same list.
 /// @return the number of meshes
-/// @throw InputError when a seed is in two folders; common::OutputError when `file` cannot be written
+/// @throw InputError when a seed is in two folders or a folder's path has a line break;
+///        common::OutputError when `file` cannot be written
 std::size_t write_mesh_list(const std::filesystem::path& root, const std::filesystem::path& file);
 
 /// The number of meshes of a mesh list, checked as render_tasks checks it. @throw InputError

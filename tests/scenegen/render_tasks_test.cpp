@@ -137,6 +137,11 @@ TEST(RenderTasks, AMalformedMeshListIsRefusedNamingItsLine) {
     }
   }
   EXPECT_THROW(sg::render_tasks(root, o, {}, root / "none"), sg::InputError);
+  // A folder whose name has a line break cannot be a line of the list.
+  fs::create_directories(root / "meshes" / "pu\nll" / "0" / "3");
+  std::ofstream(root / "meshes" / "pu\nll" / "0" / "3" / "sheet.obj") << "";
+  EXPECT_THROW(sg::write_mesh_list(root, list), sg::InputError);
+  fs::remove_all(root / "meshes" / "pu\nll");
   // A seed in two bucket folders would give two tasks one folder: the walk refuses it.
   fs::create_directories(root / "meshes" / "pull" / "9" / "1");
   std::ofstream(root / "meshes" / "pull" / "9" / "1" / "sheet.obj") << "";
