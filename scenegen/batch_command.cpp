@@ -71,12 +71,14 @@ void add_render_batch_subcommand(CLI::App& app, RenderBatchCommand& c) {
                "child scenegen render per view, --jobs at once; resumable (run the same command again), failures "
                "recorded and skipped. Writes DATASET/renders/.../view<k>/, renders.jsonl, renders_failures.jsonl. "
                "Exit status 1 when a view failed (renders_failures.jsonl); a full disk stops the batch with status 5 "
-               "and records nothing (docs/batch.md).");
+               "and records nothing. With --slurm it also lists the meshes it finds in DATASET/slurm/scenegen-batch.meshes, "
+               "which every array task reads instead of the folders (docs/batch.md).");
   c.app->add_option("dataset", c.dataset, "dataset folder")->required();
   c.app->add_option("--mesh-list", c.mesh_list,
                     "render the meshes listed in FILE (as --slurm writes it: DATASET/slurm/scenegen-batch.meshes) "
                     "instead of those found in DATASET/meshes/ now; no folder of the list is looked at before its "
-                    "views run");
+                    "views run")
+      ->type_name("FILE");
   c.app->add_option("--views", c.render.views, "renders per mesh, each with its own seed (at most 1000)")
       ->check(CLI::Range(1, 1000))->capture_default_str();
   c.app->add_flag("--flip", c.render.flip, "odd views show the sheet turned over (u -> 1 - u, printed side up)");
