@@ -59,8 +59,9 @@ std::vector<MeshEntry> finished_meshes(const fs::path& root) {
     return !before(a, b);
   });
   if (twin != out.end())
-    throw InputError("seed " + std::to_string(twin->seed) + " of scenario '" + twin->scenario + "' is in two folders: " +
-                     (root / twin->dir).string() + " and " + (root / std::next(twin)->dir).string());
+    throw InputError("seed " + std::to_string(twin->seed) + " of scenario '" + twin->scenario +
+                     "' is in two folders: " + (root / twin->dir).string() + " and " +
+                     (root / std::next(twin)->dir).string());
   return out;
 }
 
@@ -143,7 +144,8 @@ std::size_t write_mesh_list(const fs::path& root, const fs::path& file) {
   const std::vector<MeshEntry> meshes = finished_meshes(root);
   for (const MeshEntry& m : meshes)
     if (m.dir.generic_string().find_first_of("\n\r") != std::string::npos)
-      throw InputError("mesh folder '" + (root / m.dir).string() + "' has a line break in its path: it cannot be listed");
+      throw InputError("mesh folder '" + (root / m.dir).string() +
+                       "' has a line break in its path: it cannot be listed");
   common::write_file_atomically(file, [&](std::ostream& out) {
     out << MESH_LIST_HEAD << meshes.size() << " meshes\n";
     for (const MeshEntry& m : meshes) out << m.dir.generic_string() << '\n';

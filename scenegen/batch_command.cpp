@@ -19,8 +19,9 @@ namespace {
 std::vector<std::string> shard_command(const RenderBatchCommand& c, const fs::path& mesh_list) {
   const RenderBatchOptions& r = c.render;
   std::vector<std::string> cmd{batch::self_executable().string(), "batch", fs::absolute(c.dataset).string(),
-                               "--mesh-list", fs::absolute(mesh_list).string(), "--views", std::to_string(r.views), "--size", r.size, "--quality", r.quality,
-                               "--passes", r.passes, "--threads", std::to_string(r.threads), "--quiet"};
+                               "--mesh-list", fs::absolute(mesh_list).string(), "--views", std::to_string(r.views),
+                               "--size", r.size, "--quality", r.quality, "--passes", r.passes, "--threads",
+                               std::to_string(r.threads), "--quiet"};
   if (r.flip) cmd.push_back("--flip");
   if (r.dpi > 0) cmd.insert(cmd.end(), {"--dpi", std::to_string(r.dpi)});
   if (!r.documents_dir.empty()) cmd.insert(cmd.end(), {"--documents", fs::absolute(r.documents_dir).string()});
@@ -71,8 +72,9 @@ void add_render_batch_subcommand(CLI::App& app, RenderBatchCommand& c) {
                "child scenegen render per view, --jobs at once; resumable (run the same command again), failures "
                "recorded and skipped. Writes DATASET/renders/.../view<k>/, renders.jsonl, renders_failures.jsonl. "
                "Exit status 1 when a view failed (renders_failures.jsonl); a full disk stops the batch with status 5 "
-               "and records nothing. With --slurm it also lists the meshes it finds in DATASET/slurm/scenegen-batch.meshes, "
-               "which every array task reads instead of the folders (docs/batch.md).");
+               "and records nothing. With --slurm it also lists the meshes it finds in "
+               "DATASET/slurm/scenegen-batch.meshes, which every array task reads instead of the folders "
+               "(docs/batch.md).");
   c.app->add_option("dataset", c.dataset, "dataset folder")->required();
   c.app->add_option("--mesh-list", c.mesh_list,
                     "render the meshes listed in FILE (as --slurm writes it: DATASET/slurm/scenegen-batch.meshes) "

@@ -362,8 +362,8 @@ TEST(ScenegenBatch, SlurmWritesAMeshListAndTheTasksRenderItAlone) {
   ASSERT_EQ(run(slurm, work_dir() / "render_list.log"), 0) << pt::read_text(work_dir() / "render_list.log");
   const fs::path list = d / "slurm" / "scenegen-batch.meshes";
   EXPECT_EQ(pt::line_count(list), 3u);  // the head and two meshes
-  EXPECT_NE(pt::read_text(d / "slurm" / "scenegen-batch.sbatch").find("'--mesh-list' '" + fs::absolute(list).string() + "'"),
-            std::string::npos);
+  const std::string script = pt::read_text(d / "slurm" / "scenegen-batch.sbatch");
+  EXPECT_NE(script.find("'--mesh-list' '" + fs::absolute(list).string() + "'"), std::string::npos) << script;
   EXPECT_NE(pt::read_text(work_dir() / "render_list.log").find("(2 meshes)"), std::string::npos)
       << pt::read_text(work_dir() / "render_list.log");
   EXPECT_FALSE(fs::exists(d / "renders.jsonl"));
