@@ -32,24 +32,28 @@ struct MeshEntry {
 };
 
 /// Finished meshes: meshes/<scenario>/<bucket>/<seed>/ holding sheet.obj, sorted by scenario, then
-/// seed. One `stat` a mesh (sheet.obj's).
+/// seed. One `stat` a mesh (sheet.obj's). The bucket folders are listed first, so that `progress`
+/// hears after each of them how many of them are done.
 /// @throw InputError when a seed of a scenario is in two bucket folders
-std::vector<MeshEntry> finished_meshes(const fs::path& root) {
-  std::vector<MeshEntry> out;
+std::vector<MeshEntry> finished_meshes(const fs::path& root, const ListProgress& progress) {
+  std::vector<std::pair<std::string, fs::path>> buckets;  // (scenario, folder)
   std::error_code ec;
   for (const auto& sc : fs::directory_iterator(root / "meshes", ec)) {
     if (!sc.is_directory()) continue;
-    for (const auto& bucket : fs::directory_iterator(sc.path(), ec)) {
-      if (!bucket.is_directory()) continue;
-      for (const auto& d : fs::directory_iterator(bucket.path(), ec)) {
-        const std::string name = d.path().filename().string();
-        if (!d.is_directory() || !all_digits(name) || !fs::exists(d.path() / "sheet.obj")) continue;
-        // The folder relative to the root, composed (fs::relative resolves links: 8 readlink
-        // calls a mesh, which dominated the walk over a large dataset).
-        const std::string scenario = sc.path().filename().string();
-        out.push_back({scenario, std::stoull(name), fs::path("meshes") / scenario / bucket.path().filename() / name});
-      }
+    for (const auto& bucket : fs::directory_iterator(sc.path(), ec))
+      if (bucket.is_directory()) buckets.emplace_back(sc.path().filename().string(), bucket.path());
+  }
+  std::vector<MeshEntry> out;
+  for (std::size_t i = 0; i < buckets.size(); ++i) {
+    const auto& [scenario, bucket] = buckets[i];
+    for (const auto& d : fs::directory_iterator(bucket, ec)) {
+      const std::string name = d.path().filename().string();
+      if (!d.is_directory() || !all_digits(name) || !fs::exists(d.path() / "sheet.obj")) continue;
+      // The folder relative to the root, composed (fs::relative resolves links: 8 readlink
+      // calls a mesh, which dominated the walk over a large dataset).
+      out.push_back({scenario, std::stoull(name), fs::path("meshes") / scenario / bucket.filename() / name});
     }
+    if (progress) progress(i + 1, buckets.size(), out.size());
   }
   const auto before = [](const MeshEntry& a, const MeshEntry& b) {
     return a.scenario != b.scenario ? a.scenario < b.scenario : a.seed < b.seed;
@@ -140,8 +144,8 @@ std::uint64_t view_seed(const std::string& scenario, std::uint64_t seed, int vie
   return batch::splitmix64(fnv1a(scenario) ^ batch::splitmix64(seed * 64 + static_cast<std::uint64_t>(view))) >> 33;
 }
 
-std::size_t write_mesh_list(const fs::path& root, const fs::path& file) {
-  const std::vector<MeshEntry> meshes = finished_meshes(root);
+std::size_t write_mesh_list(const fs::path& root, const fs::path& file, const ListProgress& progress) {
+  const std::vector<MeshEntry> meshes = finished_meshes(root, progress);
   for (const MeshEntry& m : meshes)
     if (m.dir.generic_string().find_first_of("\n\r") != std::string::npos)
       throw InputError("mesh folder '" + (root / m.dir).string() +
@@ -158,11 +162,11 @@ std::size_t mesh_list_size(const fs::path& file) {
 }
 
 std::vector<batch::Task> render_tasks(const fs::path& root, const RenderBatchOptions& o, const batch::Shard& shard,
-                                      const fs::path& mesh_list) {
+                                      const fs::path& mesh_list, const ListProgress& progress) {
   if (o.views < 1) throw InputError("--views must be >= 1");
   std::vector<batch::Task> tasks;
   std::size_t position = 0;
-  for (const MeshEntry& m : mesh_list.empty() ? finished_meshes(root) : read_mesh_list(mesh_list)) {
+  for (const MeshEntry& m : mesh_list.empty() ? finished_meshes(root, progress) : read_mesh_list(mesh_list)) {
     const fs::path bucket = fs::path(std::to_string(m.seed / 1000)) / std::to_string(m.seed);
     for (int k = 0; k < o.views; ++k) {
       if (!shard.holds(position++)) continue;

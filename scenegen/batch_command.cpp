@@ -1,6 +1,8 @@
 #include "scenegen/batch_command.hpp"
 
 #include <CLI/CLI.hpp>
+#include <chrono>
+#include <cmath>
 #include <ostream>
 
 #include "common/cli_checks.hpp"
@@ -29,6 +31,23 @@ std::vector<std::string> shard_command(const RenderBatchCommand& c, const fs::pa
   if (c.common.time_limit > 0) cmd.insert(cmd.end(), {"--time-limit", std::to_string(c.common.time_limit)});
   if (c.common.retry_failed) cmd.push_back("--retry-failed");
   return cmd;
+}
+
+/// A line on `err` every 5 s of a walk over the dataset's mesh folders (none for a shorter one):
+/// folders done, meshes found, elapsed time and ETA.
+ListProgress walk_printer(std::ostream& err, bool quiet, const std::string& dataset) {
+  if (quiet) return {};
+  const auto start = std::chrono::steady_clock::now();
+  auto last = start;
+  return [&err, dataset, start, last](std::size_t done, std::size_t buckets, std::size_t meshes) mutable {
+    const auto now = std::chrono::steady_clock::now();
+    if (now - last < std::chrono::seconds(5)) return;
+    last = now;
+    const double t = std::chrono::duration<double>(now - start).count();
+    err << "scenegen batch: listing " << (fs::path(dataset) / "meshes").string() << ": " << done << " of " << buckets
+        << " folders, " << meshes << " meshes, " << std::lround(t) << " s, ETA "
+        << std::lround(t / static_cast<double>(done) * static_cast<double>(buckets - done)) << " s" << std::endl;
+  };
 }
 
 /// Bad values fail here, before any view runs (scenegen render would reject them per view).
@@ -108,7 +127,7 @@ int run_render_batch(const RenderBatchCommand& c, std::ostream& out, std::ostrea
       std::error_code ec;
       fs::create_directories(list.parent_path(), ec);
       if (ec) throw common::OutputError("cannot create '" + list.parent_path().string() + "': " + ec.message());
-      meshes = write_mesh_list(c.dataset, list);
+      meshes = write_mesh_list(c.dataset, list, walk_printer(err, c.common.quiet, c.dataset));
     } else {
       meshes = mesh_list_size(list);
     }
@@ -120,7 +139,8 @@ int run_render_batch(const RenderBatchCommand& c, std::ostream& out, std::ostrea
     return 0;
   }
   // Only the shard's tasks are made (an array task holds 1/N of the list in memory).
-  const std::vector<batch::Task> tasks = render_tasks(c.dataset, c.render, batch::cli_shard(c.common), c.mesh_list);
+  const std::vector<batch::Task> tasks = render_tasks(c.dataset, c.render, batch::cli_shard(c.common), c.mesh_list,
+                                                      walk_printer(err, c.common.quiet, c.dataset));
   const batch::BatchSpec spec = render_batch_spec(c.dataset, batch::self_executable(), c.render);
   const batch::BatchSummary s = batch::run_cli_batch(tasks, spec, c.common, err, "scenegen batch");
   out << batch::summary_line(s, c.dataset, spec) << '\n';

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <array>
 #include <fstream>
 #include <set>
 
@@ -69,7 +70,22 @@ TEST(RenderTasks, AMeshListGivesTheWalksTasksAndLooksAtNoFolder) {
   const fs::path root = small_dataset("mesh_list");
   const fs::path list = root / "slurm" / "scenegen-batch.meshes";
   fs::create_directories(list.parent_path());
-  ASSERT_EQ(sg::write_mesh_list(root, list), 7u);
+  // The walk reports after each bucket folder: pull/0 (with the unfinished mesh), pull/1,
+  // fold/0 and fold/4.
+  std::vector<std::array<std::size_t, 3>> heard;
+  ASSERT_EQ(sg::write_mesh_list(root, list, [&](std::size_t done, std::size_t buckets, std::size_t meshes) {
+              heard.push_back({done, buckets, meshes});
+            }),
+            7u);
+  ASSERT_EQ(heard.size(), 4u);
+  for (std::size_t i = 0; i < heard.size(); ++i) {
+    EXPECT_EQ(heard[i][0], i + 1);
+    EXPECT_EQ(heard[i][1], 4u);
+    if (i > 0) {
+      EXPECT_GE(heard[i][2], heard[i - 1][2]);
+    }
+  }
+  EXPECT_EQ(heard.back()[2], 7u);
   EXPECT_FALSE(fs::exists(list.string() + ".tmp"));
   EXPECT_EQ(sg::mesh_list_size(list), 7u);
   // A list that cannot be written is an output error naming it, and leaves nothing.
