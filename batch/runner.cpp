@@ -200,11 +200,11 @@ class Runner {
 };
 
 void Runner::scan() {
-  std::unordered_set<std::string> rows, failed;
-  for (const auto& j : read_json_lines(manifest()))
-    if (j.contains("key") && j["key"].is_string()) rows.insert(j["key"].get<std::string>());
-  for (const auto& j : read_json_lines(failures()))
-    if (j.contains("key") && j["key"].is_string()) failed.insert(j["key"].get<std::string>());
+  std::unordered_set<std::string> keys;
+  keys.reserve(m_tasks.size());
+  for (const Task& t : m_tasks) keys.insert(t.key);
+  const std::unordered_set<std::string> rows = keys_in_json_lines(manifest(), keys);
+  const std::unordered_set<std::string> failed = keys_in_json_lines(failures(), keys);
   std::vector<std::size_t> missing_rows;
   for (std::size_t i = 0; i < m_tasks.size(); ++i) {
     const Task& t = m_tasks[i];
@@ -229,9 +229,9 @@ void Runner::repair(const std::vector<std::size_t>& missing_rows) {
     TaskLock lock = TaskLock::try_take(lock_file(m_tasks[i]));
     if (lock.held()) held.emplace_back(i, std::move(lock));
   }
-  std::unordered_set<std::string> rows;
-  for (const auto& j : read_json_lines(manifest()))
-    if (j.contains("key") && j["key"].is_string()) rows.insert(j["key"].get<std::string>());
+  std::unordered_set<std::string> keys;
+  for (const auto& [i, lock] : held) keys.insert(m_tasks[i].key);
+  const std::unordered_set<std::string> rows = keys_in_json_lines(manifest(), keys);
   for (auto& [i, lock] : held) {
     if (rows.count(m_tasks[i].key)) continue;
     append_manifest_row(m_tasks[i], -1.0, -1.0);
@@ -602,6 +602,35 @@ std::vector<nlohmann::json> read_json_lines(const fs::path& path) {
     if (!j.is_discarded() && j.is_object()) rows.push_back(std::move(j));
   }
   return rows;
+}
+
+std::unordered_set<std::string> keys_in_json_lines(const fs::path& path, const std::unordered_set<std::string>& wanted) {
+  std::unordered_set<std::string> found;
+  if (wanted.empty()) return found;
+  std::ifstream in(path, std::ios::binary);
+  std::string line;
+  while (std::getline(in, line)) {
+    // Every wanted row holds "key" then a colon and the key as a JSON string. Only a line where
+    // such a string, read up to its closing quote, is a wanted key is parsed, so that the row's
+    // own "key" decides (the pattern may also be a nested object's). A line with a backslash
+    // (an escaped character: the raw text is not the value) is always parsed.
+    bool candidate = line.find('\\') != std::string::npos;
+    for (std::size_t at = line.find("\"key\""); !candidate && at != std::string::npos;
+         at = line.find("\"key\"", at + 5)) {
+      std::size_t i = line.find_first_not_of(" \t", at + 5);
+      if (i == std::string::npos || line[i] != ':') continue;
+      i = line.find_first_not_of(" \t", i + 1);
+      if (i == std::string::npos || line[i] != '"') continue;
+      const std::size_t end = line.find('"', i + 1);
+      if (end != std::string::npos && wanted.count(line.substr(i + 1, end - i - 1))) candidate = true;
+    }
+    if (!candidate) continue;
+    const nlohmann::json j = nlohmann::json::parse(line, nullptr, false);
+    if (j.is_discarded() || !j.is_object()) continue;
+    const auto key = j.find("key");
+    if (key != j.end() && key->is_string() && wanted.count(key->get<std::string>())) found.insert(key->get<std::string>());
+  }
+  return found;
 }
 
 void write_file_atomically(const fs::path& path, const std::string& text) {

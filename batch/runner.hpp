@@ -17,6 +17,7 @@
 #include <functional>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <unordered_set>
 #include <vector>
 
 namespace papersim::batch {
@@ -152,6 +153,13 @@ void append_line(const std::filesystem::path& path, const std::string& text);
 /// Every JSON object of a JSON-lines file, in order; a missing file gives none. A line that is
 /// not JSON (an incomplete last line after power loss) is skipped.
 std::vector<nlohmann::json> read_json_lines(const std::filesystem::path& path);
+
+/// The keys of `wanted` that are the "key" of a JSON object line of a JSON-lines file (a missing
+/// file gives none; a line that is not JSON is skipped, as by read_json_lines). Streams the file
+/// and parses only the lines that name a wanted key, so memory holds the matches alone: a batch
+/// (or one shard of it) checks its tasks against a manifest of millions of rows this way.
+std::unordered_set<std::string> keys_in_json_lines(const std::filesystem::path& path,
+                                                   const std::unordered_set<std::string>& wanted);
 
 /// Write `text` to `path` through a temporary file in the same folder and a rename.
 /// @throw common::OutputError naming the file when it cannot be written

@@ -13,6 +13,7 @@
 #include <fstream>
 #include <set>
 #include <sstream>
+#include <unordered_set>
 
 #include "batch/cli.hpp"
 #include "batch/slurm.hpp"
@@ -203,6 +204,34 @@ TEST(Runner, RestoresTheManifestRowOfATaskFinishedBeforeACrash) {
   for (const auto& r : papersim::batch::read_json_lines(root / "manifest.jsonl")) keys.insert(r["key"]);
   EXPECT_EQ(keys.size(), 4u);
   EXPECT_EQ(lines(root / "manifest.jsonl").size(), 4u);
+  fs::remove_all(root);
+}
+
+TEST(Runner, ManifestKeysAreFoundByTheRowsOwnKeyOnly) {
+  // keys_in_json_lines skips the parse of lines that name no wanted key; what it returns must
+  // still be exactly the wanted keys that are some whole row's own "key".
+  const fs::path root = fresh_dir("keys");
+  fs::create_directories(root);
+  const fs::path file = root / "manifest.jsonl";
+  std::ofstream(file) << R"({"key":"m/0","seed":0})" << '\n'
+                      << R"({"key":"m/1","set":{"key":"m/2"}})" << '\n'  // m/2 only nested
+                      << R"({"a":1, "key" : "m/3"})" << '\n'             // spaces around the colon
+                      << R"({"key":"m\/4","note":"\"key\":\"m/5\""})" << '\n'  // escapes: m/4, not m/5
+                      << R"({"key":"m/6","not":"a row")" << '\n'         // cut short: not a row
+                      << R"(["key","m/7"])" << '\n'                      // not an object
+                      << R"({"key":"m/8"})";                              // a last line without newline
+  const std::unordered_set<std::string> wanted{"m/0", "m/2", "m/3", "m/4", "m/5", "m/6", "m/7", "m/8", "m/9"};
+  const auto found = papersim::batch::keys_in_json_lines(file, wanted);
+  EXPECT_EQ(found, (std::unordered_set<std::string>{"m/0", "m/3", "m/4", "m/8"}));
+  // m/1 is a row but not wanted; nothing is found in a missing file or for no wanted key.
+  EXPECT_TRUE(papersim::batch::keys_in_json_lines(file, {"m/1"}).count("m/1"));
+  EXPECT_TRUE(papersim::batch::keys_in_json_lines(root / "none.jsonl", wanted).empty());
+  EXPECT_TRUE(papersim::batch::keys_in_json_lines(file, {}).empty());
+  // The same answer as reading every row.
+  std::unordered_set<std::string> all;
+  for (const auto& r : papersim::batch::read_json_lines(file))
+    if (r.contains("key") && r["key"].is_string() && wanted.count(r["key"].get<std::string>())) all.insert(r["key"]);
+  EXPECT_EQ(found, all);
   fs::remove_all(root);
 }
 
