@@ -604,7 +604,8 @@ std::vector<nlohmann::json> read_json_lines(const fs::path& path) {
   return rows;
 }
 
-std::unordered_set<std::string> keys_in_json_lines(const fs::path& path, const std::unordered_set<std::string>& wanted) {
+std::unordered_set<std::string> keys_in_json_lines(const fs::path& path,
+                                                   const std::unordered_set<std::string>& wanted) {
   std::unordered_set<std::string> found;
   if (wanted.empty()) return found;
   std::ifstream in(path, std::ios::binary);
@@ -628,7 +629,8 @@ std::unordered_set<std::string> keys_in_json_lines(const fs::path& path, const s
     const nlohmann::json j = nlohmann::json::parse(line, nullptr, false);
     if (j.is_discarded() || !j.is_object()) continue;
     const auto key = j.find("key");
-    if (key != j.end() && key->is_string() && wanted.count(key->get<std::string>())) found.insert(key->get<std::string>());
+    if (key != j.end() && key->is_string() && wanted.count(key->get<std::string>()))
+      found.insert(key->get<std::string>());
   }
   return found;
 }
