@@ -9,6 +9,7 @@
 #include <set>
 #include <sstream>
 #include <stdexcept>
+#include <unordered_set>
 
 #include "batch/runner.hpp"
 #include "batch/slurm.hpp"
@@ -31,29 +32,94 @@ double quantile(const std::vector<double>& sorted, double q) {
   return sorted[i] + (pos - static_cast<double>(i)) * (sorted[j] - sorted[i]);
 }
 
-std::string scenario_of(const json& row) { return row.value("scenario", std::string("?")); }
+/// What the report reads of one JSON-lines row, gathered by a SAX handler so that no row is kept
+/// as a JSON value: its top-level "key", "scenario" and "reason" and the wanted figures. A name
+/// given twice takes its last value, as parsing the row into an object would.
+class RowFields : public nlohmann::json_sax<json> {
+ public:
+  explicit RowFields(const std::vector<std::string>& figures) : figures_(figures), values_(figures.size()) {}
 
-/// Whether a row's "key" is a string, and its "scenario" and "reason" are strings where present.
-bool well_formed(const json& row) {
-  if (!row.contains("key") || !row["key"].is_string()) return false;
-  for (const char* k : {"scenario", "reason"})
-    if (row.contains(k) && !row[k].is_string()) return false;
-  return true;
-}
+  /// Parse `line`: whether it is a JSON object whose "key" is a string and whose "scenario" and
+  /// "reason" are strings where present.
+  bool read(const std::string& line) {
+    depth_ = 0;
+    seen_object_ = false;
+    key_ = scenario_ = reason_ = Field{};
+    std::fill(values_.begin(), values_.end(), NAN);
+    if (!json::sax_parse(line, this)) return false;
+    return seen_object_ && key_.given && key_.is_string && (!scenario_.given || scenario_.is_string) &&
+           (!reason_.given || reason_.is_string);
+  }
+  const std::string& key() const { return key_.text; }
+  std::string scenario() const { return scenario_.given ? scenario_.text : "?"; }
+  std::string reason() const { return reason_.given ? reason_.text : "?"; }
+  /// Figure i when the row gives it as a number, else NaN.
+  double value(std::size_t i) const { return values_[i]; }
 
-/// The well-formed rows of a JSON-lines file (none when it is missing); `skipped` counts the
-/// other non-empty lines.
-std::vector<json> rows_of(const fs::path& path, long long& skipped) {
-  std::vector<json> rows;
+  bool null() override { return scalar(nullptr, NAN); }
+  bool boolean(bool) override { return scalar(nullptr, NAN); }
+  bool number_integer(number_integer_t v) override { return scalar(nullptr, static_cast<double>(v)); }
+  bool number_unsigned(number_unsigned_t v) override { return scalar(nullptr, static_cast<double>(v)); }
+  bool number_float(number_float_t v, const string_t&) override { return scalar(nullptr, v); }
+  bool string(string_t& v) override { return scalar(&v, NAN); }
+  bool binary(binary_t&) override { return scalar(nullptr, NAN); }
+  bool start_object(std::size_t) override { return open(true); }
+  bool start_array(std::size_t) override { return open(false); }
+  bool end_object() override { return --depth_, true; }
+  bool end_array() override { return --depth_, true; }
+  bool key(string_t& name) override {
+    if (depth_ == 1) name_ = name;
+    return true;
+  }
+  bool parse_error(std::size_t, const std::string&, const nlohmann::detail::exception&) override { return false; }
+
+ private:
+  struct Field {
+    bool given = false, is_string = false;
+    std::string text;
+  };
+
+  /// The top-level value named `name_` is a string (`text`), a number (`number`) or neither.
+  bool scalar(const std::string* text, double number) {
+    if (depth_ != 1) return true;
+    Field* f = name_ == "key" ? &key_ : name_ == "scenario" ? &scenario_ : name_ == "reason" ? &reason_ : nullptr;
+    if (f) {
+      f->given = true;
+      f->is_string = text != nullptr;
+      if (text) f->text = *text;
+      return true;
+    }
+    for (std::size_t i = 0; i < figures_.size(); ++i)
+      if (name_ == figures_[i]) values_[i] = number;
+    return true;
+  }
+  bool open(bool object) {
+    if (depth_ == 0) seen_object_ = object;
+    else if (depth_ == 1) scalar(nullptr, NAN);  // a container is neither a string nor a number
+    ++depth_;
+    return true;
+  }
+
+  const std::vector<std::string>& figures_;
+  std::vector<double> values_;
+  Field key_, scenario_, reason_;
+  std::string name_;
+  int depth_ = 0;
+  bool seen_object_ = false;
+};
+
+/// Call `row` with the fields of each well-formed row of a JSON-lines file (none when it is
+/// missing), one row at a time; `skipped` counts the other non-empty lines.
+template <class F>
+void for_each_row(const fs::path& path, const std::vector<std::string>& figures, long long& skipped, F row) {
   std::ifstream in(path);
   std::string line;
+  RowFields fields(figures);
   while (std::getline(in, line)) {
     if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
-    json j = json::parse(line, nullptr, false);
-    if (!j.is_discarded() && j.is_object() && well_formed(j)) rows.push_back(std::move(j));
+    if (fields.read(line)) row(fields);
     else ++skipped;
   }
-  return rows;
 }
 
 std::string fmt(double v) {
@@ -102,8 +168,9 @@ void write_distributions(std::ostream& out, const PartStats& p) {
     std::snprintf(line, sizeof line, "  %-16s %7s %10s %10s %10s %10s %10s %10s\n", "scenario", "n", "min",
                   "p10", "median", "p90", "max", "mean");
     out << line;
+    std::map<std::string, Distribution> dists;
     for (const auto& [s, v] : per) {
-      const Distribution d = distribution(v);
+      const Distribution d = dists[s] = distribution(v);
       std::snprintf(line, sizeof line, "  %-16s %7zu %10s %10s %10s %10s %10s %10s\n", s.c_str(), d.count,
                     fmt(d.min).c_str(), fmt(d.p10).c_str(), fmt(d.median).c_str(), fmt(d.p90).c_str(),
                     fmt(d.max).c_str(), fmt(d.mean).c_str());
@@ -111,8 +178,7 @@ void write_distributions(std::ostream& out, const PartStats& p) {
     }
     if (figure == "wall_seconds" || figure == "cpu_seconds") {
       double total = 0;
-      for (const auto& [s, v] : per) {
-        const Distribution d = distribution(v);
+      for (const auto& [s, d] : dists) {
         total += d.sum;
         out << "  " << s << ": " << fmt(3600.0 / d.mean) << " samples per core-hour\n";
       }
@@ -191,23 +257,29 @@ PartStats read_part(const std::string& name, const fs::path& manifest, const fs:
                     const std::vector<std::string>& figures) {
   PartStats p;
   p.name = name;
-  std::set<std::string> done_keys;
-  for (const auto& row : rows_of(manifest, p.skipped_lines)) {
-    if (!done_keys.insert(row["key"].get<std::string>()).second) continue;
-    const std::string s = scenario_of(row);
+  // Rows are read one at a time and only what the report needs is kept: the done keys and the
+  // figures (a million rows: about 0.2 GB instead of 2 GB of parsed rows).
+  std::unordered_set<std::string> done_keys;
+  std::vector<std::map<std::string, std::vector<double>>*> per_figure;
+  for (const auto& f : figures) per_figure.push_back(&p.values[f]);
+  for_each_row(manifest, figures, p.skipped_lines, [&](const RowFields& row) {
+    if (!done_keys.insert(row.key()).second) return;
+    const std::string s = row.scenario();
     ++p.done[s];
-    for (const auto& f : figures)
-      if (row.contains(f) && row[f].is_number()) p.values[f][s].push_back(row[f].get<double>());
-  }
-  std::map<std::string, json> latest_failure;
-  for (const auto& row : rows_of(failures, p.skipped_lines)) {
+    for (std::size_t i = 0; i < figures.size(); ++i)
+      if (!std::isnan(row.value(i))) (*per_figure[i])[s].push_back(row.value(i));
+  });
+  for (auto it = p.values.begin(); it != p.values.end();)
+    it = it->second.empty() ? p.values.erase(it) : std::next(it);
+  std::map<std::string, std::pair<std::string, std::string>> latest_failure;  // key -> scenario, reason
+  for_each_row(failures, {}, p.skipped_lines, [&](const RowFields& row) {
     ++p.failed_attempts;
-    latest_failure[row["key"].get<std::string>()] = row;
-  }
-  for (const auto& [key, row] : latest_failure) {
+    latest_failure[row.key()] = {row.scenario(), row.reason()};
+  });
+  for (const auto& [key, failure] : latest_failure) {
     if (done_keys.count(key)) continue;
-    ++p.failed[scenario_of(row)];
-    ++p.reasons[row.value("reason", std::string("?"))];
+    ++p.failed[failure.first];
+    ++p.reasons[failure.second];
   }
   return p;
 }

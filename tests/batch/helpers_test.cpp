@@ -291,3 +291,107 @@ TEST(DatasetStats, LeavesOutAndCountsMalformedLines) {
   EXPECT_THROW(papersim::batch::read_dataset(root / "manifest.jsonl"), papersim::batch::DatasetError);
   fs::remove_all(root);
 }
+
+// The report reads each row as a stream of JSON events and keeps only its key, scenario, reason
+// and figures. On rows written to catch a reader that looks at the wrong level or the wrong
+// occurrence, it must give exactly what parsing every row into a JSON object gives: a name given
+// twice takes its last value, a "key" inside a nested object is not the row's key, escapes are
+// decoded, a figure that is not a number (a string, a bool, null, an object) is left out, and a
+// line with trailing text, a top-level array or string, or a line cut short is left out and
+// counted.
+TEST(DatasetStats, StreamedRowsGiveWhatParsingEveryRowGives) {
+  const fs::path root = fs::temp_directory_path() / ("papersim_stats_stream_" + std::to_string(getpid()));
+  fs::remove_all(root);
+  fs::create_directories(root);
+  const std::vector<std::string> manifest = {
+      R"({"key": "a", "scenario": "pull", "wall_seconds": 1, "vertices": 100})",
+      R"({"key": "a", "scenario": "pull", "wall_seconds": 50})",                     // a duplicate
+      R"({"key": 5, "key": "b", "scenario": "fold", "wall_seconds": 2})",            // last "key" wins
+      R"({"key": "c", "key": 5, "scenario": "fold", "wall_seconds": 3})",            // last is a number
+      R"({"meta": {"key": "d", "scenario": "x"}, "key": "e", "scenario": "fold"})",  // nested names
+      R"({"meta": {"key": "f"}, "scenario": "fold"})",                               // only nested
+      R"({"key": "g\/h\u0041", "scenario": "fo\"ld", "wall_seconds": 4.5e0})",       // escapes
+      R"({"key": "i", "scenario": "pull", "wall_seconds": "7", "cpu_seconds": true, "vertices": null})",
+      R"({"key": "j", "scenario": "pull", "wall_seconds": {"s": 1}, "cpu_seconds": [1, 2], "vertices": 18446744073709551615})",
+      R"({"key": "k", "scenario": "pull", "wall_seconds": 8, "wall_seconds": "x", "cpu_seconds": "x", "cpu_seconds": -3})",
+      R"({"key": "l", "scenario": null})",
+      R"({"key": "m", "scenario": ["pull"]})",
+      R"({"key": "n"})",                                                             // no scenario
+      R"({"key": "o", "scenario": "pull"} trailing)",
+      R"(["key", "p"])",
+      R"("key")",
+      "{\"key\": \"q\", \"scenario\": \"pull\", \"newton_iterations\": 12}\r",        // CRLF
+      "   ",
+      R"({"key": "r", "scenario": "pull", "wall_sec)"};
+  const std::vector<std::string> failures = {
+      R"({"key": "b", "scenario": "fold", "reason": "time limit"})",    // done later
+      R"({"key": "s", "scenario": "fold", "reason": "time limit"})",
+      R"({"key": "s", "scenario": "fold", "reason": "simulation failed"})",  // the latest counts
+      R"({"key": "t", "scenario": "fold"})",                              // no reason
+      R"({"key": "u", "scenario": "fold", "reason": {"r": "x"}})",
+      R"({"reason": "x", "nested": {"key": "v"}})"};
+  for (const auto& [name, lines] : {std::pair{"manifest.jsonl", manifest}, std::pair{"failures.jsonl", failures}}) {
+    std::ofstream out(root / name);
+    for (const auto& l : lines) out << l << "\n";
+  }
+
+  // What parsing every row into a JSON object gives.
+  papersim::batch::PartStats want;
+  const std::vector<std::string> figures = {"wall_seconds", "cpu_seconds", "vertices", "newton_iterations"};
+  const auto well_formed = [](const json& j) {
+    if (!j.is_object() || !j.contains("key") || !j["key"].is_string()) return false;
+    for (const char* k : {"scenario", "reason"})
+      if (j.contains(k) && !j[k].is_string()) return false;
+    return true;
+  };
+  std::set<std::string> done;
+  for (const auto& l : manifest) {
+    if (l.find_first_not_of(" \t\r") == std::string::npos) continue;
+    const json j = json::parse(l, nullptr, false);
+    if (j.is_discarded() || !well_formed(j)) {
+      ++want.skipped_lines;
+      continue;
+    }
+    if (!done.insert(j["key"].get<std::string>()).second) continue;
+    const std::string s = j.value("scenario", std::string("?"));
+    ++want.done[s];
+    for (const auto& f : figures)
+      if (j.contains(f) && j[f].is_number()) want.values[f][s].push_back(j[f].get<double>());
+  }
+  std::map<std::string, json> latest;
+  for (const auto& l : failures) {
+    const json j = json::parse(l, nullptr, false);
+    if (j.is_discarded() || !well_formed(j)) {
+      ++want.skipped_lines;
+      continue;
+    }
+    ++want.failed_attempts;
+    latest[j["key"].get<std::string>()] = j;
+  }
+  for (const auto& [key, j] : latest)
+    if (!done.count(key)) {
+      ++want.failed[j.value("scenario", std::string("?"))];
+      ++want.reasons[j.value("reason", std::string("?"))];
+    }
+
+  const auto got = papersim::batch::read_part("meshes", root / "manifest.jsonl", root / "failures.jsonl", figures);
+  EXPECT_EQ(got.done, want.done);
+  EXPECT_EQ(got.failed, want.failed);
+  EXPECT_EQ(got.reasons, want.reasons);
+  EXPECT_EQ(got.failed_attempts, want.failed_attempts);
+  EXPECT_EQ(got.skipped_lines, want.skipped_lines);
+  EXPECT_EQ(got.values, want.values);
+  // And the figures themselves, so that the oracle above cannot hide a shared mistake.
+  EXPECT_EQ(got.done, (std::map<std::string, long long>{{"pull", 5}, {"fold", 2}, {"fo\"ld", 1}, {"?", 1}}));
+  EXPECT_EQ(got.skipped_lines, 10);  // 8 in the manifest, 2 in the failures
+  EXPECT_EQ(got.values.at("wall_seconds"),
+            (std::map<std::string, std::vector<double>>{{"pull", {1}}, {"fold", {2}}, {"fo\"ld", {4.5}}}));
+  EXPECT_EQ(got.values.at("cpu_seconds"), (std::map<std::string, std::vector<double>>{{"pull", {-3}}}));
+  EXPECT_EQ(got.values.at("vertices"),
+            (std::map<std::string, std::vector<double>>{{"pull", {100, 18446744073709551615.0}}}));
+  EXPECT_EQ(got.values.at("newton_iterations"), (std::map<std::string, std::vector<double>>{{"pull", {12}}}));
+  EXPECT_EQ(got.failed, (std::map<std::string, long long>{{"fold", 2}}));
+  EXPECT_EQ(got.reasons, (std::map<std::string, long long>{{"simulation failed", 1}, {"?", 1}}));
+  EXPECT_EQ(got.failed_attempts, 4);
+  fs::remove_all(root);
+}
