@@ -108,14 +108,23 @@ class RowFields : public nlohmann::json_sax<json> {
   bool seen_object_ = false;
 };
 
+/// Bytes read of the files of a dataset, told to a ReadProgress every 4,096 lines.
+struct ReadCount {
+  const ReadProgress& progress;
+  std::uintmax_t read, total;
+};
+
 /// Call `row` with the fields of each well-formed row of a JSON-lines file (none when it is
 /// missing), one row at a time; `skipped` counts the other non-empty lines.
 template <class F>
-void for_each_row(const fs::path& path, const std::vector<std::string>& figures, long long& skipped, F row) {
+void for_each_row(const fs::path& path, const std::vector<std::string>& figures, long long& skipped,
+                  ReadCount& count, F row) {
   std::ifstream in(path);
   std::string line;
   RowFields fields(figures);
-  while (std::getline(in, line)) {
+  for (std::size_t lines = 1; std::getline(in, line); ++lines) {
+    count.read += line.size() + 1;
+    if (count.progress && lines % 4096 == 0) count.progress(std::min(count.read, count.total), count.total);
     if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
     if (fields.read(line)) row(fields);
     else ++skipped;
@@ -254,7 +263,9 @@ Distribution distribution(std::vector<double> v) {
 }
 
 PartStats read_part(const std::string& name, const fs::path& manifest, const fs::path& failures,
-                    const std::vector<std::string>& figures) {
+                    const std::vector<std::string>& figures, const ReadProgress& progress,
+                    std::uintmax_t read_before, std::uintmax_t total) {
+  ReadCount count{progress, read_before, total};
   PartStats p;
   p.name = name;
   // Rows are read one at a time and only what the report needs is kept: the done keys and the
@@ -262,7 +273,7 @@ PartStats read_part(const std::string& name, const fs::path& manifest, const fs:
   std::unordered_set<std::string> done_keys;
   std::vector<std::map<std::string, std::vector<double>>*> per_figure;
   for (const auto& f : figures) per_figure.push_back(&p.values[f]);
-  for_each_row(manifest, figures, p.skipped_lines, [&](const RowFields& row) {
+  for_each_row(manifest, figures, p.skipped_lines, count, [&](const RowFields& row) {
     if (!done_keys.insert(row.key()).second) return;
     const std::string s = row.scenario();
     ++p.done[s];
@@ -272,7 +283,7 @@ PartStats read_part(const std::string& name, const fs::path& manifest, const fs:
   for (auto it = p.values.begin(); it != p.values.end();)
     it = it->second.empty() ? p.values.erase(it) : std::next(it);
   std::map<std::string, std::pair<std::string, std::string>> latest_failure;  // key -> scenario, reason
-  for_each_row(failures, {}, p.skipped_lines, [&](const RowFields& row) {
+  for_each_row(failures, {}, p.skipped_lines, count, [&](const RowFields& row) {
     ++p.failed_attempts;
     latest_failure[row.key()] = {row.scenario(), row.reason()};
   });
@@ -284,13 +295,22 @@ PartStats read_part(const std::string& name, const fs::path& manifest, const fs:
   return p;
 }
 
-std::vector<PartStats> read_dataset(const fs::path& root) {
+std::vector<PartStats> read_dataset(const fs::path& root, const ReadProgress& progress) {
   if (!fs::is_directory(root)) throw DatasetError("'" + root.string() + "' is not a folder");
+  const auto size = [](const fs::path& file) {
+    std::error_code ec;
+    const auto n = fs::file_size(file, ec);
+    return ec ? std::uintmax_t{0} : n;
+  };
+  std::uintmax_t total = 0, read = 0;
+  for (const char* f : {"manifest.jsonl", "failures.jsonl", "renders.jsonl", "renders_failures.jsonl"})
+    total += size(root / f);
   std::vector<PartStats> parts;
   const auto add = [&](const std::string& name, const char* manifest, const char* failures,
                        const std::vector<std::string>& figures) {
     if (fs::exists(root / manifest) || fs::exists(root / failures))
-      parts.push_back(read_part(name, root / manifest, root / failures, figures));
+      parts.push_back(read_part(name, root / manifest, root / failures, figures, progress, read, total));
+    read += size(root / manifest) + size(root / failures);
   };
   add("meshes", "manifest.jsonl", "failures.jsonl", MESH_FIGURES);
   add("renders", "renders.jsonl", "renders_failures.jsonl", RENDER_FIGURES);

@@ -2,7 +2,9 @@
 /// `papersim dataset-stats DATASET`: what a dataset holds, read from its manifests and failure
 /// files only (no mesh is opened): counts per scenario, failure rate by reason, run-time and
 /// quality distributions, and histograms drawn with gnuplot.
+#include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <iosfwd>
 #include <map>
 #include <stdexcept>
@@ -51,15 +53,21 @@ struct PartStats {
   std::map<std::string, std::map<std::string, std::vector<double>>> values;
 };
 
-/// Read `manifest` and `failures` (JSON lines; missing files are empty). A key with a manifest
-/// row counts as done even when it also failed earlier; duplicate rows count once.
+/// Told the bytes read so far of the files read_dataset reads, and their total size, every few
+/// thousand rows.
+using ReadProgress = std::function<void(std::uintmax_t read, std::uintmax_t total)>;
+
+/// Read `manifest` and `failures` (JSON lines; missing files are empty) one row at a time. A key
+/// with a manifest row counts as done even when it also failed earlier; duplicate rows count
+/// once. `progress` is told the bytes read, counted from `read_before` of `total`.
 PartStats read_part(const std::string& name, const std::filesystem::path& manifest,
-                    const std::filesystem::path& failures, const std::vector<std::string>& figures);
+                    const std::filesystem::path& failures, const std::vector<std::string>& figures,
+                    const ReadProgress& progress = {}, std::uintmax_t read_before = 0, std::uintmax_t total = 0);
 
 /// The meshes (manifest.jsonl, failures.jsonl) and renders (renders.jsonl,
 /// renders_failures.jsonl) of a dataset; a part with no file at all is left out.
 /// @throw DatasetError when `root` is not a folder
-std::vector<PartStats> read_dataset(const std::filesystem::path& root);
+std::vector<PartStats> read_dataset(const std::filesystem::path& root, const ReadProgress& progress = {});
 
 /// The report as text tables.
 void write_dataset_report(std::ostream& out, const std::vector<PartStats>& parts);

@@ -1,6 +1,8 @@
 #include "simulation/batch_command.hpp"
 
 #include <CLI/CLI.hpp>
+#include <chrono>
+#include <cmath>
 #include <ostream>
 #include <sstream>
 
@@ -63,9 +65,26 @@ int run_mesh_batch(const BatchCommand& c, bool with_metrics, std::ostream& out, 
   return s.done == s.total ? 0 : 1;
 }
 
+/// A line on `err` every 5 s of reading a dataset's manifests (none for a shorter read): the
+/// megabytes read of all, elapsed time and ETA.
+batch::ReadProgress read_printer(std::ostream& err, bool quiet, const std::string& dataset) {
+  if (quiet) return {};
+  const auto start = std::chrono::steady_clock::now();
+  auto last = start;
+  return [&err, dataset, start, last](std::uintmax_t read, std::uintmax_t total) mutable {
+    const auto now = std::chrono::steady_clock::now();
+    if (now - last < std::chrono::seconds(5) || read == 0) return;
+    last = now;
+    const double t = std::chrono::duration<double>(now - start).count();
+    err << "papersim dataset-stats: reading " << dataset << ": " << read / 1000000 << " of " << total / 1000000
+        << " MB, " << std::lround(t) << " s, ETA "
+        << std::lround(t / static_cast<double>(read) * static_cast<double>(total - read)) << " s" << std::endl;
+  };
+}
+
 int run_stats(const BatchCommand& c, std::ostream& out, std::ostream& err) {
   try {
-    const auto parts = batch::read_dataset(c.dataset);
+    const auto parts = batch::read_dataset(c.dataset, read_printer(err, c.stats_quiet, c.dataset));
     batch::write_dataset_report(out, parts);
     if (!c.plots.empty()) {
       const auto files = batch::write_dataset_plots(c.plots, parts);
@@ -118,6 +137,8 @@ void add_batch_subcommands(CLI::App& app, BatchCommand& c) {
                                                 "distributions of a dataset, from its manifests (no mesh is opened).");
   c.stats->add_option("dataset", c.dataset, "dataset folder")->required();
   c.stats->add_option("--plots", c.plots, "also write histograms (SVG, gnuplot) into this folder");
+  c.stats->add_flag("--quiet", c.stats_quiet,
+                    "no progress on stderr (otherwise a line every 5 s while the manifests are read: MB read, ETA)");
 }
 
 int run_batch_subcommand(const BatchCommand& c, bool with_metrics, std::ostream& out, std::ostream& err) {

@@ -22,6 +22,7 @@ struct BatchCommand {
   int checkpoint_every = 0;  ///< steps between a sample's checkpoints (0: none)
   batch::BatchCliOptions common;
   std::string dataset, plots;
+  bool stats_quiet = false;  ///< dataset-stats: no progress lines
 };
 
 /// Register `batch` and `dataset-stats` on `app`.

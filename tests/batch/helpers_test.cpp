@@ -395,3 +395,32 @@ TEST(DatasetStats, StreamedRowsGiveWhatParsingEveryRowGives) {
   EXPECT_EQ(got.failed_attempts, 4);
   fs::remove_all(root);
 }
+
+// The progress of a long read: told every 4,096 lines the bytes read so far (exactly those of the
+// lines before) of the total size of the dataset's files.
+TEST(DatasetStats, ReadingTellsItsProgressInBytes) {
+  const fs::path root = fs::temp_directory_path() / ("papersim_stats_progress_" + std::to_string(getpid()));
+  fs::remove_all(root);
+  fs::create_directories(root);
+  std::vector<std::uintmax_t> ends;  // byte offset after each line
+  std::uintmax_t at = 0;
+  {
+    std::ofstream out(root / "manifest.jsonl");
+    for (int i = 0; i < 10000; ++i) {
+      const std::string line = json{{"key", "k" + std::to_string(i)}, {"scenario", "pull"}}.dump();
+      out << line << '\n';
+      ends.push_back(at += line.size() + 1);
+    }
+  }
+  std::ofstream(root / "renders.jsonl") << R"({"key": "r", "scenario": "pull"})" << '\n';
+  const std::uintmax_t total = fs::file_size(root / "manifest.jsonl") + fs::file_size(root / "renders.jsonl");
+  std::vector<std::pair<std::uintmax_t, std::uintmax_t>> told;
+  const auto parts = papersim::batch::read_dataset(
+      root, [&](std::uintmax_t read, std::uintmax_t of) { told.emplace_back(read, of); });
+  ASSERT_EQ(parts.size(), 2u);
+  EXPECT_EQ(parts[0].done.at("pull"), 10000);
+  ASSERT_EQ(told.size(), 2u);
+  EXPECT_EQ(told[0], std::make_pair(ends[4095], total));
+  EXPECT_EQ(told[1], std::make_pair(ends[8191], total));
+  fs::remove_all(root);
+}
