@@ -64,7 +64,8 @@ Integrator::Integrator(int num_vertices, std::vector<std::unique_ptr<EnergyTerm>
     : m_terms(std::move(terms)),
       m_params(params),
       m_rigid_x(Eigen::VectorXd::Zero(3 * rigid_blocks)),
-      m_rigid_v(Eigen::VectorXd::Zero(3 * rigid_blocks)) {
+      m_rigid_v(Eigen::VectorXd::Zero(3 * rigid_blocks)),
+      m_solver(params.trace) {
   const int first_auxiliary = num_vertices + rigid_blocks;
   int blocks = first_auxiliary;
   for (const auto& t : m_terms) {
@@ -97,9 +98,8 @@ void Integrator::update_pattern(const Eigen::VectorXd& x) {
   if (!changed) return;
   build_matrix();
   ++m_pattern_id;  // the solver redoes its symbolic analysis
-  if (std::getenv("PAPERSIM_DEBUG_SOLVER"))
-    std::fprintf(stderr, "pattern %ld nnz %zu (structure %zu)\n", m_pattern_id,
-                 m_hessian.values().size(), m_hessian.structure_rows().size());
+  m_params.trace(Trace::solver, "pattern %ld nnz %zu (structure %zu)", m_pattern_id, m_hessian.values().size(),
+                 m_hessian.structure_rows().size());
 }
 
 void Integrator::adopt_dynamic_patterns() {
@@ -153,8 +153,7 @@ double Integrator::energy(const Eigen::VectorXd& x) const {
   for (const auto& t : m_terms) {
     e += t->value(x);
     if (!std::isfinite(e)) {
-      static const bool debug = std::getenv("PAPERSIM_DEBUG_INF") != nullptr;
-      if (debug) std::fprintf(stderr, "  infinite: %s\n", t->name().c_str());
+      m_params.trace(Trace::inf, "  infinite: %s", t->name().c_str());
       return INF;
     }
   }
@@ -256,12 +255,12 @@ bool Integrator::factor_newton_matrix(const StepContext& ctx, const Eigen::Vecto
   return project;
 }
 
-void Integrator::debug_model(const Eigen::VectorXd& x, const Eigen::VectorXd& sol, bool project) {
+void Integrator::trace_model(const Eigen::VectorXd& x, const Eigen::VectorXd& sol, bool project) {
   // Each term's change along the full Newton step against its quadratic model (the Hessian
   // with the same projection as the factorisation in use).
   const Eigen::VectorXd dx = sol.head(x.size());
   BlockSymmetricMatrix h = m_hessian;
-  std::fprintf(stderr, "  model:");
+  std::string text = "  model:";
   for (const auto& t : m_terms) {
     Eigen::VectorXd gt = Eigen::VectorXd::Zero(x.size());
     h.set_zero();
@@ -269,9 +268,11 @@ void Integrator::debug_model(const Eigen::VectorXd& x, const Eigen::VectorXd& so
     t->add_derivatives(x, gt, &h);
     const double lin = gt.dot(dx), quad = 0.5 * sol.dot(h.multiply(sol));
     const double actual = t->value(x + dx) - t->value(x);
-    std::fprintf(stderr, " %s %.3e/%.3e", t->name().c_str(), actual, lin + quad);
+    char buf[96];
+    std::snprintf(buf, sizeof buf, " %s %.3e/%.3e", t->name().c_str(), actual, lin + quad);
+    text += buf;
   }
-  std::fprintf(stderr, "\n");
+  m_params.trace.line(Trace::model, text);
 }
 
 NewtonResult Integrator::solve(const StepContext& ctx, Eigen::VectorXd& x, StepStats& stats) {
@@ -351,18 +352,14 @@ NewtonResult Integrator::solve(const StepContext& ctx, Eigen::VectorXd& x, StepS
         trust_model = cg.model;
         ++r.trust_region_steps;
       }
-      if (std::getenv("PAPERSIM_DEBUG_NEWTON"))
-        std::fprintf(stderr,
-                     "  trust region: %d iterations, end %d, radius %.3e (projected step %.3e), "
-                     "model %.3e\n",
-                     cg.iterations, static_cast<int>(cg.end), m_trust_radius, projected_norm,
-                     cg.model);
+      m_params.trace(Trace::newton, "  trust region: %d iterations, end %d, radius %.3e (projected step %.3e), model %.3e",
+                     cg.iterations, static_cast<int>(cg.end), m_trust_radius, projected_norm, cg.model);
     }
     stats.seconds_solve += seconds_since(t0);
-    if (std::getenv("PAPERSIM_DEBUG_MODEL")) debug_model(x, sol, project);
-    if (std::getenv("PAPERSIM_DEBUG_NEWTON"))
-      std::fprintf(stderr, "t %.4f it %d E %.12g residual %.3e decrement %.3e %s\n", ctx.time_t0,
-                   r.iterations, e, r.residual, -g.dot(dx), reuse ? "reused" : project ? "projected" : "exact");
+    if (m_params.trace.on(Trace::model)) trace_model(x, sol, project);
+    if (m_params.trace.on(Trace::newton))  // the decrement costs a dot product
+      m_params.trace(Trace::newton, "t %.4f it %d E %.12g residual %.3e decrement %.3e %s", ctx.time_t0,
+                     r.iterations, e, r.residual, -g.dot(dx), reuse ? "reused" : project ? "projected" : "exact");
     if (!dx.allFinite()) {
       r.failure = "NaN in the Newton direction";
       return r;
@@ -395,14 +392,20 @@ NewtonResult Integrator::solve(const StepContext& ctx, Eigen::VectorXd& x, StepS
       if (std::isfinite(e_new) && e_new <= e + m_params.armijo * alpha * slope) break;
     }
     stats.seconds_line_search += seconds_since(t0);
-    if (std::getenv("PAPERSIM_DEBUG_NEWTON"))
-      std::fprintf(stderr, "  step %.3e (feasible %.3e, limited by %s)\n", alpha, alpha_feasible,
-                   limiting ? limiting->name().c_str() : "none");
-    if (alpha < 1e-9 && std::getenv("PAPERSIM_DEBUG_LS")) {
+    if (m_params.trace.on(Trace::newton))  // the term's name is a string made on each call
+      m_params.trace(Trace::newton, "  step %.3e (feasible %.3e, limited by %s)", alpha, alpha_feasible,
+                     limiting ? limiting->name().c_str() : "none");
+    if (alpha < 1e-9 && m_params.trace.on(Trace::line_search)) {
       for (double a = 1e-1; a > 1e-13; a *= 0.1) {
-        std::fprintf(stderr, "   a %.0e", a);
-        for (const auto& t : m_terms) std::fprintf(stderr, " %s %.6e", t->name().c_str(), t->value(x + a * dx) - t->value(x));
-        std::fprintf(stderr, " slope*a %.3e\n", a * slope);
+        char buf[96];
+        std::snprintf(buf, sizeof buf, "   a %.0e", a);
+        std::string text = buf;
+        for (const auto& t : m_terms) {
+          std::snprintf(buf, sizeof buf, " %s %.6e", t->name().c_str(), t->value(x + a * dx) - t->value(x));
+          text += buf;
+        }
+        std::snprintf(buf, sizeof buf, " slope*a %.3e", a * slope);
+        m_params.trace.line(Trace::line_search, text + buf);
       }
     }
     if (!(alpha > min_alpha)) {
@@ -521,8 +524,7 @@ bool Integrator::follow_obstacles(const StepContext& ctx, Eigen::VectorXd& x, do
       set_time(t1);
       return false;
     }
-    if (std::getenv("PAPERSIM_DEBUG_NEWTON"))
-      std::fprintf(stderr, "t %.4f following: obstacles at %.6f, step %.3e\n", ctx.time_t0, tau, alpha);
+    m_params.trace(Trace::newton, "t %.4f following: obstacles at %.6f, step %.3e", ctx.time_t0, tau, alpha);
     x += alpha * dx;
     tau = alpha == 1.0 ? t1 : tau + alpha * dt;
   }
@@ -546,8 +548,7 @@ bool Integrator::advance(SheetState& state, double h, int depth, int max_depth, 
       x = x_pred;
   }
   NewtonResult r;
-  if (std::getenv("PAPERSIM_DEBUG_NEWTON"))
-    std::fprintf(stderr, "step t %.6f h %.3e: %zu terms follow obstacles\n", ctx.time_t0, h, m_following.size());
+  m_params.trace(Trace::newton, "step t %.6f h %.3e: %zu terms follow obstacles", ctx.time_t0, h, m_following.size());
   if (m_following.empty() || follow_obstacles(ctx, x, ctx.time_t0, stats, r)) {
     const int following = r.iterations, evaluations = r.line_search_evaluations;
     r = solve(ctx, x, stats);
@@ -561,7 +562,7 @@ bool Integrator::advance(SheetState& state, double h, int depth, int max_depth, 
   stats.trust_region_steps += r.trust_region_steps;
   stats.residual = std::max(stats.residual, r.residual);
   if (!r.converged) {
-    if (std::getenv("PAPERSIM_DEBUG_NEWTON")) std::fprintf(stderr, "  failed: %s\n", r.failure.c_str());
+    m_params.trace(Trace::newton, "  failed: %s", r.failure.c_str());
     ++stats.failed_solves;
     if (depth >= max_depth) {
       std::ostringstream s;

@@ -10,6 +10,7 @@
 #include "simulation/energies/energy_term.hpp"
 #include "simulation/linear_solver.hpp"
 #include "simulation/sheet_state.hpp"
+#include "simulation/trace.hpp"
 
 namespace papersim::simulation {
 
@@ -57,6 +58,9 @@ struct NewtonParams {
   /// Follow moving obstacles within a step where they close in on the sheet
   /// (Integrator::follow_obstacles); false: every step starts against the obstacles at its end.
   bool follow_obstacles = true;
+  /// What the solver tells when asked (topics newton, model, line-search, inf, solver); not a
+  /// scene key.
+  Trace trace;
 };
 
 /// What one Newton solve did.
@@ -189,7 +193,9 @@ class Integrator {
   void update_pattern(const Eigen::VectorXd& x);
   /// The matrix of the static pattern and every term's dynamic pattern.
   void build_matrix();
-  void debug_model(const Eigen::VectorXd& x, const Eigen::VectorXd& sol, bool project);
+  /// Traces (topic `model`) each term's change along the Newton step sol from x against its
+  /// quadratic model.
+  void trace_model(const Eigen::VectorXd& x, const Eigen::VectorXd& sol, bool project);
   /// The sheet's positions (or velocities) followed by the rigid blocks'.
   Eigen::VectorXd with_rigid(const Eigen::VectorXd& sheet, const Eigen::VectorXd& rigid) const;
   std::vector<std::unique_ptr<EnergyTerm>> m_terms;

@@ -263,7 +263,7 @@ struct LinearSolver::Impl {
   }
 };
 
-LinearSolver::LinearSolver() : m_impl(std::make_unique<Impl>()) {}
+LinearSolver::LinearSolver(Trace trace) : m_impl(std::make_unique<Impl>()), m_trace(std::move(trace)) {}
 LinearSolver::~LinearSolver() = default;
 
 bool LinearSolver::factorize(const BlockSymmetricMatrix& A, long pattern_id) {
@@ -284,10 +284,8 @@ bool LinearSolver::factorize(const BlockSymmetricMatrix& A, long pattern_id) {
     m_impl->pattern_id = pattern_id;
     m_impl->n = A.size();
     ++m_analyses;
-    if (std::getenv("PAPERSIM_DEBUG_SOLVER"))
-      std::fprintf(stderr, "analyse n %d nnz(A) %zu lnz %.0f flops %.3g ordering %d %s\n", A.size(),
-                   s.nzmax, c.lnz, c.fl, c.selected,
-                   m_impl->factor->is_super ? "supernodal" : "simplicial");
+    m_trace(Trace::solver, "analyse n %d nnz(A) %zu lnz %.0f flops %.3g ordering %d %s", A.size(), s.nzmax, c.lnz,
+            c.fl, c.selected, m_impl->factor->is_super ? "supernodal" : "simplicial");
     if (m_impl->factor->is_super) m_impl->build_permuted_lower(A);
   }
   int ok = 1;

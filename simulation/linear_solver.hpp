@@ -7,6 +7,7 @@
 #include <string>
 
 #include "simulation/sparse_matrix.hpp"
+#include "simulation/trace.hpp"
 
 namespace papersim::simulation {
 
@@ -21,7 +22,8 @@ long serial_openmp_regions();
 
 class LinearSolver {
  public:
-  LinearSolver();
+  /// `trace`: its `solver` topic tells each symbolic analysis.
+  explicit LinearSolver(Trace trace = {});
   ~LinearSolver();
   LinearSolver(const LinearSolver&) = delete;
   LinearSolver& operator=(const LinearSolver&) = delete;
@@ -51,6 +53,7 @@ class LinearSolver {
   struct Impl;
   std::unique_ptr<Impl> m_impl;
   int m_analyses = 0;
+  Trace m_trace;
 };
 
 }  // namespace papersim::simulation

@@ -108,7 +108,26 @@ void add_checkpoint_options(CLI::App* app, CheckpointOptions& c) {
       ->check(CLI::ExistingDirectory);
 }
 
-int simulate(const ps::Scene& scene, const std::string& out, int frames, bool quiet,
+/// `--trace TOPICS` of `run` and `scenario`: a comma list of ps::Trace's topics, or "all".
+void add_trace_option(CLI::App* app, std::string& topics) {
+  std::string names = "all";
+  for (const auto& [n, t] : ps::Trace::names()) names += ", " + n;
+  app->add_option("--trace", topics,
+                  "Tell how the solver works, by topic (a comma list of " + names +
+                      "): lines on stderr, e.g. one per Newton iteration or remeshing pass (README, Tracing a run)")
+      ->check(CLI::Validator(
+          [](std::string& value) {
+            try {
+              ps::Trace::parse(value);
+              return std::string();
+            } catch (const std::invalid_argument& e) {
+              return std::string(e.what());
+            }
+          },
+          "TOPICS"));
+}
+
+int simulate(const ps::Scene& scene, const std::string& out, int frames, bool quiet, const std::string& trace,
              const std::string& label, const std::string& scene_json, const CheckpointOptions& checkpoint) {
   if (!checkpoint.dir.empty()) {
     // A folder the failed run created is removed with everything in it.
@@ -125,6 +144,7 @@ int simulate(const ps::Scene& scene, const std::string& out, int frames, bool qu
   options.out_dir = out;
   options.frames_every = frames;
   options.poll_stop = common::throw_if_stop_requested;
+  if (!trace.empty()) options.trace = ps::Trace(ps::Trace::parse(trace));
   if (!scene_json.empty()) options.extra_files.emplace_back("scene.json", scene_json);
   if (!quiet) options.progress = progress_printer(label);
   const ps::RunResult r = ps::run_scene(scene, options);
@@ -197,6 +217,8 @@ int main(int argc, char** argv) {
   run->add_flag("--quiet", quiet, "No progress on stderr (otherwise a redrawn line on a terminal, else a line per 10% of the steps and one every 5 minutes while they are slow)");
   CheckpointOptions checkpoint;
   add_checkpoint_options(run, checkpoint);
+  std::string trace;
+  add_trace_option(run, trace);
 
   std::string name;
   long long seed = 0;
@@ -212,6 +234,7 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0, 1 << 30));
   scen->add_flag("--quiet", quiet, "No progress on stderr (otherwise a redrawn line on a terminal, else a line per 10% of the steps and one every 5 minutes while they are slow)");
   add_checkpoint_options(scen, checkpoint);
+  add_trace_option(scen, trace);
   bool draw_only = false;
   scen->add_flag("--draw-only", draw_only, "Only write OUT/scene.json (edit it, then: papersim run)");
 
@@ -238,7 +261,7 @@ int main(int argc, char** argv) {
       return ps::run_batch_subcommand(batch_command, PAPERSIM_HAS_METRICS, std::cout, std::cerr);
     if (run->parsed()) {
       const ps::Scene scene = ps::load_scene(scene_path);
-      return simulate(scene, out_dir, frames, quiet, "run", "", checkpoint);
+      return simulate(scene, out_dir, frames, quiet, trace, "run", "", checkpoint);
     }
     if (scen->parsed()) {
       const ps::Scene scene = ps::make_scenario(name, static_cast<std::uint64_t>(seed));
@@ -249,7 +272,7 @@ int main(int argc, char** argv) {
         std::cout << "wrote " << (fs::path(out_dir) / "scene.json").string() << '\n';
         return 0;
       }
-      return simulate(scene, out_dir, frames, quiet, name + " seed " + std::to_string(seed), text.str(),
+      return simulate(scene, out_dir, frames, quiet, trace, name + " seed " + std::to_string(seed), text.str(),
                       checkpoint);
     }
 #ifdef PAPERSIM_WITH_METRICS

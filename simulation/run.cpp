@@ -249,9 +249,10 @@ EnergyBreakdown energy_breakdown(const Terms& terms, const Eigen::Vector3d& grav
   return e;
 }
 
-Run::Run(const Scene& scene) : m_scene(scene) {
+Run::Run(const Scene& scene, const Trace& trace) : m_scene(scene), m_trace(trace) {
   initial_sheet(scene, m_mesh, m_state);
   m_setup = physics_setup(scene, m_mesh, m_state);
+  m_setup.contact.trace = m_setup.self_contact_params.trace = trace;
   try {
     rebuild();
   } catch (const NumericError& e) {
@@ -388,7 +389,13 @@ void Run::rebuild() {
   if (m_integrator) m_pattern_changes_done += m_integrator->pattern_id();
   m_terms = build_terms(m_mesh, m_setup, &m_term_stats);
   m_integrator =
-      std::make_unique<Integrator>(m_mesh.num_vertices(), std::move(m_terms.list), m_scene.newton, coupled_lifts());
+      std::make_unique<Integrator>(m_mesh.num_vertices(), std::move(m_terms.list), newton_params(), coupled_lifts());
+}
+
+NewtonParams Run::newton_params() const {
+  NewtonParams p = m_scene.newton;
+  p.trace = m_trace;
+  return p;
 }
 
 int Run::coupled_lifts() const {
@@ -496,18 +503,16 @@ void Run::lift_obstacles(double step_start) {
     q.max_load = std::max(q.max_load, load);
     q.max_rise = std::max(q.max_rise, rise);
     if (l.lift.coupled) {
-      if (std::getenv("PAPERSIM_DEBUG_LIFT"))
-        std::fprintf(stderr, "t %.4f lift: obstacle %d force (%.4g, %.4g, %.4g) N, rise %.4g m (coupled, %+.3g m in the step)\n",
-                     t, l.spec, force.x(), force.y(), force.z(), rise, moved);
+      m_trace(Trace::lift, "t %.4f lift: obstacle %d force (%.4g, %.4g, %.4g) N, rise %.4g m (coupled, %+.3g m in the step)",
+              t, l.spec, force.x(), force.y(), force.z(), rise, moved);
       continue;
     }
     // Up or down at speed x clamp((F - load) / load, -1, 1) over the next step, never below the
     // keyframed path; changes below a nanometre are not made (they would only add keyframes).
     const double rate = l.lift.speed * std::clamp((load - l.lift.load) / l.lift.load, -1.0, 1.0);
     const double dz = std::max(rate * m_h, -std::max(rise, 0.0));
-    if (std::getenv("PAPERSIM_DEBUG_LIFT"))
-      std::fprintf(stderr, "t %.4f lift: obstacle %d force (%.4g, %.4g, %.4g) N, rise %.4g m, next %+.3g m\n", t,
-                   l.spec, force.x(), force.y(), force.z(), rise, dz);
+    m_trace(Trace::lift, "t %.4f lift: obstacle %d force (%.4g, %.4g, %.4g) N, rise %.4g m, next %+.3g m", t, l.spec,
+            force.x(), force.y(), force.z(), rise, dz);
     if (std::abs(dz) < 1e-9) continue;
     l.collider->motion.translate_from(t, t + m_h, Eigen::Vector3d(0, 0, dz), l.keyframed);
     m_scene.obstacles[l.spec].keyframes = l.collider->motion.keyframes();
@@ -595,15 +600,13 @@ void Run::remesh_pass() {
   if (failure.empty()) failure = check_remeshed(mesh, state, terms);
   std::unique_ptr<Integrator> integrator;
   if (failure.empty()) {
-    integrator = std::make_unique<Integrator>(mesh.num_vertices(), std::move(terms.list), m_scene.newton,
+    integrator = std::make_unique<Integrator>(mesh.num_vertices(), std::move(terms.list), newton_params(),
                                               coupled_lifts());
     begin_lift_bodies(terms, *integrator);
     if (!std::isfinite(integrator->start_energy(state, m_h))) failure = "infeasible";
   }
-  if (std::getenv("PAPERSIM_DEBUG_REMESH"))
-    std::fprintf(stderr, "remesh t %.6f: %d splits, %d flips, %d collapses -> %d vertices%s%s\n", m_state.time,
-                 st.splits, st.flips, st.collapses, mesh.num_vertices(), failure.empty() ? "" : ", undone: ",
-                 failure.c_str());
+  m_trace(Trace::remesh, "remesh t %.6f: %d splits, %d flips, %d collapses -> %d vertices%s%s", m_state.time,
+          st.splits, st.flips, st.collapses, mesh.num_vertices(), failure.empty() ? "" : ", undone: ", failure.c_str());
   if (!failure.empty()) {
     ++m_remesh.rollbacks;
     ++m_remesh.rollback_reasons[failure];
@@ -626,9 +629,8 @@ void Run::remesh_pass() {
   m_remesh.max_energy_jump = std::max(m_remesh.max_energy_jump, jump);
   const double range = m_energy_max - m_energy_min;
   if (range > 0) m_remesh.max_energy_jump_relative = std::max(m_remesh.max_energy_jump_relative, jump / range);
-  if (std::getenv("PAPERSIM_DEBUG_REMESH"))
-    std::fprintf(stderr, "remesh t %.6f: energy %.6g -> %.6g J (jump %.3g of the range so far, %.6g J)\n", m_state.time,
-                 before, after, range > 0 ? jump / range : 0.0, range);
+  m_trace(Trace::remesh, "remesh t %.6f: energy %.6g -> %.6g J (jump %.3g of the range so far, %.6g J)", m_state.time,
+          before, after, range > 0 ? jump / range : 0.0, range);
   m_counts.vertices_max = std::max(m_counts.vertices_max, m_mesh.num_vertices());
   m_counts.faces_max = std::max(m_counts.faces_max, m_mesh.num_faces());
   m_remesh.seconds_rebuild += seconds_since(t0);

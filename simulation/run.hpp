@@ -208,7 +208,8 @@ class Run {
   /// @throw SceneError (also for a sheet read from `sheet.mesh` on which the terms cannot be
   ///        built, such as a bending system that cannot be factored), remesh::IoError,
   ///        remesh::MeshError
-  explicit Run(const Scene& scene);
+  /// `trace`: what the run and its parts tell when asked (Trace; off by default).
+  explicit Run(const Scene& scene, const Trace& trace = {});
   ~Run();
   Run(const Run&) = delete;
   Run& operator=(const Run&) = delete;
@@ -307,8 +308,11 @@ class Run {
   /// closes in 2 `remesh.every` steps at its current speed towards the obstacle [m] (#V): what
   /// the obstacle-proximity sizing refines by.
   Eigen::VectorXd vertex_obstacle_distance() const;
+  /// The scene's solver parameters with the run's trace.
+  NewtonParams newton_params() const;
 
   Scene m_scene;
+  Trace m_trace;
   remesh::SheetMesh m_mesh;
   SheetState m_state;
   PhysicsSetup m_setup;

@@ -408,7 +408,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
   };
   double wall_before = 0.0;  // wall time of the run before the checkpoint it continues from [s]
-  Run run(scene);
+  Run run(scene, options.trace);
   json resumed;
   if (!options.resume_from.empty()) {
     const Checkpoint c = load_checkpoint(options.resume_from);

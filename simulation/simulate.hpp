@@ -63,6 +63,8 @@ struct RunOptions {
   /// scene may differ from the checkpoint's (e.g. other solver settings at a hard spot) but not
   /// in time step or duration; meta.json's `resumed` lists what differs.
   std::string resume_from;
+  /// What the run tells on stderr about its inner workings (`--trace`; off by default).
+  Trace trace;
 };
 
 /// A saved state of a run: DIR/checkpoint.json (format, step, time, the sheet file's name, the

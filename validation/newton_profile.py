@@ -1,8 +1,8 @@
 #!/usr/bin/env python3
 """Where the Newton iterations of a run go, by phase, from the per-iteration trace that
-papersim prints on stderr with PAPERSIM_DEBUG_NEWTON=1 (docs/performance.md).
+papersim prints on stderr with --trace newton (docs/performance.md).
 
-    PAPERSIM_DEBUG_NEWTON=1 papersim run SCENE.json --out DIR --quiet 2> newton.log
+    papersim run SCENE.json --out DIR --quiet --trace newton 2> newton.log
     python3 validation/newton_profile.py newton.log [--impact-ms 20] [--bin-ms 20]
 
 Phases are read from the trace itself: flight = the steps before the first one that needs more
@@ -65,7 +65,7 @@ def main():
     a = p.parse_args()
     steps = read_trace(a.log)
     if not steps:
-        sys.exit(f"{a.log}: no 't ... it ... residual' lines (run papersim with PAPERSIM_DEBUG_NEWTON=1)")
+        sys.exit(f"{a.log}: no 't ... it ... residual' lines (run papersim with --trace newton)")
     ph = phases(steps, 1e-3 * a.impact_ms)
     total = sum(len(v) for v in steps.values())
     print(f"{'phase':8s} {'from_ms':>7s} {'steps':>6s} {'newton':>7s} {'share':>6s} {'per_step':>8s} "

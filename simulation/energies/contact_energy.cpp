@@ -529,9 +529,7 @@ void ObstacleContactEnergy::begin_step(const StepContext& ctx, const Eigen::Vect
     stiffness = std::max(stiffness, target);
   }
   m_stiffness = stiffness;
-  static const bool debug = std::getenv("PAPERSIM_DEBUG_CONTACT") != nullptr;
-  if (debug)
-    std::fprintf(stderr, "contact t %.6f h %.3e: %zu contacts, gap %.3e, stiffness %.4g -> %.4g Pa\n",
+  m_params.trace(Trace::contact, "contact t %.6f h %.3e: %zu contacts, gap %.3e, stiffness %.4g -> %.4g Pa",
                  ctx.time_t0, ctx.h, contacts.size(), gap, carried, stiffness);
   // Lagged friction: normal force and tangent plane at the step start (IPC Sec. 5).
   m_friction.clear();

@@ -74,6 +74,7 @@
 #include "collision/self_contact.hpp"
 #include "collision/triangle_sdf.hpp"
 #include "simulation/energies/energy_term.hpp"
+#include "simulation/trace.hpp"
 
 namespace papersim::simulation {
 
@@ -98,6 +99,7 @@ struct ContactParams {
   /// Contact on sheet faces against obstacles other than planes (set_faces), for features
   /// smaller than the sheet's edges; off: vertices only.
   bool faces = false;
+  Trace trace;  ///< topic `contact`: the stiffness and contacts at each step start; not a scene key
 };
 
 /// Counters of obstacle contact over a run. The run owns them and hands them to every term it

@@ -23,12 +23,6 @@ using collision::Vector12d;
 
 namespace {
 
-/// PAPERSIM_DEBUG_INTERSECT (SelfContactEnergy::report_crossings), read once.
-bool debug_intersect() {
-  static const bool debug = std::getenv("PAPERSIM_DEBUG_INTERSECT") != nullptr;
-  return debug;
-}
-
 /// The first nv vertices of flat positions x as rows.
 Eigen::MatrixX3d sheet_positions(const Eigen::VectorXd& x, int nv) {
   Eigen::MatrixX3d p(nv, 3);
@@ -210,9 +204,9 @@ void SelfContactEnergy::begin_step(const StepContext& ctx, const Eigen::VectorXd
   const int nv = m_mesh.num_vertices;
   const Eigen::MatrixX3d p = sheet_positions(x_t0, nv);
   m_floor = nv > 0 ? floor_fraction * (p.colwise().maxCoeff() - p.colwise().minCoeff()).norm() : 0.0;
-  if (debug_intersect())
-    std::fprintf(stderr, "self t %.6f h %.3e: %d intersecting pairs\n", ctx.time_t0, ctx.h,
-                 collision::count_self_intersections(sheet_positions(x_t0, m_mesh.num_vertices), m_mesh.faces));
+  if (m_params.trace.on(Trace::intersect))
+    m_params.trace(Trace::intersect, "self t %.6f h %.3e: %d intersecting pairs", ctx.time_t0, ctx.h,
+                   collision::count_self_intersections(sheet_positions(x_t0, m_mesh.num_vertices), m_mesh.faces));
   ensure_candidates(x_t0);
   m_last_below = distance_below(x_t0, m_floor);
   m_friction.clear();
@@ -244,12 +238,12 @@ void SelfContactEnergy::begin_step(const StepContext& ctx, const Eigen::VectorXd
     m_friction_keys.push_back(key(p));
   }
   std::sort(m_friction_keys.begin(), m_friction_keys.end());
-  static const bool debug = std::getenv("PAPERSIM_DEBUG_CONTACT") != nullptr;
-  if (debug) {
+  if (m_params.trace.on(Trace::contact)) {
     double largest = 0, total = 0;
     for (const FrictionPair& fp : m_friction) largest = std::max(largest, fp.mu_lambda), total += fp.mu_lambda;
-    std::fprintf(stderr, "self t %.6f h %.3e: %zu friction pairs, mu lambda largest %.3e N, sum %.3e N, static zone %.3e m\n",
-                 ctx.time_t0, ctx.h, m_friction.size(), largest, total, m_eps);
+    m_params.trace(Trace::contact,
+                   "self t %.6f h %.3e: %zu friction pairs, mu lambda largest %.3e N, sum %.3e N, static zone %.3e m",
+                   ctx.time_t0, ctx.h, m_friction.size(), largest, total, m_eps);
   }
 }
 
@@ -407,11 +401,12 @@ void SelfContactEnergy::report_crossings(const Eigen::VectorXd& x, const Eigen::
   const int before = collision::count_self_intersections(sheet_positions(x, nv), m_mesh.faces);
   const collision::SelfIntersections after = collision::find_self_intersections(sheet_positions(x1, nv), m_mesh.faces);
   if (after.count() <= before) return;
-  std::fprintf(stderr, "self-contact CCD: %d -> %d intersecting pairs at step %.3e (%zu candidates)\n", before,
-               after.count(), alpha, m_candidates.size());
+  const Trace& trace = m_params.trace;
+  trace(Trace::intersect, "self-contact CCD: %d -> %d intersecting pairs at step %.3e (%zu candidates)", before,
+        after.count(), alpha, m_candidates.size());
   for (int k = 0; k < after.count(); ++k) {
     const int fa = after.pairs(k, 0), fb = after.pairs(k, 1);
-    std::fprintf(stderr, "  faces %d and %d\n", fa, fb);
+    trace(Trace::intersect, "  faces %d and %d", fa, fb);
     // The IPC pairs of the two faces: vertex-triangle both ways, and edge-edge.
     std::vector<Pair> pairs;
     std::vector<int> edges_a, edges_b;
@@ -447,9 +442,9 @@ void SelfContactEnergy::report_crossings(const Eigen::VectorXd& x, const Eigen::
       };
       const double t = p.edge_edge ? collision::edge_edge_ccd(p0, d, 1.0, m_params.ccd_min_separation)
                                    : collision::point_triangle_ccd(p0, d, 1.0, m_params.ccd_min_separation);
-      std::fprintf(stderr, "    %s (vertices %d %d %d %d): candidate %d, distance %.3e -> %.3e, CCD %.3e\n",
-                   p.edge_edge ? "edge-edge" : "vertex-triangle", v[0], v[1], v[2], v[3], candidate ? 1 : 0,
-                   distance(p0), distance(p1), t);
+      trace(Trace::intersect, "    %s (vertices %d %d %d %d): candidate %d, distance %.3e -> %.3e, CCD %.3e",
+            p.edge_edge ? "edge-edge" : "vertex-triangle", v[0], v[1], v[2], v[3], candidate ? 1 : 0, distance(p0),
+            distance(p1), t);
     }
   }
 }
@@ -468,7 +463,7 @@ double SelfContactEnergy::max_step(const Eigen::VectorXd& x, const Eigen::Vector
                 ? collision::edge_edge_ccd(points(p, x), d, alpha, m_params.ccd_min_separation)
                 : collision::point_triangle_ccd(points(p, x), d, alpha, m_params.ccd_min_separation);
   }
-  if (debug_intersect()) report_crossings(x, dx, alpha);
+  if (m_params.trace.on(Trace::intersect)) report_crossings(x, dx, alpha);
   return alpha;
 }
 
@@ -493,10 +488,8 @@ bool SelfContactEnergy::adapt(const Eigen::VectorXd& x) {
   m_stiffness = std::min(2 * m_stiffness, most);
   m_stats->max_stiffness = std::max(m_stats->max_stiffness, m_stiffness);
   ++m_stats->stiffness_doublings;
-  static const bool debug = std::getenv("PAPERSIM_DEBUG_CONTACT") != nullptr;
-  if (debug)
-    std::fprintf(stderr, "self t %.6f: closest pair %.3e -> %.3e m (floor %.3e): stiffness %.4g Pa\n", m_t0, before,
-                 d, m_floor, m_stiffness);
+  m_params.trace(Trace::contact, "self t %.6f: closest pair %.3e -> %.3e m (floor %.3e): stiffness %.4g Pa", m_t0,
+                 before, d, m_floor, m_stiffness);
   return true;
 }
 

@@ -46,6 +46,7 @@
 
 #include "collision/self_contact.hpp"
 #include "simulation/energies/energy_term.hpp"
+#include "simulation/trace.hpp"
 
 namespace papersim::simulation {
 
@@ -61,6 +62,9 @@ struct SelfContactParams {
   bool static_whole_step = false;  ///< as ContactParams::static_whole_step
   /// The line search never closes more than this fraction of a pair's gap in one step.
   double ccd_min_separation = 0.1;
+  /// Topics `contact` (friction pairs and stiffness raises) and `intersect` (report_crossings);
+  /// not a scene key.
+  Trace trace;
 };
 
 /// Counters of self-contact over a run, owned by the run (as ContactStatistics).
@@ -177,7 +181,7 @@ class SelfContactEnergy : public EnergyTerm {
   void add_pair(const Pair& p, const collision::PairPoints& pts, const collision::DistanceStencil& s,
                 Eigen::VectorXd& g, BlockSymmetricMatrix* H) const;
   void add_friction(const Eigen::VectorXd& x, Eigen::VectorXd& g, BlockSymmetricMatrix* H) const;
-  /// PAPERSIM_DEBUG_INTERSECT: when the step x -> x + alpha dx that max_step allows makes
+  /// Trace topic `intersect`: when the step x -> x + alpha dx that max_step allows makes
   /// triangles intersect, prints each new pair's IPC pairs (candidate or not, distances, CCD).
   void report_crossings(const Eigen::VectorXd& x, const Eigen::VectorXd& dx, double alpha) const;
   /// Smallest distance of a candidate pair at x when it is below `floor`, else +inf [m].

@@ -3,6 +3,7 @@
 // invariants.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -466,6 +467,92 @@ TEST(RemeshRun, LiftedSheetRemeshesAndKeepsEveryInvariant) {
               r.sheet.vertices_start, r.sheet.vertices, min_vertices, r.sheet.vertices_max,
               r.remesh->max_energy_jump, r.remesh->max_energy_jump_relative,
               r.remesh->seconds_remesh + r.remesh->seconds_rebuild, r.wall_seconds);
+}
+
+// Trace topics by name: a comma list or "all"; an unknown or empty name is refused naming it
+// and listing the known ones. A trace formats a line for a topic it has, without a newline, and
+// calls nothing for another.
+TEST(Trace, TopicsByNameAndLinesOnlyForThem) {
+  EXPECT_EQ(Trace::parse("newton"), static_cast<unsigned>(Trace::newton));
+  EXPECT_EQ(Trace::parse("remesh,line-search"), Trace::remesh | Trace::line_search);
+  unsigned all = 0;
+  for (const auto& [name, topic] : Trace::names()) all |= topic;
+  EXPECT_EQ(Trace::parse("all"), all);
+  EXPECT_EQ(Trace::names().size(), 9u);
+  const std::pair<const char*, const char*> bad[] = {
+      {"newtn", "newtn"}, {"newton,", ""}, {"", ""}, {"newton,,remesh", ""}, {"Newton", "Newton"}};
+  for (const auto& [list, unknown] : bad) {
+    try {
+      Trace::parse(list);
+      ADD_FAILURE() << "accepted '" << list << "'";
+    } catch (const std::invalid_argument& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find("unknown trace topic '" + std::string(unknown) + "'"), std::string::npos) << what;
+      EXPECT_NE(what.find("line-search"), std::string::npos) << what;
+    }
+  }
+  std::vector<std::string> lines;
+  const Trace t(Trace::remesh, [&](const std::string& l) { lines.push_back(l); });
+  t(Trace::remesh, "remesh t %.3f: %d splits", 0.25, 7);
+  t(Trace::newton, "t %.4f it %d", 0.25, 1);
+  t.line(Trace::newton, "not this either");
+  t.line(Trace::remesh, std::string(300, 'x'));
+  ASSERT_EQ(lines.size(), 2u);
+  EXPECT_EQ(lines[0], "remesh t 0.250: 7 splits");
+  EXPECT_EQ(lines[1], std::string(300, 'x'));
+  EXPECT_FALSE(Trace().on(Trace::newton));
+}
+
+// Tracing (`papersim run --trace`) tells what the run does without changing it: a run traced on
+// the topics newton, remesh and solver ends in the untraced run's state to the bit; there is a
+// "t ... it k E ..." line per Newton iteration of the solves (every one converges here), an
+// energy line per kept remeshing pass and a pass line per pass that edited (kept or undone), a
+// symbolic analysis at least per mesh a step factors, and nothing on a topic not asked for (the
+// ground contact's, which tells each step start when asked). The scene is the lifted sheet's
+// above, for 0.1 s.
+TEST(RemeshRun, TracingTellsEachIterationAndPassAndChangesNothing) {
+  Scene s;
+  s.sheet.width = s.sheet.height = 0.15;
+  s.sheet.edge_length = 0.01;
+  s.sheet.position = Eigen::Vector3d(0, 0, 1e-3);
+  s.duration = 0.1;
+  s.time_step = 0.01;
+  HandleSpec h;
+  h.material_point = Eigen::Vector2d(0.075, 0.075);
+  h.keyframes = {{0.0, Eigen::Vector3d::Zero()}, {0.1, Eigen::Vector3d(0, 0, 0.02)}};
+  h.axes = Eigen::Vector3d(0, 0, 1);
+  s.handles = {h};
+  s.remesh.enabled = true;
+  s.remesh.params.size_min = 4e-3;
+  s.remesh.params.size_max = 0.04;
+  const RunResult plain = run_scene(s, RunOptions{});
+  std::vector<std::string> lines;
+  RunOptions o;
+  o.trace = Trace(Trace::newton | Trace::remesh | Trace::solver,
+                  [&](const std::string& line) { lines.push_back(line); });
+  const RunResult traced = run_scene(s, o);
+  ASSERT_EQ(traced.state.positions.size(), plain.state.positions.size());
+  EXPECT_EQ(traced.state.positions, plain.state.positions);
+  EXPECT_EQ(traced.totals.newton_iterations, plain.totals.newton_iterations);
+  ASSERT_TRUE(traced.remesh.has_value());
+  ASSERT_EQ(traced.totals.failed_solves, 0);
+  const auto count = [&](const std::string& head, const std::string& part) {
+    return std::count_if(lines.begin(), lines.end(), [&](const std::string& l) {
+      return l.rfind(head, 0) == 0 && l.find(part) != std::string::npos;
+    });
+  };
+  EXPECT_EQ(count("t ", " E "), traced.totals.newton_iterations - traced.totals.following_iterations);
+  EXPECT_GE(count("step t ", "follow obstacles"), traced.steps);
+  EXPECT_EQ(count("remesh t ", " energy "), traced.remesh->passes);
+  EXPECT_EQ(count("remesh t ", " vertices"), traced.remesh->passes + traced.remesh->rollbacks);
+  EXPECT_GT(traced.remesh->passes, 0);
+  EXPECT_GE(count("analyse n ", "flops"), traced.remesh->passes);  // one per mesh a step factors
+  EXPECT_EQ(count("contact t ", ""), 0);
+  std::vector<std::string> contact_lines;
+  o.trace = Trace(Trace::contact, [&](const std::string& line) { contact_lines.push_back(line); });
+  run_scene(s, o);
+  EXPECT_GE(contact_lines.size(), static_cast<std::size_t>(traced.steps)) << "a line per step start, when asked";
+  for (const auto& l : lines) EXPECT_EQ(l.find('\n'), std::string::npos) << "a line holds its own newline";
 }
 
 // Regression: a 1,000-vertex sheet (21 mm edges) draped over three spheres, remeshed with the
