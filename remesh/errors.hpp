@@ -1,5 +1,5 @@
 #pragma once
-/// Errors of the remesh module: typed exceptions for bad input and I/O, and an invariant check.
+/// Errors of the remesh module: typed exceptions for bad input and I/O.
 #include <stdexcept>
 #include <string>
 
@@ -21,16 +21,3 @@ struct IoError : std::runtime_error {
 };
 
 }  // namespace papersim::remesh
-
-#if defined(PAPERSIM_ENABLE_ASSERTS)
-#define PAPERSIM_ASSERT(cond, msg)                                                      \
-  do {                                                                                  \
-    if (!(cond))                                                                        \
-      throw std::logic_error(std::string("papersim invariant failed: ") + #cond + " (" + \
-                             (msg) + ") at " + __FILE__ + ":" + std::to_string(__LINE__)); \
-  } while (0)
-#else
-#define PAPERSIM_ASSERT(cond, msg) \
-  do {                             \
-  } while (0)
-#endif

@@ -5,7 +5,7 @@
 #include <stdexcept>
 #include <vector>
 
-#include "remesh/errors.hpp"
+#include "common/assert.hpp"
 #include "remesh/sizing.hpp"
 
 namespace papersim::remesh {

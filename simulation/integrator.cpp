@@ -9,8 +9,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "common/assert.hpp"
 #include "common/clock.hpp"
-#include "remesh/errors.hpp"
 #include "simulation/errors.hpp"
 #include "simulation/steihaug.hpp"
 

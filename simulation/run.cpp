@@ -10,6 +10,7 @@
 
 #include "collision/errors.hpp"
 #include "collision/self_intersection.hpp"
+#include "common/assert.hpp"
 #include "common/clock.hpp"
 #include "remesh/errors.hpp"
 #include "remesh/sheet_io.hpp"

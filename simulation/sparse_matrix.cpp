@@ -7,7 +7,7 @@
 #include <cstdint>
 #include <string>
 
-#include "remesh/errors.hpp"
+#include "common/assert.hpp"
 
 namespace papersim::simulation {
 

@@ -4,7 +4,7 @@
 #include <cmath>
 
 #include "collision/barrier.hpp"
-#include "remesh/errors.hpp"
+#include "common/assert.hpp"
 
 namespace papersim::simulation {
 

@@ -8,10 +8,10 @@
 #include <map>
 #include <string>
 
+#include "common/assert.hpp"
 #include "simulation/energies/dihedral_angle.hpp"
 #include "simulation/energies/fit_bending_energy.hpp"
 #include "simulation/energies/psd.hpp"
-#include "remesh/errors.hpp"
 #include "simulation/errors.hpp"
 
 namespace papersim::simulation {
