@@ -24,12 +24,7 @@
 #include "simulation/scene.hpp"
 #include "simulation/simulate.hpp"
 
-#ifdef PAPERSIM_WITH_METRICS
 #include "validation/metrics_command.hpp"
-#define PAPERSIM_HAS_METRICS true
-#else
-#define PAPERSIM_HAS_METRICS false
-#endif
 
 namespace ps = papersim::simulation;
 namespace common = papersim::common;
@@ -241,10 +236,8 @@ int main(int argc, char** argv) {
   ps::BatchCommand batch_command;
   ps::add_batch_subcommands(app, batch_command);
 
-#ifdef PAPERSIM_WITH_METRICS
   int metrics_code = 0;
   papersim::validation::add_metrics_subcommand(app, metrics_code, std::cout, std::cerr);
-#endif
 
   try {
     // The metrics subcommand runs inside parse (its callback).
@@ -258,7 +251,7 @@ int main(int argc, char** argv) {
     // What a run killed with SIGKILL left goes first, whatever happens to this run.
     if (run->parsed() || scen->parsed()) prepare_output(out_dir);
     if (batch_command.batch->parsed() || batch_command.stats->parsed())
-      return ps::run_batch_subcommand(batch_command, PAPERSIM_HAS_METRICS, std::cout, std::cerr);
+      return ps::run_batch_subcommand(batch_command, true, std::cout, std::cerr);
     if (run->parsed()) {
       const ps::Scene scene = ps::load_scene(scene_path);
       return simulate(scene, out_dir, frames, quiet, trace, "run", "", checkpoint);
@@ -275,11 +268,8 @@ int main(int argc, char** argv) {
       return simulate(scene, out_dir, frames, quiet, trace, name + " seed " + std::to_string(seed), text.str(),
                       checkpoint);
     }
-#ifdef PAPERSIM_WITH_METRICS
     return metrics_code;
-#endif
   } catch (...) {
     return report(std::current_exception());
   }
-  return 0;
 }
