@@ -544,8 +544,11 @@ bool Integrator::advance(SheetState& state, double h, int depth, int max_depth, 
   for (const auto& t : m_terms) alpha = std::min(alpha, t->max_step(x_t0, dx0));
   if (alpha > 0) {
     const Eigen::VectorXd x_pred = x_t0 + alpha * dx0;
-    if (std::isfinite(energy(x_pred)) && energy(x_pred) <= energy(x_t0) + 1e-12 * std::abs(energy(x_t0)))
-      x = x_pred;
+    const double e_pred = energy(x_pred);
+    if (std::isfinite(e_pred)) {
+      const double e_t0 = energy(x_t0);
+      if (e_pred <= e_t0 + 1e-12 * std::abs(e_t0)) x = x_pred;
+    }
   }
   NewtonResult r;
   m_params.trace(Trace::newton, "step t %.6f h %.3e: %zu terms follow obstacles", ctx.time_t0, h, m_following.size());
