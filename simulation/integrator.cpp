@@ -275,6 +275,133 @@ void Integrator::trace_model(const Eigen::VectorXd& x, const Eigen::VectorXd& so
   m_params.trace.line(Trace::model, text);
 }
 
+bool Integrator::newton_matrix(const StepContext& ctx, const Eigen::VectorXd& x, Eigen::VectorXd& g,
+                               StepStats& stats, bool reuse, bool factor_projected, ExactSkip& skip, Clock& t0) {
+  if (reuse) {
+    ++m_reused;
+    ++stats.reused_factorizations;
+    assemble_gradient(x, g);
+    stats.seconds_assembly += seconds_since(t0);
+    t0 = std::chrono::steady_clock::now();
+    return factor_projected;
+  }
+  m_reused = 0;
+  const bool skipped = skip.left > 0;
+  const bool projected = factor_newton_matrix(ctx, x, g, stats, skipped);
+  if (skipped) {
+    --skip.left;
+    ++stats.exact_skipped;
+  } else if (m_params.exact_retry_skip_max > 0 && m_params.exact_hessian_first && projected) {
+    skip.left = skip.backoff;  // the exact Hessian was indefinite: skip it for a while
+    skip.backoff = std::min(2 * skip.backoff, m_params.exact_retry_skip_max);
+  } else {
+    skip.backoff = 1;
+  }
+  m_factor_h = ctx.h;
+  t0 = std::chrono::steady_clock::now();
+  return projected;
+}
+
+Integrator::NewtonDirection Integrator::newton_direction(const Eigen::VectorXd& g, double h, bool project,
+                                                         NewtonResult& r) {
+  NewtonDirection d;
+  // Auxiliary unknowns (EnergyTerm::auxiliary_blocks) sit at their optimum, so their part of
+  // the right-hand side is zero; their part of the solution is dropped.
+  Eigen::VectorXd rhs = Eigen::VectorXd::Zero(m_hessian.size());
+  rhs.head(g.size()) = -g;
+  d.sol = m_solver.solve(rhs);
+  d.dx = d.sol.head(g.size());
+  r.residual = max_vertex_norm(d.dx) / h;  // the stopping test stays the projected step's
+  if (r.iterations == 1) m_trust_radius = 0;
+  if (project && m_have_exact && r.residual >= m_params.tolerance) {
+    const double projected_norm = std::sqrt(d.sol.dot(m_hessian.multiply(d.sol)));
+    m_trust_radius = std::max(m_trust_radius, projected_norm);
+    const SteihaugResult cg =
+        steihaug([&](const Eigen::VectorXd& v) { return m_hessian_exact.multiply(v); },
+                 [&](const Eigen::VectorXd& v) { return m_hessian.multiply(v); },
+                 [&](const Eigen::VectorXd& v) { return m_solver.solve(v); }, rhs, d.sol, m_trust_radius,
+                 m_params.trust_region_cg, 0.1);
+    if (cg.model < 0 && cg.z.allFinite()) {  // else the projected step
+      d.sol = cg.z;
+      d.dx = d.sol.head(g.size());
+      d.trust_model = cg.model;
+      ++r.trust_region_steps;
+    }
+    m_params.trace(Trace::newton, "  trust region: %d iterations, end %d, radius %.3e (projected step %.3e), model %.3e",
+                   cg.iterations, static_cast<int>(cg.end), m_trust_radius, projected_norm, cg.model);
+  }
+  return d;
+}
+
+Integrator::LineSearch Integrator::line_search(const Eigen::VectorXd& x, const Eigen::VectorXd& dx,
+                                               const Eigen::VectorXd& g, double e, NewtonResult& r) const {
+  LineSearch ls;
+  const EnergyTerm* limiting = nullptr;
+  for (const auto& t : m_terms) {
+    const double a = t->max_step(x, dx);
+    if (a < ls.alpha) ls.alpha = a, limiting = t.get();
+  }
+  ls.alpha_feasible = ls.alpha;
+  ls.slope = g.dot(dx);
+  // A step that would move no vertex by more than a picometre makes no progress: the line
+  // search gives up there (at round-off level an energy with a search-based term, such as
+  // face contact, can show a decrease that is only noise, and Newton would repeat it).
+  ls.min_alpha = std::max(1e-12, 1e-12 / std::max(max_vertex_norm(dx), 1e-300));
+  for (; ls.alpha > ls.min_alpha; ls.alpha *= 0.5) {
+    ls.x_new = x + ls.alpha * dx;
+    ls.e_new = energy(ls.x_new);
+    ++r.line_search_evaluations;
+    if (std::isfinite(ls.e_new) && ls.e_new <= e + m_params.armijo * ls.alpha * ls.slope) break;
+  }
+  if (m_params.trace.on(Trace::newton))  // the term's name is a string made on each call
+    m_params.trace(Trace::newton, "  step %.3e (feasible %.3e, limited by %s)", ls.alpha, ls.alpha_feasible,
+                   limiting ? limiting->name().c_str() : "none");
+  if (ls.alpha < 1e-9 && m_params.trace.on(Trace::line_search)) {
+    for (double a = 1e-1; a > 1e-13; a *= 0.1) {
+      char buf[96];
+      std::snprintf(buf, sizeof buf, "   a %.0e", a);
+      std::string text = buf;
+      for (const auto& t : m_terms) {
+        std::snprintf(buf, sizeof buf, " %s %.6e", t->name().c_str(), t->value(x + a * dx) - t->value(x));
+        text += buf;
+      }
+      std::snprintf(buf, sizeof buf, " slope*a %.3e", a * ls.slope);
+      m_params.trace.line(Trace::line_search, text + buf);
+    }
+  }
+  return ls;
+}
+
+void Integrator::extrapolate(const Eigen::VectorXd& x, const Eigen::VectorXd& dx, double e, LineSearch& ls,
+                             NewtonResult& r) const {
+  // Lengthen the projected step while the energy keeps falling (sufficient decrease against the
+  // longer step too) and every term allows the longer step.
+  for (int m = 2; m <= m_params.max_extrapolation; m *= 2) {
+    double feasible = 1.0;
+    const Eigen::VectorXd dm = m * dx;
+    for (const auto& t : m_terms) feasible = std::min(feasible, t->max_step(x, dm));
+    if (feasible < 1.0) break;
+    Eigen::VectorXd x_try = x + dm;
+    const double e_try = energy(x_try);
+    ++r.line_search_evaluations;
+    if (!(std::isfinite(e_try) && e_try < ls.e_new && e_try <= e + m_params.armijo * m * ls.slope)) break;
+    ls.x_new.swap(x_try);
+    ls.e_new = e_try;
+    if (m == 2) ++r.extrapolations;
+  }
+}
+
+void Integrator::update_trust_radius(double alpha, double change, double model) {
+  // The radius doubles after a full step whose energy change the exact model predicted within a
+  // quarter and shrinks after a shortened one (it never falls below the projected step:
+  // newton_direction).
+  const double agreement = change / model;
+  if (alpha < 1.0 || agreement < 0.25)
+    m_trust_radius *= 0.25 + 0.375 * alpha;
+  else if (agreement > 0.75)
+    m_trust_radius *= 2;
+}
+
 NewtonResult Integrator::solve(const StepContext& ctx, Eigen::VectorXd& x, StepStats& stats) {
   NewtonResult r;
   Eigen::VectorXd g(x.size());
@@ -292,7 +419,7 @@ NewtonResult Integrator::solve(const StepContext& ctx, Eigen::VectorXd& x, StepS
   bool may_reuse = quiet;
   double residual_before = INF;  // residual of the iteration before the last
   bool factor_projected = false;  // the factorisation in use is of the projected Hessian
-  int skip_exact = 0, backoff = 1;  // NewtonParams::exact_retry_skip_max
+  ExactSkip skip;
   for (r.iterations = 1; r.iterations <= m_params.max_iterations; ++r.iterations) {
     auto t0 = std::chrono::steady_clock::now();
     if (r.iterations > 1) {
@@ -306,61 +433,15 @@ NewtonResult Integrator::solve(const StepContext& ctx, Eigen::VectorXd& x, StepS
     update_pattern(x);
     const bool reuse = may_reuse && m_reused < m_params.max_factor_reuse && m_factor_pattern == m_pattern_id;
     m_reuse_next = false;
-    bool project = factor_projected;
-    if (reuse) {
-      ++m_reused;
-      ++stats.reused_factorizations;
-      assemble_gradient(x, g);
-      stats.seconds_assembly += seconds_since(t0);
-      t0 = std::chrono::steady_clock::now();
-    } else {
-      m_reused = 0;
-      const bool skipped = skip_exact > 0;
-      project = factor_projected = factor_newton_matrix(ctx, x, g, stats, skipped);
-      if (skipped) {
-        --skip_exact;
-        ++stats.exact_skipped;
-      } else if (m_params.exact_retry_skip_max > 0 && m_params.exact_hessian_first && project) {
-        skip_exact = backoff;  // the exact Hessian was indefinite: skip it for a while
-        backoff = std::min(2 * backoff, m_params.exact_retry_skip_max);
-      } else {
-        backoff = 1;
-      }
-      m_factor_h = ctx.h;
-      t0 = std::chrono::steady_clock::now();
-    }
-    // Auxiliary unknowns (EnergyTerm::auxiliary_blocks) sit at their optimum, so their part of
-    // the right-hand side is zero; their part of the solution is dropped.
-    Eigen::VectorXd rhs = Eigen::VectorXd::Zero(m_hessian.size());
-    rhs.head(g.size()) = -g;
-    Eigen::VectorXd sol = m_solver.solve(rhs);
-    Eigen::VectorXd dx = sol.head(g.size());
-    r.residual = max_vertex_norm(dx) / ctx.h;  // the stopping test stays the projected step's
-    if (r.iterations == 1) m_trust_radius = 0;
-    double trust_model = 0;  // the exact model's change along a trust-region step (0: none taken)
-    if (project && m_have_exact && r.residual >= m_params.tolerance) {
-      const double projected_norm = std::sqrt(sol.dot(m_hessian.multiply(sol)));
-      m_trust_radius = std::max(m_trust_radius, projected_norm);
-      const SteihaugResult cg =
-          steihaug([&](const Eigen::VectorXd& v) { return m_hessian_exact.multiply(v); },
-                   [&](const Eigen::VectorXd& v) { return m_hessian.multiply(v); },
-                   [&](const Eigen::VectorXd& v) { return m_solver.solve(v); }, rhs, sol,
-                   m_trust_radius, m_params.trust_region_cg, 0.1);
-      if (cg.model < 0 && cg.z.allFinite()) {  // else the projected step
-        sol = cg.z;
-        dx = sol.head(g.size());
-        trust_model = cg.model;
-        ++r.trust_region_steps;
-      }
-      m_params.trace(Trace::newton, "  trust region: %d iterations, end %d, radius %.3e (projected step %.3e), model %.3e",
-                     cg.iterations, static_cast<int>(cg.end), m_trust_radius, projected_norm, cg.model);
-    }
+    factor_projected = newton_matrix(ctx, x, g, stats, reuse, factor_projected, skip, t0);
+    const bool project = factor_projected;
+    const NewtonDirection d = newton_direction(g, ctx.h, project, r);
     stats.seconds_solve += seconds_since(t0);
-    if (m_params.trace.on(Trace::model)) trace_model(x, sol, project);
+    if (m_params.trace.on(Trace::model)) trace_model(x, d.sol, project);
     if (m_params.trace.on(Trace::newton))  // the decrement costs a dot product
       m_params.trace(Trace::newton, "t %.4f it %d E %.12g residual %.3e decrement %.3e %s", ctx.time_t0,
-                     r.iterations, e, r.residual, -g.dot(dx), reuse ? "reused" : project ? "projected" : "exact");
-    if (!dx.allFinite()) {
+                     r.iterations, e, r.residual, -g.dot(d.dx), reuse ? "reused" : project ? "projected" : "exact");
+    if (!d.dx.allFinite()) {
       r.failure = "NaN in the Newton direction";
       return r;
     }
@@ -371,85 +452,26 @@ NewtonResult Integrator::solve(const StepContext& ctx, Eigen::VectorXd& x, StepS
       return r;
     }
     t0 = std::chrono::steady_clock::now();
-    double alpha = 1.0;
-    const EnergyTerm* limiting = nullptr;
-    for (const auto& t : m_terms) {
-      const double a = t->max_step(x, dx);
-      if (a < alpha) alpha = a, limiting = t.get();
-    }
-    const double alpha_feasible = alpha;
-    const double slope = g.dot(dx);
-    double e_new = INF;
-    Eigen::VectorXd x_new;
-    // A step that would move no vertex by more than a picometre makes no progress: the line
-    // search gives up there (at round-off level an energy with a search-based term, such as
-    // face contact, can show a decrease that is only noise, and Newton would repeat it).
-    const double min_alpha = std::max(1e-12, 1e-12 / std::max(max_vertex_norm(dx), 1e-300));
-    for (; alpha > min_alpha; alpha *= 0.5) {
-      x_new = x + alpha * dx;
-      e_new = energy(x_new);
-      ++r.line_search_evaluations;
-      if (std::isfinite(e_new) && e_new <= e + m_params.armijo * alpha * slope) break;
-    }
+    LineSearch ls = line_search(x, d.dx, g, e, r);
     stats.seconds_line_search += seconds_since(t0);
-    if (m_params.trace.on(Trace::newton))  // the term's name is a string made on each call
-      m_params.trace(Trace::newton, "  step %.3e (feasible %.3e, limited by %s)", alpha, alpha_feasible,
-                     limiting ? limiting->name().c_str() : "none");
-    if (alpha < 1e-9 && m_params.trace.on(Trace::line_search)) {
-      for (double a = 1e-1; a > 1e-13; a *= 0.1) {
-        char buf[96];
-        std::snprintf(buf, sizeof buf, "   a %.0e", a);
-        std::string text = buf;
-        for (const auto& t : m_terms) {
-          std::snprintf(buf, sizeof buf, " %s %.6e", t->name().c_str(), t->value(x + a * dx) - t->value(x));
-          text += buf;
-        }
-        std::snprintf(buf, sizeof buf, " slope*a %.3e", a * slope);
-        m_params.trace.line(Trace::line_search, text + buf);
-      }
-    }
-    if (!(alpha > min_alpha)) {
+    if (!(ls.alpha > ls.min_alpha)) {
       // No decrease along the direction: converged to round-off when the step is tiny.
       // (A step blocked by collision detection is not convergence: the step is split instead.)
-      if ((alpha_feasible == 1.0 && r.residual < 10 * m_params.tolerance) ||
-          std::abs(slope) < 1e-14 * std::abs(e)) {
+      if ((ls.alpha_feasible == 1.0 && r.residual < 10 * m_params.tolerance) ||
+          std::abs(ls.slope) < 1e-14 * std::abs(e)) {
         r.converged = true;
         return r;
       }
       r.failure = "line search found no decrease";
       return r;
     }
-    if (project && alpha == 1.0 && m_params.max_extrapolation > 1) {
-      // Lengthen the projected step while the energy keeps falling (sufficient decrease
-      // against the longer step too) and every term allows the longer step.
-      for (int m = 2; m <= m_params.max_extrapolation; m *= 2) {
-        double feasible = 1.0;
-        const Eigen::VectorXd dm = m * dx;
-        for (const auto& t : m_terms) feasible = std::min(feasible, t->max_step(x, dm));
-        if (feasible < 1.0) break;
-        Eigen::VectorXd x_try = x + dm;
-        const double e_try = energy(x_try);
-        ++r.line_search_evaluations;
-        if (!(std::isfinite(e_try) && e_try < e_new && e_try <= e + m_params.armijo * m * slope)) break;
-        x_new.swap(x_try);
-        e_new = e_try;
-        if (m == 2) ++r.extrapolations;
-      }
-    }
-    if (trust_model < 0) {
-      // The radius doubles after a full step whose energy change the exact model predicted
-      // within a quarter and shrinks after a shortened one (it never falls below the projected
-      // step, above).
-      const double agreement = (e_new - e) / trust_model;
-      if (alpha < 1.0 || agreement < 0.25)
-        m_trust_radius *= 0.25 + 0.375 * alpha;
-      else if (agreement > 0.75)
-        m_trust_radius *= 2;
-    }
-    may_reuse = quiet && alpha == 1.0 && !factor_projected && (r.iterations == 1 || r.residual < 0.1 * residual_before);
+    if (project && ls.alpha == 1.0 && m_params.max_extrapolation > 1) extrapolate(x, d.dx, e, ls, r);
+    if (d.trust_model < 0) update_trust_radius(ls.alpha, ls.e_new - e, d.trust_model);
+    may_reuse =
+        quiet && ls.alpha == 1.0 && !factor_projected && (r.iterations == 1 || r.residual < 0.1 * residual_before);
     residual_before = r.residual;
-    x = x_new;
-    e = e_new;
+    x = ls.x_new;
+    e = ls.e_new;
   }
   --r.iterations;
   std::ostringstream s;

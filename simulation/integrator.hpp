@@ -2,6 +2,8 @@
 /// Backward Euler as minimisation of the incremental potential (Li et al. 2020; Kane et al.
 /// 2000), solved by Newton's method with PSD element Hessians, a sparse Cholesky solve, CCD
 /// filtered backtracking line search, and step halving when Newton fails.
+#include <chrono>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <string>
@@ -161,7 +163,49 @@ class Integrator {
   long pattern_id() const { return m_pattern_id; }
 
  private:
+  /// Newton's method on the step's incremental potential from x: newton_matrix, then
+  /// newton_direction, the stopping test, line_search, extrapolate, update_trust_radius.
   NewtonResult solve(const StepContext& ctx, Eigen::VectorXd& x, StepStats& stats);
+  using Clock = std::chrono::steady_clock::time_point;
+  /// NewtonParams::exact_retry_skip_max within one solve: the iterations left that factor the
+  /// projected Hessian without trying the exact one, and the length of the next such run.
+  struct ExactSkip {
+    int left = 0, backoff = 1;
+  };
+  /// The Newton matrix of an iteration at x, with the gradient into g: the last factorisation
+  /// reused (`reuse`: the gradient alone is assembled) or the Hessian assembled and factored
+  /// (factor_newton_matrix). `t0`: when the iteration's assembly began, reset at its end.
+  /// @return whether the factorisation in use is of the projected Hessian (`factor_projected`
+  ///         when reused)
+  bool newton_matrix(const StepContext& ctx, const Eigen::VectorXd& x, Eigen::VectorXd& g, StepStats& stats,
+                     bool reuse, bool factor_projected, ExactSkip& skip, Clock& t0);
+  /// A Newton direction: the factored system's solution (with the auxiliary unknowns) and its
+  /// position part; trust_model < 0 when it is a trust-region step on the exact Hessian, the
+  /// exact model's change along it.
+  struct NewtonDirection {
+    Eigen::VectorXd sol, dx;
+    double trust_model = 0;
+  };
+  /// Solves for the direction on the factorisation in use (-g on the right), sets r.residual
+  /// (the projected step's largest vertex displacement / h) and, where the projected Hessian was
+  /// factored and NewtonParams::trust_region_cg is on, takes the Steihaug step instead.
+  NewtonDirection newton_direction(const Eigen::VectorXd& g, double h, bool project, NewtonResult& r);
+  /// The backtracking line search along dx from x (energy e, gradient g): alpha starts at the
+  /// largest step every term allows (max_step) and halves until the Armijo condition holds or
+  /// alpha <= min_alpha.
+  struct LineSearch {
+    double alpha = 1.0, alpha_feasible = 1.0, slope = 0.0, min_alpha = 0.0, e_new = std::numeric_limits<double>::infinity();
+    Eigen::VectorXd x_new;
+  };
+  LineSearch line_search(const Eigen::VectorXd& x, const Eigen::VectorXd& dx, const Eigen::VectorXd& g, double e,
+                         NewtonResult& r) const;
+  /// After a full projected step: tries 2, 4, ... times dx up to NewtonParams::max_extrapolation
+  /// while the energy keeps falling and every term allows it, updating ls.
+  void extrapolate(const Eigen::VectorXd& x, const Eigen::VectorXd& dx, double e, LineSearch& ls,
+                   NewtonResult& r) const;
+  /// The trust region after a step of length alpha whose energy change was `change` against the
+  /// exact model's `model` (< 0).
+  void update_trust_radius(double alpha, double change, double model);
   /// Following moving obstacles: with the obstacles evaluated at time tau (the step start),
   /// moves them to the step's end in Newton iterations on the joint motion (see the .cpp).
   /// @return false (r.failure set) when they cannot get there within the iteration budget
