@@ -14,6 +14,8 @@
 
 namespace papersim::collision {
 
+struct Shape;
+
 /// Axis-aligned box in world space [m].
 struct Aabb {
   Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300);
@@ -143,6 +145,13 @@ class Collider {
   /// plane): continuous collision detection can use that plane instead of sphere tracing.
   virtual bool is_convex() const { return false; }
 
+  /// What the contact models need to know of the obstacle's kind, so that they never ask for
+  /// its type: the analytic primitive it is (AnalyticCollider: a sphere's radius, a polytope's
+  /// corners and edges), null for any other obstacle.
+  virtual const Shape* analytic_shape() const { return nullptr; }
+  /// True for a plane, whose contact with a sheet face is that of the face's vertices.
+  virtual bool is_plane() const { return false; }
+
   /// Continuous collision detection of a point moving on the segment p -> p + a d at time t:
   /// a step a in [0, limit] such that every point p + b d, b in [0, a], keeps
   /// phi >= keep phi(p) (keep in [0, 1), e.g. 0.1: the point closes at most 90% of its gap).
@@ -214,6 +223,7 @@ class Collider {
 class PlaneCollider : public Collider {
  public:
   bool is_convex() const override { return true; }
+  bool is_plane() const override { return true; }
   /// Translation, and any turn about the plane's normal (which leaves the field unchanged).
   bool moves_affinely(double t0, double t1) const override;
   /// Exact for these motions: the distance is linear along the joint motion within a keyframe

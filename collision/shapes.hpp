@@ -73,6 +73,7 @@ class AnalyticCollider : public Collider {
   /// @throw ColliderError when a dimension is invalid (see validate).
   explicit AnalyticCollider(const Shape& shape);
   const Shape& shape() const { return m_shape; }
+  const Shape* analytic_shape() const override { return &m_shape; }
   /// Every primitive but the inverted sphere (sphere, cylinder, capsule, box, gable prism) is
   /// convex.
   bool is_convex() const override { return m_shape.kind != ShapeKind::inverted_sphere; }

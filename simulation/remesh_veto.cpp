@@ -77,14 +77,14 @@ RemeshVeto::RemeshVeto(std::vector<std::shared_ptr<const collision::Collider>> o
     m_bounds.push_back(b);
     r.inflate(std::max(params.obstacle_reach, params.obstacle_gap));
     m_reach_bounds.push_back(r);
-    const auto* analytic = dynamic_cast<const collision::AnalyticCollider*>(o.get());
+    const collision::Shape* analytic = o->analytic_shape();
     if (!analytic) continue;
-    const Eigen::Affine3d pose = analytic->motion.pose(params.time);
-    if (analytic->shape().kind == collision::ShapeKind::sphere) {
-      m_spheres.emplace_back(pose.translation(), analytic->shape().radius * pose.linear().col(0).norm());
+    const Eigen::Affine3d pose = o->motion.pose(params.time);
+    if (analytic->kind == collision::ShapeKind::sphere) {
+      m_spheres.emplace_back(pose.translation(), analytic->radius * pose.linear().col(0).norm());
       continue;
     }
-    const collision::PolytopeFeatures local = collision::polytope_features(analytic->shape());
+    const collision::PolytopeFeatures local = collision::polytope_features(*analytic);
     const int first = static_cast<int>(m_corners.size());
     for (const auto& c : local.corners) m_corners.push_back(pose * c);
     for (const auto& e : local.edges) m_edges.push_back({first + e[0], first + e[1]});

@@ -60,17 +60,17 @@ void ObstacleContactEnergy::set_faces(const Eigen::MatrixX3i& faces, const Eigen
     }
   for (size_t o = 0; o < m_obstacles.size(); ++o) {
     const auto* obs = m_obstacles[o].get();
-    if (dynamic_cast<const collision::PlaneCollider*>(obs)) continue;
-    const auto* analytic = dynamic_cast<const collision::AnalyticCollider*>(obs);
+    if (obs->is_plane()) continue;
+    const collision::Shape* analytic = obs->analytic_shape();
     // Inverted sphere: r - |p - c| is concave, so its minimum over a triangle is at a vertex
     // (the farthest point from c): the vertex terms are the exact face contact.
-    if (analytic && analytic->shape().kind == collision::ShapeKind::inverted_sphere) continue;
+    if (analytic && analytic->kind == collision::ShapeKind::inverted_sphere) continue;
     m_mode[o] = Mode::search;
     if (!analytic) continue;
-    if (analytic->shape().kind == collision::ShapeKind::sphere) {
+    if (analytic->kind == collision::ShapeKind::sphere) {
       m_mode[o] = Mode::sphere;
-      m_sphere_radius[o] = analytic->shape().radius;
-    } else if (!collision::polytope_features(analytic->shape()).corners.empty()) {
+      m_sphere_radius[o] = analytic->radius;
+    } else if (!collision::polytope_features(*analytic).corners.empty()) {
       m_mode[o] = Mode::polytope;
     }
   }

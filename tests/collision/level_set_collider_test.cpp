@@ -1,6 +1,7 @@
 #include "collision/collider_factory.hpp"
 #include "collision/errors.hpp"
 #include "collision/level_set_collider.hpp"
+#include "collision/shapes.hpp"
 
 #include <gtest/gtest.h>
 
@@ -228,4 +229,30 @@ TEST(LevelSet, RefusesHugeGrids) {
   } catch (const pc::ColliderError& e) {
     EXPECT_NE(std::string(e.what()).find("voxel"), std::string::npos) << e.what();
   }
+}
+
+// The contact models learn an obstacle's kind from the collider itself, never from its type:
+// a plane says so, an analytic primitive gives its shape (kind and dimensions as specified),
+// and the same primitive as a level set, like any mesh, gives none.
+TEST(LevelSet, AColliderTellsTheContactModelsItsKind) {
+  pc::ColliderSpec spec;
+  spec.kind = pc::ColliderKind::plane;
+  const auto plane = pc::make_collider(spec);
+  EXPECT_TRUE(plane->is_plane());
+  EXPECT_EQ(plane->analytic_shape(), nullptr);
+  spec.kind = pc::ColliderKind::sphere;
+  spec.radius = 0.03;
+  const auto sphere = pc::make_collider(spec);
+  EXPECT_FALSE(sphere->is_plane());
+  ASSERT_NE(sphere->analytic_shape(), nullptr);
+  EXPECT_EQ(sphere->analytic_shape()->kind, pc::ShapeKind::sphere);
+  EXPECT_EQ(sphere->analytic_shape()->radius, 0.03);
+  spec.kind = pc::ColliderKind::gable;
+  const auto gable = pc::make_collider(spec);
+  ASSERT_NE(gable->analytic_shape(), nullptr);
+  EXPECT_EQ(gable->analytic_shape()->kind, pc::ShapeKind::gable);
+  spec.field = pc::FieldKind::level_set;
+  const auto gable_grid = pc::make_collider(spec);
+  EXPECT_EQ(gable_grid->analytic_shape(), nullptr);
+  EXPECT_FALSE(gable_grid->is_plane());
 }
