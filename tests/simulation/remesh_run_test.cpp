@@ -402,26 +402,37 @@ TEST(RemeshVeto, RefusesAFaceThatAPolytopesEdgeOrASpherePiercesBetweenTheSampled
   EXPECT_EQ(veto_with_top_at(ball, 40e-6), "");
 }
 
+namespace {
+
+/// A 15 x 15 cm sheet on a 10 mm grid just above the ground, its centre lifted by `rise` [m] over
+/// `duration` [s] in 10 ms steps, remeshed with faces of 4 mm to 4 cm.
+Scene lifted_sheet(double duration, double rise) {
+  Scene s;
+  s.sheet.width = s.sheet.height = 0.15;
+  s.sheet.edge_length = 0.01;
+  s.sheet.position = Eigen::Vector3d(0, 0, 1e-3);
+  s.duration = duration;
+  s.time_step = 0.01;
+  HandleSpec h;
+  h.material_point = Eigen::Vector2d(0.075, 0.075);
+  h.keyframes = {{0.0, Eigen::Vector3d::Zero()}, {duration, Eigen::Vector3d(0, 0, rise)}};
+  h.axes = Eigen::Vector3d(0, 0, 1);
+  s.handles = {h};
+  s.remesh.enabled = true;
+  s.remesh.params.size_min = 4e-3;
+  s.remesh.params.size_max = 0.04;
+  return s;
+}
+
+}  // namespace
+
 // Remeshing inside a run: a 15 x 15 cm sheet on a 10 mm grid lifted at one point for 0.2 s
 // coarsens where it stays flat and refines where it bends; every pass keeps the sheet free of
 // self-intersections, off the ground and within the strain limit, the lifted point follows its
 // handle on every mesh, and meta.json reports the passes.
 TEST(RemeshRun, LiftedSheetRemeshesAndKeepsEveryInvariant) {
-  Scene s;
-  s.sheet.width = s.sheet.height = 0.15;
-  s.sheet.edge_length = 0.01;
-  s.sheet.position = Eigen::Vector3d(0, 0, 1e-3);
-  s.duration = 0.2;
-  s.time_step = 0.01;
-  HandleSpec h;
-  h.material_point = Eigen::Vector2d(0.075, 0.075);
-  h.keyframes = {{0.0, Eigen::Vector3d::Zero()}, {0.2, Eigen::Vector3d(0, 0, 0.04)}};
-  h.axes = Eigen::Vector3d(0, 0, 1);
-  s.handles = {h};
-  s.remesh.enabled = true;
+  Scene s = lifted_sheet(0.2, 0.04);
   s.remesh.every = 2;
-  s.remesh.params.size_min = 4e-3;
-  s.remesh.params.size_max = 0.04;
   int min_vertices = 1 << 30, max_vertices = 0;
   std::vector<double> jumps;  // change of StepReport::remesh_energy_change over each step [J]
   double energy_change = 0.0;
@@ -511,20 +522,7 @@ TEST(Trace, TopicsByNameAndLinesOnlyForThem) {
 // ground contact's, which tells each step start when asked). The scene is the lifted sheet's
 // above, for 0.1 s.
 TEST(RemeshRun, TracingTellsEachIterationAndPassAndChangesNothing) {
-  Scene s;
-  s.sheet.width = s.sheet.height = 0.15;
-  s.sheet.edge_length = 0.01;
-  s.sheet.position = Eigen::Vector3d(0, 0, 1e-3);
-  s.duration = 0.1;
-  s.time_step = 0.01;
-  HandleSpec h;
-  h.material_point = Eigen::Vector2d(0.075, 0.075);
-  h.keyframes = {{0.0, Eigen::Vector3d::Zero()}, {0.1, Eigen::Vector3d(0, 0, 0.02)}};
-  h.axes = Eigen::Vector3d(0, 0, 1);
-  s.handles = {h};
-  s.remesh.enabled = true;
-  s.remesh.params.size_min = 4e-3;
-  s.remesh.params.size_max = 0.04;
+  const Scene s = lifted_sheet(0.1, 0.02);
   const RunResult plain = run_scene(s, RunOptions{});
   std::vector<std::string> lines;
   RunOptions o;
