@@ -289,6 +289,8 @@ def options(p, quick):
         [p.papersim], [p.papersim, "nope"], [p.papersim, "run"], [p.papersim, "run", scene],
         [p.papersim, "run", scene, "--out", ""], [p.papersim, "run", scene, "--out", out, "--frames", "-1"],
         [p.papersim, "run", scene, "--out", out, "--bogus"],
+        [p.papersim, "run", scene, "--out", out, "--trace", "bogus"], [p.papersim, "run", scene, "--out", out, "--trace", ""],
+        [p.papersim, "scenario", "pull", "--seed", "1", "--out", out, "--trace", "newton,"],
         [p.papersim, "scenario", "nope", "--seed", "1", "--out", out],
         [p.papersim, "scenario", "pull", "--seed", "-1", "--out", out],
         [p.papersim, "scenario", "pull", "--seed", "2147483648", "--draw-only", "--out", out],
