@@ -295,6 +295,9 @@ void MeshEditor::pass_to_children(VertexHandle v, std::vector<ParentFace>& paren
 
 VertexHandle MeshEditor::split(EdgeHandle e, const EditCheck& check) {
   TriMesh& m = m_sheet.mesh();
+  PAPERSIM_ASSERT(!m_finished, "MeshEditor::split: after finish()");
+  PAPERSIM_ASSERT(e.is_valid() && e.idx() < static_cast<int>(m.n_edges()) && !m.status(e).deleted(),
+                  "MeshEditor::split: not an edge of the mesh");
   const EditProposal p = propose_split(e);
   if (!accept(p, quality_reason(p), check)) return VertexHandle();
   std::vector<ParentFace> parents = faces_of_edge(e);
@@ -308,6 +311,9 @@ VertexHandle MeshEditor::split(EdgeHandle e, const EditCheck& check) {
 
 bool MeshEditor::flip(EdgeHandle e, const EditCheck& check) {
   TriMesh& m = m_sheet.mesh();
+  PAPERSIM_ASSERT(!m_finished, "MeshEditor::flip: after finish()");
+  PAPERSIM_ASSERT(e.is_valid() && e.idx() < static_cast<int>(m.n_edges()) && !m.status(e).deleted(),
+                  "MeshEditor::flip: not an edge of the mesh");
   std::string own;
   if (m.is_boundary(e))
     own = "boundary";
@@ -354,6 +360,10 @@ std::string MeshEditor::collapse_boundary_reason(HalfedgeHandle h) const {
 
 bool MeshEditor::collapse(HalfedgeHandle h, const EditCheck& check) {
   TriMesh& m = m_sheet.mesh();
+  PAPERSIM_ASSERT(!m_finished, "MeshEditor::collapse: after finish()");
+  PAPERSIM_ASSERT(h.is_valid() && h.idx() < static_cast<int>(m.n_halfedges()) &&
+                      !m.status(m.edge_handle(h)).deleted(),
+                  "MeshEditor::collapse: not a half-edge of the mesh");
   std::string own;
   if (!m.is_collapse_ok(h)) own = "topology";
   if (own.empty()) own = collapse_boundary_reason(h);

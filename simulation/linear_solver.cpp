@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "common/assert.hpp"
 #include "simulation/errors.hpp"
 
 namespace {
@@ -316,6 +317,8 @@ double LinearSolver::factorize_shifted(BlockSymmetricMatrix& A, long pattern_id)
 }
 
 Eigen::VectorXd LinearSolver::solve(const Eigen::VectorXd& b) {
+  PAPERSIM_ASSERT(m_impl->factor != nullptr && b.size() == m_impl->n,
+                  "LinearSolver::solve: no factorisation, or b is not of its size");
   auto& c = m_impl->common;
   cholmod_dense rhs{};
   rhs.nrow = b.size();

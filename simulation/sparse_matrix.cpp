@@ -1,6 +1,5 @@
 #include "simulation/sparse_matrix.hpp"
 
-#include <cassert>
 
 #include <algorithm>
 #include <atomic>
@@ -155,6 +154,8 @@ void BlockSymmetricMatrix::add_element(const int* vertices, int n, const double*
 }
 
 void BlockSymmetricMatrix::find_slots(const int* vertices, int n, std::vector<int>& slots) const {
+  for (int a = 0; a < n; ++a)
+    PAPERSIM_ASSERT(vertices[a] >= 0 && 3 * vertices[a] < size(), "BlockSymmetricMatrix: a block index out of range");
   for (int b = 0; b < n; ++b)
     for (int a = 0; a < n; ++a)
       if (vertices[a] < vertices[b] || a == b) slots.push_back(3 * block_offset(vertices[a], vertices[b]));
@@ -184,7 +185,7 @@ void BlockSymmetricMatrix::add_element(const int* vertices, int n, const int* sl
 
 void BlockSymmetricMatrix::add_column(int column, const int* blocks, int n, const double* values) {
   for (int k = 0; k < n; ++k) {
-    assert(blocks[k] <= column / 3);
+    PAPERSIM_ASSERT(blocks[k] <= column / 3, "BlockSymmetricMatrix::add_column: an entry below the diagonal");
     const int position = this->position(3 * blocks[k], column);
     add_column(column, blocks + k, 1, &position, values + 3 * k);
   }
@@ -203,12 +204,12 @@ void BlockSymmetricMatrix::add_column(int column, const int* blocks, int n, cons
 void BlockSymmetricMatrix::add_entry(int row, int column, double v) { add_at(position(row, column), v); }
 
 int BlockSymmetricMatrix::position(int row, int column) const {
-  assert(row <= column);
+  PAPERSIM_ASSERT(row <= column, "BlockSymmetricMatrix::add_entry: an entry below the diagonal");
   return m_col_start[column] + 3 * block_offset(row / 3, column / 3) + row % 3;
 }
 
 void BlockSymmetricMatrix::add_diagonal(const Eigen::VectorXd& d) {
-  assert(d.size() <= size());
+  PAPERSIM_ASSERT(d.size() <= size(), "BlockSymmetricMatrix::add_diagonal: longer than the matrix");
   for (int c = 0; c < d.size(); ++c) m_values[m_col_start[c + 1] - 1] += d[c];
 }
 
@@ -219,6 +220,7 @@ Eigen::VectorXd BlockSymmetricMatrix::diagonal() const {
 }
 
 Eigen::VectorXd BlockSymmetricMatrix::multiply(const Eigen::VectorXd& x) const {
+  PAPERSIM_ASSERT(x.size() == size(), "BlockSymmetricMatrix::multiply: x is not of the matrix's size");
   Eigen::VectorXd y = Eigen::VectorXd::Zero(size());
   for (int c = 0; c < size(); ++c)
     for (int k = m_col_start[c]; k < m_col_start[c + 1]; ++k) {

@@ -1,6 +1,8 @@
 #include <gtest/gtest.h>
 
 #include <random>
+#include <stdexcept>
+#include <string>
 
 #include "remesh/mesh_editor.hpp"
 #include "remesh_test_support.hpp"
@@ -331,4 +333,31 @@ TEST(MeshEditor, FlipThroughNearlyCollinearVerticesIsRefused) {
   EXPECT_FALSE(ed.flip(edge(ed, 3, 2)));
   EXPECT_EQ(ed.stats().refusals.at("degenerate"), 1);
   EXPECT_EQ(ed.stats().flips, 0);
+}
+
+// With the invariant checks on (Debug, or PAPERSIM_ASSERTS as in the test build), an edit of a
+// handle that is not the mesh's, or any edit after finish(), is refused naming the edit.
+TEST(MeshEditor, InvariantChecksRefuseAnEditOfNoEdgeOrAfterFinish) {
+#ifndef PAPERSIM_ENABLE_ASSERTS
+  GTEST_SKIP() << "built without PAPERSIM_ASSERTS";
+#else
+  Fixture fx;
+  MeshEditor ed(fx.mesh, fx.state);
+  const auto refused = [](auto&& call, const std::string& what) {
+    try {
+      call();
+      ADD_FAILURE() << what << " accepted";
+    } catch (const std::logic_error& e) {
+      EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+    }
+  };
+  refused([&] { ed.split(EdgeHandle()); }, "MeshEditor::split: not an edge");
+  refused([&] { ed.flip(EdgeHandle(1 << 20)); }, "MeshEditor::flip: not an edge");
+  refused([&] { ed.collapse(HalfedgeHandle(-1)); }, "MeshEditor::collapse: not a half-edge");
+  const EdgeHandle e = edge(ed, vid(1, 1), vid(2, 1));
+  EXPECT_EQ(ed.stats().splits, 0);
+  ed.finish();
+  refused([&] { ed.split(e); }, "MeshEditor::split: after finish()");
+  fx.expect_valid();
+#endif
 }

@@ -1,12 +1,15 @@
 // Assembly into the block matrix: an element's blocks added at places found once (ElementSlots)
 // are the sums the searching add_element makes and the dense sum of the elements, and a matrix of
 // another layout is told apart.
+#include "simulation/linear_solver.hpp"
 #include "simulation/sparse_matrix.hpp"
 
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
 #include <random>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 using namespace papersim::simulation;
@@ -214,4 +217,36 @@ TEST(ElementSlots, PositionsFoundOnceAddTheColumnsAndEntriesTheSearchAdds) {
     }
   EXPECT_NEAR(checked, dense.cwiseAbs().sum(), 1e-9);  // no sum fell outside the stored entries
   EXPECT_GT(checked, 0);
+}
+
+// With the invariant checks on (Debug, or PAPERSIM_ASSERTS as in the test build), the matrix's
+// and the solver's public entries refuse a size or an index that does not fit, naming the entry,
+// instead of reading or writing past their arrays.
+TEST(InvariantChecks, TheMatrixAndTheSolverRefuseSizesAndIndicesThatDoNotFit) {
+#ifndef PAPERSIM_ENABLE_ASSERTS
+  GTEST_SKIP() << "built without PAPERSIM_ASSERTS";
+#else
+  BlockSymmetricMatrix m({{0}, {0, 1}});  // two blocks, coupled
+  const auto refused = [](auto&& call, const std::string& entry) {
+    try {
+      call();
+      ADD_FAILURE() << entry << " accepted a bad argument";
+    } catch (const std::logic_error& e) {
+      EXPECT_NE(std::string(e.what()).find(entry), std::string::npos) << e.what();
+    }
+  };
+  refused([&] { m.multiply(Eigen::VectorXd::Zero(5)); }, "BlockSymmetricMatrix::multiply");
+  refused([&] { m.add_diagonal(Eigen::VectorXd::Ones(7)); }, "BlockSymmetricMatrix::add_diagonal");
+  const int outside[2] = {0, 2};
+  std::vector<int> slots;
+  refused([&] { m.find_slots(outside, 2, slots); }, "block index out of range");
+  refused([&] { m.add_entry(4, 1, 1.0); }, "BlockSymmetricMatrix::add_entry");
+  EXPECT_EQ(m.multiply(Eigen::VectorXd::Ones(6)).size(), 6);  // the right size passes
+  LinearSolver solver;
+  refused([&] { solver.solve(Eigen::VectorXd::Ones(6)); }, "LinearSolver::solve");
+  m.add_diagonal(Eigen::VectorXd::Ones(6));
+  ASSERT_TRUE(solver.factorize(m, 0));
+  refused([&] { solver.solve(Eigen::VectorXd::Ones(3)); }, "LinearSolver::solve");
+  EXPECT_TRUE(solver.solve(Eigen::VectorXd::Ones(6)).isApprox(Eigen::VectorXd::Ones(6)));
+#endif
 }
