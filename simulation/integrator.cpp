@@ -202,16 +202,14 @@ void Integrator::begin_step(const StepContext& ctx, const Eigen::VectorXd& x_t0)
 
 void Integrator::assemble_gradient(const Eigen::VectorXd& x, Eigen::VectorXd& g) const {
   g.setZero();
-  for (const auto& t : m_terms) t->add_derivatives(x, g, nullptr);
+  for (const auto& t : m_terms) t->add_gradient(x, g);
 }
 
 void Integrator::assemble(const Eigen::VectorXd& x, Eigen::VectorXd& g, bool project) {
   g.setZero();
   m_hessian.set_zero();
-  for (const auto& t : m_terms) {
-    t->set_hessian_projection(project);
-    t->add_derivatives(x, g, &m_hessian);
-  }
+  const HessianProjection projection = project ? HessianProjection::psd : HessianProjection::none;
+  for (const auto& t : m_terms) t->add_derivatives(x, g, &m_hessian, projection);
 }
 
 bool Integrator::factor_newton_matrix(const StepContext& ctx, const Eigen::VectorXd& x, Eigen::VectorXd& g,
@@ -264,8 +262,7 @@ void Integrator::trace_model(const Eigen::VectorXd& x, const Eigen::VectorXd& so
   for (const auto& t : m_terms) {
     Eigen::VectorXd gt = Eigen::VectorXd::Zero(x.size());
     h.set_zero();
-    t->set_hessian_projection(project);
-    t->add_derivatives(x, gt, &h);
+    t->add_derivatives(x, gt, &h, project ? HessianProjection::psd : HessianProjection::none);
     const double lin = gt.dot(dx), quad = 0.5 * sol.dot(h.multiply(sol));
     const double actual = t->value(x + dx) - t->value(x);
     char buf[96];

@@ -206,9 +206,9 @@ void linear_sag(const char* label, const rm::SheetMesh& mesh, double clamp, doub
     Eigen::VectorXd x = x0;
     x[3 * free[j] + 2] += eps;
     Eigen::VectorXd g = Eigen::VectorXd::Zero(3 * nv), g2 = g;
-    bend.add_derivatives(x, g, nullptr);
+    bend.add_gradient(x, g);
     x[3 * free[j] + 2] -= 2 * eps;
-    bend.add_derivatives(x, g2, nullptr);
+    bend.add_gradient(x, g2);
     for (int i = 0; i < n; ++i) H(i, j) = (g[3 * free[i] + 2] - g2[3 * free[i] + 2]) / (2 * eps);
   }
   H = 0.5 * (H + H.transpose()).eval();

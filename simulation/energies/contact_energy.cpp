@@ -622,8 +622,9 @@ double ObstacleContactEnergy::value(const Eigen::VectorXd& x) const {
 }
 
 void ObstacleContactEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd& g,
-                                            BlockSymmetricMatrix* H) const {
+                                            BlockSymmetricMatrix* H, HessianProjection projection) const {
   ScopedTimer timer(m_stats->seconds);
+  const bool project = projection == HessianProjection::psd;
   const int nv = static_cast<int>(m_area.size());
   const double dhat = m_params.dhat;
   const auto add_weighted = [&](const std::array<int, 3>& vs, const Eigen::Vector3d& w, int count,
@@ -648,7 +649,7 @@ void ObstacleContactEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::Vec
                              const collision::Vector12d& grad, collision::Matrix12d* hess) {
     for (int k = 0; k < count; ++k) g.segment<3>(3 * vs[k]) += scale * grad.segment<3>(3 * (first + k));
     if (!H) return;
-    const collision::Matrix12d h = m_project ? project_psd(scale * *hess) : collision::Matrix12d(scale * *hess);
+    const collision::Matrix12d h = project ? project_psd(scale * *hess) : collision::Matrix12d(scale * *hess);
     if (count == 2)
       H->add_element<2>({vs[0], vs[1]}, h.block<6, 6>(3 * first, 3 * first));
     else
@@ -698,7 +699,7 @@ void ObstacleContactEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::Vec
         Eigen::Matrix3d curvature;
         if (m_obstacles[o]->distance_hessian(p, m_time, curvature)) {
           local += kappa(v) * b1 * curvature;
-          if (m_project) local = project_psd(local);
+          if (project) local = project_psd(local);
         }
         if (!coupled) {
           H->add_element<1>({v}, local);

@@ -124,7 +124,7 @@ class ObstacleContactEnergy : public EnergyTerm {
   void begin_step(const StepContext& ctx, const Eigen::VectorXd& x_t0) override;
   double value(const Eigen::VectorXd& x) const override;
   void add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd& gradient,
-                       BlockSymmetricMatrix* hessian) const override;
+                       BlockSymmetricMatrix* hessian, HessianProjection projection) const override;
   double max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const override;
 
   /// Moving obstacles (EnergyTerm, Integrator "Following moving obstacles"): supported when
@@ -159,7 +159,6 @@ class ObstacleContactEnergy : public EnergyTerm {
   /// @param faces #F by 3 vertex indices; @param material_coords #V by 2 flat sheet
   /// coordinates [m] (face areas and rest edge lengths)
   void set_faces(const Eigen::MatrixX3i& faces, const Eigen::MatrixX2d& material_coords);
-  void set_hessian_projection(bool project) override { m_project = project; }
 
   /// Enables the impact rule (see above) for a sheet of areal density rho_A [kg/m^2].
   void set_impact_density(double areal_density) { m_impact_density = areal_density; }
@@ -286,7 +285,6 @@ class ObstacleContactEnergy : public EnergyTerm {
   Eigen::MatrixX2i m_edges;               // sheet edges (polytope mode)
   Eigen::VectorXd m_face_area, m_edge_area, m_edge_rest;
   collision::TriangleSdfParams m_triangle;
-  bool m_project = true;
   double m_time = 0.0;      // time the obstacles are evaluated at: the step's end unless followed
   double m_t0 = 0.0, m_t1 = 0.0;  // the current step [s]
   std::vector<bool> m_moving;     // per obstacle: moves during the current step

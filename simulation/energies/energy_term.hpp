@@ -3,7 +3,8 @@
 /// (inertia, gravity, damping, stretching, strain limit, bending, handles, contact, friction).
 ///
 /// Positions are a flat vector x of size 3N (vertex v at x[3v..3v+2]) [m]. Each term evaluates
-/// its elements on fixed-size Eigen types and adds PSD element Hessians to the assembler.
+/// its elements on fixed-size Eigen types and adds element Hessians to the assembler, projected
+/// to PSD or exact as the caller asks.
 #include <Eigen/Core>
 #include <limits>
 #include <string>
@@ -27,6 +28,11 @@ struct StepContext {
   double time_t1() const { return time_t0 + h; }
   double whole_step() const { return h_whole > 0 ? h_whole : h; }
 };
+
+/// How add_derivatives adds element Hessians that can be indefinite (as ipc-toolkit's
+/// PSDProjectionMethod): projected to the nearest PSD matrix (negative eigenvalues clamped to 0)
+/// or exact.
+enum class HessianProjection { psd, none };
 
 class EnergyTerm {
  public:
@@ -56,15 +62,20 @@ class EnergyTerm {
   virtual void end_step(SheetState& /*state*/) const {}
   /// Value [J]; +infinity when x is infeasible for this term.
   virtual double value(const Eigen::VectorXd& x) const = 0;
-  /// Adds the gradient [J/m] to `gradient` and, when `hessian` is not null, PSD element
-  /// Hessians [J/m^2].
+  /// Adds the gradient [J/m] to `gradient` and, when `hessian` is not null, the element
+  /// Hessians [J/m^2]. Terms whose exact element Hessians can be indefinite (the membrane under
+  /// compression, the contact barriers) project them to PSD with `HessianProjection::psd` and
+  /// add them exactly with `none`; the other terms' element Hessians are PSD either way. The
+  /// integrator tries the exact Hessian first and projects when the assembled matrix is not
+  /// positive definite (Integrator::newton_matrix). The gradient does not depend on
+  /// `projection`.
   virtual void add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd& gradient,
-                               BlockSymmetricMatrix* hessian) const = 0;
-  /// Terms whose exact element Hessians can be indefinite (the membrane under compression)
-  /// project them to PSD when `project` is true (the default) and add them exactly otherwise.
-  /// The integrator tries the exact Hessian first and projects when the assembled matrix is not
-  /// positive definite (Integrator::solve).
-  virtual void set_hessian_projection(bool /*project*/) {}
+                               BlockSymmetricMatrix* hessian,
+                               HessianProjection projection) const = 0;
+  /// Adds the gradient alone.
+  void add_gradient(const Eigen::VectorXd& x, Eigen::VectorXd& gradient) const {
+    add_derivatives(x, gradient, nullptr, HessianProjection::psd);
+  }
 
   /// Unknowns of the linear system that are not positions: a term whose energy is minimised
   /// over internal variables y (the bending energy's edge slopes) keeps y out of the state

@@ -108,7 +108,7 @@ Eigen::MatrixX3d FitBendingEnergy::face_curvatures(const Eigen::VectorXd& x) con
 }
 
 void FitBendingEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd& gradient,
-                                    BlockSymmetricMatrix* hessian) const {
+                                    BlockSymmetricMatrix* hessian, HessianProjection /*projection*/) const {
   const bool curvature_term = m_hessian_kind != BendingHessian::gauss_newton && hessian;
   const HingeDerivatives hd = hinge_derivatives(m_hinges, x, curvature_term);
   const Eigen::VectorXd& theta = hd.theta;

@@ -42,7 +42,7 @@ class FitBendingEnergy : public BendingEnergy {
   void add_pattern(SparsityBuilder& pattern) const override;
   double value(const Eigen::VectorXd& x) const override;
   void add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd& gradient,
-                       BlockSymmetricMatrix* hessian) const override;
+                       BlockSymmetricMatrix* hessian, HessianProjection projection) const override;
 
   /// Curvature tensor of every face at x, #F by 3 (K_xx, K_yy, K_xy) [1/m].
   Eigen::MatrixX3d face_curvatures(const Eigen::VectorXd& x) const override;

@@ -119,7 +119,7 @@ double HandleEnergy::value(const Eigen::VectorXd& x) const {
 }
 
 void HandleEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd& g,
-                                   BlockSymmetricMatrix* H) const {
+                                   BlockSymmetricMatrix* H, HessianProjection /*projection*/) const {
   for (int i = 0; i < size(); ++i) {
     if (!active(i, m_t1)) continue;
     const Bound& b = m_handles[i];

@@ -58,7 +58,7 @@ class HandleEnergy : public EnergyTerm {
   void begin_step(const StepContext& ctx, const Eigen::VectorXd& x_t0) override;
   double value(const Eigen::VectorXd& x) const override;
   void add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd& gradient,
-                       BlockSymmetricMatrix* hessian) const override;
+                       BlockSymmetricMatrix* hessian, HessianProjection projection) const override;
 
   /// World position of handle i's material point at x [m].
   Eigen::Vector3d point(int i, const Eigen::VectorXd& x) const;

@@ -35,7 +35,7 @@ double LiftBodyEnergy::value(const Eigen::VectorXd& x) const {
 }
 
 void LiftBodyEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd& gradient,
-                                     BlockSymmetricMatrix* hessian) const {
+                                     BlockSymmetricMatrix* hessian, HessianProjection /*projection*/) const {
   const Eigen::Vector3d q = x.segment<3>(3 * m_block);
   const double k = m_mass / (m_h * m_h);
   Eigen::Vector3d grad = k * (q - m_pred) - m_mass * m_gravity;

@@ -27,7 +27,7 @@ class LiftBodyEnergy : public EnergyTerm {
   void begin_step(const StepContext& ctx, const Eigen::VectorXd& x_t0) override;
   double value(const Eigen::VectorXd& x) const override;
   void add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd& gradient,
-                       BlockSymmetricMatrix* hessian) const override;
+                       BlockSymmetricMatrix* hessian, HessianProjection projection) const override;
   /// The stop: q_z may close 90% of its gap to the path.
   double max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const override;
 

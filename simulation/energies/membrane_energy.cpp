@@ -268,7 +268,7 @@ void MembraneEnergy::add_pattern(SparsityBuilder& pattern) const {
 
 double MembraneEnergy::element(int f, const Eigen::Matrix<double, 9, 1>& xs,
                                Eigen::Matrix<double, 9, 1>* g,
-                               Eigen::Matrix<double, 9, 9>* H) const {
+                               Eigen::Matrix<double, 9, 9>* H, bool project) const {
   const Triangle& t = m_tris[f];
   Eigen::Matrix<double, 3, 2> F = Eigen::Matrix<double, 3, 2>::Zero();
   for (int i = 0; i < 3; ++i) F += xs.segment<3>(3 * i) * t.w.row(i);
@@ -291,7 +291,7 @@ double MembraneEnergy::element(int f, const Eigen::Matrix<double, 9, 1>& xs,
         const double s = 2 * t.area * t.w.row(i).dot(G * t.w.row(j).transpose());
         H->block<3, 3>(3 * i, 3 * j).diagonal().array() += s;
       }
-    if (m_project && (G.determinant() < 0 || G.trace() < 0)) *H = project_psd(*H);
+    if (project && (G.determinant() < 0 || G.trace() < 0)) *H = project_psd(*H);
   }
   return t.area * W.value;
 }
@@ -308,7 +308,7 @@ void MembraneEnergy::arc_deltas(int f, const Eigen::Matrix3Xd& K, bool derivativ
 double MembraneEnergy::arc_element(int f, const Eigen::VectorXd& x, const Eigen::Matrix3Xd& Kf,
                                    const std::vector<Eigen::Matrix<double, 12, 1>>* grads,
                                    const std::vector<Eigen::Matrix<double, 12, 12>>* hesses,
-                                   ArcWork* work, bool hessian) const {
+                                   ArcWork* work, bool hessian, bool project) const {
   const Triangle& t = m_tris[f];
   const Arc& a = m_arcs[f];
   Eigen::Matrix<double, 3, 2> F = Eigen::Matrix<double, 3, 2>::Zero();
@@ -364,7 +364,7 @@ double MembraneEnergy::arc_element(int f, const Eigen::VectorXd& x, const Eigen:
   // arc membrane's assembly").
   const Vec3 beta = a.G.transpose() * W.grad;
   s.D.setZero();
-  if (m_project) {
+  if (project) {
     s.D.topLeftCorner<3, 3>() = (t.area * W.hess).llt().matrixL();
     for (int j = 0; j < 3; ++j) {
       Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(t.area * beta[j] * d[j].hessian);
@@ -377,12 +377,12 @@ double MembraneEnergy::arc_element(int f, const Eigen::VectorXd& x, const Eigen:
   }
   s.DM.resize(12, n);
   for (int j = 0; j < 4; ++j) {
-    const Eigen::Matrix3d Dj = m_project ? Eigen::Matrix3d(s.D.block<3, 3>(3 * j, 3 * j).transpose())
+    const Eigen::Matrix3d Dj = project ? Eigen::Matrix3d(s.D.block<3, 3>(3 * j, 3 * j).transpose())
                                          : Eigen::Matrix3d(s.D.block<3, 3>(3 * j, 3 * j));
     s.DM.middleRows<3>(3 * j).noalias() = Dj.lazyProduct(s.M.middleRows<3>(3 * j));
   }
   // Projected: H = (L^T M)^T (L^T M); exact: H = M^T (D M). Lower blocks, then mirrored.
-  const double* left = m_project ? s.DM.data() : s.M.data();
+  const double* left = project ? s.DM.data() : s.M.data();
   s.H.resize(n, n);
   for (int b = 0; b < n / 3; ++b) {
     const Eigen::Map<const Eigen::Matrix<double, 12, 3>> right(s.DM.data() + 36 * b);
@@ -407,7 +407,7 @@ double MembraneEnergy::arc_element(int f, const Eigen::VectorXd& x, const Eigen:
   Eigen::Matrix3d Sg;
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j) Sg(i, j) = 2 * t.area * t.w.row(i).dot(S * t.w.row(j).transpose());
-  if (m_project && (S.determinant() < 0 || S.trace() < 0)) Sg = project_psd(Sg);
+  if (project && (S.determinant() < 0 || S.trace() < 0)) Sg = project_psd(Sg);
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j) s.H.block<3, 3>(3 * i, 3 * j).diagonal().array() += Sg(i, j);
   if (!hesses) return value;
@@ -450,22 +450,23 @@ double MembraneEnergy::value(const Eigen::VectorXd& x) const {
   if (arc()) {
     const Eigen::Matrix3Xd K = face_curvatures(hinge_angles_at(m_hinges, x));
     for (int f = 0; f < static_cast<int>(m_tris.size()); ++f) {
-      e += arc_element(f, x, K, nullptr, nullptr, nullptr, false);
+      e += arc_element(f, x, K, nullptr, nullptr, nullptr, false, false);
       if (!std::isfinite(e)) return INF;
     }
     return e;
   }
   for (int f = 0; f < static_cast<int>(m_tris.size()); ++f) {
-    e += element(f, gather(x, m_tris[f].v), nullptr, nullptr);
+    e += element(f, gather(x, m_tris[f].v), nullptr, nullptr, false);
     if (!std::isfinite(e)) return INF;
   }
   return e;
 }
 
 void MembraneEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd& gradient,
-                                     BlockSymmetricMatrix* hessian) const {
+                                     BlockSymmetricMatrix* hessian, HessianProjection projection) const {
+  const bool project = projection == HessianProjection::psd;
   if (arc()) {
-    const bool exact = hessian && !m_project;
+    const bool exact = hessian && !project;
     const HingeDerivatives hd = hinge_derivatives(m_hinges, x, exact);
     const Eigen::Matrix3Xd K = face_curvatures(hd.theta);
     ArcWork work;
@@ -476,7 +477,7 @@ void MembraneEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd& 
     for (int f = 0; f < static_cast<int>(m_tris.size()); ++f) {
       const Arc& a = m_arcs[f];
       if (!std::isfinite(arc_element(f, x, K, &hd.gradients, exact ? &hd.hessians : nullptr, &work,
-                                     hessian != nullptr)))
+                                     hessian != nullptr, project)))
         throw NumericError("membrane: derivatives requested past the strain limit");
       for (size_t i = 0; i < a.vertices.size(); ++i)
         gradient.segment<3>(3 * a.vertices[i]) += work.g.segment<3>(3 * i);
@@ -493,7 +494,7 @@ void MembraneEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd& 
   }
   for (int f = 0; f < static_cast<int>(m_tris.size()); ++f) {
     const auto& t = m_tris[f];
-    if (!std::isfinite(element(f, gather(x, t.v), &g, hessian ? &H : nullptr)))
+    if (!std::isfinite(element(f, gather(x, t.v), &g, hessian ? &H : nullptr, project)))
       throw NumericError("membrane: derivatives requested past the strain limit");
     for (int i = 0; i < 3; ++i) gradient.segment<3>(3 * t.v[i]) += g.segment<3>(3 * i);
     if (hessian) hessian->add_element(t.v.data(), 3, m_slots.slots(f), H.data());

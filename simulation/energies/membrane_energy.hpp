@@ -18,7 +18,7 @@
 /// Element Hessians: J^T (d2W/dC2) J plus the geometric term (dW/dC contracted with the second
 /// derivatives of C), exact. The geometric term is indefinite where dW/dC is (compression, or
 /// the compression barrier's push); there the 9x9 element matrix is projected to PSD unless
-/// the integrator asks for the exact Hessian (set_hessian_projection).
+/// the caller asks for the exact Hessian (HessianProjection::none).
 ///
 /// Arc model (Material::membrane_model `arc`): a flat triangle's edge is the chord of the
 /// surface the bending discretisation describes, and on a surface of normal curvature k along
@@ -63,7 +63,7 @@ class MembraneEnergy : public EnergyTerm {
   void add_pattern(SparsityBuilder& pattern) const override;
   double value(const Eigen::VectorXd& x) const override;
   void add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd& gradient,
-                       BlockSymmetricMatrix* hessian) const override;
+                       BlockSymmetricMatrix* hessian, HessianProjection projection) const override;
 
   /// Principal stretches (s1 >= s2) of every face at x, #F by 2 (of the chords, as the limits
   /// see them, under either model).
@@ -86,13 +86,13 @@ class MembraneEnergy : public EnergyTerm {
     return arc_delta(L, size, q, K, false).value;
   }
 
-  /// Energy, gradient and PSD Hessian of one triangle (x0, x1, x2 stacked).
+  /// Energy, gradient and Hessian of one triangle (x0, x1, x2 stacked); the Hessian projected
+  /// to PSD when `project`.
   double element(int f, const Eigen::Matrix<double, 9, 1>& xs, Eigen::Matrix<double, 9, 1>* g,
-                 Eigen::Matrix<double, 9, 9>* H) const;
+                 Eigen::Matrix<double, 9, 9>* H, bool project) const;
 
   bool arc() const { return !m_arcs.empty(); }
   bool limit_enabled() const { return m_limit > 0 || m_limit_low > 0; }
-  void set_hessian_projection(bool project) override { m_project = project; }
 
  private:
   struct Triangle {
@@ -144,11 +144,12 @@ class MembraneEnergy : public EnergyTerm {
   Eigen::Matrix3Xd face_curvatures(const Eigen::VectorXd& theta) const;
   /// The deltas of face f's three edges (with their derivatives in K when `derivatives`).
   void arc_deltas(int f, const Eigen::Matrix3Xd& K, bool derivatives, Delta d[3]) const;
-  /// One arc element's energy; with `work`, its gradient (and with `hessian` its Hessian) in it.
+  /// One arc element's energy; with `work`, its gradient (and with `hessian` its Hessian,
+  /// projected to PSD when `project`) in it.
   double arc_element(int f, const Eigen::VectorXd& x, const Eigen::Matrix3Xd& K,
                      const std::vector<Eigen::Matrix<double, 12, 1>>* grads,
                      const std::vector<Eigen::Matrix<double, 12, 12>>* hesses, ArcWork* work,
-                     bool hessian) const;
+                     bool hessian, bool project) const;
 
   std::vector<Triangle> m_tris;
   std::vector<Arc> m_arcs;  // empty under the chord model
@@ -160,7 +161,6 @@ class MembraneEnergy : public EnergyTerm {
   double m_limit_low = 0;  // Lc = (1 - compression_limit)^2, 0 when disabled
   double m_dhat_low = 0;   // its activation distance in lambda
   double m_kappa;          // barrier stiffness [J/m^2]
-  bool m_project = true;   // element Hessians projected to PSD under compression
   mutable ElementSlots m_slots;  // the elements' places in the Hessian (arcs or triangles)
 };
 

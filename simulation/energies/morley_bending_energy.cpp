@@ -386,7 +386,7 @@ Eigen::MatrixX3d MorleyBendingEnergy::face_curvatures(const Eigen::VectorXd& x) 
 }
 
 void MorleyBendingEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd& gradient,
-                                    BlockSymmetricMatrix* hessian) const {
+                                    BlockSymmetricMatrix* hessian, HessianProjection /*projection*/) const {
   const int nh = static_cast<int>(m_hinges.vertices.rows());
   const bool curvature_term = m_hessian_kind != BendingHessian::gauss_newton && hessian;
   HingeDerivatives hd = hinge_derivatives(m_hinges, x, curvature_term);

@@ -58,7 +58,7 @@ class MorleyBendingEnergy : public BendingEnergy {
   void add_pattern(SparsityBuilder& pattern) const override;
   double value(const Eigen::VectorXd& x) const override;
   void add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd& gradient,
-                       BlockSymmetricMatrix* hessian) const override;
+                       BlockSymmetricMatrix* hessian, HessianProjection projection) const override;
   int auxiliary_blocks() const override { return (m_num_psi + 2) / 3; }
   void set_auxiliary_offset(int first_block) override { m_first_block = first_block; }
 

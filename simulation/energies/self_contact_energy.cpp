@@ -343,7 +343,7 @@ double SelfContactEnergy::value(const Eigen::VectorXd& x) const {
 }
 
 void SelfContactEnergy::add_pair(const Pair& p, const PairPoints& pts, const DistanceStencil& s,
-                                 Eigen::VectorXd& g, BlockSymmetricMatrix* H) const {
+                                 Eigen::VectorXd& g, BlockSymmetricMatrix* H, bool project) const {
   const double scale = m_stiffness / m_params.dhat * weight(p);
   Vector12d grad;
   Matrix12d hess;
@@ -353,7 +353,7 @@ void SelfContactEnergy::add_pair(const Pair& p, const PairPoints& pts, const Dis
   for (int k = 0; k < 4; ++k) g.segment<3>(3 * v[k]) += scale * grad.segment<3>(3 * k);
   if (H) {
     hess *= scale;
-    H->add_element<4>(v, m_project ? project_psd(hess) : hess);
+    H->add_element<4>(v, project ? project_psd(hess) : hess);
   }
 }
 
@@ -375,7 +375,7 @@ void SelfContactEnergy::add_friction(const Eigen::VectorXd& x, Eigen::VectorXd& 
 }
 
 void SelfContactEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd& g,
-                                        BlockSymmetricMatrix* H) const {
+                                        BlockSymmetricMatrix* H, HessianProjection projection) const {
   ScopedTimer timer(m_stats->seconds);
   ensure_candidates(x);
   const double dhat2 = m_params.dhat * m_params.dhat;
@@ -388,7 +388,7 @@ void SelfContactEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::VectorX
     const double d2 = stencil_distance2(k, pts, s, dhat2, moved);
     if (d2 >= dhat2 || !(d2 > 0)) continue;
     ++active;
-    add_pair(p, pts, s, g, H);
+    add_pair(p, pts, s, g, H, projection == HessianProjection::psd);
   }
   add_friction(x, g, H);
   m_active = active;

@@ -36,6 +36,10 @@
 /// removing the common translation, so that the line search, the next Newton iterations and,
 /// for a sheet moving as a whole, the next time steps reuse it. A Newton step with more
 /// relative motion gets a broad phase over the boxes swept along it (less its mean) instead.
+/// The set is a cache, not state: value(), add_derivatives() and max_step() find it again when
+/// it does not cover their x (or step), and what they return does not depend on it, since every
+/// set that covers x holds the same pairs within dhat and visits them in the broad phase's
+/// sorted order (test EnergyDerivatives.SelfContactResultsAtXDoNotDependOnWhatWasEvaluatedBefore).
 /// The Hessian pattern holds the pairs within 2 dhat (and the friction pairs) when it was
 /// last rebuilt; update_pattern() asks for a rebuild only when a pair within dhat (or a friction
 /// pair) is not in it, or when it holds far more pairs than are near (a contact ended), so that
@@ -93,8 +97,7 @@ class SelfContactEnergy : public EnergyTerm {
   void begin_step(const StepContext& ctx, const Eigen::VectorXd& x_t0) override;
   double value(const Eigen::VectorXd& x) const override;
   void add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd& gradient,
-                       BlockSymmetricMatrix* hessian) const override;
-  void set_hessian_projection(bool project) override { m_project = project; }
+                       BlockSymmetricMatrix* hessian, HessianProjection projection) const override;
   double max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const override;
   /// Doubles the stiffness when the smallest pair distance at x and at the last iterate (or the
   /// step start) are both below the floor and it fell (see "Adaptive stiffness").
@@ -177,9 +180,10 @@ class SelfContactEnergy : public EnergyTerm {
   /// primitive's plus the largest of its second's.
   Eigen::VectorXd motions(const Eigen::VectorXd& x) const;
   double pair_motion(const Pair& p, const Eigen::VectorXd& moved) const;
-  /// Adds one pair's barrier derivatives (gradient, Hessian) at distance stencil s.
+  /// Adds one pair's barrier derivatives (gradient, Hessian projected to PSD when `project`) at
+  /// distance stencil s.
   void add_pair(const Pair& p, const collision::PairPoints& pts, const collision::DistanceStencil& s,
-                Eigen::VectorXd& g, BlockSymmetricMatrix* H) const;
+                Eigen::VectorXd& g, BlockSymmetricMatrix* H, bool project) const;
   void add_friction(const Eigen::VectorXd& x, Eigen::VectorXd& g, BlockSymmetricMatrix* H) const;
   /// Trace topic `intersect`: when the step x -> x + alpha dx that max_step allows makes
   /// triangles intersect, prints each new pair's IPC pairs (candidate or not, distances, CCD).
@@ -190,7 +194,6 @@ class SelfContactEnergy : public EnergyTerm {
   collision::SelfContactMesh m_mesh;
   SelfContactParams m_params;
   Eigen::VectorXd m_vertex_area, m_edge_area, m_edge_rest;
-  bool m_project = true;
   double m_eps = 1e-6;  // friction smoothing: eps_velocity h (or h_whole) [m]
   double m_stiffness = 0;           // current stiffness [Pa] (Adaptive stiffness)
   double m_floor = 0;               // floor of the step [m]

@@ -28,7 +28,7 @@ double InertiaEnergy::value(const Eigen::VectorXd& x) const {
 }
 
 void InertiaEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd& g,
-                                    BlockSymmetricMatrix* H) const {
+                                    BlockSymmetricMatrix* H, HessianProjection /*projection*/) const {
   Eigen::VectorXd d(3 * m_mass.size());  // the sheet's entries (x may hold rigid blocks after them)
   for (int v = 0; v < m_mass.size(); ++v) {
     const double k = m_mass[v] / (m_h * m_h);
@@ -51,7 +51,7 @@ double DampingEnergy::value(const Eigen::VectorXd& x) const {
 }
 
 void DampingEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd& g,
-                                    BlockSymmetricMatrix* H) const {
+                                    BlockSymmetricMatrix* H, HessianProjection /*projection*/) const {
   Eigen::VectorXd d(3 * m_mass.size());  // the sheet's entries (x may hold rigid blocks after them)
   for (int v = 0; v < m_mass.size(); ++v) {
     const double k = m_c * m_mass[v] / m_h;
@@ -68,7 +68,7 @@ double GravityEnergy::value(const Eigen::VectorXd& x) const {
 }
 
 void GravityEnergy::add_derivatives(const Eigen::VectorXd&, Eigen::VectorXd& g,
-                                    BlockSymmetricMatrix*) const {
+                                    BlockSymmetricMatrix*, HessianProjection /*projection*/) const {
   for (int v = 0; v < m_mass.size(); ++v) g.segment<3>(3 * v) -= m_mass[v] * m_g;
 }
 

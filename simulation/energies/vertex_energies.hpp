@@ -19,7 +19,7 @@ class InertiaEnergy : public EnergyTerm {
   void begin_step(const StepContext& ctx, const Eigen::VectorXd& x_t0) override;
   double value(const Eigen::VectorXd& x) const override;
   void add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd& gradient,
-                       BlockSymmetricMatrix* hessian) const override;
+                       BlockSymmetricMatrix* hessian, HessianProjection projection) const override;
 
  private:
   Eigen::VectorXd m_mass, m_x_pred;
@@ -36,7 +36,7 @@ class DampingEnergy : public EnergyTerm {
   void begin_step(const StepContext& ctx, const Eigen::VectorXd& x_t0) override;
   double value(const Eigen::VectorXd& x) const override;
   void add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd& gradient,
-                       BlockSymmetricMatrix* hessian) const override;
+                       BlockSymmetricMatrix* hessian, HessianProjection projection) const override;
 
  private:
   Eigen::VectorXd m_mass, m_x_t0;
@@ -52,7 +52,7 @@ class GravityEnergy : public EnergyTerm {
   void add_pattern(SparsityBuilder&) const override {}
   double value(const Eigen::VectorXd& x) const override;
   void add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd& gradient,
-                       BlockSymmetricMatrix* hessian) const override;
+                       BlockSymmetricMatrix* hessian, HessianProjection projection) const override;
 
  private:
   Eigen::VectorXd m_mass;

@@ -2,8 +2,10 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Eigenvalues>
+#include <functional>
 #include <memory>
 #include <random>
+#include <vector>
 
 #include "collision/collider.hpp"
 #include "collision/shapes.hpp"
@@ -68,7 +70,8 @@ Eigen::MatrixXd dense(const BlockSymmetricMatrix& A) {
 /// Central differences of value against the gradient, and of the gradient against the
 /// Hessian. Step 1e-7 m: truncation O(h^2 f''') and round-off O(eps f / h) both far below
 /// the tolerances for positions of order 0.1 m. Terms with a log barrier near its singularity
-/// have large third derivatives and take a smaller step.
+/// have large third derivatives and take a smaller step. The Hessian checked is the exact one
+/// (HessianProjection::none): a projected one matches only where projecting changes nothing.
 void check_derivatives(EnergyTerm& term, int nv, const Eigen::VectorXd& x,
                        double tol_grad = 1e-6, double tol_hess = 1e-5, bool check_hessian = true,
                        double step = 1e-7) {
@@ -81,7 +84,7 @@ void check_derivatives(EnergyTerm& term, int nv, const Eigen::VectorXd& x,
   term.add_dynamic_pattern(pattern);
   BlockSymmetricMatrix H(pattern.finish());
   Eigen::VectorXd g = Eigen::VectorXd::Zero(x.size());
-  term.add_derivatives(x, g, &H);
+  term.add_derivatives(x, g, &H, HessianProjection::none);
   // The factorisation takes only the declared structure: nothing may be written outside it.
   int outside = 0;
   for (std::size_t k = 0; k < H.values().size(); ++k)
@@ -95,8 +98,8 @@ void check_derivatives(EnergyTerm& term, int nv, const Eigen::VectorXd& x,
     xm[i] -= step;
     g_fd[i] = (term.value(xp) - term.value(xm)) / (2 * step);
     Eigen::VectorXd gp = Eigen::VectorXd::Zero(x.size()), gm = gp;
-    term.add_derivatives(xp, gp, nullptr);
-    term.add_derivatives(xm, gm, nullptr);
+    term.add_gradient(xp, gp);
+    term.add_gradient(xm, gm);
     H_fd.col(i) = (gp - gm) / (2 * step);
   }
   const double gscale = std::max(g.norm(), 1e-12);
@@ -140,7 +143,6 @@ TEST(EnergyDerivatives, MembraneArc) {
     if (bend > 10) m.strain_limit = 0;
     MembraneEnergy e(f.mesh, m);
     ASSERT_TRUE(e.arc());
-    e.set_hessian_projection(false);
     check_derivatives(e, f.mesh.num_vertices(), f.x, 1e-6, 1e-4, true, 1e-8);
   }
 }
@@ -243,12 +245,12 @@ TEST(MembraneArc, GreenStrainsAreWhatEachModelMeasuresAndTheSizingSeesThem) {
 }
 
 /// The Hessian term adds at x, dense.
-Eigen::MatrixXd dense_hessian(EnergyTerm& term, int nv, const Eigen::VectorXd& x) {
+Eigen::MatrixXd dense_hessian(EnergyTerm& term, int nv, const Eigen::VectorXd& x, HessianProjection projection) {
   SparsityBuilder pattern(nv, nv);
   term.add_pattern(pattern);
   BlockSymmetricMatrix H(pattern.finish());
   Eigen::VectorXd g = Eigen::VectorXd::Zero(x.size());
-  term.add_derivatives(x, g, &H);
+  term.add_derivatives(x, g, &H, projection);
   return dense(H);
 }
 
@@ -270,16 +272,14 @@ TEST(MembraneArc, ProjectedHessianIsExactWhereNothingIsProjectedAndPsdElsewhere)
   m.strain_limit = 0;
   m.membrane_model = MembraneModel::arc;
   MembraneEnergy e(s.mesh, m);
-  const Eigen::MatrixXd projected = dense_hessian(e, nv, rolled);
-  e.set_hessian_projection(false);
-  const Eigen::MatrixXd exact = dense_hessian(e, nv, rolled);
+  const Eigen::MatrixXd projected = dense_hessian(e, nv, rolled, HessianProjection::psd);
+  const Eigen::MatrixXd exact = dense_hessian(e, nv, rolled, HessianProjection::none);
   EXPECT_LT((projected - exact).norm(), 1e-5 * exact.norm());
 
-  e.set_hessian_projection(true);
   for (const double scale : {1.003, 0.997}) {
     Eigen::VectorXd strained = rolled;
     for (int v = 0; v < nv; ++v) strained[3 * v + 1] *= scale;
-    const Eigen::MatrixXd H = dense_hessian(e, nv, strained);
+    const Eigen::MatrixXd H = dense_hessian(e, nv, strained, HessianProjection::psd);
     EXPECT_LT((H - H.transpose()).norm(), 1e-12 * H.norm()) << "scale " << scale;
     const Eigen::VectorXd eigenvalues = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(H).eigenvalues();
     EXPECT_GT(eigenvalues.minCoeff(), -1e-10 * eigenvalues.maxCoeff()) << "scale " << scale;
@@ -308,7 +308,6 @@ TEST(EnergyDerivatives, MembraneUnderTheCompressionLimit) {
   const Eigen::MatrixX2d s = e.principal_stretches(f.x);
   ASSERT_LT(s.col(1).maxCoeff(), 0.975) << "barrier active on every face";
   ASSERT_GT(s.col(1).minCoeff(), 0.95);
-  e.set_hessian_projection(false);
   check_derivatives(e, f.mesh.num_vertices(), f.x, 1e-6, 1e-4, true, 1e-8);
   // The barrier adds energy and pushes the faces apart along y: the same state without the
   // limit has less energy.
@@ -503,7 +502,6 @@ TEST(EnergyDerivatives, ContactInsideAShrinkingCavity) {
   ctx.x_t0 = &x0;
   ctx.v_t0 = &vel;
   ObstacleContactEnergy e(Eigen::VectorXd::Constant(nv, 4e-4), {cavity}, params);
-  e.set_hessian_projection(false);
   e.begin_step(ctx, x0);
   EXPECT_GT(e.active_friction(), 0);
   ASSERT_LT(e.value(x), INF);
@@ -551,7 +549,7 @@ TEST(EnergyDerivatives, ContactGradientFollowsAMovingSphere) {
   const auto gradient_at = [&](double time) {
     e.set_obstacle_time(time);
     Eigen::VectorXd g = Eigen::VectorXd::Zero(9);
-    e.add_derivatives(x, g, nullptr);
+    e.add_gradient(x, g);
     return g;
   };
   const double delta = 1e-6;  // the sphere moves 0.1 micrometre
@@ -592,7 +590,6 @@ FaceContactCase face_contact_case(std::shared_ptr<collision::Collider> obstacle)
   const Eigen::VectorXd areas = Eigen::VectorXd::Constant(c.f.mesh.num_vertices(), 4e-4);
   c.faces = std::make_unique<ObstacleContactEnergy>(areas, std::vector<std::shared_ptr<const collision::Collider>>{obstacle}, params);
   c.faces->set_faces(c.f.mesh.faces(), c.f.mesh.material_coords());
-  c.faces->set_hessian_projection(false);
   c.vertices_only = std::make_unique<ObstacleContactEnergy>(areas, std::vector<std::shared_ptr<const collision::Collider>>{obstacle}, params);
   StepContext ctx;
   ctx.h = 1e-3;
@@ -699,7 +696,6 @@ collision::PairPoints pair_points(const Eigen::VectorXd& x, std::array<int, 4> v
 /// barrier's third derivative near d = 0.4 mm asks for a small step: 1e-9 m.
 void check_self_contact(const TwoTriangles& t) {
   SelfContactEnergy e(t.X, t.F, self_params());
-  e.set_hessian_projection(false);
   ASSERT_GT(e.value(t.x), 0.0);
   ASSERT_LT(e.value(t.x), INF);
   check_derivatives(e, 6, t.x, 1e-6, 1e-5, true, 1e-9);
@@ -755,7 +751,6 @@ TEST(EnergyDerivatives, SelfContactFrictionAndCcd) {
   const TwoTriangles t = two_triangles({{Eigen::Vector3d(0.002, 0.002, 5e-4), Eigen::Vector3d(0.004, 0.003, 0.008),
                                          Eigen::Vector3d(0.001, 0.004, 0.009)}});
   SelfContactEnergy e(t.X, t.F, self_params());
-  e.set_hessian_projection(false);
   const Eigen::VectorXd v = Eigen::VectorXd::Zero(18);
   StepContext ctx;
   ctx.h = 1e-3;
@@ -770,7 +765,7 @@ TEST(EnergyDerivatives, SelfContactFrictionAndCcd) {
   check_derivatives(e, 6, x, 1e-6, 1e-5, true, 1e-9);
   // Friction resists the slide: the gradient on vertex 0 points along the slip.
   Eigen::VectorXd g = Eigen::VectorXd::Zero(18);
-  e.add_derivatives(x, g, nullptr);
+  e.add_gradient(x, g);
   EXPECT_GT(g[0], 0.0);
   // CCD: moving A down by 2 mm would put vertex 0 through B at a quarter of the step.
   Eigen::VectorXd dx = Eigen::VectorXd::Zero(18);
@@ -804,12 +799,11 @@ TEST(EnergyDerivatives, FrictionKeepsTheWholeStepsStaticZoneInASplitStep) {
     SelfContactParams p = self_params();
     p.static_whole_step = whole;
     SelfContactEnergy e(t.X, t.F, p);
-    e.set_hessian_projection(false);
     e.begin_step(ctx, t.x);
     EXPECT_EQ(e.active_friction(), 1);
     if (whole) check_derivatives(e, 6, x, 1e-6, 1e-5, true, 1e-9);
     Eigen::VectorXd g = Eigen::VectorXd::Zero(18);
-    e.add_derivatives(x, g, nullptr);
+    e.add_gradient(x, g);
     return g[0];
   };
   const double split = self_friction(false);
@@ -838,7 +832,7 @@ TEST(EnergyDerivatives, FrictionKeepsTheWholeStepsStaticZoneInASplitStep) {
     EXPECT_EQ(e.active_friction(), nv);
     if (whole) check_derivatives(e, nv, y, 1e-6, 1e-4, true, 1e-8);
     Eigen::VectorXd g = Eigen::VectorXd::Zero(y.size());
-    e.add_derivatives(y, g, nullptr);
+    e.add_gradient(y, g);
     double sum = 0;
     for (int k = 0; k < nv; ++k) sum += g[3 * k];
     return sum;
@@ -903,35 +897,52 @@ TEST(SelfContactStiffness, DoublesOnlyWhileAPairBelowTheFloorKeepsClosing) {
   EXPECT_EQ(next.statistics().max_stiffness, SelfContactEnergy::max_stiffness_factor * params.stiffness);
 }
 
-TEST(EnergyDerivatives, SelfContactBoundsKeptBetweenEvaluationsRejectOnlyFarPairs) {
-  // Two layers of a 9 x 9 grid of 2 mm cells, 0.7 mm apart (dhat 1 mm): every vertex is near the
-  // other layer, and the mesh neighbours within a layer are candidates that are millimetres
-  // apart. One energy evaluated along a sequence of small motions keeps, per candidate, a bound
-  // from its earlier distances; the energy, gradient and Hessian must be those of a fresh energy
-  // (no bounds kept) at each position.
-  const int n = 9;
+/// Two layers of an n x n grid of 2 mm cells, 0.7 mm apart (dhat 1 mm): every vertex is near
+/// the other layer, and the mesh neighbours within a layer are candidates that are millimetres
+/// apart.
+struct TwoLayers {
+  static constexpr int n = 9;
+  static constexpr int per_layer = n * n;
+  Eigen::MatrixX2d X;
+  Eigen::MatrixX3i F;
+  Eigen::VectorXd x0;
+};
+
+TwoLayers two_layers() {
+  const int n = TwoLayers::n, per_layer = TwoLayers::per_layer;
   const double cell = 2e-3;
-  const int per_layer = n * n;
-  Eigen::MatrixX2d X(2 * per_layer, 2);
-  Eigen::VectorXd x0(6 * per_layer);
+  TwoLayers t;
+  t.X.resize(2 * per_layer, 2);
+  t.x0.resize(6 * per_layer);
   std::vector<Eigen::Vector3i> faces;
   for (int layer = 0; layer < 2; ++layer)
     for (int j = 0; j < n; ++j)
       for (int i = 0; i < n; ++i) {
         const int v = layer * per_layer + j * n + i;
-        X.row(v) << i * cell + layer * 0.05, j * cell;  // material: the layers side by side
-        x0.segment<3>(3 * v) << i * cell, j * cell, layer * 7e-4;
+        t.X.row(v) << i * cell + layer * 0.05, j * cell;  // material: the layers side by side
+        t.x0.segment<3>(3 * v) << i * cell, j * cell, layer * 7e-4;
         if (i + 1 < n && j + 1 < n) {
           faces.emplace_back(v, v + 1, v + n + 1);
           faces.emplace_back(v, v + n + 1, v + n);
         }
       }
-  Eigen::MatrixX3i F(static_cast<int>(faces.size()), 3);
-  for (size_t f = 0; f < faces.size(); ++f) F.row(static_cast<int>(f)) = faces[f].transpose();
+  t.F.resize(static_cast<int>(faces.size()), 3);
+  for (size_t f = 0; f < faces.size(); ++f) t.F.row(static_cast<int>(f)) = faces[f].transpose();
+  return t;
+}
+
+TEST(EnergyDerivatives, SelfContactBoundsKeptBetweenEvaluationsRejectOnlyFarPairs) {
+  // One energy evaluated along a sequence of small motions of two layers keeps, per candidate,
+  // a bound from its earlier distances; the energy, gradient and Hessian must be those of a
+  // fresh energy (no bounds kept) at each position.
+  const TwoLayers t = two_layers();
+  const int n = TwoLayers::n, per_layer = TwoLayers::per_layer;
+  const Eigen::MatrixX2d& X = t.X;
+  const Eigen::MatrixX3i& F = t.F;
+  const Eigen::VectorXd& x0 = t.x0;
   SelfContactParams params = self_params();
   params.friction = 0;
   SelfContactEnergy kept(X, F, params);
-  kept.set_hessian_projection(false);
   std::mt19937 rng(5);
   std::normal_distribution<double> normal(0.0, 1.0);
   Eigen::VectorXd x = x0;
@@ -940,7 +951,6 @@ TEST(EnergyDerivatives, SelfContactBoundsKeptBetweenEvaluationsRejectOnlyFarPair
     // Steps of up to about 0.1 mm per vertex: within the candidates' margin, so the set stays.
     for (int i = 0; i < x.size(); ++i) x[i] = x0[i] + 3e-5 * k * normal(rng) / 4;
     SelfContactEnergy fresh(X, F, params);
-    fresh.set_hessian_projection(false);
     const double e_kept = kept.value(x), e_fresh = fresh.value(x);
     ASSERT_GT(e_fresh, 0.0);
     ASSERT_NEAR(e_kept, e_fresh, 1e-12 * e_fresh) << "position " << k;
@@ -952,8 +962,8 @@ TEST(EnergyDerivatives, SelfContactBoundsKeptBetweenEvaluationsRejectOnlyFarPair
     fresh.add_dynamic_pattern(pattern_builder);
     const BlockPattern pattern = pattern_builder.finish();
     BlockSymmetricMatrix H_kept(pattern), H_fresh(pattern);
-    kept.add_derivatives(x, g_kept, &H_kept);
-    fresh.add_derivatives(x, g_fresh, &H_fresh);
+    kept.add_derivatives(x, g_kept, &H_kept, HessianProjection::none);
+    fresh.add_derivatives(x, g_fresh, &H_fresh, HessianProjection::none);
     ASSERT_LT((g_kept - g_fresh).norm(), 1e-12 * g_fresh.norm()) << "position " << k;
     double h_norm = 0, h_diff = 0;
     for (size_t i = 0; i < H_fresh.values().size(); ++i) {
@@ -964,4 +974,83 @@ TEST(EnergyDerivatives, SelfContactBoundsKeptBetweenEvaluationsRejectOnlyFarPair
     active = kept.active_pairs();
   }
   EXPECT_GT(active, 2 * (n - 1) * (n - 1)) << "pairs across the layers are active";
+}
+
+TEST(EnergyDerivatives, SelfContactResultsAtXDoNotDependOnWhatWasEvaluatedBefore) {
+  // The candidate pairs are a cache that value, add_derivatives and max_step find again when it
+  // does not cover x (self_contact_energy.hpp). What they return must not depend on it: every
+  // set that covers x holds the same pairs within dhat, visited in the broad phase's sorted
+  // order. A term first evaluated elsewhere (at far positions, which put the set's base there,
+  // and along a long step, which sweeps it along the step) must give, at x, a fresh term's
+  // energy, gradient, Hessians (exact and projected) and step bound to the bit. (The Hessian's
+  // pattern is the term's state: it changes only when its pairs no longer fit, so that the
+  // symbolic analysis is redone rarely; the matrices are compared entry by entry.)
+  const TwoLayers t = two_layers();
+  SelfContactParams params = self_params();
+  params.friction = 0;
+  std::mt19937 rng(11);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  const auto jitter = [&](double scale) {
+    Eigen::VectorXd y = t.x0;
+    for (int i = 0; i < y.size(); ++i) y[i] += scale * normal(rng);
+    return y;
+  };
+  const Eigen::VectorXd x = jitter(2e-5);
+  Eigen::VectorXd dx = Eigen::VectorXd::Zero(x.size());
+  for (int v = TwoLayers::per_layer; v < 2 * TwoLayers::per_layer; ++v) dx[3 * v + 2] = -6e-4;  // closing
+  struct Results {
+    double value, step;
+    Eigen::VectorXd gradient;
+    Eigen::MatrixXd exact, projected;  // dense: the pattern (the matrix's structure) may differ
+    int active;
+  };
+  const auto evaluate = [&](SelfContactEnergy& e) {
+    Results r;
+    r.value = e.value(x);
+    e.update_pattern(x);
+    SparsityBuilder builder(2 * TwoLayers::per_layer);
+    e.add_dynamic_pattern(builder);
+    const BlockPattern pattern = builder.finish();
+    for (const HessianProjection projection : {HessianProjection::none, HessianProjection::psd}) {
+      BlockSymmetricMatrix H(pattern);
+      r.gradient = Eigen::VectorXd::Zero(x.size());
+      e.add_derivatives(x, r.gradient, &H, projection);
+      (projection == HessianProjection::none ? r.exact : r.projected) = dense(H);
+    }
+    r.active = e.active_pairs();
+    r.step = e.max_step(x, dx);
+    return r;
+  };
+  SelfContactEnergy fresh(t.X, t.F, params);
+  const Results want = evaluate(fresh);
+  ASSERT_GT(want.active, 2 * (TwoLayers::n - 1) * (TwoLayers::n - 1)) << "pairs across the layers are active";
+  ASSERT_GT(want.step, 0.0);
+  ASSERT_LT(want.step, 1.0) << "the step closing the layers is cut";
+  ASSERT_FALSE(want.exact == want.projected) << "projecting changes some pair's Hessian";
+
+  const Eigen::VectorXd far = jitter(5e-4);  // moves the vertices by more than the set's margin
+  Eigen::VectorXd long_step = Eigen::VectorXd::Zero(x.size());
+  for (int v = 0; v < TwoLayers::per_layer; ++v) long_step.segment<3>(3 * v) << 3e-3, -2e-3, 1e-4;
+  const std::vector<std::function<void(SelfContactEnergy&)>> histories = {
+      [&](SelfContactEnergy& e) { e.value(far); },
+      [&](SelfContactEnergy& e) { e.max_step(x, long_step); },
+      [&](SelfContactEnergy& e) { e.max_step(far, x - far); },
+      [&](SelfContactEnergy& e) {
+        Eigen::VectorXd g = Eigen::VectorXd::Zero(x.size());
+        e.value(far);
+        e.add_gradient(x + 0.5 * long_step, g);
+        e.value(x + 1e-4 * dx);
+      },
+  };
+  for (std::size_t k = 0; k < histories.size(); ++k) {
+    SelfContactEnergy e(t.X, t.F, params);
+    histories[k](e);
+    const Results got = evaluate(e);
+    EXPECT_EQ(got.value, want.value) << "history " << k;
+    EXPECT_TRUE(got.gradient == want.gradient) << "history " << k;
+    EXPECT_TRUE(got.exact == want.exact) << "history " << k;
+    EXPECT_TRUE(got.projected == want.projected) << "history " << k;
+    EXPECT_EQ(got.active, want.active) << "history " << k;
+    EXPECT_EQ(got.step, want.step) << "history " << k;
+  }
 }

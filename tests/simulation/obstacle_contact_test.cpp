@@ -245,7 +245,7 @@ TEST(ObstacleContact, CoupledBodyDerivativesMatchFiniteDifferences) {
   e.add_pattern(pattern);
   BlockSymmetricMatrix H(pattern.finish());
   Eigen::VectorXd g = Eigen::VectorXd::Zero(x.size());
-  e.add_derivatives(x, g, &H);
+  e.add_derivatives(x, g, &H, HessianProjection::psd);
   ASSERT_LT(g[3 * block + 2], 0.0);  // the sheet below pushes the body up
   const double step = 1e-9;
   for (int i = 0; i < x.size(); ++i) {
@@ -255,8 +255,8 @@ TEST(ObstacleContact, CoupledBodyDerivativesMatchFiniteDifferences) {
     const double fd = (e.value(a) - e.value(b)) / (2 * step);
     EXPECT_NEAR(g[i], fd, 1e-5 * std::abs(g[i]) + 1e-9) << "gradient entry " << i;
     Eigen::VectorXd ga = Eigen::VectorXd::Zero(x.size()), gb = Eigen::VectorXd::Zero(x.size());
-    e.add_derivatives(a, ga, nullptr);
-    e.add_derivatives(b, gb, nullptr);
+    e.add_gradient(a, ga);
+    e.add_gradient(b, gb);
     const Eigen::VectorXd column = (ga - gb) / (2 * step);
     const Eigen::VectorXd unit = Eigen::VectorXd::Unit(x.size(), i);
     const Eigen::VectorXd h = H.multiply(unit);
@@ -307,7 +307,7 @@ TEST(ObstacleContact, CarriedStiffnessMovesToHoldTheLoadAtAHundredthOfTheThickne
       Eigen::VectorXd y = x;
       y[2] = 0.05 + dhat / 100;
       *force = Eigen::VectorXd::Zero(3);
-      e.add_derivatives(y, *force, nullptr);
+      e.add_gradient(y, *force);
     }
     return e.step_stiffness();
   };
@@ -415,7 +415,7 @@ TEST(ObstacleFaceSearch, ManySpheresFindTheFacesEachSphereAloneFinds) {
   const auto all = term(spheres);
   const double e_all = all->value(x);
   Eigen::VectorXd g_all = Eigen::VectorXd::Zero(x.size());
-  all->add_derivatives(x, g_all, nullptr);
+  all->add_gradient(x, g_all);
   const double step_all = all->max_step(x, dx);
   double e_sum = 0, step_min = 1.0;
   Eigen::VectorXd g_sum = Eigen::VectorXd::Zero(x.size());
@@ -426,7 +426,7 @@ TEST(ObstacleFaceSearch, ManySpheresFindTheFacesEachSphereAloneFinds) {
     ASSERT_TRUE(std::isfinite(e));
     touching += e > 0;
     e_sum += e;
-    one->add_derivatives(x, g_sum, nullptr);
+    one->add_gradient(x, g_sum);
     step_min = std::min(step_min, one->max_step(x, dx));
   }
   EXPECT_EQ(touching, 12);  // every sphere is within the barrier of some face
