@@ -20,37 +20,56 @@ namespace {
 std::string duration_text(double s) {
   if (s < 0) return "?";
   char buf[32];
-  if (s < 120) std::snprintf(buf, sizeof buf, "%.0f s", s);
-  else if (s < 7200) std::snprintf(buf, sizeof buf, "%.1f min", s / 60);
-  else std::snprintf(buf, sizeof buf, "%.1f h", s / 3600);
+  if (s < 120)
+    std::snprintf(buf, sizeof buf, "%.0f s", s);
+  else if (s < 7200)
+    std::snprintf(buf, sizeof buf, "%.1f min", s / 60);
+  else
+    std::snprintf(buf, sizeof buf, "%.1f h", s / 3600);
   return buf;
 }
 
 }  // namespace
 
 void add_batch_cli_options(CLI::App* app, BatchCliOptions& o) {
-  app->add_option("--jobs,-j", o.jobs, "samples at once, one child process each (0: one per core; at most 1024)")
-      ->check(CLI::Range(0, 1024))->capture_default_str();
-  app->add_option("--time-limit", o.time_limit, "seconds per sample; a sample over it is killed and recorded as failed (0: none)")
-      ->check(papersim::common::non_negative())->capture_default_str();
-  app->add_option("--shard", o.shard, "run only slice I of N (0 <= I < N): the samples at positions p with p % N == I");
-  app->add_flag("--retry-failed", o.retry_failed, "run samples recorded in the failures file again");
+  app->add_option("--jobs,-j", o.jobs,
+                  "samples at once, one child process each (0: one per core; at most 1024)")
+      ->check(CLI::Range(0, 1024))
+      ->capture_default_str();
+  app->add_option("--time-limit", o.time_limit,
+                  "seconds per sample; a sample over it is killed and recorded as failed (0: none)")
+      ->check(papersim::common::non_negative())
+      ->capture_default_str();
+  app->add_option("--shard", o.shard,
+                  "run only slice I of N (0 <= I < N): the samples at positions p with p % N == I");
+  app->add_flag("--retry-failed", o.retry_failed,
+                "run samples recorded in the failures file again");
   app->add_flag("--quiet", o.quiet, "no progress line");
-  app->add_option("--slurm", o.slurm_shards, "write DATASET/slurm/*.sbatch, a job array of this many shards, and print how to submit it (nothing runs)")
+  app->add_option("--slurm", o.slurm_shards,
+                  "write DATASET/slurm/*.sbatch, a job array of this many shards, and print how to "
+                  "submit it (nothing runs)")
       ->check(papersim::common::positive());
-  app->add_option("--slurm-cpus", o.slurm.cpus_per_task, "cores per array task (= samples at once in it; at most 1024)")
-      ->check(CLI::Range(1, 1024))->capture_default_str();
-  app->add_option("--slurm-mem", o.slurm.mem, "memory per array task (sbatch --mem)")->capture_default_str();
-  app->add_option("--slurm-time", o.slurm.time, "time limit per array task (sbatch --time)")->capture_default_str();
-  app->add_option("--slurm-partition", o.slurm.partition, "sbatch --partition (default: the cluster's)");
-  app->add_option("--slurm-max-running", o.slurm.max_running, "at most this many array tasks at once (0: no limit)")
-      ->check(papersim::common::non_negative())->capture_default_str();
+  app->add_option("--slurm-cpus", o.slurm.cpus_per_task,
+                  "cores per array task (= samples at once in it; at most 1024)")
+      ->check(CLI::Range(1, 1024))
+      ->capture_default_str();
+  app->add_option("--slurm-mem", o.slurm.mem, "memory per array task (sbatch --mem)")
+      ->capture_default_str();
+  app->add_option("--slurm-time", o.slurm.time, "time limit per array task (sbatch --time)")
+      ->capture_default_str();
+  app->add_option("--slurm-partition", o.slurm.partition,
+                  "sbatch --partition (default: the cluster's)");
+  app->add_option("--slurm-max-running", o.slurm.max_running,
+                  "at most this many array tasks at once (0: no limit)")
+      ->check(papersim::common::non_negative())
+      ->capture_default_str();
 }
 
 ProgressFn progress_printer(std::ostream& out, bool tty, const std::string& label) {
   return [&out, tty, label](const Progress& p) {
     char line[256];
-    std::snprintf(line, sizeof line, "%s: done %lld/%lld  failed %lld  running %lld%s  %.1f samples/h  ETA %s",
+    std::snprintf(line, sizeof line,
+                  "%s: done %lld/%lld  failed %lld  running %lld%s  %.1f samples/h  ETA %s",
                   label.c_str(), p.done, p.total, p.failed, p.running,
                   p.waiting > 0 ? ("  held elsewhere " + std::to_string(p.waiting)).c_str() : "",
                   p.per_hour, duration_text(p.eta).c_str());
@@ -71,7 +90,8 @@ Shard cli_shard(const BatchCliOptions& o) {
 
 BatchSummary run_cli_batch(const std::vector<Task>& tasks, BatchSpec spec, const BatchCliOptions& o,
                            std::ostream& progress_out, const std::string& label) {
-  spec.jobs = o.jobs > 0 ? o.jobs : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  spec.jobs =
+      o.jobs > 0 ? o.jobs : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   spec.time_limit = o.time_limit;
   spec.retry_failed = o.retry_failed;
   const bool tty = &progress_out == &std::cerr ? isatty(2) : false;
@@ -82,8 +102,8 @@ BatchSummary run_cli_batch(const std::vector<Task>& tasks, BatchSpec spec, const
   return s;
 }
 
-fs::path write_slurm_script(const fs::path& root, const std::string& name, const std::vector<std::string>& command,
-                            const BatchCliOptions& o) {
+fs::path write_slurm_script(const fs::path& root, const std::string& name,
+                            const std::vector<std::string>& command, const BatchCliOptions& o) {
   SlurmOptions so = o.slurm;
   so.shards = o.slurm_shards;
   so.job_name = name;

@@ -28,12 +28,12 @@ inline std::uint64_t splitmix64(std::uint64_t x) {
 
 /// Parsed shared options.
 struct BatchCliOptions {
-  int jobs = 0;               ///< 0: one per core
-  double time_limit = 0.0;    ///< per sample [s]; 0: none
-  std::string shard;          ///< "I/N" or empty
+  int jobs = 0;             ///< 0: one per core
+  double time_limit = 0.0;  ///< per sample [s]; 0: none
+  std::string shard;        ///< "I/N" or empty
   bool retry_failed = false;
   bool quiet = false;
-  int slurm_shards = 0;       ///< > 0: write the sbatch script instead of running
+  int slurm_shards = 0;  ///< > 0: write the sbatch script instead of running
   SlurmOptions slurm;
 };
 
@@ -51,8 +51,9 @@ Shard cli_shard(const BatchCliOptions& options);
 /// Fill jobs / time limit / retry / progress into the spec and run `tasks`, which are the
 /// shard's alone: the caller makes only the tasks cli_shard() holds (an array task of a large
 /// dataset then holds 1/N of its tasks in memory). --jobs 0 means one per core.
-BatchSummary run_cli_batch(const std::vector<Task>& tasks, BatchSpec spec, const BatchCliOptions& options,
-                           std::ostream& progress_out, const std::string& label);
+BatchSummary run_cli_batch(const std::vector<Task>& tasks, BatchSpec spec,
+                           const BatchCliOptions& options, std::ostream& progress_out,
+                           const std::string& label);
 
 /// Write ROOT/slurm/NAME.sbatch for `command` (the batch command line without --shard and
 /// --jobs; absolute paths) and return its path.

@@ -21,7 +21,8 @@ using nlohmann::json;
 namespace {
 
 const std::vector<std::string> MESH_FIGURES = {
-    "wall_seconds", "cpu_seconds", "vertices", "newton_iterations", "max_stretch", "closest_obstacle_distance",
+    "wall_seconds",       "cpu_seconds",   "vertices",
+    "newton_iterations",  "max_stretch",   "closest_obstacle_distance",
     "self_intersections", "crease_length", "abs_curvature_integral"};
 const std::vector<std::string> RENDER_FIGURES = {"wall_seconds", "cpu_seconds"};
 
@@ -37,7 +38,8 @@ double quantile(const std::vector<double>& sorted, double q) {
 /// given twice takes its last value, as parsing the row into an object would.
 class RowFields : public nlohmann::json_sax<json> {
  public:
-  explicit RowFields(const std::vector<std::string>& figures) : figures_(figures), values_(figures.size()) {}
+  explicit RowFields(const std::vector<std::string>& figures)
+      : figures_(figures), values_(figures.size()) {}
 
   /// Parse `line`: whether it is a JSON object whose "key" is a string and whose "scenario" and
   /// "reason" are strings where present.
@@ -47,8 +49,8 @@ class RowFields : public nlohmann::json_sax<json> {
     key_ = scenario_ = reason_ = Field{};
     std::fill(values_.begin(), values_.end(), NAN);
     if (!json::sax_parse(line, this)) return false;
-    return seen_object_ && key_.given && key_.is_string && (!scenario_.given || scenario_.is_string) &&
-           (!reason_.given || reason_.is_string);
+    return seen_object_ && key_.given && key_.is_string &&
+           (!scenario_.given || scenario_.is_string) && (!reason_.given || reason_.is_string);
   }
   const std::string& key() const { return key_.text; }
   std::string scenario() const { return scenario_.given ? scenario_.text : "?"; }
@@ -58,8 +60,12 @@ class RowFields : public nlohmann::json_sax<json> {
 
   bool null() override { return scalar(nullptr, NAN); }
   bool boolean(bool) override { return scalar(nullptr, NAN); }
-  bool number_integer(number_integer_t v) override { return scalar(nullptr, static_cast<double>(v)); }
-  bool number_unsigned(number_unsigned_t v) override { return scalar(nullptr, static_cast<double>(v)); }
+  bool number_integer(number_integer_t v) override {
+    return scalar(nullptr, static_cast<double>(v));
+  }
+  bool number_unsigned(number_unsigned_t v) override {
+    return scalar(nullptr, static_cast<double>(v));
+  }
   bool number_float(number_float_t v, const string_t&) override { return scalar(nullptr, v); }
   bool string(string_t& v) override { return scalar(&v, NAN); }
   bool binary(binary_t&) override { return scalar(nullptr, NAN); }
@@ -71,7 +77,9 @@ class RowFields : public nlohmann::json_sax<json> {
     if (depth_ == 1) name_ = name;
     return true;
   }
-  bool parse_error(std::size_t, const std::string&, const nlohmann::detail::exception&) override { return false; }
+  bool parse_error(std::size_t, const std::string&, const nlohmann::detail::exception&) override {
+    return false;
+  }
 
  private:
   struct Field {
@@ -82,7 +90,10 @@ class RowFields : public nlohmann::json_sax<json> {
   /// The top-level value named `name_` is a string (`text`), a number (`number`) or neither.
   bool scalar(const std::string* text, double number) {
     if (depth_ != 1) return true;
-    Field* f = name_ == "key" ? &key_ : name_ == "scenario" ? &scenario_ : name_ == "reason" ? &reason_ : nullptr;
+    Field* f = name_ == "key"        ? &key_
+               : name_ == "scenario" ? &scenario_
+               : name_ == "reason"   ? &reason_
+                                     : nullptr;
     if (f) {
       f->given = true;
       f->is_string = text != nullptr;
@@ -94,8 +105,10 @@ class RowFields : public nlohmann::json_sax<json> {
     return true;
   }
   bool open(bool object) {
-    if (depth_ == 0) seen_object_ = object;
-    else if (depth_ == 1) scalar(nullptr, NAN);  // a container is neither a string nor a number
+    if (depth_ == 0)
+      seen_object_ = object;
+    else if (depth_ == 1)
+      scalar(nullptr, NAN);  // a container is neither a string nor a number
     ++depth_;
     return true;
   }
@@ -124,10 +137,13 @@ void for_each_row(const fs::path& path, const std::vector<std::string>& figures,
   RowFields fields(figures);
   for (std::size_t lines = 1; std::getline(in, line); ++lines) {
     count.read += line.size() + 1;
-    if (count.progress && lines % 4096 == 0) count.progress(std::min(count.read, count.total), count.total);
+    if (count.progress && lines % 4096 == 0)
+      count.progress(std::min(count.read, count.total), count.total);
     if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
-    if (fields.read(line)) row(fields);
-    else ++skipped;
+    if (fields.read(line))
+      row(fields);
+    else
+      ++skipped;
   }
 }
 
@@ -143,11 +159,13 @@ void write_counts(std::ostream& out, const PartStats& p) {
   for (const auto& [s, n] : p.failed) names.insert(s);
   out << p.name << ": samples per scenario\n";
   char line[256];
-  std::snprintf(line, sizeof line, "  %-16s %10s %10s %12s\n", "scenario", "done", "failed", "failure rate");
+  std::snprintf(line, sizeof line, "  %-16s %10s %10s %12s\n", "scenario", "done", "failed",
+                "failure rate");
   out << line;
   long long td = 0, tf = 0;
   for (const auto& s : names) {
-    const long long d = p.done.count(s) ? p.done.at(s) : 0, f = p.failed.count(s) ? p.failed.at(s) : 0;
+    const long long d = p.done.count(s) ? p.done.at(s) : 0,
+                    f = p.failed.count(s) ? p.failed.at(s) : 0;
     td += d;
     tf += f;
     std::snprintf(line, sizeof line, "  %-16s %10lld %10lld %11.1f%%\n", s.c_str(), d, f,
@@ -174,15 +192,15 @@ void write_distributions(std::ostream& out, const PartStats& p) {
   char line[256];
   for (const auto& [figure, per] : p.values) {
     out << p.name << ": " << figure << "\n";
-    std::snprintf(line, sizeof line, "  %-16s %7s %10s %10s %10s %10s %10s %10s\n", "scenario", "n", "min",
-                  "p10", "median", "p90", "max", "mean");
+    std::snprintf(line, sizeof line, "  %-16s %7s %10s %10s %10s %10s %10s %10s\n", "scenario", "n",
+                  "min", "p10", "median", "p90", "max", "mean");
     out << line;
     std::map<std::string, Distribution> dists;
     for (const auto& [s, v] : per) {
       const Distribution d = dists[s] = distribution(v);
-      std::snprintf(line, sizeof line, "  %-16s %7zu %10s %10s %10s %10s %10s %10s\n", s.c_str(), d.count,
-                    fmt(d.min).c_str(), fmt(d.p10).c_str(), fmt(d.median).c_str(), fmt(d.p90).c_str(),
-                    fmt(d.max).c_str(), fmt(d.mean).c_str());
+      std::snprintf(line, sizeof line, "  %-16s %7zu %10s %10s %10s %10s %10s %10s\n", s.c_str(),
+                    d.count, fmt(d.min).c_str(), fmt(d.p10).c_str(), fmt(d.median).c_str(),
+                    fmt(d.p90).c_str(), fmt(d.max).c_str(), fmt(d.mean).c_str());
       out << line;
     }
     if (figure == "wall_seconds" || figure == "cpu_seconds") {
@@ -222,17 +240,20 @@ bool whole_svg(const fs::path& path) {
 }
 
 /// One histogram file: bin centre, then one count column per scenario.
-std::string write_histogram(const fs::path& dat, const std::map<std::string, std::vector<double>>& per, int bins) {
+std::string write_histogram(const fs::path& dat,
+                            const std::map<std::string, std::vector<double>>& per, int bins) {
   double lo = INFINITY, hi = -INFINITY;
   for (const auto& [s, v] : per)
     for (double x : v) lo = std::min(lo, x), hi = std::max(hi, x);
   if (!(hi > lo)) hi = lo + 1;
   const double w = (hi - lo) / bins;
-  std::vector<std::vector<long long>> counts(per.size(), std::vector<long long>(static_cast<std::size_t>(bins), 0));
+  std::vector<std::vector<long long>> counts(
+      per.size(), std::vector<long long>(static_cast<std::size_t>(bins), 0));
   std::size_t k = 0;
   for (const auto& [s, v] : per) {
     for (double x : v)
-      ++counts[k][std::min(static_cast<std::size_t>(bins - 1), static_cast<std::size_t>((x - lo) / w))];
+      ++counts[k][std::min(static_cast<std::size_t>(bins - 1),
+                           static_cast<std::size_t>((x - lo) / w))];
     ++k;
   }
   std::ostringstream text;
@@ -282,7 +303,8 @@ PartStats read_part(const std::string& name, const fs::path& manifest, const fs:
   });
   for (auto it = p.values.begin(); it != p.values.end();)
     it = it->second.empty() ? p.values.erase(it) : std::next(it);
-  std::map<std::string, std::pair<std::string, std::string>> latest_failure;  // key -> scenario, reason
+  std::map<std::string, std::pair<std::string, std::string>>
+      latest_failure;  // key -> scenario, reason
   for_each_row(failures, {}, p.skipped_lines, count, [&](const RowFields& row) {
     ++p.failed_attempts;
     latest_failure[row.key()] = {row.scenario(), row.reason()};
@@ -303,13 +325,15 @@ std::vector<PartStats> read_dataset(const fs::path& root, const ReadProgress& pr
     return ec ? std::uintmax_t{0} : n;
   };
   std::uintmax_t total = 0, read = 0;
-  for (const char* f : {"manifest.jsonl", "failures.jsonl", "renders.jsonl", "renders_failures.jsonl"})
+  for (const char* f :
+       {"manifest.jsonl", "failures.jsonl", "renders.jsonl", "renders_failures.jsonl"})
     total += size(root / f);
   std::vector<PartStats> parts;
   const auto add = [&](const std::string& name, const char* manifest, const char* failures,
                        const std::vector<std::string>& figures) {
     if (fs::exists(root / manifest) || fs::exists(root / failures))
-      parts.push_back(read_part(name, root / manifest, root / failures, figures, progress, read, total));
+      parts.push_back(
+          read_part(name, root / manifest, root / failures, figures, progress, read, total));
     read += size(root / manifest) + size(root / failures);
   };
   add("meshes", "manifest.jsonl", "failures.jsonl", MESH_FIGURES);
@@ -325,7 +349,8 @@ void write_dataset_report(std::ostream& out, const std::vector<PartStats>& parts
   }
 }
 
-std::vector<std::string> write_dataset_plots(const fs::path& dir, const std::vector<PartStats>& parts, int bins) {
+std::vector<std::string> write_dataset_plots(const fs::path& dir,
+                                             const std::vector<PartStats>& parts, int bins) {
   std::error_code ec;
   fs::create_directories(dir, ec);
   if (ec) throw PlotsOutputError("cannot create '" + dir.string() + "': " + ec.message());
@@ -344,8 +369,9 @@ std::vector<std::string> write_dataset_plots(const fs::path& dir, const std::vec
       for (const auto& [figure, per] : p.values) {
         const std::string name = p.name + "_" + figure;
         const std::string width = write_histogram(stage / (name + ".dat"), per, bins);
-        gp << "set output " << gp_quoted(name + ".svg") << "\nset title " << gp_quoted(p.name + ": " + figure)
-           << "\nset xlabel " << gp_quoted(figure) << "\nset boxwidth " << width << "\nplot ";
+        gp << "set output " << gp_quoted(name + ".svg") << "\nset title "
+           << gp_quoted(p.name + ": " + figure) << "\nset xlabel " << gp_quoted(figure)
+           << "\nset boxwidth " << width << "\nplot ";
         int col = 2;
         for (const auto& [s, v] : per) {
           gp << (col > 2 ? ", " : "") << gp_quoted(name + ".dat") << " using 1:" << col
@@ -358,7 +384,8 @@ std::vector<std::string> write_dataset_plots(const fs::path& dir, const std::vec
     }
     if (!names.empty()) {
       write_checked(stage / "stats.gp", gp.str());
-      const std::string command = "cd " + shell_quote(stage.string()) + " && gnuplot stats.gp 2> gnuplot.log";
+      const std::string command =
+          "cd " + shell_quote(stage.string()) + " && gnuplot stats.gp 2> gnuplot.log";
       if (std::system(command.c_str()) != 0) {
         std::ifstream log(stage / "gnuplot.log");
         std::stringstream text;
@@ -374,10 +401,14 @@ std::vector<std::string> write_dataset_plots(const fs::path& dir, const std::vec
       for (const auto& name : names)
         for (const char* ext : {".dat", ".svg"}) {
           fs::rename(stage / (name + ext), dir / (name + ext), ec);
-          if (ec) throw PlotsOutputError("cannot write '" + (dir / (name + ext)).string() + "': " + ec.message());
+          if (ec)
+            throw PlotsOutputError("cannot write '" + (dir / (name + ext)).string() +
+                                   "': " + ec.message());
         }
       fs::rename(stage / "stats.gp", dir / "stats.gp", ec);
-      if (ec) throw PlotsOutputError("cannot write '" + (dir / "stats.gp").string() + "': " + ec.message());
+      if (ec)
+        throw PlotsOutputError("cannot write '" + (dir / "stats.gp").string() +
+                               "': " + ec.message());
       for (const auto& name : names) written.push_back((dir / (name + ".svg")).string());
     }
   } catch (...) {

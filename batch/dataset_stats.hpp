@@ -40,11 +40,11 @@ Distribution distribution(std::vector<double> values);
 
 /// One part of a dataset (meshes or renders) as its manifest and failures file describe it.
 struct PartStats {
-  std::string name;                              ///< "meshes" or "renders"
-  std::map<std::string, long long> done;         ///< finished samples per scenario
-  std::map<std::string, long long> failed;       ///< samples whose latest state is failed, per scenario
-  std::map<std::string, long long> reasons;      ///< those failures by reason
-  long long failed_attempts = 0;                 ///< every failure row, retried ones included
+  std::string name;                          ///< "meshes" or "renders"
+  std::map<std::string, long long> done;     ///< finished samples per scenario
+  std::map<std::string, long long> failed;   ///< samples whose latest state is failed, per scenario
+  std::map<std::string, long long> reasons;  ///< those failures by reason
+  long long failed_attempts = 0;             ///< every failure row, retried ones included
   /// Lines of the two files that are not a JSON object with a string "key" (and a string
   /// "scenario" and "reason" where present), left out and counted: a line cut short by a
   /// killed writer, or a file edited by hand.
@@ -62,12 +62,14 @@ using ReadProgress = std::function<void(std::uintmax_t read, std::uintmax_t tota
 /// once. `progress` is told the bytes read, counted from `read_before` of `total`.
 PartStats read_part(const std::string& name, const std::filesystem::path& manifest,
                     const std::filesystem::path& failures, const std::vector<std::string>& figures,
-                    const ReadProgress& progress = {}, std::uintmax_t read_before = 0, std::uintmax_t total = 0);
+                    const ReadProgress& progress = {}, std::uintmax_t read_before = 0,
+                    std::uintmax_t total = 0);
 
 /// The meshes (manifest.jsonl, failures.jsonl) and renders (renders.jsonl,
 /// renders_failures.jsonl) of a dataset; a part with no file at all is left out.
 /// @throw DatasetError when `root` is not a folder
-std::vector<PartStats> read_dataset(const std::filesystem::path& root, const ReadProgress& progress = {});
+std::vector<PartStats> read_dataset(const std::filesystem::path& root,
+                                    const ReadProgress& progress = {});
 
 /// The report as text tables.
 void write_dataset_report(std::ostream& out, const std::vector<PartStats>& parts);

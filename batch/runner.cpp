@@ -54,7 +54,8 @@ class StopSignals {
   StopSignals& operator=(const StopSignals&) = delete;
 
  private:
-  struct sigaction m_old_int {}, m_old_term {};
+  struct sigaction m_old_int {
+  }, m_old_term{};
 };
 
 /// An flock on ROOT/.locks/<task>.lock; released when every copy of the descriptor is closed
@@ -85,7 +86,8 @@ class TaskLock {
   static TaskLock try_take(const fs::path& file) {
     const int fd = open(file.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
     if (fd < 0)
-      throw common::OutputError("cannot open lock file '" + file.string() + "': " + std::strerror(errno));
+      throw common::OutputError("cannot open lock file '" + file.string() +
+                                "': " + std::strerror(errno));
     if (flock(fd, LOCK_EX | LOCK_NB) != 0) {
       close(fd);
       return TaskLock();
@@ -106,7 +108,8 @@ std::string last_line(const fs::path& file) {
   const std::streamoff start = size > 4096 ? size - 4096 : 0;
   in.seekg(start);
   std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  while (!text.empty() && (text.back() == '\n' || text.back() == '\r' || text.back() == ' ')) text.pop_back();
+  while (!text.empty() && (text.back() == '\n' || text.back() == '\r' || text.back() == ' '))
+    text.pop_back();
   const auto nl = text.find_last_of('\n');
   return nl == std::string::npos ? text : text.substr(nl + 1);
 }
@@ -140,7 +143,8 @@ pid_t spawn(const Command& cmd, const fs::path& log, int lock_fd) {
   dup2(in, 0);
   dup2(out, 1);
   dup2(err, 2);
-  if (lock_fd >= 0 && dup(lock_fd) < 0) _exit(126);  // dup clears close-on-exec: the child holds the lock
+  // dup clears close-on-exec: the child holds the lock
+  if (lock_fd >= 0 && dup(lock_fd) < 0) _exit(126);
   execv(argv[0], argv.data());
   const char msg[] = "batch: cannot execute the sample program\n";
   [[maybe_unused]] const ssize_t w = write(2, msg, sizeof msg - 1);
@@ -180,13 +184,16 @@ class Runner {
 
   fs::path manifest() const { return m_spec.root / m_spec.manifest_name; }
   fs::path failures() const { return m_spec.root / m_spec.failures_name; }
-  fs::path lock_file(const Task& t) const { return m_spec.root / ".locks" / (safe_name(t.key) + ".lock"); }
+  fs::path lock_file(const Task& t) const {
+    return m_spec.root / ".locks" / (safe_name(t.key) + ".lock");
+  }
   bool finished(const Task& t) const { return fs::exists(m_spec.root / t.final_dir); }
 
   void scan();
   void repair(const std::vector<std::size_t>& missing_rows);
   void append_manifest_row(const Task& t, double wall, double cpu);
-  void record_failure(const Task& t, const std::string& reason, const std::string& detail, double wall);
+  void record_failure(const Task& t, const std::string& reason, const std::string& detail,
+                      double wall);
   void remove_stages(const Task& t) const;
   void fill_slots();
   bool try_start(std::size_t task);
@@ -279,8 +286,9 @@ bool Runner::try_start(std::size_t task) {
   auto s = std::make_unique<Slot>();
   s->task = task;
   s->lock = std::move(lock);
-  s->stage = m_spec.root / ".staging" /
-             (safe_name(t.key) + "." + std::to_string(getpid()) + "." + std::to_string(m_attempt++));
+  s->stage =
+      m_spec.root / ".staging" /
+      (safe_name(t.key) + "." + std::to_string(getpid()) + "." + std::to_string(m_attempt++));
   s->log = s->stage / "log.txt";
   s->start = Clock::now();
   fs::create_directories(s->stage);
@@ -300,9 +308,7 @@ bool Runner::try_start(std::size_t task) {
   return true;
 }
 
-void Runner::start_next_command(Slot& s) {
-  s.pid = spawn(s.commands[s.next], s.log, s.lock.fd());
-}
+void Runner::start_next_command(Slot& s) { s.pid = spawn(s.commands[s.next], s.log, s.lock.fd()); }
 
 void Runner::fill_slots() {
   while (static_cast<int>(m_slots.size()) < m_spec.jobs && !m_pending.empty()) {
@@ -332,7 +338,8 @@ void Runner::poll() {
       s.cpu_seconds += static_cast<double>(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
                        1e-6 * static_cast<double>(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
       on_exit(s, status);
-    } else if (m_spec.time_limit > 0 && !s.timed_out && seconds_since(s.start) > m_spec.time_limit) {
+    } else if (m_spec.time_limit > 0 && !s.timed_out &&
+               seconds_since(s.start) > m_spec.time_limit) {
       s.timed_out = true;
       kill(-s.pid, SIGKILL);
     }
@@ -361,9 +368,10 @@ void Runner::on_exit(Slot& s, int status) {
     // The child could not write its output (a full disk, a file size limit, no permission): every
     // later sample would fail the same way at its end, so the batch stops, and records nothing for
     // this sample, which the same command runs again once there is room.
-    throw common::OutputError(m_tasks[s.task].key + ": " + last_line(s.log) +
-                              " (the batch stopped; nothing is recorded for this sample: free space and "
-                              "run the same command again)");
+    throw common::OutputError(
+        m_tasks[s.task].key + ": " + last_line(s.log) +
+        " (the batch stopped; nothing is recorded for this sample: free space and "
+        "run the same command again)");
   }
   if (code != 0) {
     const std::string line = last_line(s.log);
@@ -437,7 +445,8 @@ void Runner::stop_all() {
 }
 
 void Runner::report(bool force) {
-  if (!m_spec.progress || (!force && seconds_since(m_last_progress) < m_spec.progress_every)) return;
+  if (!m_spec.progress || (!force && seconds_since(m_last_progress) < m_spec.progress_every))
+    return;
   m_last_progress = Clock::now();
   Progress p;
   p.total = m_sum.total;
@@ -508,7 +517,8 @@ BatchSummary Runner::run() {
     const std::string mine = "." + std::to_string(getpid()) + ".";
     std::error_code ec;
     for (const auto& e : fs::directory_iterator(m_spec.root / ".staging", ec))
-      if (e.path().filename().string().find(mine) != std::string::npos) fs::remove_all(e.path(), ec);
+      if (e.path().filename().string().find(mine) != std::string::npos)
+        fs::remove_all(e.path(), ec);
     throw;
   }
   m_sum.elapsed = seconds_since(m_t0);
@@ -523,7 +533,8 @@ std::vector<Task> select_shard(const std::vector<Task>& tasks, int index, int co
     throw std::invalid_argument("shard " + std::to_string(index) + "/" + std::to_string(count) +
                                 " is not I/N with 0 <= I < N");
   std::vector<Task> out;
-  for (std::size_t p = static_cast<std::size_t>(index); p < tasks.size(); p += static_cast<std::size_t>(count))
+  for (std::size_t p = static_cast<std::size_t>(index); p < tasks.size();
+       p += static_cast<std::size_t>(count))
     out.push_back(tasks[p]);
   return out;
 }
@@ -561,7 +572,8 @@ std::pair<int, int> parse_shard(const std::string& text, const std::string& opti
 
 BatchSummary run_batch(const std::vector<Task>& tasks, const BatchSpec& spec) {
   if (spec.jobs < 1) throw std::invalid_argument("jobs must be >= 1");
-  if (!spec.commands || !spec.finalize) throw std::invalid_argument("batch spec needs commands and finalize");
+  if (!spec.commands || !spec.finalize)
+    throw std::invalid_argument("batch spec needs commands and finalize");
   Runner runner(tasks, spec);
   return runner.run();
 }
@@ -569,7 +581,8 @@ BatchSummary run_batch(const std::vector<Task>& tasks, const BatchSpec& spec) {
 void append_line(const fs::path& path, const std::string& text) {
   const std::string line = text + "\n";
   const int fd = open(path.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
-  if (fd < 0) throw common::OutputError("cannot open '" + path.string() + "': " + std::strerror(errno));
+  if (fd < 0)
+    throw common::OutputError("cannot open '" + path.string() + "': " + std::strerror(errno));
   // Appenders of other processes wait here, so a line cut short (a full disk) can be cut off
   // again before another is appended after it.
   int locked = -1;
@@ -587,9 +600,10 @@ void append_line(const fs::path& path, const std::string& text) {
   close(fd);  // releases the lock
   if (!synced)
     throw common::OutputError("cannot append to '" + path.string() + "': " +
-                              (w < 0                                        ? std::strerror(write_errno)
-                               : w != static_cast<ssize_t>(line.size()) ? "short write (the disk is full?)"
-                                                                            : std::strerror(sync_errno)));
+                              (w < 0 ? std::strerror(write_errno)
+                               : w != static_cast<ssize_t>(line.size())
+                                   ? "short write (the disk is full?)"
+                                   : std::strerror(sync_errno)));
 }
 
 std::vector<nlohmann::json> read_json_lines(const fs::path& path) {
@@ -623,7 +637,8 @@ std::unordered_set<std::string> keys_in_json_lines(const fs::path& path,
       i = line.find_first_not_of(" \t", i + 1);
       if (i == std::string::npos || line[i] != '"') continue;
       const std::size_t end = line.find('"', i + 1);
-      if (end != std::string::npos && wanted.count(line.substr(i + 1, end - i - 1))) candidate = true;
+      if (end != std::string::npos && wanted.count(line.substr(i + 1, end - i - 1)))
+        candidate = true;
     }
     if (!candidate) continue;
     const nlohmann::json j = nlohmann::json::parse(line, nullptr, false);

@@ -24,7 +24,7 @@ namespace papersim::batch {
 
 /// One sample of a batch.
 struct Task {
-  std::string key;                  ///< unique within the batch, e.g. "pull/0/17"; used in file names
+  std::string key;  ///< unique within the batch, e.g. "pull/0/17"; used in file names
   std::filesystem::path final_dir;  ///< relative to the root; exists only when finished
   nlohmann::json info = nlohmann::json::object();  ///< copied into manifest and failure rows
 };
@@ -39,7 +39,8 @@ struct Command {
 struct Attempt {
   std::filesystem::path stage;  ///< the staging folder of the attempt
   double wall_seconds = 0.0;    ///< from the first command's start to the last one's end [s]
-  double cpu_seconds = 0.0;     ///< user + system time of the commands (and children they waited for) [s]
+  /// user + system time of the commands (and children they waited for) [s]
+  double cpu_seconds = 0.0;
 };
 
 /// A slice of a task list: the tasks whose position p has p % count == index (0 <= index <
@@ -95,13 +96,13 @@ using ProgressFn = std::function<void(const Progress&)>;
 
 /// How a batch runs and what it does with each task.
 struct BatchSpec {
-  std::filesystem::path root;              ///< dataset folder (created if missing)
+  std::filesystem::path root;  ///< dataset folder (created if missing)
   std::string manifest_name = "manifest.jsonl";
   std::string failures_name = "failures.jsonl";
-  int jobs = 1;                            ///< child processes at once (>= 1)
-  double time_limit = 0.0;                 ///< per task, all its commands [s]; <= 0: none
-  bool retry_failed = false;               ///< run tasks with a recorded failure again
-  double progress_every = 1.0;             ///< seconds between progress calls [s]
+  int jobs = 1;                 ///< child processes at once (>= 1)
+  double time_limit = 0.0;      ///< per task, all its commands [s]; <= 0: none
+  bool retry_failed = false;    ///< run tasks with a recorded failure again
+  double progress_every = 1.0;  ///< seconds between progress calls [s]
   /// Write the inputs of a task into its (empty) staging folder; runs in this process, so
   /// keep it cheap. A throw is recorded as a failure with reason "prepare".
   std::function<void(const Task&, const std::filesystem::path& stage)> prepare;
@@ -111,14 +112,16 @@ struct BatchSpec {
   /// stage) that becomes the task's final folder. Throw to record a failure ("outputs").
   std::function<std::filesystem::path(const Task&, const Attempt&)> finalize;
   /// The manifest row of a finished task (its final folder given); the runner adds "key",
-  /// "path", "cpu_seconds" (null when unknown) and the task's info. For a task found finished without a row, wall_seconds is
-  /// unknown (negative) and the hook should read it from the outputs.
+  /// "path", "cpu_seconds" (null when unknown) and the task's info. For a task found finished
+  /// without a row, wall_seconds is unknown (negative) and the hook should read it from the
+  /// outputs.
   std::function<nlohmann::json(const Task&, const std::filesystem::path& final_dir,
-                               double wall_seconds)> manifest_row;
+                               double wall_seconds)>
+      manifest_row;
   /// The reason of a failed command from its exit status (>= 0) and last log line; empty
   /// means "exit status N".
   std::function<std::string(int exit_status, const std::string& last_line)> failure_reason;
-  ProgressFn progress;                     ///< called every progress_every and at the end
+  ProgressFn progress;  ///< called every progress_every and at the end
   /// Optional: the share of a running task done so far (0-1), negative when unknown; asked for
   /// every running task before each progress call (Progress::running_done).
   std::function<double(const Task&)> running_share;
@@ -128,8 +131,8 @@ struct BatchSpec {
 struct BatchSummary {
   long long total = 0, done = 0, failed = 0;
   long long done_now = 0, failed_now = 0, repaired = 0;  ///< repaired: manifest rows added
-  bool interrupted = false;   ///< stopped by SIGINT or SIGTERM; unfinished tasks left as they were
-  double elapsed = 0.0;       ///< [s]
+  bool interrupted = false;  ///< stopped by SIGINT or SIGTERM; unfinished tasks left as they were
+  double elapsed = 0.0;      ///< [s]
 };
 
 /// Run every unfinished task of `tasks` under spec.root. SIGINT and SIGTERM stop the batch:

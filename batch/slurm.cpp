@@ -21,7 +21,8 @@ std::string slurm_script(const std::vector<std::string>& command, const SlurmOpt
     << "# died (node lost, time limit, scancel) is simply submitted again: it resumes its shard.\n"
     << "#   sbatch --array=I THIS_FILE\n"
     << "#SBATCH --job-name=" << o.job_name << "\n"
-    << "#SBATCH --array=0-" << o.shards - 1 << (o.max_running > 0 ? "%" + std::to_string(o.max_running) : "") << "\n"
+    << "#SBATCH --array=0-" << o.shards - 1
+    << (o.max_running > 0 ? "%" + std::to_string(o.max_running) : "") << "\n"
     << "#SBATCH --ntasks=1\n"
     << "#SBATCH --cpus-per-task=" << o.cpus_per_task << "\n"
     << "#SBATCH --mem=" << o.mem << "\n"

@@ -9,13 +9,13 @@ namespace papersim::batch {
 
 /// What the `sbatch` script asks for, per array task.
 struct SlurmOptions {
-  int shards = 1;                ///< array tasks (0 .. shards-1), each one shard I/N
-  int cpus_per_task = 1;         ///< cores per array task; the shard runs this many samples at once
-  std::string mem = "2G";        ///< memory per array task (sbatch --mem syntax)
-  std::string time = "24:00:00"; ///< wall-time limit per array task (sbatch --time syntax)
-  std::string partition;         ///< sbatch --partition; empty: the cluster's default
+  int shards = 1;          ///< array tasks (0 .. shards-1), each one shard I/N
+  int cpus_per_task = 1;   ///< cores per array task; the shard runs this many samples at once
+  std::string mem = "2G";  ///< memory per array task (sbatch --mem syntax)
+  std::string time = "24:00:00";  ///< wall-time limit per array task (sbatch --time syntax)
+  std::string partition;          ///< sbatch --partition; empty: the cluster's default
   std::string job_name = "papersim";
-  int max_running = 0;           ///< at most this many array tasks at once (%M); 0: no limit
+  int max_running = 0;  ///< at most this many array tasks at once (%M); 0: no limit
 };
 
 /// A bash word in single quotes.

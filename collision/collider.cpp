@@ -1,12 +1,12 @@
 #include "collision/collider.hpp"
 
-#include "common/format.hpp"
-
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
 #include <string>
+
+#include "common/format.hpp"
 
 namespace papersim::collision {
 
@@ -65,7 +65,8 @@ Eigen::Affine3d RigidMotion::pose(double t) const {
 double RigidMotion::scale(double t) const {
   if (m_keyframes.empty()) return 1.0;
   const int i = segment(t);
-  if (i < 0) return t >= m_keyframes.back().time ? m_keyframes.back().scale : m_keyframes.front().scale;
+  if (i < 0)
+    return t >= m_keyframes.back().time ? m_keyframes.back().scale : m_keyframes.front().scale;
   const Keyframe& a = m_keyframes[i];
   const Keyframe& b = m_keyframes[i + 1];
   const double s = (t - a.time) / (b.time - a.time);
@@ -75,7 +76,8 @@ double RigidMotion::scale(double t) const {
 double RigidMotion::scale_rate(double t) const {
   const int i = segment(t);
   if (i < 0) return 0.0;
-  return (m_keyframes[i + 1].scale - m_keyframes[i].scale) / (m_keyframes[i + 1].time - m_keyframes[i].time);
+  return (m_keyframes[i + 1].scale - m_keyframes[i].scale) /
+         (m_keyframes[i + 1].time - m_keyframes[i].time);
 }
 
 Eigen::Vector3d RigidMotion::linear_velocity(double t) const {
@@ -139,7 +141,8 @@ size_t RigidMotion::keyframe_index(double t, const RigidMotion& turning) {
   constexpr double SAME = 1e-9;  // [s] keyframes this close count as one
   const auto it = std::lower_bound(m_keyframes.begin(), m_keyframes.end(), t - SAME,
                                    [](const Keyframe& k, double x) { return k.time < x; });
-  if (it != m_keyframes.end() && it->time <= t + SAME) return static_cast<size_t>(it - m_keyframes.begin());
+  if (it != m_keyframes.end() && it->time <= t + SAME)
+    return static_cast<size_t>(it - m_keyframes.begin());
   const size_t i = static_cast<size_t>(it - m_keyframes.begin());
   Keyframe k = turning.keyframe_at(t);
   k.translation = pose(t).translation();
@@ -147,22 +150,26 @@ size_t RigidMotion::keyframe_index(double t, const RigidMotion& turning) {
   return i;
 }
 
-void RigidMotion::translate_from(double t0, double t1, const Eigen::Vector3d& delta, const RigidMotion& turning) {
+void RigidMotion::translate_from(double t0, double t1, const Eigen::Vector3d& delta,
+                                 const RigidMotion& turning) {
   if (!(t1 > t0))
     throw std::invalid_argument("RigidMotion::translate_from: t1 = " + common::format_number(t1) +
                                 " must be after t0 = " + common::format_number(t0));
   keyframe_index(t0, turning);
-  for (size_t i = keyframe_index(t1, turning); i < m_keyframes.size(); ++i) m_keyframes[i].translation += delta;
+  for (size_t i = keyframe_index(t1, turning); i < m_keyframes.size(); ++i)
+    m_keyframes[i].translation += delta;
 }
 
-void RigidMotion::set_translation_at(double t, const Eigen::Vector3d& translation, const RigidMotion& turning) {
+void RigidMotion::set_translation_at(double t, const Eigen::Vector3d& translation,
+                                     const RigidMotion& turning) {
   m_keyframes[keyframe_index(t, turning)].translation = translation;
 }
 
 bool RigidMotion::moves_during(double t0, double t1) const {
   if (is_static()) return false;
   for (double t = t0; t < t1; t = next_keyframe_time(t))
-    if (linear_velocity(t).squaredNorm() > 0 || angular_velocity(t).squaredNorm() > 0 || scale_rate(t) != 0)
+    if (linear_velocity(t).squaredNorm() > 0 || angular_velocity(t).squaredNorm() > 0 ||
+        scale_rate(t) != 0)
       return true;
   return false;
 }
@@ -245,8 +252,8 @@ Eigen::Vector3d Collider::velocity(const Eigen::Vector3d& p, double t) const {
 
 // Sphere tracing: phi is 1-Lipschitz, so advancing by (phi - stop) / |d| keeps every point
 // passed over at phi >= stop.
-double Collider::segment_step(const Eigen::Vector3d& p, const Eigen::Vector3d& d, double t, double limit,
-                              double keep) const {
+double Collider::segment_step(const Eigen::Vector3d& p, const Eigen::Vector3d& d, double t,
+                              double limit, double keep) const {
   const double len = d.norm();
   if (len == 0) return limit;
   const Eigen::Affine3d pose = motion.pose(t);
@@ -263,18 +270,20 @@ double Collider::segment_step(const Eigen::Vector3d& p, const Eigen::Vector3d& d
   return a;
 }
 
-bool Collider::distance_hessian(const Eigen::Vector3d&, double, Eigen::Matrix3d&) const { return false; }
+bool Collider::distance_hessian(const Eigen::Vector3d&, double, Eigen::Matrix3d&) const {
+  return false;
+}
 
 bool Collider::moves_affinely(double t0, double t1) const { return !motion.moves_during(t0, t1); }
 
-double Collider::moving_segment_step(const Eigen::Vector3d& p, const Eigen::Vector3d& d, double t, double dt,
-                                     double limit, double keep) const {
+double Collider::moving_segment_step(const Eigen::Vector3d& p, const Eigen::Vector3d& d, double t,
+                                     double dt, double limit, double keep) const {
   if (!moves_affinely(t, t + limit * dt)) return -1.0;
   return segment_step(p, d, t, limit, keep);
 }
 
-double Collider::convex_piece_step(const Eigen::Vector3d& q, const Eigen::Vector3d& d, double tq, double dt,
-                                   double length, double stop, double t_inside) const {
+double Collider::convex_piece_step(const Eigen::Vector3d& q, const Eigen::Vector3d& d, double tq,
+                                   double dt, double length, double stop, double t_inside) const {
   Eigen::Vector3d n;
   const double phi = distance_at_pose(q, motion.pose(tq), &n);
   if (!(phi > stop)) return 0.0;
@@ -296,14 +305,15 @@ bool PlaneCollider::moves_affinely(double t0, double t1) const {
   return true;
 }
 
-double PlaneCollider::moving_segment_step(const Eigen::Vector3d& p, const Eigen::Vector3d& d, double t, double dt,
-                                          double limit, double keep) const {
+double PlaneCollider::moving_segment_step(const Eigen::Vector3d& p, const Eigen::Vector3d& d,
+                                          double t, double dt, double limit, double keep) const {
   if (dt == 0) return segment_step(p, d, t, limit, keep);
   if (dt < 0 || !moves_affinely(t, t + limit * dt)) return -1.0;
-  return step_over_pieces(p, d, t, dt, limit, keep,
-                          [&](const Eigen::Vector3d& q, double tq, double length, double stop, double t_inside) {
-                            return convex_piece_step(q, d, tq, dt, length, stop, t_inside);
-                          });
+  return step_over_pieces(
+      p, d, t, dt, limit, keep,
+      [&](const Eigen::Vector3d& q, double tq, double length, double stop, double t_inside) {
+        return convex_piece_step(q, d, tq, dt, length, stop, t_inside);
+      });
 }
 
 double PlaneCollider::local_distance(const Eigen::Vector3d& p, Eigen::Vector3d* gradient) const {

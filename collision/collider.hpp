@@ -44,8 +44,8 @@ struct Aabb {
 
 /// A placement at a time: world point = rotation * (scale * local point) + translation.
 struct Keyframe {
-  double time = 0.0;                                        ///< [s]
-  Eigen::Vector3d translation = Eigen::Vector3d::Zero();   ///< [m]
+  double time = 0.0;                                      ///< [s]
+  Eigen::Vector3d translation = Eigen::Vector3d::Zero();  ///< [m]
   Eigen::Quaterniond rotation = Eigen::Quaterniond::Identity();
   double scale = 1.0;  ///< uniform scale of the shape about its local origin, finite and > 0 [-]
 };
@@ -91,7 +91,8 @@ class RigidMotion {
   /// from its time alone (a motion rebuilt from saved times and translations is the same to the
   /// bit), and the placement between keyframes is the same as before to rounding.
   /// @throw std::invalid_argument when t1 <= t0
-  void translate_from(double t0, double t1, const Eigen::Vector3d& delta, const RigidMotion& turning);
+  void translate_from(double t0, double t1, const Eigen::Vector3d& delta,
+                      const RigidMotion& turning);
   /// Sets the translation of the keyframe at time t [s] (inserted as translate_from does where
   /// none lies within 1e-9 s): a motion saved as keyframe times and translations is rebuilt by
   /// calling this for each on a copy of `turning`.
@@ -157,8 +158,8 @@ class Collider {
   /// phi >= keep phi(p) (keep in [0, 1), e.g. 0.1: the point closes at most 90% of its gap).
   /// Conservative (may return less than the largest such a); 0 when phi(p) <= 0. The default
   /// is sphere tracing on the 1-Lipschitz field. Thread-safe.
-  virtual double segment_step(const Eigen::Vector3d& p, const Eigen::Vector3d& d, double t, double limit,
-                              double keep) const;
+  virtual double segment_step(const Eigen::Vector3d& p, const Eigen::Vector3d& d, double t,
+                              double limit, double keep) const;
 
   /// Hessian of the field at world point p at time t [1/m], written to `hessian`; false (and
   /// nothing written) when the collider does not provide it. Contact adds its curvature term
@@ -178,8 +179,8 @@ class Collider {
   /// phi >= keep phi(p, t). Needs moves_affinely(t, t + limit dt) and dt >= 0; returns a
   /// negative value when the collider cannot bound the motion. The default handles an obstacle
   /// that does not move over the interval (segment_step).
-  virtual double moving_segment_step(const Eigen::Vector3d& p, const Eigen::Vector3d& d, double t, double dt,
-                                     double limit, double keep) const;
+  virtual double moving_segment_step(const Eigen::Vector3d& p, const Eigen::Vector3d& d, double t,
+                                     double dt, double limit, double keep) const;
 
   double friction = 0.3;  ///< Coulomb coefficient sheet-obstacle [-]
   RigidMotion motion;     ///< world pose over time
@@ -190,8 +191,8 @@ class Collider {
   /// the largest step in [0, length] of the point q = p + a d, moving from time tq = t + a dt,
   /// that keeps phi >= stop [m] (stop = keep phi(p, t)); t_inside is a time inside the piece.
   template <class Piece>
-  double step_over_pieces(const Eigen::Vector3d& p, const Eigen::Vector3d& d, double t, double dt, double limit,
-                          double keep, Piece&& piece) const {
+  double step_over_pieces(const Eigen::Vector3d& p, const Eigen::Vector3d& d, double t, double dt,
+                          double limit, double keep, Piece&& piece) const {
     const double phi0 = distance(p, t);
     if (!(phi0 > 0)) return 0.0;
     const double stop = keep * phi0;
@@ -210,8 +211,8 @@ class Collider {
   /// (it may also turn or scale in ways that leave the field unchanged): the field is convex
   /// along the point's path relative to the frame, so it stays above its tangent at the start,
   /// phi(a) >= phi + a n.r, r = d - dt c'(t_inside); exact for a plane.
-  double convex_piece_step(const Eigen::Vector3d& q, const Eigen::Vector3d& d, double tq, double dt, double length,
-                           double stop, double t_inside) const;
+  double convex_piece_step(const Eigen::Vector3d& q, const Eigen::Vector3d& d, double tq, double dt,
+                           double length, double stop, double t_inside) const;
 
   /// Signed distance in the local frame; gradient (unit, local frame) when not null.
   virtual double local_distance(const Eigen::Vector3d& p, Eigen::Vector3d* gradient) const = 0;
@@ -228,8 +229,8 @@ class PlaneCollider : public Collider {
   bool moves_affinely(double t0, double t1) const override;
   /// Exact for these motions: the distance is linear along the joint motion within a keyframe
   /// piece (a pressing plate, a moving floor).
-  double moving_segment_step(const Eigen::Vector3d& p, const Eigen::Vector3d& d, double t, double dt,
-                             double limit, double keep) const override;
+  double moving_segment_step(const Eigen::Vector3d& p, const Eigen::Vector3d& d, double t,
+                             double dt, double limit, double keep) const override;
 
  protected:
   double local_distance(const Eigen::Vector3d& p, Eigen::Vector3d* gradient) const override;

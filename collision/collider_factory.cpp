@@ -1,19 +1,19 @@
 #include "collision/collider_factory.hpp"
 
-#include "common/format.hpp"
-
-#include "collision/errors.hpp"
-
 #include <cmath>
 #include <stdexcept>
+
+#include "collision/errors.hpp"
+#include "common/format.hpp"
 
 namespace papersim::collision {
 
 namespace {
 
-const ColliderKind ALL_KINDS[] = {ColliderKind::plane,   ColliderKind::sphere, ColliderKind::cylinder,
-                                  ColliderKind::capsule, ColliderKind::box,    ColliderKind::gable,
-                                  ColliderKind::mesh,    ColliderKind::inverted_sphere};
+const ColliderKind ALL_KINDS[] = {ColliderKind::plane,    ColliderKind::sphere,
+                                  ColliderKind::cylinder, ColliderKind::capsule,
+                                  ColliderKind::box,      ColliderKind::gable,
+                                  ColliderKind::mesh,     ColliderKind::inverted_sphere};
 const FieldKind ALL_FIELDS[] = {FieldKind::automatic, FieldKind::analytic, FieldKind::level_set};
 
 RigidMotion motion_of(const std::vector<Keyframe>& keyframes) {
@@ -23,7 +23,8 @@ RigidMotion motion_of(const std::vector<Keyframe>& keyframes) {
       throw ColliderError("collider keyframe " + std::to_string(i) + " is not finite");
   for (size_t i = 0; i < keyframes.size(); ++i)
     if (!(std::isfinite(keyframes[i].scale) && keyframes[i].scale > 0.0))
-      throw ColliderError("collider keyframe " + std::to_string(i) + ": scale must be finite and > 0, got " +
+      throw ColliderError("collider keyframe " + std::to_string(i) +
+                          ": scale must be finite and > 0, got " +
                           common::format_number(keyframes[i].scale));
   try {
     return RigidMotion(keyframes);
@@ -53,8 +54,10 @@ std::unique_ptr<Collider> make_mesh(const ColliderSpec& spec) {
 std::unique_ptr<Collider> make_primitive(const ColliderSpec& spec) {
   const Shape shape = shape_of(spec);
   if (shape.kind == ShapeKind::inverted_sphere && spec.field == FieldKind::level_set)
-    throw ColliderError("collider inverted_sphere: field 'level_set' is not available (unbounded solid)");
-  if (spec.field == FieldKind::level_set) return LevelSetCollider::from_shape(shape, spec.level_set);
+    throw ColliderError(
+        "collider inverted_sphere: field 'level_set' is not available (unbounded solid)");
+  if (spec.field == FieldKind::level_set)
+    return LevelSetCollider::from_shape(shape, spec.level_set);
   return std::make_unique<AnalyticCollider>(shape);
 }
 
@@ -63,12 +66,24 @@ std::unique_ptr<Collider> make_primitive(const ColliderSpec& spec) {
 Shape shape_of(const ColliderSpec& spec) {
   Shape s;
   switch (spec.kind) {
-    case ColliderKind::sphere: s.kind = ShapeKind::sphere; break;
-    case ColliderKind::cylinder: s.kind = ShapeKind::cylinder; break;
-    case ColliderKind::capsule: s.kind = ShapeKind::capsule; break;
-    case ColliderKind::box: s.kind = ShapeKind::box; break;
-    case ColliderKind::gable: s.kind = ShapeKind::gable; break;
-    case ColliderKind::inverted_sphere: s.kind = ShapeKind::inverted_sphere; break;
+    case ColliderKind::sphere:
+      s.kind = ShapeKind::sphere;
+      break;
+    case ColliderKind::cylinder:
+      s.kind = ShapeKind::cylinder;
+      break;
+    case ColliderKind::capsule:
+      s.kind = ShapeKind::capsule;
+      break;
+    case ColliderKind::box:
+      s.kind = ShapeKind::box;
+      break;
+    case ColliderKind::gable:
+      s.kind = ShapeKind::gable;
+      break;
+    case ColliderKind::inverted_sphere:
+      s.kind = ShapeKind::inverted_sphere;
+      break;
     default:
       throw ColliderError(std::string("collider ") + to_string(spec.kind) +
                           " is not an analytic primitive");
@@ -81,8 +96,8 @@ Shape shape_of(const ColliderSpec& spec) {
   return s;
 }
 
-ColliderSpec shrinking_cavity(const Eigen::Vector3d& centre, double radius, double t_hold, double t_end,
-                              double end_scale, double friction) {
+ColliderSpec shrinking_cavity(const Eigen::Vector3d& centre, double radius, double t_hold,
+                              double t_end, double end_scale, double friction) {
   ColliderSpec cavity;
   cavity.kind = ColliderKind::inverted_sphere;
   cavity.radius = radius;
@@ -116,14 +131,22 @@ std::unique_ptr<Collider> make_collider(const ColliderSpec& spec) {
 
 const char* to_string(ColliderKind kind) {
   switch (kind) {
-    case ColliderKind::plane: return "plane";
-    case ColliderKind::sphere: return "sphere";
-    case ColliderKind::cylinder: return "cylinder";
-    case ColliderKind::capsule: return "capsule";
-    case ColliderKind::box: return "box";
-    case ColliderKind::gable: return "gable";
-    case ColliderKind::mesh: return "mesh";
-    case ColliderKind::inverted_sphere: return "inverted_sphere";
+    case ColliderKind::plane:
+      return "plane";
+    case ColliderKind::sphere:
+      return "sphere";
+    case ColliderKind::cylinder:
+      return "cylinder";
+    case ColliderKind::capsule:
+      return "capsule";
+    case ColliderKind::box:
+      return "box";
+    case ColliderKind::gable:
+      return "gable";
+    case ColliderKind::mesh:
+      return "mesh";
+    case ColliderKind::inverted_sphere:
+      return "inverted_sphere";
   }
   return "unknown";
 }
@@ -131,15 +154,19 @@ const char* to_string(ColliderKind kind) {
 ColliderKind collider_kind_from_string(const std::string& name) {
   for (ColliderKind k : ALL_KINDS)
     if (name == to_string(k)) return k;
-  throw ColliderError("unknown collider kind '" + name +
-                      "' (expected plane, sphere, cylinder, capsule, box, gable, mesh or inverted_sphere)");
+  throw ColliderError(
+      "unknown collider kind '" + name +
+      "' (expected plane, sphere, cylinder, capsule, box, gable, mesh or inverted_sphere)");
 }
 
 const char* to_string(FieldKind field) {
   switch (field) {
-    case FieldKind::automatic: return "automatic";
-    case FieldKind::analytic: return "analytic";
-    case FieldKind::level_set: return "level_set";
+    case FieldKind::automatic:
+      return "automatic";
+    case FieldKind::analytic:
+      return "analytic";
+    case FieldKind::level_set:
+      return "level_set";
   }
   return "unknown";
 }

@@ -1,14 +1,14 @@
 #pragma once
 /// Builds obstacles from a plain description, for the scene loader (which parses JSON into a
 /// ColliderSpec; this module never sees JSON).
-#include "collision/collider.hpp"
-#include "collision/level_set_collider.hpp"
-#include "collision/shapes.hpp"
-
 #include <Eigen/Core>
 #include <memory>
 #include <string>
 #include <vector>
+
+#include "collision/collider.hpp"
+#include "collision/level_set_collider.hpp"
+#include "collision/shapes.hpp"
 
 namespace papersim::collision {
 
@@ -49,16 +49,16 @@ struct LiftSpec {
 struct ColliderSpec {
   ColliderKind kind = ColliderKind::plane;
   FieldKind field = FieldKind::automatic;
-  double radius = 0.05;      ///< sphere, inverted sphere, cylinder, capsule [m]
-  double length = 0.1;       ///< cylinder, capsule (tip to tip), gable: along local x [m]
+  double radius = 0.05;  ///< sphere, inverted sphere, cylinder, capsule [m]
+  double length = 0.1;   ///< cylinder, capsule (tip to tip), gable: along local x [m]
   Eigen::Vector3d half_extents = Eigen::Vector3d::Constant(0.05);  ///< box [m]
-  double half_width = 0.05;  ///< gable: half base width along local y [m]
-  double height = 0.05;      ///< gable: ridge height along local z [m]
+  double half_width = 0.05;      ///< gable: half base width along local y [m]
+  double height = 0.05;          ///< gable: ridge height along local z [m]
   double plane_half_size = 1e3;  ///< plane: half extent of its bounding box in x and y [m]
-  std::string obj_path;      ///< mesh: closed triangle mesh, OBJ
-  double obj_scale = 1.0;    ///< mesh: factor applied to the OBJ coordinates to get metres [-]
-  LevelSetParams level_set;  ///< resolution of level-set fields (voxel size, band)
-  double friction = 0.3;     ///< Coulomb coefficient sheet-obstacle [-]
+  std::string obj_path;          ///< mesh: closed triangle mesh, OBJ
+  double obj_scale = 1.0;        ///< mesh: factor applied to the OBJ coordinates to get metres [-]
+  LevelSetParams level_set;      ///< resolution of level-set fields (voxel size, band)
+  double friction = 0.3;         ///< Coulomb coefficient sheet-obstacle [-]
   /// Placement over time (rotation, translation, uniform scale of the shape); empty = identity.
   std::vector<Keyframe> keyframes;
   LiftSpec lift;  ///< yield upwards under load (off by default)
@@ -67,11 +67,12 @@ struct ColliderSpec {
 /// A spherical cavity (inverted sphere) of `radius` [m] centred at `centre` [m] that holds its
 /// size until `t_hold` [s] and shrinks linearly to `end_scale` times it at `t_end` [s] (held
 /// after); friction `friction` [-]. Used by the crumple scenario and the stress suite.
-ColliderSpec shrinking_cavity(const Eigen::Vector3d& centre, double radius, double t_hold, double t_end,
-                              double end_scale, double friction = 0.3);
+ColliderSpec shrinking_cavity(const Eigen::Vector3d& centre, double radius, double t_hold,
+                              double t_end, double end_scale, double friction = 0.3);
 
 /// Builds the collider a spec describes.
-/// @throw ColliderError naming the bad value (dimension, friction, keyframe time or scale, kind/field
+/// @throw ColliderError naming the bad value (dimension, friction, keyframe time or scale,
+/// kind/field
 ///        combination, grid too large); ColliderIoError naming the OBJ file when it cannot be
 ///        read or is not closed.
 std::unique_ptr<Collider> make_collider(const ColliderSpec& spec);

@@ -1,9 +1,5 @@
 #include "collision/level_set_collider.hpp"
 
-#include "common/format.hpp"
-
-#include "collision/errors.hpp"
-
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/MeshToVolume.h>
 #include <openvdb/tools/SignedFloodFill.h>
@@ -14,6 +10,9 @@
 #include <cmath>
 #include <mutex>
 #include <sstream>
+
+#include "collision/errors.hpp"
+#include "common/format.hpp"
 
 namespace papersim::collision {
 
@@ -88,8 +87,7 @@ LeafT* sample_leaf(const Shape& s, const openvdb::Coord& origin, const Resolutio
   bool any_active = false;
   for (openvdb::Index i = 0; i < LeafT::SIZE; ++i) {
     const openvdb::Coord ijk = leaf->offsetToGlobalCoord(i);
-    const double d =
-        shape_distance(s, r.h * Eigen::Vector3d(ijk.x(), ijk.y(), ijk.z()), nullptr);
+    const double d = shape_distance(s, r.h * Eigen::Vector3d(ijk.x(), ijk.y(), ijk.z()), nullptr);
     if (std::abs(d) < band) {
       leaf->setValueOn(i, static_cast<float>(d));
       any_active = true;
@@ -126,8 +124,9 @@ openvdb::FloatGrid::Ptr fill_band(const Shape& s, const Resolution& r) {
                       }
                     });
   openvdb::FloatGrid::Ptr grid = empty_level_set(r);
+  // the tree takes ownership
   for (LeafT* leaf : leaves)
-    if (leaf) grid->tree().addLeaf(leaf);  // the tree takes ownership
+    if (leaf) grid->tree().addLeaf(leaf);
   openvdb::tools::signedFloodFill(grid->tree());
   return grid;
 }
@@ -155,7 +154,8 @@ std::unique_ptr<LevelSetCollider> LevelSetCollider::from_shape(const Shape& shap
                                                                const LevelSetParams& params) {
   validate(shape);
   if (shape.kind == ShapeKind::inverted_sphere)
-    throw ColliderError("level set: an inverted sphere has an unbounded solid; use its analytic field");
+    throw ColliderError(
+        "level set: an inverted sphere has an unbounded solid; use its analytic field");
   const Resolution r = resolve(params, shape_smallest_feature(shape));
   check_budget(shape_surface_area(shape), r, params.max_active_voxels);
   auto grid = std::make_unique<Grid>();
@@ -187,14 +187,16 @@ std::unique_ptr<LevelSetCollider> LevelSetCollider::from_mesh(const TriangleMesh
   grid->h = r.h;
   grid->band = r.n * r.h;
   grid->exact = (r.n - SQRT3) * r.h;
-  return std::unique_ptr<LevelSetCollider>(new LevelSetCollider(std::move(grid), mesh_bounds(mesh)));
+  return std::unique_ptr<LevelSetCollider>(
+      new LevelSetCollider(std::move(grid), mesh_bounds(mesh)));
 }
 
 std::unique_ptr<LevelSetCollider> LevelSetCollider::from_obj(const std::string& path,
                                                              const LevelSetParams& params,
                                                              double scale) {
   if (!(std::isfinite(scale) && scale > 0.0))
-    throw ColliderError("mesh '" + path + "': scale must be > 0, got " + common::format_number(scale));
+    throw ColliderError("mesh '" + path + "': scale must be > 0, got " +
+                        common::format_number(scale));
   TriangleMesh mesh = read_obj(path);
   for (Eigen::Vector3d& v : mesh.vertices) v *= scale;
   try {
@@ -223,8 +225,8 @@ double LevelSetCollider::far_field(const Eigen::Vector3d& p, bool inside,
   const Eigen::Vector3d centre = 0.5 * (m_surface_bounds.lo + m_surface_bounds.hi);
   const Eigen::Vector3d nearest = p.cwiseMax(m_surface_bounds.lo).cwiseMin(m_surface_bounds.hi);
   if (gradient) {
-    Eigen::Vector3d dir = (!inside && nearest != p) ? Eigen::Vector3d(p - nearest)
-                                                     : Eigen::Vector3d(p - centre);
+    Eigen::Vector3d dir =
+        (!inside && nearest != p) ? Eigen::Vector3d(p - nearest) : Eigen::Vector3d(p - centre);
     const double n = dir.norm();
     *gradient = n > 0.0 ? Eigen::Vector3d(dir / n) : Eigen::Vector3d::UnitZ();
   }

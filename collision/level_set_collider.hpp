@@ -16,13 +16,13 @@
 /// where the grid overestimates the outside distance by up to 0.25 h. A solver that must never
 /// let a vertex inside should keep phi_grid > error_bound() or use the exact analytic field
 /// (AnalyticCollider, the factory's default for primitives).
-#include "collision/collider.hpp"
-#include "collision/shapes.hpp"
-#include "collision/triangle_mesh.hpp"
-
 #include <cstddef>
 #include <memory>
 #include <string>
+
+#include "collision/collider.hpp"
+#include "collision/shapes.hpp"
+#include "collision/triangle_mesh.hpp"
 
 namespace papersim::collision {
 

@@ -62,11 +62,14 @@ class BoxGrid {
       m_index.resize(entries);
       std::vector<int> next(m_start.begin(), m_start.end() - 1);
       for (std::size_t i = 0; i < inserted.size(); ++i)
-        for_cells(m_low[i], high[i], [&](std::size_t c) { m_index[next[c]++] = static_cast<int>(i); });
+        for_cells(m_low[i], high[i],
+                  [&](std::size_t c) { m_index[next[c]++] = static_cast<int>(i); });
     } else {
       m_entries.reserve(entries);
       for (std::size_t i = 0; i < inserted.size(); ++i)
-        for_cells(m_low[i], high[i], [&](std::size_t c) { m_entries.push_back({c, static_cast<int>(i)}); });
+        for_cells(m_low[i], high[i], [&](std::size_t c) {
+          m_entries.push_back({c, static_cast<int>(i)});
+        });
       std::sort(m_entries.begin(), m_entries.end());
     }
   }
@@ -106,7 +109,9 @@ class BoxGrid {
   struct Entry {
     std::size_t cell;
     int index;
-    bool operator<(const Entry& o) const { return cell < o.cell || (cell == o.cell && index < o.index); }
+    bool operator<(const Entry& o) const {
+      return cell < o.cell || (cell == o.cell && index < o.index);
+    }
   };
   Eigen::Array3i cell(const Eigen::Vector3d& p) const {
     const Eigen::Array3d c = ((p - m_origin) / m_cell).array().floor();
@@ -114,7 +119,8 @@ class BoxGrid {
   }
   /// A cell's place in x, y, z order within the grid's extent.
   std::size_t index_of(const Eigen::Array3i& c) const {
-    return (std::size_t(c.x()) * std::size_t(m_size.y()) + std::size_t(c.y())) * std::size_t(m_size.z()) +
+    return (std::size_t(c.x()) * std::size_t(m_size.y()) + std::size_t(c.y())) *
+               std::size_t(m_size.z()) +
            std::size_t(c.z());
   }
   template <class F>
@@ -125,11 +131,12 @@ class BoxGrid {
   }
 
   const std::vector<Aabb>& m_boxes;
-  std::vector<Eigen::Array3i> m_low;  ///< each inserted box's lowest cell
+  std::vector<Eigen::Array3i> m_low;               ///< each inserted box's lowest cell
   Eigen::Array3i m_size = Eigen::Array3i::Zero();  ///< cells per axis
   bool m_dense = false;
-  std::vector<int> m_start, m_index;  ///< dense: cell c's boxes are m_index[m_start[c] .. m_start[c + 1])
-  std::vector<Entry> m_entries;       ///< sparse: (cell, box) sorted
+  std::vector<int> m_start,
+      m_index;  ///< dense: cell c's boxes are m_index[m_start[c] .. m_start[c + 1])
+  std::vector<Entry> m_entries;  ///< sparse: (cell, box) sorted
   Eigen::Vector3d m_origin = Eigen::Vector3d::Zero();
   double m_cell = 1.0;
 };
@@ -174,7 +181,8 @@ DistanceStencil closest_of(const PairPoints& x, const std::array<std::array<int,
   double best_d2 = INF;
   for (int k = 0; k < n; ++k) {
     DistanceStencil s;
-    const double d2 = point_segment(x[c[k][0]], x[c[k][1]], x[c[k][2]], c[k][0], c[k][1], c[k][2], s);
+    const double d2 =
+        point_segment(x[c[k][0]], x[c[k][1]], x[c[k][2]], c[k][0], c[k][1], c[k][2], s);
     if (d2 < best_d2) {
       best_d2 = d2;
       best = s;
@@ -207,7 +215,8 @@ double affine_distance(const PairPoints& x, const std::array<int, 4>& idx,
   if (hess) {
     Eigen::Matrix<double, 3 * N, K> C;
     for (int i = 0; i < N; ++i)
-      for (int a = 0; a < K; ++a) C.template block<3, 1>(3 * i, a) = 2 * (w[i] * E.col(a) + dw(i, a) * r);
+      for (int a = 0; a < K; ++a)
+        C.template block<3, 1>(3 * i, a) = 2 * (w[i] * E.col(a) + dw(i, a) * r);
     for (int i = 0; i < N; ++i)
       for (int j = 0; j < N; ++j)
         hess->template block<3, 3>(3 * i, 3 * j) = 2 * w[i] * w[j] * Eigen::Matrix3d::Identity();
@@ -224,7 +233,8 @@ double stencil_derivatives(const DistanceStencil& s, const PairPoints& x,
   Eigen::Matrix<double, N, 1> w;
   Eigen::Matrix<double, 3 * N, 1> gl;
   Eigen::Matrix<double, 3 * N, 3 * N> hl;
-  const double d2 = affine_distance<N, K>(x, s.points, w0, dw, w, g ? &gl : nullptr, H ? &hl : nullptr);
+  const double d2 =
+      affine_distance<N, K>(x, s.points, w0, dw, w, g ? &gl : nullptr, H ? &hl : nullptr);
   if (g) {
     g->setZero();
     for (int i = 0; i < N; ++i) g->segment<3>(3 * s.points[i]) = gl.template segment<3>(3 * i);
@@ -268,7 +278,8 @@ double evaluate(const DistanceStencil& s, const PairPoints& x, Vector12d* g, Mat
       return r.squaredNorm();
     }
     case DistanceType::point_edge:
-      return stencil_derivatives<3, 1>(s, x, Eigen::Vector3d(1, -1, 0), Eigen::Vector3d(0, 1, -1), g, H, weights);
+      return stencil_derivatives<3, 1>(s, x, Eigen::Vector3d(1, -1, 0), Eigen::Vector3d(0, 1, -1),
+                                       g, H, weights);
     case DistanceType::point_triangle: {
       Eigen::Matrix<double, 4, 2> dw;
       dw << 0, 0, 1, 1, -1, 0, 0, -1;
@@ -293,10 +304,11 @@ Eigen::Matrix3d cross_matrix(const Eigen::Vector3d& v) {
 
 double pair_distance_lower_bound(const PairPoints& x, bool edge_edge) {
   if (edge_edge)
-    return (0.5 * (x[0] + x[1] - x[2] - x[3])).norm() - 0.5 * ((x[1] - x[0]).norm() + (x[3] - x[2]).norm());
+    return (0.5 * (x[0] + x[1] - x[2] - x[3])).norm() -
+           0.5 * ((x[1] - x[0]).norm() + (x[3] - x[2]).norm());
   const Eigen::Vector3d c = (x[1] + x[2] + x[3]) / 3;
-  return (x[0] - c).norm() -
-         std::sqrt(std::max({(x[1] - c).squaredNorm(), (x[2] - c).squaredNorm(), (x[3] - c).squaredNorm()}));
+  return (x[0] - c).norm() - std::sqrt(std::max({(x[1] - c).squaredNorm(), (x[2] - c).squaredNorm(),
+                                                 (x[3] - c).squaredNorm()}));
 }
 
 namespace {
@@ -305,13 +317,14 @@ namespace {
 /// pair less the offset. The distance changes no faster than the bound lp on the relative speed
 /// of the pair's points, and so does the gap.
 template <class Distance2>
-double additive_ccd(PairPoints x, PairPoints dx, bool edge_edge, double t_max, double s, double offset,
-                    Distance2&& distance2) {
+double additive_ccd(PairPoints x, PairPoints dx, bool edge_edge, double t_max, double s,
+                    double offset, Distance2&& distance2) {
   // The distance is translation invariant: remove the mean motion to tighten the bound.
   const Eigen::Vector3d mean = 0.25 * (dx[0] + dx[1] + dx[2] + dx[3]);
   for (auto& p : dx) p -= mean;
-  const double lp = edge_edge ? std::max(dx[0].norm(), dx[1].norm()) + std::max(dx[2].norm(), dx[3].norm())
-                              : dx[0].norm() + std::max({dx[1].norm(), dx[2].norm(), dx[3].norm()});
+  const double lp =
+      edge_edge ? std::max(dx[0].norm(), dx[1].norm()) + std::max(dx[2].norm(), dx[3].norm())
+                : dx[0].norm() + std::max({dx[1].norm(), dx[2].norm(), dx[3].norm()});
   if (lp == 0) return t_max;
   // Most candidates cannot close their gap within t_max: the bounding-sphere bound shows it
   // without the closest-feature search.
@@ -353,7 +366,8 @@ SelfContactMesh SelfContactMesh::from_faces(const Eigen::MatrixX3i& faces, int n
   std::sort(e.begin(), e.end());
   e.erase(std::unique(e.begin(), e.end()), e.end());
   m.edges.resize(static_cast<Eigen::Index>(e.size()), 2);
-  for (size_t i = 0; i < e.size(); ++i) m.edges.row(static_cast<Eigen::Index>(i)) << e[i][0], e[i][1];
+  for (size_t i = 0; i < e.size(); ++i)
+    m.edges.row(static_cast<Eigen::Index>(i)) << e[i][0], e[i][1];
   return m;
 }
 
@@ -384,11 +398,15 @@ SelfContactCandidates find_self_contact_candidates(const SelfContactMesh& mesh,
     });
   const BoxGrid edges(edge_boxes);
   for (int a = 0; a < static_cast<int>(ne); ++a)
-    edges.query(edge_boxes[a], [&](int b) {
-      const int a0 = mesh.edges(a, 0), a1 = mesh.edges(a, 1), b0 = mesh.edges(b, 0), b1 = mesh.edges(b, 1);
-      if (a0 == b0 || a0 == b1 || a1 == b0 || a1 == b1) return;
-      out.edge_edge.push_back({{a, b}});
-    }, a);
+    edges.query(
+        edge_boxes[a],
+        [&](int b) {
+          const int a0 = mesh.edges(a, 0), a1 = mesh.edges(a, 1), b0 = mesh.edges(b, 0),
+                    b1 = mesh.edges(b, 1);
+          if (a0 == b0 || a0 == b1 || a1 == b0 || a1 == b1) return;
+          out.edge_edge.push_back({{a, b}});
+        },
+        a);
   // The grid reports a vertex's faces in the order of its cells; sorted, the pairs near each
   // other are summed in the same order whatever positions the set was found at (a run continued
   // from a checkpoint finds its set at other positions than the run it continues).
@@ -399,9 +417,12 @@ SelfContactCandidates find_self_contact_candidates(const SelfContactMesh& mesh,
 
 int DistanceStencil::count() const {
   switch (type) {
-    case DistanceType::point_point: return 2;
-    case DistanceType::point_edge: return 3;
-    default: return 4;
+    case DistanceType::point_point:
+      return 2;
+    case DistanceType::point_edge:
+      return 3;
+    default:
+      return 4;
   }
 }
 
@@ -413,7 +434,8 @@ DistanceStencil point_triangle_stencil(const PairPoints& x) {
     Eigen::Matrix2d A;
     A << e1.dot(e1), e1.dot(e2), e1.dot(e2), e2.dot(e2);
     const Eigen::Vector2d b = A.ldlt().solve(Eigen::Vector2d(e1.dot(q), e2.dot(q)));
-    if (b[0] >= 0 && b[1] >= 0 && b[0] + b[1] <= 1) return {DistanceType::point_triangle, {{0, 1, 2, 3}}};
+    if (b[0] >= 0 && b[1] >= 0 && b[0] + b[1] <= 1)
+      return {DistanceType::point_triangle, {{0, 1, 2, 3}}};
   }
   // Outside (or degenerate): the closest point lies on the boundary.
   return closest_of(x, {{{{0, 1, 2}}, {{0, 2, 3}}, {{0, 3, 1}}, {{0, 0, 0}}}}, 3);
@@ -444,7 +466,8 @@ DistanceStencil edge_edge_stencil(const PairPoints& x) {
 double distance_squared(const DistanceStencil& s, const PairPoints& x) {
   const auto& p = s.points;
   switch (s.type) {
-    case DistanceType::point_point: return (x[p[0]] - x[p[1]]).squaredNorm();
+    case DistanceType::point_point:
+      return (x[p[0]] - x[p[1]]).squaredNorm();
     case DistanceType::point_edge: {
       const Eigen::Vector3d e = x[p[2]] - x[p[1]];
       return e.cross(x[p[0]] - x[p[1]]).squaredNorm() / e.squaredNorm();
@@ -486,7 +509,8 @@ double edge_edge_mollifier_threshold(double rest_length_a, double rest_length_b)
   return 1e-3 * rest_length_a * rest_length_a * rest_length_b * rest_length_b;
 }
 
-double edge_edge_mollifier(const PairPoints& x, double eps, Vector12d* gradient, Matrix12d* hessian) {
+double edge_edge_mollifier(const PairPoints& x, double eps, Vector12d* gradient,
+                           Matrix12d* hessian) {
   const Eigen::Vector3d u = x[1] - x[0], v = x[3] - x[2], w = u.cross(v);
   const double c = w.squaredNorm();
   if (c >= eps) {
@@ -494,7 +518,8 @@ double edge_edge_mollifier(const PairPoints& x, double eps, Vector12d* gradient,
     if (hessian) hessian->setZero();
     return 1.0;
   }
-  const double m = (2 - c / eps) * c / eps, dm = 2 / eps - 2 * c / (eps * eps), ddm = -2 / (eps * eps);
+  const double m = (2 - c / eps) * c / eps, dm = 2 / eps - 2 * c / (eps * eps),
+               ddm = -2 / (eps * eps);
   // c = |u x v|^2: dc/du = 2 v x w, dc/dv = 2 w x u; second derivatives (derived from
   // dw = du x v + u x dv): Huu = 2(|v|^2 I - v v^T), Hvv = 2(|u|^2 I - u u^T),
   // Huv = 2(u v^T - (u.v) I - [w]x).
@@ -521,7 +546,8 @@ double edge_edge_mollifier(const PairPoints& x, double eps, Vector12d* gradient,
 }
 
 double pair_barrier_derivatives(const DistanceStencil& s, const PairPoints& pts, double dhat,
-                                double mollifier_eps, Vector12d& grad, Matrix12d* hess, double offset) {
+                                double mollifier_eps, Vector12d& grad, Matrix12d* hess,
+                                double offset) {
   Vector12d g2;
   Matrix12d H2;
   const double d2 = distance_squared_derivatives(s, pts, g2, hess ? &H2 : nullptr);
@@ -532,9 +558,11 @@ double pair_barrier_derivatives(const DistanceStencil& s, const PairPoints& pts,
   const double b = barrier(d, dhat), b1 = barrier_first_derivative(d, dhat);
   grad = b1 * gd;
   if (hess)
-    *hess = barrier_second_derivative(d, dhat) * gd * gd.transpose() + b1 * (H2 - 2 * gd * gd.transpose()) / (2 * r);
+    *hess = barrier_second_derivative(d, dhat) * gd * gd.transpose() +
+            b1 * (H2 - 2 * gd * gd.transpose()) / (2 * r);
   if (mollifier_eps <= 0) return b;
-  // Mollified: E = m b, grad = m grad b + b grad m, Hess = m Hb + grad b grad m^T + grad m grad b^T + b Hm.
+  // Mollified: E = m b, grad = m grad b + b grad m, Hess = m Hb + grad b grad m^T + grad m grad b^T
+  // + b Hm.
   Vector12d gm;
   Matrix12d Hm;
   const double m = edge_edge_mollifier(pts, mollifier_eps, &gm, hess ? &Hm : nullptr);
@@ -543,13 +571,14 @@ double pair_barrier_derivatives(const DistanceStencil& s, const PairPoints& pts,
   return m * b;
 }
 
-double point_triangle_ccd(const PairPoints& x, const PairPoints& dx, double t_max, double min_separation,
-                          double offset) {
+double point_triangle_ccd(const PairPoints& x, const PairPoints& dx, double t_max,
+                          double min_separation, double offset) {
   return additive_ccd(x, dx, false, t_max, min_separation, offset,
                       [](const PairPoints& y) { return point_triangle_distance_squared(y); });
 }
 
-double edge_edge_ccd(const PairPoints& x, const PairPoints& dx, double t_max, double min_separation) {
+double edge_edge_ccd(const PairPoints& x, const PairPoints& dx, double t_max,
+                     double min_separation) {
   return additive_ccd(x, dx, true, t_max, min_separation, 0.0,
                       [](const PairPoints& y) { return edge_edge_distance_squared(y); });
 }

@@ -75,14 +75,15 @@ class Grid {
     }
     m_origin = lo;
     const double span = boxes.empty() ? 1.0 : (hi - lo).maxCoeff();
-    m_size = std::max({2.0 * size / std::max<std::size_t>(1, boxes.size()), span / ((1 << BITS) - 2),
-                       1e-300});
+    m_size = std::max(
+        {2.0 * size / std::max<std::size_t>(1, boxes.size()), span / ((1 << BITS) - 2), 1e-300});
   }
   Eigen::Array3i cell(const Eigen::Array3d& x) const {
     return ((x - m_origin) / m_size).floor().cast<int>();
   }
   static std::uint64_t key(const Eigen::Array3i& c) {
-    return (std::uint64_t(c(0)) << (2 * BITS)) | (std::uint64_t(c(1)) << BITS) | std::uint64_t(c(2));
+    return (std::uint64_t(c(0)) << (2 * BITS)) | (std::uint64_t(c(1)) << BITS) |
+           std::uint64_t(c(2));
   }
 
  private:
@@ -129,7 +130,8 @@ std::vector<std::pair<int, int>> broad_phase(const std::vector<Box>& boxes) {
     for (std::size_t g = 0; g < boxes.size(); ++g)
       if (static_cast<int>(g) != f && !(is_large[g] && static_cast<int>(g) < f) &&
           boxes[f].overlaps(boxes[g]))
-        candidates.emplace_back(std::min<int>(f, static_cast<int>(g)), std::max<int>(f, static_cast<int>(g)));
+        candidates.emplace_back(std::min<int>(f, static_cast<int>(g)),
+                                std::max<int>(f, static_cast<int>(g)));
   return candidates;
 }
 
@@ -226,8 +228,8 @@ bool pair_meets(const std::vector<Point>& pts, const Eigen::MatrixX3i& faces, in
   }
   if (s.n_shared == 1) {
     kind = PairKind::vertex;
-    return vertex_pair_meets(tf[s.shared_in_f[0]], tf[s.own_f[0]], tf[s.own_f[1]],
-                             tg[s.own_g[0]], tg[s.own_g[1]]);
+    return vertex_pair_meets(tf[s.shared_in_f[0]], tf[s.own_f[0]], tf[s.own_f[1]], tg[s.own_g[0]],
+                             tg[s.own_g[1]]);
   }
   kind = PairKind::edge;
   return edge_pair_meets(tf[s.shared_in_f[0]], tf[s.shared_in_f[1]], tf[s.own_f[0]],

@@ -29,10 +29,10 @@ namespace papersim::collision {
 struct SelfIntersections {
   /// Intersecting pairs (i, j), i < j face indices, sorted by (i, j). #P by 2.
   Eigen::MatrixX2i pairs;
-  int disjoint_pairs = 0;       ///< pairs sharing no vertex that intersect
-  int vertex_pairs = 0;         ///< pairs sharing one vertex that meet beyond it
-  int edge_pairs = 0;           ///< pairs sharing an edge that are folded flat onto each other
-  int skipped_degenerate = 0;   ///< adjacent pairs not tested because a triangle is degenerate
+  int disjoint_pairs = 0;      ///< pairs sharing no vertex that intersect
+  int vertex_pairs = 0;        ///< pairs sharing one vertex that meet beyond it
+  int edge_pairs = 0;          ///< pairs sharing an edge that are folded flat onto each other
+  int skipped_degenerate = 0;  ///< adjacent pairs not tested because a triangle is degenerate
   /// Total number of intersecting pairs (rows of `pairs`).
   int count() const { return static_cast<int>(pairs.rows()); }
 };

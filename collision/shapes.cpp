@@ -1,14 +1,13 @@
 #include "collision/shapes.hpp"
 
-#include "common/format.hpp"
-
-#include "collision/errors.hpp"
-
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <string>
+
+#include "collision/errors.hpp"
+#include "common/format.hpp"
 
 namespace papersim::collision {
 
@@ -114,7 +113,9 @@ double box_distance(const Eigen::Vector3d& b, const Eigen::Vector3d& p, Eigen::V
   }
   const Eigen::Vector3d v = q.cwiseMax(0.0);
   const double d = v.norm();
-  if (g) *g = Eigen::Vector3d(sign_of(p.x()) * v.x(), sign_of(p.y()) * v.y(), sign_of(p.z()) * v.z()) / d;
+  if (g)
+    *g =
+        Eigen::Vector3d(sign_of(p.x()) * v.x(), sign_of(p.y()) * v.y(), sign_of(p.z()) * v.z()) / d;
   return d;
 }
 
@@ -129,7 +130,9 @@ double gable_distance(const Shape& s, const Eigen::Vector3d& p, Eigen::Vector3d*
 void validate(const Shape& s) {
   switch (s.kind) {
     case ShapeKind::sphere:
-    case ShapeKind::inverted_sphere: require_positive("radius", s.radius); return;
+    case ShapeKind::inverted_sphere:
+      require_positive("radius", s.radius);
+      return;
     case ShapeKind::cylinder:
       require_positive("radius", s.radius);
       require_positive("length", s.length);
@@ -139,8 +142,8 @@ void validate(const Shape& s) {
       require_positive("length", s.length);
       if (s.length < 2.0 * s.radius)
         throw ColliderError("collider shape: capsule length (tip to tip) " +
-                            common::format_number(s.length) + " must be >= 2 radius = " +
-                            common::format_number(2.0 * s.radius));
+                            common::format_number(s.length) +
+                            " must be >= 2 radius = " + common::format_number(2.0 * s.radius));
       return;
     case ShapeKind::box:
       require_positive("half_extents.x", s.half_extents.x());
@@ -158,12 +161,18 @@ void validate(const Shape& s) {
 
 double shape_distance(const Shape& s, const Eigen::Vector3d& p, Eigen::Vector3d* g) {
   switch (s.kind) {
-    case ShapeKind::sphere: return sphere_distance(s.radius, p, g);
-    case ShapeKind::inverted_sphere: return inverted_sphere_distance(s.radius, p, g);
-    case ShapeKind::cylinder: return cylinder_distance(s, p, g);
-    case ShapeKind::capsule: return capsule_distance(s, p, g);
-    case ShapeKind::box: return box_distance(s.half_extents, p, g);
-    case ShapeKind::gable: return gable_distance(s, p, g);
+    case ShapeKind::sphere:
+      return sphere_distance(s.radius, p, g);
+    case ShapeKind::inverted_sphere:
+      return inverted_sphere_distance(s.radius, p, g);
+    case ShapeKind::cylinder:
+      return cylinder_distance(s, p, g);
+    case ShapeKind::capsule:
+      return capsule_distance(s, p, g);
+    case ShapeKind::box:
+      return box_distance(s.half_extents, p, g);
+    case ShapeKind::gable:
+      return gable_distance(s, p, g);
   }
   return 0.0;
 }
@@ -172,10 +181,16 @@ Aabb shape_bounds(const Shape& s) {
   Aabb b;
   switch (s.kind) {
     case ShapeKind::sphere:
-    case ShapeKind::inverted_sphere: b.hi = Eigen::Vector3d::Constant(s.radius); break;
+    case ShapeKind::inverted_sphere:
+      b.hi = Eigen::Vector3d::Constant(s.radius);
+      break;
     case ShapeKind::cylinder:
-    case ShapeKind::capsule: b.hi = Eigen::Vector3d(0.5 * s.length, s.radius, s.radius); break;
-    case ShapeKind::box: b.hi = s.half_extents; break;
+    case ShapeKind::capsule:
+      b.hi = Eigen::Vector3d(0.5 * s.length, s.radius, s.radius);
+      break;
+    case ShapeKind::box:
+      b.hi = s.half_extents;
+      break;
     case ShapeKind::gable:
       b.lo = Eigen::Vector3d(-0.5 * s.length, -s.half_width, 0.0);
       b.hi = Eigen::Vector3d(0.5 * s.length, s.half_width, s.height);
@@ -188,11 +203,16 @@ Aabb shape_bounds(const Shape& s) {
 double shape_smallest_feature(const Shape& s) {
   switch (s.kind) {
     case ShapeKind::sphere:
-    case ShapeKind::inverted_sphere: return s.radius;
-    case ShapeKind::cylinder: return std::min(s.radius, 0.5 * s.length);
-    case ShapeKind::capsule: return s.radius;
-    case ShapeKind::box: return s.half_extents.minCoeff();
-    case ShapeKind::gable: return std::min({s.half_width, s.height, 0.5 * s.length});
+    case ShapeKind::inverted_sphere:
+      return s.radius;
+    case ShapeKind::cylinder:
+      return std::min(s.radius, 0.5 * s.length);
+    case ShapeKind::capsule:
+      return s.radius;
+    case ShapeKind::box:
+      return s.half_extents.minCoeff();
+    case ShapeKind::gable:
+      return std::min({s.half_width, s.height, 0.5 * s.length});
   }
   return 0.0;
 }
@@ -202,10 +222,14 @@ double shape_surface_area(const Shape& s) {
   const Eigen::Vector3d& e = s.half_extents;
   switch (s.kind) {
     case ShapeKind::sphere:
-    case ShapeKind::inverted_sphere: return 4.0 * M_PI * r * r;
-    case ShapeKind::cylinder: return 2.0 * M_PI * r * (r + l);
-    case ShapeKind::capsule: return 4.0 * M_PI * r * r + 2.0 * M_PI * r * (l - 2.0 * r);
-    case ShapeKind::box: return 8.0 * (e.x() * e.y() + e.y() * e.z() + e.z() * e.x());
+    case ShapeKind::inverted_sphere:
+      return 4.0 * M_PI * r * r;
+    case ShapeKind::cylinder:
+      return 2.0 * M_PI * r * (r + l);
+    case ShapeKind::capsule:
+      return 4.0 * M_PI * r * r + 2.0 * M_PI * r * (l - 2.0 * r);
+    case ShapeKind::box:
+      return 8.0 * (e.x() * e.y() + e.y() * e.z() + e.z() * e.x());
     case ShapeKind::gable: {
       const double slant = std::hypot(s.half_width, s.height);
       return (2.0 * s.half_width + 2.0 * slant) * l + 2.0 * s.half_width * s.height;
@@ -222,7 +246,8 @@ double AnalyticCollider::local_distance(const Eigen::Vector3d& p, Eigen::Vector3
 
 Aabb AnalyticCollider::local_bounds() const { return shape_bounds(m_shape); }
 
-bool AnalyticCollider::distance_hessian(const Eigen::Vector3d& p, double t, Eigen::Matrix3d& hessian) const {
+bool AnalyticCollider::distance_hessian(const Eigen::Vector3d& p, double t,
+                                        Eigen::Matrix3d& hessian) const {
   if (m_shape.kind != ShapeKind::inverted_sphere) return false;
   const Eigen::Vector3d q = p - motion.pose(t).translation();
   const double n = q.norm();
@@ -237,7 +262,8 @@ bool AnalyticCollider::distance_hessian(const Eigen::Vector3d& p, double t, Eige
 // <= R'^2 at a = 0, so the set is an interval [a_-, a_+] holding 0: a_+ is the exact answer.
 double AnalyticCollider::segment_step(const Eigen::Vector3d& p, const Eigen::Vector3d& d, double t,
                                       double limit, double keep) const {
-  if (m_shape.kind != ShapeKind::inverted_sphere) return Collider::segment_step(p, d, t, limit, keep);
+  if (m_shape.kind != ShapeKind::inverted_sphere)
+    return Collider::segment_step(p, d, t, limit, keep);
   const double dd = d.squaredNorm();
   if (dd == 0) return limit;
   const Eigen::Affine3d pose = motion.pose(t);
@@ -255,7 +281,8 @@ double AnalyticCollider::segment_step(const Eigen::Vector3d& p, const Eigen::Vec
 }
 
 bool AnalyticCollider::moves_affinely(double t0, double t1) const {
-  const bool any_rotation = m_shape.kind == ShapeKind::sphere || m_shape.kind == ShapeKind::inverted_sphere;
+  const bool any_rotation =
+      m_shape.kind == ShapeKind::sphere || m_shape.kind == ShapeKind::inverted_sphere;
   const bool spin = m_shape.kind == ShapeKind::cylinder || m_shape.kind == ShapeKind::capsule;
   for (double t = t0; t < t1; t = motion.next_keyframe_time(t)) {
     if (motion.scale_rate(t) != 0 && m_shape.kind != ShapeKind::inverted_sphere) return false;
@@ -271,19 +298,21 @@ bool AnalyticCollider::moves_affinely(double t0, double t1) const {
 
 // The motion is taken piece by piece between keyframes, within which translation and scale are
 // linear in time.
-double AnalyticCollider::moving_segment_step(const Eigen::Vector3d& p, const Eigen::Vector3d& d, double t,
-                                             double dt, double limit, double keep) const {
+double AnalyticCollider::moving_segment_step(const Eigen::Vector3d& p, const Eigen::Vector3d& d,
+                                             double t, double dt, double limit, double keep) const {
   if (dt == 0) return segment_step(p, d, t, limit, keep);
   if (dt < 0 || !moves_affinely(t, t + limit * dt)) return -1.0;
-  return step_over_pieces(p, d, t, dt, limit, keep,
-                          [&](const Eigen::Vector3d& q, double tq, double length, double stop, double t_inside) {
-                            return piece_step(q, d, tq, dt, length, stop, t_inside);
-                          });
+  return step_over_pieces(
+      p, d, t, dt, limit, keep,
+      [&](const Eigen::Vector3d& q, double tq, double length, double stop, double t_inside) {
+        return piece_step(q, d, tq, dt, length, stop, t_inside);
+      });
 }
 
-double AnalyticCollider::piece_step(const Eigen::Vector3d& p, const Eigen::Vector3d& d, double t, double dt,
-                                    double length, double stop, double t_inside) const {
-  if (m_shape.kind != ShapeKind::inverted_sphere) return convex_piece_step(p, d, t, dt, length, stop, t_inside);
+double AnalyticCollider::piece_step(const Eigen::Vector3d& p, const Eigen::Vector3d& d, double t,
+                                    double dt, double length, double stop, double t_inside) const {
+  if (m_shape.kind != ShapeKind::inverted_sphere)
+    return convex_piece_step(p, d, t, dt, length, stop, t_inside);
   // phi(a) = s(a) R - |q + a r| with s linear in a: concave, so f(a) = |q + a r| - (s(a) R -
   // stop) is convex, negative at 0, and the admissible steps are [0, root].
   const Eigen::Affine3d pose = motion.pose(t);
@@ -291,7 +320,9 @@ double AnalyticCollider::piece_step(const Eigen::Vector3d& p, const Eigen::Vecto
   const Eigen::Vector3d r = d - dt * motion.linear_velocity(t_inside);
   const double s0 = pose.linear().col(0).norm(), rate_s = motion.scale_rate(t_inside) * dt;
   const Eigen::Vector3d q = p - pose.translation();
-  const auto f = [&](double a) { return (q + a * r).norm() - ((s0 + a * rate_s) * m_shape.radius - stop); };
+  const auto f = [&](double a) {
+    return (q + a * r).norm() - ((s0 + a * rate_s) * m_shape.radius - stop);
+  };
   if (f(length) < 0) return length;
   double lo = 0, hi = length;
   for (int it = 0; it < 60; ++it) {
@@ -306,7 +337,8 @@ PolytopeFeatures polytope_features(const Shape& s) {
   if (s.kind == ShapeKind::box) {
     const Eigen::Vector3d& e = s.half_extents;
     for (int i = 0; i < 8; ++i)  // bit k of i: sign of axis k
-      f.corners.emplace_back((i & 1 ? 1 : -1) * e.x(), (i & 2 ? 1 : -1) * e.y(), (i & 4 ? 1 : -1) * e.z());
+      f.corners.emplace_back((i & 1 ? 1 : -1) * e.x(), (i & 2 ? 1 : -1) * e.y(),
+                             (i & 4 ? 1 : -1) * e.z());
     for (int i = 0; i < 8; ++i)
       for (int k = 0; k < 3; ++k)
         if (!(i & (1 << k))) f.edges.push_back({{i, i | (1 << k)}});
@@ -317,9 +349,9 @@ PolytopeFeatures polytope_features(const Shape& s) {
       f.corners.emplace_back(x, 0.0, s.height);
     }
     for (int k = 0; k < 3; ++k) {
-      f.edges.push_back({{k, k + 3}});                  // along the prism
-      f.edges.push_back({{k, (k + 1) % 3}});            // end triangle at -length/2
-      f.edges.push_back({{k + 3, (k + 1) % 3 + 3}});    // end triangle at +length/2
+      f.edges.push_back({{k, k + 3}});                // along the prism
+      f.edges.push_back({{k, (k + 1) % 3}});          // end triangle at -length/2
+      f.edges.push_back({{k + 3, (k + 1) % 3 + 3}});  // end triangle at +length/2
     }
   }
   return f;

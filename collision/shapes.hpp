@@ -15,11 +15,11 @@
 ///             has its base on z = 0 from y = -half_width to half_width and its ridge at
 ///             (y, z) = (0, height); ridge angle 2 atan(half_width / height). Closed (base
 ///             face included).
-#include "collision/collider.hpp"
-
 #include <Eigen/Core>
 #include <array>
 #include <vector>
+
+#include "collision/collider.hpp"
 
 namespace papersim::collision {
 
@@ -29,8 +29,8 @@ enum class ShapeKind { sphere, cylinder, capsule, box, gable, inverted_sphere };
 /// An analytic primitive with its dimensions [m]; only the fields of its kind are read.
 struct Shape {
   ShapeKind kind = ShapeKind::sphere;
-  double radius = 0.05;      ///< sphere, inverted sphere, cylinder, capsule [m]
-  double length = 0.1;       ///< cylinder, capsule (tip to tip), gable: extent along x [m]
+  double radius = 0.05;  ///< sphere, inverted sphere, cylinder, capsule [m]
+  double length = 0.1;   ///< cylinder, capsule (tip to tip), gable: extent along x [m]
   Eigen::Vector3d half_extents = Eigen::Vector3d::Constant(0.05);  ///< box [m]
   double half_width = 0.05;  ///< gable: half the base width (along y) [m]
   double height = 0.05;      ///< gable: ridge height above the base (along z) [m]
@@ -49,7 +49,8 @@ double shape_distance(const Shape& shape, const Eigen::Vector3d& p, Eigen::Vecto
 Aabb shape_bounds(const Shape& shape);
 
 /// Smallest feature size used to choose a grid resolution [m]: sphere, inverted sphere, cylinder
-/// and capsule radius, box smallest half extent, gable min(half_width, height), never above length/2.
+/// and capsule radius, box smallest half extent, gable min(half_width, height), never above
+/// length/2.
 double shape_smallest_feature(const Shape& shape);
 
 /// Surface area [m^2] (to estimate a level set's voxel count before building it).
@@ -82,7 +83,8 @@ class AnalyticCollider : public Collider {
                       double keep) const override;
   /// The inverted sphere's Hessian -(I - q q^T / |q|^2) / |q|, q = p - centre (negative
   /// semi-definite); false for the other primitives.
-  bool distance_hessian(const Eigen::Vector3d& p, double t, Eigen::Matrix3d& hessian) const override;
+  bool distance_hessian(const Eigen::Vector3d& p, double t,
+                        Eigen::Matrix3d& hessian) const override;
   /// Translation, plus any rotation of a sphere or inverted sphere, spin of a cylinder or
   /// capsule about its axis, and a uniform scale of the inverted sphere.
   bool moves_affinely(double t0, double t1) const override;
@@ -90,8 +92,8 @@ class AnalyticCollider : public Collider {
   /// segment, along which a convex field is convex (it stays above its tangent at the start)
   /// and the inverted sphere's field, with its radius linear in time, is concave (the bound is
   /// the root of a quadratic).
-  double moving_segment_step(const Eigen::Vector3d& p, const Eigen::Vector3d& d, double t, double dt,
-                             double limit, double keep) const override;
+  double moving_segment_step(const Eigen::Vector3d& p, const Eigen::Vector3d& d, double t,
+                             double dt, double limit, double keep) const override;
 
  protected:
   double local_distance(const Eigen::Vector3d& p, Eigen::Vector3d* gradient) const override;
@@ -100,8 +102,8 @@ class AnalyticCollider : public Collider {
  private:
   /// moving_segment_step within one keyframe segment: the largest a in [0, length] keeping
   /// phi >= stop [m] from time t; t_inside is a time inside the segment (its velocities).
-  double piece_step(const Eigen::Vector3d& p, const Eigen::Vector3d& d, double t, double dt, double length,
-                    double stop, double t_inside) const;
+  double piece_step(const Eigen::Vector3d& p, const Eigen::Vector3d& d, double t, double dt,
+                    double length, double stop, double t_inside) const;
 
   Shape m_shape;
 };

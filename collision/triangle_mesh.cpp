@@ -1,12 +1,12 @@
 #include "collision/triangle_mesh.hpp"
 
-#include "collision/errors.hpp"
-
 #include <Eigen/Geometry>
 #include <fstream>
 #include <map>
 #include <sstream>
 #include <utility>
+
+#include "collision/errors.hpp"
 
 namespace papersim::collision {
 
@@ -26,8 +26,9 @@ int face_index(const std::string& token, int vertex_count, const std::string& pa
   }
   const int resolved = index < 0 ? vertex_count + index : index - 1;
   if (index == 0 || resolved < 0 || resolved >= vertex_count)
-    parse_error(path, line, "face index " + token + " out of range (" +
-                                std::to_string(vertex_count) + " vertices so far)");
+    parse_error(path, line,
+                "face index " + token + " out of range (" + std::to_string(vertex_count) +
+                    " vertices so far)");
   return resolved;
 }
 
@@ -72,8 +73,7 @@ void check_closed(const TriangleMesh& mesh, const std::string& name) {
     if (t[0] == t[1] || t[1] == t[2] || t[2] == t[0])
       throw ColliderError("mesh '" + name + "': triangle " + std::to_string(f) +
                           " repeats a vertex");
-    for (int e = 0; e < 3; ++e)
-      ++edge_count[std::minmax(t[e], t[(e + 1) % 3])];
+    for (int e = 0; e < 3; ++e) ++edge_count[std::minmax(t[e], t[(e + 1) % 3])];
   }
   for (const auto& [edge, count] : edge_count)
     if (count != 2)

@@ -1,10 +1,10 @@
 #pragma once
 /// A plain indexed triangle mesh for mesh obstacles, and its OBJ reader.
-#include "collision/collider.hpp"
-
 #include <Eigen/Core>
 #include <string>
 #include <vector>
+
+#include "collision/collider.hpp"
 
 namespace papersim::collision {
 

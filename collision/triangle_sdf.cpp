@@ -4,8 +4,8 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
-#include <cmath>
 #include <array>
+#include <cmath>
 #include <queue>
 
 namespace papersim::collision {
@@ -90,7 +90,8 @@ Eigen::Vector3d closest_barycentric(const Eigen::Matrix3d& v, const Eigen::Vecto
   double best_d = 1e300;
   for (int k = 0; k < 3; ++k) {  // clamp onto each edge, keep the closest
     const Eigen::Vector3d a = v.col(k), b = v.col((k + 1) % 3);
-    const double t = std::clamp((x - a).dot(b - a) / std::max((b - a).squaredNorm(), 1e-300), 0.0, 1.0);
+    const double t =
+        std::clamp((x - a).dot(b - a) / std::max((b - a).squaredNorm(), 1e-300), 0.0, 1.0);
     const double d = (a + t * (b - a) - x).squaredNorm();
     if (d < best_d) {
       best_d = d;
@@ -160,15 +161,14 @@ std::vector<FaceSdfContact> mesh_edges_faces_vs_sdf(const Collider& collider,
                     [&](const tbb::blocked_range<std::size_t>& r) {
                       for (std::size_t f = r.begin(); f != r.end(); ++f) {
                         const Eigen::Vector3i& t = faces[f];
-                        results[f] = triangle_min_distance(collider, positions[t[0]],
-                                                           positions[t[1]], positions[t[2]],
-                                                           pose, params);
+                        results[f] =
+                            triangle_min_distance(collider, positions[t[0]], positions[t[1]],
+                                                  positions[t[2]], pose, params);
                       }
                     });
   std::vector<FaceSdfContact> contacts;
   for (std::size_t f = 0; f < faces.size(); ++f)
-    if (results[f].distance < params.cutoff)
-      contacts.push_back({static_cast<int>(f), results[f]});
+    if (results[f].distance < params.cutoff) contacts.push_back({static_cast<int>(f), results[f]});
   return contacts;
 }
 

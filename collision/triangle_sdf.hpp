@@ -12,12 +12,12 @@
 /// gradient steps inside the triangle. The result carries both the smallest value found (an
 /// upper bound on the true minimum, attained at `barycentric`) and a certified lower bound.
 /// A triangle far from the obstacle costs one query.
-#include "collision/collider.hpp"
-
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <limits>
 #include <vector>
+
+#include "collision/collider.hpp"
 
 namespace papersim::collision {
 
@@ -40,11 +40,13 @@ struct TriangleSdfParams {
 /// Minimum of the signed distance over a triangle.
 struct TriangleSdfResult {
   double distance = std::numeric_limits<double>::infinity();  ///< smallest phi found [m]
-  double lower_bound = -std::numeric_limits<double>::infinity();  ///< phi >= this on the triangle [m]
-  Eigen::Vector3d barycentric = Eigen::Vector3d::Constant(1.0 / 3.0);  ///< weights of a, b, c of the minimiser
-  Eigen::Vector3d point = Eigen::Vector3d::Zero();     ///< world minimiser [m]
-  Eigen::Vector3d gradient = Eigen::Vector3d::UnitZ(); ///< unit field gradient there (world)
-  int evaluations = 0;                                 ///< field queries used
+  double lower_bound =
+      -std::numeric_limits<double>::infinity();  ///< phi >= this on the triangle [m]
+  /// weights of a, b, c of the minimiser
+  Eigen::Vector3d barycentric = Eigen::Vector3d::Constant(1.0 / 3.0);
+  Eigen::Vector3d point = Eigen::Vector3d::Zero();      ///< world minimiser [m]
+  Eigen::Vector3d gradient = Eigen::Vector3d::UnitZ();  ///< unit field gradient there (world)
+  int evaluations = 0;                                  ///< field queries used
 };
 
 /// Minimum of `collider`'s signed distance over the triangle (a, b, c) (world, [m]) with the

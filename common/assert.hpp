@@ -6,11 +6,11 @@
 #include <string>
 
 #if defined(PAPERSIM_ENABLE_ASSERTS)
-#define PAPERSIM_ASSERT(cond, msg)                                                      \
-  do {                                                                                  \
-    if (!(cond))                                                                        \
-      throw std::logic_error(std::string("papersim invariant failed: ") + #cond + " (" + \
-                             (msg) + ") at " + __FILE__ + ":" + std::to_string(__LINE__)); \
+#define PAPERSIM_ASSERT(cond, msg)                                                               \
+  do {                                                                                           \
+    if (!(cond))                                                                                 \
+      throw std::logic_error(std::string("papersim invariant failed: ") + #cond + " (" + (msg) + \
+                             ") at " + __FILE__ + ":" + std::to_string(__LINE__));               \
   } while (0)
 #else
 #define PAPERSIM_ASSERT(cond, msg) \

@@ -17,7 +17,8 @@ inline CLI::Validator number_at_least_zero(bool strictly) {
         const double x = std::strtod(value.c_str(), &end);
         if (value.empty() || end == value.c_str() || *end != '\0' || !std::isfinite(x))
           return "'" + value + "' is not a number";
-        if (strictly ? x <= 0 : x < 0) return "'" + value + "' must be " + (strictly ? "> 0" : ">= 0");
+        if (strictly ? x <= 0 : x < 0)
+          return "'" + value + "' must be " + (strictly ? "> 0" : ">= 0");
         return {};
       },
       strictly ? "POSITIVE" : "NONNEGATIVE");

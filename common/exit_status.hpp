@@ -4,12 +4,13 @@ namespace papersim::common {
 
 enum ExitStatus : int {
   EXIT_OK = 0,
-  EXIT_INTERNAL = 1,    ///< an unexpected error (a bug): please report it
-  EXIT_BAD_INPUT = 2,   ///< bad command line, scene, mesh, image or option value; a stated limit exceeded
-  EXIT_NO_CAMERA = 3,   ///< scenegen: no valid camera direction (meta.json records why)
-  EXIT_NUMERIC = 4,     ///< papersim: numeric failure of the simulation (a step that cannot be taken)
-  EXIT_OUTPUT = 5,      ///< an output cannot be written (full disk, file size limit, permission)
-  EXIT_EXTERNAL = 6,    ///< a helper program failed (POV-Ray, gnuplot)
+  EXIT_INTERNAL = 1,  ///< an unexpected error (a bug): please report it
+  /// bad command line, scene, mesh, image or option value; a stated limit exceeded
+  EXIT_BAD_INPUT = 2,
+  EXIT_NO_CAMERA = 3,  ///< scenegen: no valid camera direction (meta.json records why)
+  EXIT_NUMERIC = 4,   ///< papersim: numeric failure of the simulation (a step that cannot be taken)
+  EXIT_OUTPUT = 5,    ///< an output cannot be written (full disk, file size limit, permission)
+  EXIT_EXTERNAL = 6,  ///< a helper program failed (POV-Ray, gnuplot)
 };
 
 /// Status of a program stopped by signal `signal_number` (SIGINT: 130, SIGTERM: 143).

@@ -3,10 +3,11 @@
 ///
 /// install_interrupt_handling() handles SIGINT / SIGTERM: the handler only records the signal
 /// (the stop request) and wakes a watcher thread. Runs poll stop_requested() and answer by
-/// throwing Interrupted; their destructors remove staging folders. Should the program still run STOP_GRACE_SECONDS later
-/// (a long solve that does not poll), the waiting thread removes the registered cleanup paths
-/// itself and ends the process with status 128 + signal. SIGXFSZ is ignored, so that a file
-/// size limit shows as a failed write (exit status 5) instead of killing the program.
+/// throwing Interrupted; their destructors remove staging folders. Should the program still run
+/// STOP_GRACE_SECONDS later (a long solve that does not poll), the waiting thread removes the
+/// registered cleanup paths itself and ends the process with status 128 + signal. SIGXFSZ is
+/// ignored, so that a file size limit shows as a failed write (exit status 5) instead of killing
+/// the program.
 #include <filesystem>
 
 namespace papersim::common {

@@ -45,7 +45,9 @@ std::vector<Eigen::Vector2d> clip_half_plane(const std::vector<Eigen::Vector2d>&
                                              const Eigen::Vector2d& p0, const Eigen::Vector2d& p1) {
   std::vector<Eigen::Vector2d> out;
   const Eigen::Vector2d d = p1 - p0;
-  auto side = [&](const Eigen::Vector2d& p) { return d.x() * (p.y() - p0.y()) - d.y() * (p.x() - p0.x()); };
+  auto side = [&](const Eigen::Vector2d& p) {
+    return d.x() * (p.y() - p0.y()) - d.y() * (p.x() - p0.x());
+  };
   for (size_t i = 0; i < poly.size(); ++i) {
     const Eigen::Vector2d& a = poly[i];
     const Eigen::Vector2d& b = poly[(i + 1) % poly.size()];
@@ -65,7 +67,8 @@ double triangle_area(const Triangle2& t) {
 /// or a flip or collapse making a face through three nearly collinear vertices).
 std::string quality_reason(const EditProposal& p) {
   for (const Triangle2& t : p.material) {
-    const Eigen::Vector2d a = t.row(0).transpose(), b = t.row(1).transpose(), c = t.row(2).transpose();
+    const Eigen::Vector2d a = t.row(0).transpose(), b = t.row(1).transpose(),
+                          c = t.row(2).transpose();
     if (!is_proper_triangle(a, b, c)) return "inverted";
     if (aspect_ratio(a, b, c) < EDIT_ASPECT_MIN) return "degenerate";
   }
@@ -140,7 +143,8 @@ Eigen::Matrix2d MeshEditor::metric(VertexHandle v) const {
 }
 
 void MeshEditor::set_metric(VertexHandle v, const Eigen::Matrix2d& m) {
-  m_sheet.mesh().property(m_metric, v) = OpenMesh::Vec3d(m(0, 0), m(1, 1), 0.5 * (m(0, 1) + m(1, 0)));
+  m_sheet.mesh().property(m_metric, v) =
+      OpenMesh::Vec3d(m(0, 0), m(1, 1), 0.5 * (m(0, 1) + m(1, 0)));
 }
 
 void MeshEditor::refuse(const std::string& reason) { ++m_stats.refusals[reason]; }
@@ -204,8 +208,7 @@ EditProposal MeshEditor::propose_split(EdgeHandle e) const {
   }
   const VertexHandle a = m.from_vertex_handle(m.halfedge_handle(e, 0));
   const VertexHandle b = m.to_vertex_handle(m.halfedge_handle(e, 0));
-  fill_geometry(p, 0.5 * (position(a) + position(b)),
-                0.5 * (material(a) + material(b)));
+  fill_geometry(p, 0.5 * (position(a) + position(b)), 0.5 * (material(a) + material(b)));
   return p;
 }
 

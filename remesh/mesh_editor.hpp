@@ -8,11 +8,10 @@
 /// finish() permutes it together with the connectivity. Vertex and face indices seen during the
 /// edits (EditProposal) are those of the working mesh: deleted elements keep their index until
 /// finish().
+#include <Eigen/Core>
 #include <functional>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "remesh/remesh.hpp"
 #include "remesh/sheet_mesh.hpp"

@@ -1,14 +1,13 @@
 #include "remesh/remesh.hpp"
 
+#include <Eigen/Geometry>
+#include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
 #include <set>
 #include <tuple>
 #include <utility>
 #include <vector>
-
-#include <Eigen/Geometry>
-#include <Eigen/LU>
 
 #include "remesh/mesh_editor.hpp"
 #include "remesh/sizing.hpp"
@@ -40,9 +39,7 @@ constexpr double SLIVER_FRACTION = 0.5;
 /// Bound on the sweeps of the sliver phase.
 constexpr int SLIVER_SWEEPS_MAX = 10;
 
-VertexPair key(VertexHandle a, VertexHandle b) {
-  return std::minmax(a.idx(), b.idx());
-}
+VertexPair key(VertexHandle a, VertexHandle b) { return std::minmax(a.idx(), b.idx()); }
 
 /// l^2 = u^T M u for the material edge vector u, M the mean of the end vertices' metrics.
 double edge_size2(const MeshEditor& ed, VertexHandle a, VertexHandle b) {
@@ -127,10 +124,10 @@ double face_aspect(const MeshEditor& ed, OpenMesh::FaceHandle f) {
 /// Smallest aspect ratio of the faces edit p removes, and of the faces it creates.
 std::pair<double, double> thinnest_before_after(const MeshEditor& ed, const EditProposal& p) {
   double before = 1.0, after = 1.0;
-  for (int f : p.removed_faces)
-    before = std::min(before, face_aspect(ed, OpenMesh::FaceHandle(f)));
+  for (int f : p.removed_faces) before = std::min(before, face_aspect(ed, OpenMesh::FaceHandle(f)));
   for (const auto& x : p.material)
-    after = std::min(after, aspect_ratio(x.row(0).transpose(), x.row(1).transpose(), x.row(2).transpose()));
+    after = std::min(
+        after, aspect_ratio(x.row(0).transpose(), x.row(1).transpose(), x.row(2).transpose()));
   return {before, after};
 }
 
@@ -214,9 +211,9 @@ void flip_around(MeshEditor& ed, VertexHandle v, const RemeshParams& params) {
 /// one left was refused).
 void split_phase(MeshEditor& ed, const RemeshParams& params) {
   std::set<VertexPair> refused;
-  const MeshEditor::EditCheck thick = params.refuse_thin_splits
-                                          ? thick_split_check(ed, SLIVER_FRACTION * params.aspect_min)
-                                          : MeshEditor::EditCheck();
+  const MeshEditor::EditCheck thick =
+      params.refuse_thin_splits ? thick_split_check(ed, SLIVER_FRACTION * params.aspect_min)
+                                : MeshEditor::EditCheck();
   for (;;) {
     std::vector<std::tuple<double, int, int>> bad;
     for (auto e : ed.mesh().edges()) {

@@ -11,13 +11,12 @@
 /// splits next to the boundary leave: no flip can reach them there) by a collapse that makes the
 /// neighbourhood less thin. Every edit goes through one MeshEditor (mesh_editor.hpp), which
 /// carries every attribute across it and hands each proposed edit to a caller's veto first.
+#include <Eigen/Core>
 #include <array>
 #include <functional>
 #include <map>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "remesh/sheet_mesh.hpp"
 
@@ -44,10 +43,10 @@ struct RemeshParams {
   /// refinement: edges no longer than d / |grad d| along the direction in which the distance d
   /// changes (ArcSim's obstacle metric from a per-vertex distance), <= 0 off.
   double obstacle_distance = 0.0;
-  double size_min = 3e-3;    ///< [m] shortest edge the metric asks for (> 0)
-  double size_max = 0.1;     ///< [m] longest edge the metric allows (>= size_min)
-  double aspect_min = 0.2;   ///< [-] smallest aspect ratio of the metric, and of a face a
-                             ///< collapse may create (12 sqrt(3) area / perimeter^2), in (0, 1]
+  double size_min = 3e-3;   ///< [m] shortest edge the metric asks for (> 0)
+  double size_max = 0.1;    ///< [m] longest edge the metric allows (>= size_min)
+  double aspect_min = 0.2;  ///< [-] smallest aspect ratio of the metric, and of a face a
+                            ///< collapse may create (12 sqrt(3) area / perimeter^2), in (0, 1]
   /// [rad] no flip across a hinge whose world dihedral angle (or the one the flip would create)
   /// exceeds this: a flip there would cut a crease (ArcSim 0.2 uses 40 degrees). In (0, pi].
   double flip_angle_max = 0.7;
@@ -142,8 +141,9 @@ std::vector<Eigen::Matrix2d> sizing(const SheetMesh& mesh, const RemeshState& st
 /// symmetric positive semi-definite metric in material space [1/m^2] (zero when off): an edge u
 /// is as long as a criterion allows when u^T M u = 1.
 struct SizingTerms {
-  Eigen::Matrix2d curvature = Eigen::Matrix2d::Zero();    ///< world shape: S^T S / refine_angle^2
-  Eigen::Matrix2d plastic = Eigen::Matrix2d::Zero();      ///< plastic curvature: Kp^T Kp / refine_angle^2
+  Eigen::Matrix2d curvature = Eigen::Matrix2d::Zero();  ///< world shape: S^T S / refine_angle^2
+  /// plastic curvature: Kp^T Kp / refine_angle^2
+  Eigen::Matrix2d plastic = Eigen::Matrix2d::Zero();
   Eigen::Matrix2d compression = Eigen::Matrix2d::Zero();  ///< membrane compression (ArcSim)
   Eigen::Matrix2d velocity = Eigen::Matrix2d::Zero();     ///< velocity gradient
   Eigen::Matrix2d obstacle = Eigen::Matrix2d::Zero();     ///< obstacle proximity

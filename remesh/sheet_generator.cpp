@@ -3,10 +3,10 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <array>
-#include <vector>
 #include <cmath>
 #include <random>
 #include <string>
+#include <vector>
 
 #include "remesh/errors.hpp"
 
@@ -17,15 +17,19 @@ namespace {
 void check(const RectangleOptions& o) {
   if (!(o.width > 0) || !(o.height > 0)) throw MeshError("rectangle: width and height must be > 0");
   if (o.nx < 2 || o.ny < 2) throw MeshError("rectangle: nx and ny must be >= 2");
-  if (!(o.jitter >= 0.0 && o.jitter <= 0.4)) throw MeshError("rectangle: jitter must be in [0, 0.4]");
+  if (!(o.jitter >= 0.0 && o.jitter <= 0.4))
+    throw MeshError("rectangle: jitter must be in [0, 0.4]");
 }
 
 /// Diagonal of cell (i, j): true = from (i, j) to (i+1, j+1).
 bool cell_diagonal(const RectangleOptions& o, int i, int j, std::mt19937_64& rng) {
   switch (o.triangulation) {
-    case Triangulation::alternating: return ((i + j) % 2) == 0;
-    case Triangulation::random: return (rng() & 1u) != 0;
-    case Triangulation::regular: return true;
+    case Triangulation::alternating:
+      return ((i + j) % 2) == 0;
+    case Triangulation::random:
+      return (rng() & 1u) != 0;
+    case Triangulation::regular:
+      return true;
   }
   return true;
 }
@@ -72,9 +76,8 @@ struct Circle {
 Circle circumcircle(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c) {
   const Eigen::Vector2d ab = b - a, ac = c - a;
   const double d = 2 * (ab.x() * ac.y() - ab.y() * ac.x());
-  const Eigen::Vector2d o(
-      (ac.y() * ab.squaredNorm() - ab.y() * ac.squaredNorm()) / d,
-      (ab.x() * ac.squaredNorm() - ac.x() * ab.squaredNorm()) / d);
+  const Eigen::Vector2d o((ac.y() * ab.squaredNorm() - ab.y() * ac.squaredNorm()) / d,
+                          (ab.x() * ac.squaredNorm() - ac.x() * ab.squaredNorm()) / d);
   return {a + o, o.squaredNorm()};
 }
 
@@ -139,7 +142,8 @@ SheetMesh make_rotated_lattice(const LatticeOptions& o) {
   const Eigen::Vector2d a1(h * std::cos(o.angle), h * std::sin(o.angle));
   const Eigen::Vector2d a2 = Eigen::Vector2d(-a1.y(), a1.x()) / o.aspect;
   // Half the lattice's spacing across a side of constant x / y (at aspect 1: half an edge).
-  const double margin_x = 0.5 * std::max(h, std::abs(a2.x())), margin_y = 0.5 * std::max(h, std::abs(a2.y()));
+  const double margin_x = 0.5 * std::max(h, std::abs(a2.x())),
+               margin_y = 0.5 * std::max(h, std::abs(a2.y()));
   std::vector<Eigen::Vector2d> pts;
   // Boundary: evenly spaced points on the four sides.
   const int nx = std::max(1, static_cast<int>(std::lround(o.width / h)));
@@ -158,7 +162,8 @@ SheetMesh make_rotated_lattice(const LatticeOptions& o) {
     // The line's ends replace the boundary points within half a spacing of them.
     pts.erase(std::remove_if(pts.begin(), pts.end(),
                              [&](const Eigen::Vector2d& p) {
-                               return (p.y() == 0.0 || p.y() == o.height) && std::abs(p.x() - lx) < 0.5 * h;
+                               return (p.y() == 0.0 || p.y() == o.height) &&
+                                      std::abs(p.x() - lx) < 0.5 * h;
                              }),
               pts.end());
     for (int j = 0; j <= ny; ++j) pts.emplace_back(lx, o.height * j / ny);

@@ -29,9 +29,9 @@ SheetMesh make_rectangle(const RectangleOptions& options);
 
 /// Options of make_rotated_lattice.
 struct LatticeOptions {
-  double width = 0.210;       ///< [m] along material x
-  double height = 0.297;      ///< [m] along material y
-  double edge_length = 5e-3;  ///< lattice spacing [m]
+  double width = 0.210;               ///< [m] along material x
+  double height = 0.297;              ///< [m] along material y
+  double edge_length = 5e-3;          ///< lattice spacing [m]
   double angle = 0.5235987755982988;  ///< angle of the lattice (the mesh grain) to material x [rad]
   /// The lattice's spacing across the grain is edge_length / aspect (0 < aspect <= 1): at aspect
   /// < 1 its cells, and the triangles, are 1 / aspect times longer across the grain than along it.

@@ -1,7 +1,6 @@
 #include "remesh/sheet_io.hpp"
 
 #include <Eigen/Cholesky>
-
 #include <cerrno>
 #include <cmath>
 #include <cstdint>
@@ -128,7 +127,8 @@ int parse_obj_index(const std::string& token, int count, const std::string& wher
   if (token.empty() || *end != '\0' || errno == ERANGE)
     parse_error(where, "bad face index '" + token + "'");
   const long idx = i > 0 ? i - 1 : count + i;
-  if (i == 0 || idx < 0 || idx >= count) parse_error(where, "face index " + token + " out of range");
+  if (i == 0 || idx < 0 || idx >= count)
+    parse_error(where, "face index " + token + " out of range");
   return static_cast<int>(idx);
 }
 
@@ -136,7 +136,8 @@ int parse_obj_index(const std::string& token, int count, const std::string& wher
 void check_size(double width, double height, const std::string& where) {
   if (width == 0 && height == 0) return;  // none given
   if (!(width > 0 && width <= MAX_SHEET_COORDINATE && height > 0 && height <= MAX_SHEET_COORDINATE))
-    parse_error(where, "sheet size must be in (0, " + std::to_string(int(MAX_SHEET_COORDINATE)) + "] m");
+    parse_error(where,
+                "sheet size must be in (0, " + std::to_string(int(MAX_SHEET_COORDINATE)) + "] m");
 }
 
 void check_positions(const Eigen::MatrixX3d& x, const std::string& path) {
@@ -162,7 +163,8 @@ SheetData read_obj(std::istream& in, const std::string& path) {
       std::string a, b;
       ls >> a >> b;
       if (a == "papersim" && b == "sheet") {
-        if (!(ls >> width >> height)) parse_error(where, "malformed '# papersim sheet WIDTH HEIGHT'");
+        if (!(ls >> width >> height))
+          parse_error(where, "malformed '# papersim sheet WIDTH HEIGHT'");
         check_size(width, height, where);
       }
     } else if (tag == "v") {
@@ -212,7 +214,8 @@ SheetData read_obj(std::istream& in, const std::string& path) {
     for (int k = 0; k < 3; ++k) {
       const Eigen::Vector2d t = vt[ft[f][k]];
       auto row = uv.row(fv[f][k]);
-      if (std::isnan(row(0))) row = t.transpose();
+      if (std::isnan(row(0)))
+        row = t.transpose();
       else if ((row.transpose() - t).norm() > 1e-9)
         throw MeshError(path + ": vertex " + std::to_string(fv[f][k] + 1) +
                         " has two different vt (a seam); a sheet needs one vt per vertex");
@@ -289,17 +292,20 @@ SheetData read_ply(std::istream& in, const std::string& path) {
     std::istringstream ls(line);
     std::string tag;
     ls >> tag;
-    if (tag == "format") ls >> format;
+    if (tag == "format")
+      ls >> format;
     else if (tag == "comment") {
       std::string a, b;
       ls >> a >> b;
       if (a == "papersim" && b == "sheet") {
-        if (!(ls >> width >> height)) parse_error(path, "malformed 'comment papersim sheet WIDTH HEIGHT'");
+        if (!(ls >> width >> height))
+          parse_error(path, "malformed 'comment papersim sheet WIDTH HEIGHT'");
         check_size(width, height, path);
       }
     } else if (tag == "element") {
       PlyElement e;
-      if (!(ls >> e.name >> e.count) || e.count < 0) parse_error(path, "malformed element line: " + line);
+      if (!(ls >> e.name >> e.count) || e.count < 0)
+        parse_error(path, "malformed element line: " + line);
       const long limit = e.name == "vertex" ? MAX_SHEET_VERTICES : MAX_SHEET_FACES;
       if (e.count > limit)
         throw MeshError(path + ": element " + e.name + " has " + std::to_string(e.count) +
@@ -311,7 +317,8 @@ SheetData read_ply(std::istream& in, const std::string& path) {
       ls >> p.type;
       if (p.type == "list") ls >> p.count_type >> p.type;
       if (!(ls >> p.name)) parse_error(path, "malformed property line: " + line);
-      if (elements.back().props.size() >= 32) parse_error(path, "more than 32 properties in an element");
+      if (elements.back().props.size() >= 32)
+        parse_error(path, "more than 32 properties in an element");
       elements.back().props.push_back(p);
     } else if (tag == "end_header") {
       header_done = true;
@@ -428,8 +435,10 @@ void write_sheet_file(const std::string& path, const SheetMesh& mesh,
   if (!obj && !ends_with(path, ".ply"))
     throw IoError(path + ": unknown mesh format (expected .obj or .ply)");
   common::write_file_atomically(path, [&](std::ostream& out) {
-    if (obj) write_obj(out, mesh, positions, width, height);
-    else write_ply(out, mesh, positions, velocities, width, height);
+    if (obj)
+      write_obj(out, mesh, positions, width, height);
+    else
+      write_ply(out, mesh, positions, velocities, width, height);
   });
 }
 

@@ -9,9 +9,9 @@
 namespace papersim::remesh {
 
 /// Limits of the sheet readers, checked while reading (before memory is committed).
-constexpr long MAX_SHEET_VERTICES = 500'000;   ///< vertices of a sheet file
-constexpr long MAX_SHEET_FACES = 1'000'000;    ///< faces of a sheet file
-constexpr double MAX_SHEET_COORDINATE = 1e6;   ///< |x|, |y|, |z|, width and height [m]
+constexpr long MAX_SHEET_VERTICES = 500'000;  ///< vertices of a sheet file
+constexpr long MAX_SHEET_FACES = 1'000'000;   ///< faces of a sheet file
+constexpr double MAX_SHEET_COORDINATE = 1e6;  ///< |x|, |y|, |z|, width and height [m]
 
 /// A sheet as stored in a file: connectivity, material coordinates and world state.
 struct SheetData {

@@ -1,7 +1,6 @@
 #include "remesh/sheet_mesh.hpp"
 
 #include <OpenMesh/Core/System/omstream.hh>
-
 #include <cmath>
 #include <string>
 #include <vector>
@@ -36,7 +35,8 @@ namespace {
 
 void check_faces(const Eigen::MatrixX2d& material_coords, const Eigen::MatrixX3i& faces) {
   const int nv = static_cast<int>(material_coords.rows());
-  if (!material_coords.allFinite()) throw MeshError("mesh: material coordinates contain NaN or inf");
+  if (!material_coords.allFinite())
+    throw MeshError("mesh: material coordinates contain NaN or inf");
   for (int f = 0; f < faces.rows(); ++f) {
     for (int k = 0; k < 3; ++k)
       if (faces(f, k) < 0 || faces(f, k) >= nv)

@@ -1,15 +1,14 @@
 #include "remesh/sizing.hpp"
 
+#include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
+#include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <optional>
 #include <sstream>
 #include <string>
-
-#include <Eigen/Eigenvalues>
-#include <Eigen/Geometry>
-#include <Eigen/LU>
 
 #include "remesh/errors.hpp"
 
@@ -29,10 +28,12 @@ void require(bool ok, const std::string& name, const std::string& rule, double v
 }
 
 /// `element` names what a row is for: "vertex" or "face".
-void check_rows(const std::string& name, Eigen::Index rows, int n, const std::string& element = "vertex") {
+void check_rows(const std::string& name, Eigen::Index rows, int n,
+                const std::string& element = "vertex") {
   if (rows != n)
-    throw MeshError("remesh: state." + name + " has " + std::to_string(rows) + " rows, the mesh has " +
-                    std::to_string(n) + " " + (element == "vertex" ? "vertices" : element + "s"));
+    throw MeshError("remesh: state." + name + " has " + std::to_string(rows) +
+                    " rows, the mesh has " + std::to_string(n) + " " +
+                    (element == "vertex" ? "vertices" : element + "s"));
 }
 
 template <typename Derived>
@@ -123,8 +124,10 @@ std::vector<Disk> enclose_triple(const Disk& d1, const Disk& d2, const Disk& d3)
 }  // namespace
 
 void check_params(const RemeshParams& p) {
-  require(std::isfinite(p.refine_angle) && p.refine_angle > 0, "refine_angle", "> 0", p.refine_angle);
-  require(std::isfinite(p.refine_compression), "refine_compression", "finite", p.refine_compression);
+  require(std::isfinite(p.refine_angle) && p.refine_angle > 0, "refine_angle", "> 0",
+          p.refine_angle);
+  require(std::isfinite(p.refine_compression), "refine_compression", "finite",
+          p.refine_compression);
   require(std::isfinite(p.refine_velocity), "refine_velocity", "finite", p.refine_velocity);
   require(std::isfinite(p.obstacle_distance), "obstacle_distance", "finite", p.obstacle_distance);
   require(std::isfinite(p.size_min) && p.size_min > 0, "size_min", "> 0", p.size_min);
@@ -191,8 +194,8 @@ Eigen::Matrix2d face_curvature(const SheetMesh& sheet, int f, const std::vector<
 Eigen::Matrix2d compression_metric(const Eigen::Matrix2d& e, const Eigen::Matrix2d& curvature2,
                                    double c) {
   const Eigen::Matrix2d d = e.transpose() * e - 4.0 * c * c * adjugate(curvature2);
-  const Eigen::Matrix2d root = map_eigenvalues(
-      d, [](double l) { return l >= 0 ? std::sqrt(l) : -std::sqrt(-l); });
+  const Eigen::Matrix2d root =
+      map_eigenvalues(d, [](double l) { return l >= 0 ? std::sqrt(l) : -std::sqrt(-l); });
   return map_eigenvalues(-e + root, [](double l) { return std::max(l, 0.0); }) / (2.0 * c * c);
 }
 
@@ -217,8 +220,8 @@ Eigen::Matrix2d tensor_max(const std::vector<Eigen::Matrix2d>& tensors) {
   std::vector<Disk> disks;
   for (const Eigen::Matrix2d& t : tensors) {
     if (!(t.trace() > 0)) continue;
-    disks.push_back({Eigen::Vector2d(0.5 * (t(0, 0) - t(1, 1)), 0.5 * (t(0, 1) + t(1, 0))),
-                     0.5 * t.trace()});
+    disks.push_back(
+        {Eigen::Vector2d(0.5 * (t(0, 0) - t(1, 1)), 0.5 * (t(0, 1) + t(1, 0))), 0.5 * t.trace()});
   }
   if (disks.empty()) return Eigen::Matrix2d::Zero();
   // The smallest enclosing disk touches one, two or three of the disks: try them all (a handful
@@ -340,9 +343,9 @@ SizingTerms face_terms(const FaceInputs& in, const Eigen::Matrix2d& s, const Eig
     }
     Eigen::Matrix<double, 2, 3> edges;
     for (int k = 0; k < 3; ++k) edges.col(k) = in.material.col((k + 1) % 3) - in.material.col(k);
-    t.compression = compression_metric_at_resolution(
-        compression_metric(green, s2, p.refine_compression), edges, p.refine_compression,
-        p.refine_angle);
+    t.compression =
+        compression_metric_at_resolution(compression_metric(green, s2, p.refine_compression), edges,
+                                         p.refine_compression, p.refine_angle);
   }
   if (p.refine_velocity > 0) {
     const Eigen::Matrix<double, 3, 2> grad_v = material_gradient<3>(in.velocity, dm_inv);

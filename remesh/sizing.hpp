@@ -1,9 +1,8 @@
 #pragma once
 /// The pieces of the sizing metric of Narain, Samii, O'Brien 2012 (section 4), each a 2 x 2
 /// symmetric tensor in material space [1/m^2]; remesh.hpp declares sizing(), which combines them.
-#include <vector>
-
 #include <Eigen/Core>
+#include <vector>
 
 #include "remesh/remesh.hpp"
 #include "remesh/sheet_mesh.hpp"
@@ -46,8 +45,8 @@ Eigen::Matrix2d compression_metric_at_resolution(const Eigen::Matrix2d& arcsim,
 
 /// The anisotropic maximum of symmetric positive semi-definite 2 x 2 tensors: the smallest-trace
 /// tensor M with M >= M_i for every i (ArcSim's tensor_max: writing M = r I + a diag(1, -1)
-/// + b [[0, 1], [1, 0]], M >= M_i exactly when disk (a_i, b_i; r_i) lies inside disk (a, b; r), so M
-/// is the smallest disk enclosing the disks). Zero for an empty list or all-zero tensors.
+/// + b [[0, 1], [1, 0]], M >= M_i exactly when disk (a_i, b_i; r_i) lies inside disk (a, b; r), so
+/// M is the smallest disk enclosing the disks). Zero for an empty list or all-zero tensors.
 Eigen::Matrix2d tensor_max(const std::vector<Eigen::Matrix2d>& tensors);
 
 /// Clamps the eigenvalues of a metric to [1/size_max^2, 1/size_min^2], then raises the smaller one

@@ -51,7 +51,8 @@ std::vector<MeshEntry> finished_meshes(const fs::path& root, const ListProgress&
       if (!d.is_directory() || !all_digits(name) || !fs::exists(d.path() / "sheet.obj")) continue;
       // The folder relative to the root, composed (fs::relative resolves links: 8 readlink
       // calls a mesh, which dominated the walk over a large dataset).
-      out.push_back({scenario, std::stoull(name), fs::path("meshes") / scenario / bucket.filename() / name});
+      out.push_back(
+          {scenario, std::stoull(name), fs::path("meshes") / scenario / bucket.filename() / name});
     }
     if (progress) progress(i + 1, buckets.size(), out.size());
   }
@@ -59,9 +60,9 @@ std::vector<MeshEntry> finished_meshes(const fs::path& root, const ListProgress&
     return a.scenario != b.scenario ? a.scenario < b.scenario : a.seed < b.seed;
   };
   std::sort(out.begin(), out.end(), before);
-  const auto twin = std::adjacent_find(out.begin(), out.end(), [&](const MeshEntry& a, const MeshEntry& b) {
-    return !before(a, b);
-  });
+  const auto twin =
+      std::adjacent_find(out.begin(), out.end(),
+                         [&](const MeshEntry& a, const MeshEntry& b) { return !before(a, b); });
   if (twin != out.end())
     throw InputError("seed " + std::to_string(twin->seed) + " of scenario '" + twin->scenario +
                      "' is in two folders: " + (root / twin->dir).string() + " and " +
@@ -80,7 +81,8 @@ MeshEntry parse_mesh_line(const std::string& line) {
     parts.push_back(line.substr(start, slash - start));
   parts.push_back(line.substr(start));
   const auto name = [](const std::string& s) { return !s.empty() && s != "." && s != ".."; };
-  if (parts.size() != 4 || parts[0] != "meshes" || !name(parts[1]) || !name(parts[2]) || !all_digits(parts[3]))
+  if (parts.size() != 4 || parts[0] != "meshes" || !name(parts[1]) || !name(parts[2]) ||
+      !all_digits(parts[3]))
     return {};
   return {parts[1], std::stoull(parts[3]), fs::path(line)};
 }
@@ -95,9 +97,11 @@ std::vector<MeshEntry> read_mesh_list(const fs::path& file) {
   const std::string head = MESH_LIST_HEAD;
   std::size_t count = 0;
   {
-    const std::string tail = line.compare(0, head.size(), head) == 0 ? line.substr(head.size()) : "";
+    const std::string tail =
+        line.compare(0, head.size(), head) == 0 ? line.substr(head.size()) : "";
     const std::size_t space = tail.find(' ');
-    if (space == std::string::npos || !all_digits(tail.substr(0, space)) || tail.substr(space) != " meshes")
+    if (space == std::string::npos || !all_digits(tail.substr(0, space)) ||
+        tail.substr(space) != " meshes")
       throw InputError("mesh list '" + file.string() + "': line 1 is not '" + head + "N meshes'");
     count = std::stoull(tail.substr(0, space));
   }
@@ -105,18 +109,22 @@ std::vector<MeshEntry> read_mesh_list(const fs::path& file) {
   out.reserve(std::min<std::size_t>(count, 10000000));
   for (std::size_t n = 2; std::getline(in, line); ++n) {
     MeshEntry e = parse_mesh_line(line);
-    const auto where = [&] { return "mesh list '" + file.string() + "', line " + std::to_string(n) + ": "; };
-    if (e.scenario.empty()) throw InputError(where() + "'" + line + "' is not meshes/<scenario>/<bucket>/<seed>");
+    const auto where = [&] {
+      return "mesh list '" + file.string() + "', line " + std::to_string(n) + ": ";
+    };
+    if (e.scenario.empty())
+      throw InputError(where() + "'" + line + "' is not meshes/<scenario>/<bucket>/<seed>");
     if (!out.empty() && !(out.back().scenario < e.scenario ||
                           (out.back().scenario == e.scenario && out.back().seed < e.seed)))
-      throw InputError(where() + "'" + line + "' is out of order (the list is sorted by scenario, then seed, " +
+      throw InputError(where() + "'" + line +
+                       "' is out of order (the list is sorted by scenario, then seed, " +
                        "each once)");
     out.push_back(std::move(e));
   }
   if (in.bad()) throw InputError("mesh list '" + file.string() + "' cannot be read");
   if (out.size() != count)
-    throw InputError("mesh list '" + file.string() + "' announces " + std::to_string(count) + " meshes but holds " +
-                     std::to_string(out.size()) + " (cut short?)");
+    throw InputError("mesh list '" + file.string() + "' announces " + std::to_string(count) +
+                     " meshes but holds " + std::to_string(out.size()) + " (cut short?)");
   return out;
 }
 
@@ -141,10 +149,13 @@ SheetMesh flipped_sheet(const SheetMesh& mesh) {
 }
 
 std::uint64_t view_seed(const std::string& scenario, std::uint64_t seed, int view) {
-  return batch::splitmix64(fnv1a(scenario) ^ batch::splitmix64(seed * 64 + static_cast<std::uint64_t>(view))) >> 33;
+  return batch::splitmix64(fnv1a(scenario) ^
+                           batch::splitmix64(seed * 64 + static_cast<std::uint64_t>(view))) >>
+         33;
 }
 
-std::size_t write_mesh_list(const fs::path& root, const fs::path& file, const ListProgress& progress) {
+std::size_t write_mesh_list(const fs::path& root, const fs::path& file,
+                            const ListProgress& progress) {
   const std::vector<MeshEntry> meshes = finished_meshes(root, progress);
   for (const MeshEntry& m : meshes)
     if (m.dir.generic_string().find_first_of("\n\r") != std::string::npos)
@@ -157,24 +168,27 @@ std::size_t write_mesh_list(const fs::path& root, const fs::path& file, const Li
   return meshes.size();
 }
 
-std::size_t mesh_list_size(const fs::path& file) {
-  return read_mesh_list(file).size();
-}
+std::size_t mesh_list_size(const fs::path& file) { return read_mesh_list(file).size(); }
 
-std::vector<batch::Task> render_tasks(const fs::path& root, const RenderBatchOptions& o, const batch::Shard& shard,
-                                      const fs::path& mesh_list, const ListProgress& progress) {
+std::vector<batch::Task> render_tasks(const fs::path& root, const RenderBatchOptions& o,
+                                      const batch::Shard& shard, const fs::path& mesh_list,
+                                      const ListProgress& progress) {
   if (o.views < 1) throw InputError("--views must be >= 1");
   std::vector<batch::Task> tasks;
   std::size_t position = 0;
-  for (const MeshEntry& m : mesh_list.empty() ? finished_meshes(root, progress) : read_mesh_list(mesh_list)) {
+  for (const MeshEntry& m :
+       mesh_list.empty() ? finished_meshes(root, progress) : read_mesh_list(mesh_list)) {
     const fs::path bucket = fs::path(std::to_string(m.seed / 1000)) / std::to_string(m.seed);
     for (int k = 0; k < o.views; ++k) {
       if (!shard.holds(position++)) continue;
       batch::Task t;
       t.final_dir = fs::path("renders") / m.scenario / bucket / ("view" + std::to_string(k));
       t.key = t.final_dir.generic_string();
-      t.info = {{"scenario", m.scenario}, {"seed", m.seed}, {"view", k},
-                {"flipped", o.flip && k % 2 == 1}, {"render_seed", view_seed(m.scenario, m.seed, k)},
+      t.info = {{"scenario", m.scenario},
+                {"seed", m.seed},
+                {"view", k},
+                {"flipped", o.flip && k % 2 == 1},
+                {"render_seed", view_seed(m.scenario, m.seed, k)},
                 {"mesh", (m.dir / "sheet.obj").generic_string()}};
       tasks.push_back(std::move(t));
     }
@@ -182,7 +196,8 @@ std::vector<batch::Task> render_tasks(const fs::path& root, const RenderBatchOpt
   return tasks;
 }
 
-batch::BatchSpec render_batch_spec(const fs::path& root, const fs::path& scenegen, const RenderBatchOptions& o) {
+batch::BatchSpec render_batch_spec(const fs::path& root, const fs::path& scenegen,
+                                   const RenderBatchOptions& o) {
   batch::BatchSpec spec;
   spec.root = root;
   spec.manifest_name = "renders.jsonl";
@@ -194,11 +209,26 @@ batch::BatchSpec render_batch_spec(const fs::path& root, const fs::path& scenege
   };
   spec.commands = [root, scenegen, o](const batch::Task& t, const fs::path& stage) {
     const bool flipped = t.info.at("flipped").get<bool>();
-    const fs::path mesh = flipped ? stage / "flipped.obj" : root / t.info.at("mesh").get<std::string>();
-    std::vector<std::string> argv{scenegen.string(), "render", mesh.string(), "--out", (stage / "out").string(),
-                                  "--seed", std::to_string(t.info.at("render_seed").get<std::uint64_t>()),
-                                  "--size", o.size, "--quality", o.quality, "--passes", o.passes,
-                                  "--parallel", "1", "--threads", std::to_string(o.threads), "--quiet"};
+    const fs::path mesh =
+        flipped ? stage / "flipped.obj" : root / t.info.at("mesh").get<std::string>();
+    std::vector<std::string> argv{scenegen.string(),
+                                  "render",
+                                  mesh.string(),
+                                  "--out",
+                                  (stage / "out").string(),
+                                  "--seed",
+                                  std::to_string(t.info.at("render_seed").get<std::uint64_t>()),
+                                  "--size",
+                                  o.size,
+                                  "--quality",
+                                  o.quality,
+                                  "--passes",
+                                  o.passes,
+                                  "--parallel",
+                                  "1",
+                                  "--threads",
+                                  std::to_string(o.threads),
+                                  "--quiet"};
     if (o.dpi > 0) argv.insert(argv.end(), {"--dpi", std::to_string(o.dpi)});
     if (!o.documents_dir.empty()) argv.insert(argv.end(), {"--documents", o.documents_dir});
     if (!o.backgrounds_dir.empty()) argv.insert(argv.end(), {"--backgrounds", o.backgrounds_dir});

@@ -20,15 +20,30 @@ namespace {
 /// meshes from `mesh_list`.
 std::vector<std::string> shard_command(const RenderBatchCommand& c, const fs::path& mesh_list) {
   const RenderBatchOptions& r = c.render;
-  std::vector<std::string> cmd{batch::self_executable().string(), "batch", fs::absolute(c.dataset).string(),
-                               "--mesh-list", fs::absolute(mesh_list).string(), "--views", std::to_string(r.views),
-                               "--size", r.size, "--quality", r.quality, "--passes", r.passes, "--threads",
-                               std::to_string(r.threads), "--quiet"};
+  std::vector<std::string> cmd{batch::self_executable().string(),
+                               "batch",
+                               fs::absolute(c.dataset).string(),
+                               "--mesh-list",
+                               fs::absolute(mesh_list).string(),
+                               "--views",
+                               std::to_string(r.views),
+                               "--size",
+                               r.size,
+                               "--quality",
+                               r.quality,
+                               "--passes",
+                               r.passes,
+                               "--threads",
+                               std::to_string(r.threads),
+                               "--quiet"};
   if (r.flip) cmd.push_back("--flip");
   if (r.dpi > 0) cmd.insert(cmd.end(), {"--dpi", std::to_string(r.dpi)});
-  if (!r.documents_dir.empty()) cmd.insert(cmd.end(), {"--documents", fs::absolute(r.documents_dir).string()});
-  if (!r.backgrounds_dir.empty()) cmd.insert(cmd.end(), {"--backgrounds", fs::absolute(r.backgrounds_dir).string()});
-  if (c.common.time_limit > 0) cmd.insert(cmd.end(), {"--time-limit", std::to_string(c.common.time_limit)});
+  if (!r.documents_dir.empty())
+    cmd.insert(cmd.end(), {"--documents", fs::absolute(r.documents_dir).string()});
+  if (!r.backgrounds_dir.empty())
+    cmd.insert(cmd.end(), {"--backgrounds", fs::absolute(r.backgrounds_dir).string()});
+  if (c.common.time_limit > 0)
+    cmd.insert(cmd.end(), {"--time-limit", std::to_string(c.common.time_limit)});
   if (c.common.retry_failed) cmd.push_back("--retry-failed");
   return cmd;
 }
@@ -39,14 +54,17 @@ ListProgress walk_printer(std::ostream& err, bool quiet, const std::string& data
   if (quiet) return {};
   const auto start = std::chrono::steady_clock::now();
   auto last = start;
-  return [&err, dataset, start, last](std::size_t done, std::size_t buckets, std::size_t meshes) mutable {
+  return [&err, dataset, start, last](std::size_t done, std::size_t buckets,
+                                      std::size_t meshes) mutable {
     const auto now = std::chrono::steady_clock::now();
     if (now - last < std::chrono::seconds(5)) return;
     last = now;
     const double t = std::chrono::duration<double>(now - start).count();
-    err << "scenegen batch: listing " << (fs::path(dataset) / "meshes").string() << ": " << done << " of " << buckets
-        << " folders, " << meshes << " meshes, " << std::lround(t) << " s, ETA "
-        << std::lround(t / static_cast<double>(done) * static_cast<double>(buckets - done)) << " s" << std::endl;
+    err << "scenegen batch: listing " << (fs::path(dataset) / "meshes").string() << ": " << done
+        << " of " << buckets << " folders, " << meshes << " meshes, " << std::lround(t)
+        << " s, ETA "
+        << std::lround(t / static_cast<double>(done) * static_cast<double>(buckets - done)) << " s"
+        << std::endl;
   };
 }
 
@@ -54,7 +72,8 @@ ListProgress walk_printer(std::ostream& err, bool quiet, const std::string& data
 void check_options(const RenderBatchCommand& c) {
   if (!fs::is_directory(c.dataset)) throw InputError("dataset '" + c.dataset + "' is not a folder");
   if (!fs::is_directory(fs::path(c.dataset) / "meshes"))
-    throw InputError("dataset '" + c.dataset + "' has no meshes/ folder (run papersim batch --out " + c.dataset + " first)");
+    throw InputError("dataset '" + c.dataset +
+                     "' has no meshes/ folder (run papersim batch --out " + c.dataset + " first)");
   try {
     parse_passes(c.render.passes);
   } catch (const InputError& e) {
@@ -66,14 +85,17 @@ void check_options(const RenderBatchCommand& c) {
     throw InputError(std::string("--quality: ") + e.what());
   }
   const auto x = c.render.size.find('x');
-  if (x == std::string::npos || c.render.size.find_first_not_of("0123456789x") != std::string::npos ||
-      x == 0 || x + 1 == c.render.size.size())
+  if (x == std::string::npos ||
+      c.render.size.find_first_not_of("0123456789x") != std::string::npos || x == 0 ||
+      x + 1 == c.render.size.size())
     throw InputError("--size '" + c.render.size + "' is not WIDTHxHEIGHT");
   if (!c.mesh_list.empty() && !fs::is_regular_file(c.mesh_list))
     throw InputError("--mesh-list '" + c.mesh_list + "' is not a file");
-  for (const auto& [opt, dir] : {std::pair<const char*, std::string>{"--documents", c.render.documents_dir},
-                                 {"--backgrounds", c.render.backgrounds_dir}})
-    if (!dir.empty() && !fs::is_directory(dir)) throw InputError(std::string(opt) + " '" + dir + "' is not a folder");
+  for (const auto& [opt, dir] :
+       {std::pair<const char*, std::string>{"--documents", c.render.documents_dir},
+        {"--backgrounds", c.render.backgrounds_dir}})
+    if (!dir.empty() && !fs::is_directory(dir))
+      throw InputError(std::string(opt) + " '" + dir + "' is not a folder");
   if (!c.common.shard.empty()) {
     try {
       batch::parse_shard(c.common.shard, "--shard");
@@ -87,31 +109,55 @@ void check_options(const RenderBatchCommand& c) {
 
 void add_render_batch_subcommand(CLI::App& app, RenderBatchCommand& c) {
   c.app = app.add_subcommand(
-      "batch", "Render every finished mesh of a dataset (DATASET/meshes/, from papersim batch) --views times, one "
-               "child scenegen render per view, --jobs at once; resumable (run the same command again), failures "
-               "recorded and skipped. Writes DATASET/renders/.../view<k>/, renders.jsonl, renders_failures.jsonl. "
-               "Exit status 1 when a view failed (renders_failures.jsonl); a full disk stops the batch with status 5 "
-               "and records nothing. With --slurm it also lists the meshes it finds in "
-               "DATASET/slurm/scenegen-batch.meshes, which every array task reads instead of the folders "
-               "(docs/batch.md).");
+      "batch",
+      "Render every finished mesh of a dataset (DATASET/meshes/, from papersim batch) --views "
+      "times, one "
+      "child scenegen render per view, --jobs at once; resumable (run the same command again), "
+      "failures "
+      "recorded and skipped. Writes DATASET/renders/.../view<k>/, renders.jsonl, "
+      "renders_failures.jsonl. "
+      "Exit status 1 when a view failed (renders_failures.jsonl); a full disk stops the batch with "
+      "status 5 "
+      "and records nothing. With --slurm it also lists the meshes it finds in "
+      "DATASET/slurm/scenegen-batch.meshes, which every array task reads instead of the folders "
+      "(docs/batch.md).");
   c.app->add_option("dataset", c.dataset, "dataset folder")->required();
-  c.app->add_option("--mesh-list", c.mesh_list,
-                    "render the meshes listed in FILE (as --slurm writes it: DATASET/slurm/scenegen-batch.meshes) "
-                    "instead of those found in DATASET/meshes/ now; no folder of the list is looked at before its "
-                    "views run")
+  c.app
+      ->add_option("--mesh-list", c.mesh_list,
+                   "render the meshes listed in FILE (as --slurm writes it: "
+                   "DATASET/slurm/scenegen-batch.meshes) "
+                   "instead of those found in DATASET/meshes/ now; no folder of the list is looked "
+                   "at before its "
+                   "views run")
       ->type_name("FILE");
-  c.app->add_option("--views", c.render.views, "renders per mesh, each with its own seed (at most 1000)")
-      ->check(CLI::Range(1, 1000))->capture_default_str();
-  c.app->add_flag("--flip", c.render.flip, "odd views show the sheet turned over (u -> 1 - u, printed side up)");
-  c.app->add_option("--size", c.render.size, "image size WIDTHxHEIGHT [pixels]")->capture_default_str();
-  c.app->add_option("--quality", c.render.quality, "draft | final | best (final with smooth penumbrae)")->capture_default_str();
-  c.app->add_option("--passes", c.render.passes, "as scenegen render --passes")->capture_default_str();
+  c.app
+      ->add_option("--views", c.render.views,
+                   "renders per mesh, each with its own seed (at most 1000)")
+      ->check(CLI::Range(1, 1000))
+      ->capture_default_str();
+  c.app->add_flag("--flip", c.render.flip,
+                  "odd views show the sheet turned over (u -> 1 - u, printed side up)");
+  c.app->add_option("--size", c.render.size, "image size WIDTHxHEIGHT [pixels]")
+      ->capture_default_str();
+  c.app
+      ->add_option("--quality", c.render.quality,
+                   "draft | final | best (final with smooth penumbrae)")
+      ->capture_default_str();
+  c.app->add_option("--passes", c.render.passes, "as scenegen render --passes")
+      ->capture_default_str();
   c.app->add_option("--documents", c.render.documents_dir, "folder of PNG/JPEG pages to draw from");
-  c.app->add_option("--backgrounds", c.render.backgrounds_dir, "folder of PNG/JPEG background images");
-  c.app->add_option("--dpi", c.render.dpi, "built-in page resolution [dpi] (0: scenegen render's default)")
-      ->check(papersim::common::non_negative())->capture_default_str();
-  c.app->add_option("--threads", c.render.threads, "POV-Ray threads per view (1 keeps radiosity reproducible)")
-      ->check(papersim::common::positive())->capture_default_str();
+  c.app->add_option("--backgrounds", c.render.backgrounds_dir,
+                    "folder of PNG/JPEG background images");
+  c.app
+      ->add_option("--dpi", c.render.dpi,
+                   "built-in page resolution [dpi] (0: scenegen render's default)")
+      ->check(papersim::common::non_negative())
+      ->capture_default_str();
+  c.app
+      ->add_option("--threads", c.render.threads,
+                   "POV-Ray threads per view (1 keeps radiosity reproducible)")
+      ->check(papersim::common::positive())
+      ->capture_default_str();
   batch::add_batch_cli_options(c.app, c.common);
 }
 
@@ -126,21 +172,26 @@ int run_render_batch(const RenderBatchCommand& c, std::ostream& out, std::ostrea
       list = fs::path(c.dataset) / "slurm" / "scenegen-batch.meshes";
       std::error_code ec;
       fs::create_directories(list.parent_path(), ec);
-      if (ec) throw common::OutputError("cannot create '" + list.parent_path().string() + "': " + ec.message());
+      if (ec)
+        throw common::OutputError("cannot create '" + list.parent_path().string() +
+                                  "': " + ec.message());
       meshes = write_mesh_list(c.dataset, list, walk_printer(err, c.common.quiet, c.dataset));
     } else {
       meshes = mesh_list_size(list);
     }
-    const fs::path script = batch::write_slurm_script(c.dataset, "scenegen-batch", shard_command(c, list), c.common);
+    const fs::path script =
+        batch::write_slurm_script(c.dataset, "scenegen-batch", shard_command(c, list), c.common);
     out << "wrote " << list.string() << " (" << meshes << " meshes) and " << script.string() << " ("
-        << c.common.slurm_shards << " array tasks over " << meshes * static_cast<std::size_t>(c.render.views)
-        << " views)\nsubmit it with:  sbatch " << script.string()
-        << "\na task that died: sbatch --array=I " << script.string() << "  (it resumes shard I)\n";
+        << c.common.slurm_shards << " array tasks over "
+        << meshes * static_cast<std::size_t>(c.render.views) << " views)\nsubmit it with:  sbatch "
+        << script.string() << "\na task that died: sbatch --array=I " << script.string()
+        << "  (it resumes shard I)\n";
     return 0;
   }
   // Only the shard's tasks are made (an array task holds 1/N of the list in memory).
-  const std::vector<batch::Task> tasks = render_tasks(c.dataset, c.render, batch::cli_shard(c.common), c.mesh_list,
-                                                      walk_printer(err, c.common.quiet, c.dataset));
+  const std::vector<batch::Task> tasks =
+      render_tasks(c.dataset, c.render, batch::cli_shard(c.common), c.mesh_list,
+                   walk_printer(err, c.common.quiet, c.dataset));
   const batch::BatchSpec spec = render_batch_spec(c.dataset, batch::self_executable(), c.render);
   const batch::BatchSummary s = batch::run_cli_batch(tasks, spec, c.common, err, "scenegen batch");
   out << batch::summary_line(s, c.dataset, spec) << '\n';

@@ -16,7 +16,8 @@ namespace papersim::scenegen {
 struct RenderBatchCommand {
   CLI::App* app = nullptr;
   std::string dataset;
-  std::string mesh_list;  ///< --mesh-list: the meshes to render, instead of a walk over DATASET/meshes/
+  std::string
+      mesh_list;  ///< --mesh-list: the meshes to render, instead of a walk over DATASET/meshes/
   RenderBatchOptions render;
   batch::BatchCliOptions common;
 };

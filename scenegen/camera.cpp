@@ -1,8 +1,7 @@
 #include "scenegen/camera.hpp"
 
-#include <cmath>
-
 #include <Eigen/Geometry>
+#include <cmath>
 
 #include "scenegen/geometry.hpp"
 
@@ -26,7 +25,8 @@ double backfacing_fraction(const SheetMesh& mesh, const Eigen::MatrixX3d& normal
   const double c = std::cos(angle_deg * DEG);
   int count = 0;
   for (int i = 0; i < mesh.num_vertices(); ++i) {
-    const Eigen::Vector3d to_cam = (cam.position - Eigen::Vector3d(mesh.positions.row(i))).normalized();
+    const Eigen::Vector3d to_cam =
+        (cam.position - Eigen::Vector3d(mesh.positions.row(i))).normalized();
     if (Eigen::Vector3d(normals.row(i)).dot(to_cam) < c) ++count;
   }
   return static_cast<double>(count) / std::max(1, mesh.num_vertices());
@@ -41,8 +41,11 @@ int occluded_points(const SheetMesh& mesh, const MeshBvh& bvh, const Camera& cam
     if (bvh.first_hit(cam.position, d, 0.0, T_END, i)) ++count;
   }
   for (int f = 0; f < mesh.num_faces(); ++f) {
-    const Eigen::Vector3d c = (mesh.positions.row(mesh.faces(f, 0)) + mesh.positions.row(mesh.faces(f, 1)) +
-                               mesh.positions.row(mesh.faces(f, 2))).transpose() / 3.0;
+    const Eigen::Vector3d c =
+        (mesh.positions.row(mesh.faces(f, 0)) + mesh.positions.row(mesh.faces(f, 1)) +
+         mesh.positions.row(mesh.faces(f, 2)))
+            .transpose() /
+        3.0;
     const auto hit = bvh.first_hit(cam.position, c - cam.position, 0.0, T_END);
     if (hit && hit->face != f) ++count;
   }
@@ -111,7 +114,8 @@ CameraChoice choose_camera(const SheetMesh& mesh, const Stage& stage, int width,
   }
   if (valid.empty()) return choice;
   choice.valid = true;
-  choice.index = valid[static_cast<std::size_t>(rng.randint(0, static_cast<int>(valid.size()) - 1))];
+  choice.index =
+      valid[static_cast<std::size_t>(rng.randint(0, static_cast<int>(valid.size()) - 1))];
   const auto& c = choice.candidates[static_cast<std::size_t>(choice.index)];
   choice.camera = make_camera(stage, stage.centre_of_mass, c.inclination_deg, c.azimuth_deg,
                               choice.roll_deg, width, height, params);

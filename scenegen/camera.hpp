@@ -1,9 +1,8 @@
 #pragma once
 /// The camera: a pinhole matching POV-Ray's perspective camera pixel for pixel, the candidate
 /// directions of the reference setup, and the validity test (in frame, facing, not occluded).
-#include <vector>
-
 #include <Eigen/Core>
+#include <vector>
 
 #include "scenegen/random.hpp"
 #include "scenegen/resting_pose.hpp"
@@ -13,14 +12,14 @@ namespace papersim::scenegen {
 
 /// Camera parameters (reference: 50 mm lens on a 36 mm sensor, 0.6 m away).
 struct CameraParams {
-  double focal_length = 0.050;       ///< [m]
-  double sensor_size = 0.036;        ///< [m] along the longer image side
-  double distance = 0.6;             ///< camera to sheet centre of mass [m]
-  double margin = 0.02;              ///< frame margin, fraction of the image width / height
-  double max_roll_deg = 8.0;         ///< roll drawn in U[-max, max] [deg]
+  double focal_length = 0.050;            ///< [m]
+  double sensor_size = 0.036;             ///< [m] along the longer image side
+  double distance = 0.6;                  ///< camera to sheet centre of mass [m]
+  double margin = 0.02;                   ///< frame margin, fraction of the image width / height
+  double max_roll_deg = 8.0;              ///< roll drawn in U[-max, max] [deg]
   double backfacing_angle_deg = 60.0;     ///< a normal turned further away counts as backfacing
   double max_backfacing_fraction = 0.04;  ///< of the vertices
-  bool check_occlusion = true;       ///< ray-cast every vertex and face centre
+  bool check_occlusion = true;            ///< ray-cast every vertex and face centre
 };
 
 /// A pinhole camera. Pixel coordinates: x right, y down, pixel (i, j) covers [i, i+1) x [j, j+1)
@@ -56,14 +55,14 @@ struct CameraCandidate {
   double azimuth_deg = 0.0;      ///< 0: camera on the page's bottom side (-y), positive towards +x
   bool in_frame = false;         ///< every vertex inside the frame minus the margin
   double backfacing_fraction = 0.0;
-  int occluded_points = 0;       ///< vertices / face centres hidden by another part of the sheet
+  int occluded_points = 0;  ///< vertices / face centres hidden by another part of the sheet
   bool valid = false;
 };
 
 /// The drawn camera (or the failure) and the evaluation of every candidate.
 struct CameraChoice {
   bool valid = false;
-  int index = -1;                ///< chosen candidate
+  int index = -1;  ///< chosen candidate
   double roll_deg = 0.0;
   Camera camera;
   std::vector<CameraCandidate> candidates;

@@ -91,7 +91,8 @@ void apply_vignetting(ImageF& linear, const Camera& camera) {
       const double dx = (x + 0.5 - 0.5 * camera.width) / camera.focal_px;
       const double dy = (y + 0.5 - 0.5 * camera.height) / camera.focal_px;
       const double cos2 = 1.0 / (1.0 + dx * dx + dy * dy);
-      for (int c = 0; c < linear.channels; ++c) linear.at(x, y, c) *= static_cast<float>(cos2 * cos2);
+      for (int c = 0; c < linear.channels; ++c)
+        linear.at(x, y, c) *= static_cast<float>(cos2 * cos2);
     }
 }
 
@@ -114,7 +115,8 @@ ImageF backward_map(const SheetMesh& mesh, const Camera& camera, const ImageF& u
   ImageF map(gw, gh, 3);
   for (int r = 0; r < gh; ++r)
     for (int c = 0; c < gw; ++c) {
-      const Eigen::Vector2d uv(static_cast<double>(c) / (gw - 1), 1.0 - static_cast<double>(r) / (gh - 1));
+      const Eigen::Vector2d uv(static_cast<double>(c) / (gw - 1),
+                               1.0 - static_cast<double>(r) / (gh - 1));
       const auto hit = locator.locate(uv);
       if (!hit) continue;
       Eigen::Vector3d p = Eigen::Vector3d::Zero(), n = Eigen::Vector3d::Zero();
@@ -131,7 +133,8 @@ ImageF backward_map(const SheetMesh& mesh, const Camera& camera, const ImageF& u
       if (px < 0 || py < 0 || px >= uv_pass.width || py >= uv_pass.height) continue;
       if (uv_pass.at(px, py, 2) < 0.5f) continue;
       // Size of one pixel on the sheet along its most foreshortened direction [m].
-      const double cosine = std::max(0.05, std::abs(n.normalized().dot((camera.position - p).normalized())));
+      const double cosine =
+          std::max(0.05, std::abs(n.normalized().dot((camera.position - p).normalized())));
       const double footprint = depth / (camera.focal_px * cosine);
       const Eigen::Vector2d seen(uv_pass.at(px, py, 0), uv_pass.at(px, py, 1));
       const double dist = mesh.material_point(seen - uv).norm();

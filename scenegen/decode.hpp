@@ -1,8 +1,7 @@
 #pragma once
 /// Turning POV-Ray's raw 16-bit renders into the float passes, and the backward map.
-#include <string>
-
 #include <Eigen/Core>
+#include <string>
 
 #include "scenegen/camera.hpp"
 #include "scenegen/image_io.hpp"
@@ -36,8 +35,8 @@ void apply_vignetting(ImageF& linear, const Camera& camera);
 
 /// Backward-map parameters.
 struct BackwardParams {
-  int grid_width = 121;   ///< points across the page (u), 0: the render width
-  int grid_height = 177;  ///< points down the page (v), 0: the render height
+  int grid_width = 121;           ///< points across the page (u), 0: the render width
+  int grid_height = 177;          ///< points down the page (v), 0: the render height
   double tolerance_pixels = 1.5;  ///< occlusion test: material distance in pixel footprints
 };
 

@@ -14,16 +14,20 @@ namespace papersim::scenegen {
 namespace {
 
 const char* const WORDS[] = {
-    "paper", "sheet", "model", "energy", "bending", "surface", "contact", "method", "results",
-    "data", "image", "the", "of", "and", "a", "in", "to", "is", "for", "with", "on", "that",
-    "by", "we", "this", "are", "from", "which", "be", "as", "an", "at", "or", "each", "our",
-    "analysis", "measured", "stiffness", "friction", "simulation", "mesh", "figure", "table",
-    "error", "samples", "render", "camera", "light", "material", "document", "crease",
-    "deformation", "strain", "curvature", "solver", "step", "time", "section", "value",
-    "experiment", "dataset", "training", "network", "geometry", "texture", "shows", "given",
-    "between", "under", "across", "after", "before", "small", "large", "mean", "total",
-    "observed", "reported", "proposed", "compared", "linear", "stable", "fold", "grid",
-    "quality", "distance", "normal", "point", "smooth", "robust", "exact", "random", "field"};
+    "paper",    "sheet",    "model",       "energy",     "bending",    "surface",  "contact",
+    "method",   "results",  "data",        "image",      "the",        "of",       "and",
+    "a",        "in",       "to",          "is",         "for",        "with",     "on",
+    "that",     "by",       "we",          "this",       "are",        "from",     "which",
+    "be",       "as",       "an",          "at",         "or",         "each",     "our",
+    "analysis", "measured", "stiffness",   "friction",   "simulation", "mesh",     "figure",
+    "table",    "error",    "samples",     "render",     "camera",     "light",    "material",
+    "document", "crease",   "deformation", "strain",     "curvature",  "solver",   "step",
+    "time",     "section",  "value",       "experiment", "dataset",    "training", "network",
+    "geometry", "texture",  "shows",       "given",      "between",    "under",    "across",
+    "after",    "before",   "small",       "large",      "mean",       "total",    "observed",
+    "reported", "proposed", "compared",    "linear",     "stable",     "fold",     "grid",
+    "quality",  "distance", "normal",      "point",      "smooth",     "robust",   "exact",
+    "random",   "field"};
 constexpr int N_WORDS = sizeof(WORDS) / sizeof(WORDS[0]);
 
 struct Fonts {
@@ -43,7 +47,12 @@ double text_width(const std::string& s, double size) { return 0.53 * size * s.si
 class Flow {
  public:
   Flow(DocumentLayout& doc, double top, double bottom, double left, double col_w, double gap)
-      : m_doc(doc), m_top(top), m_bottom(bottom), m_left(left), m_col_w(col_w), m_gap(gap),
+      : m_doc(doc),
+        m_top(top),
+        m_bottom(bottom),
+        m_left(left),
+        m_col_w(col_w),
+        m_gap(gap),
         m_y(top) {}
   double x() const { return m_left + m_col * (m_col_w + m_gap); }
   double width() const { return m_col_w; }
@@ -71,11 +80,15 @@ bool paragraph(Rng& rng, DocumentLayout& doc, Flow& flow, const Fonts& f, double
   for (int i = 0; i < n_words; ++i) {
     std::string w = word(rng);
     if (i == 0) w = capitalised(w);
-    if (i + 1 == n_words) w += ".";
-    else if (rng.uniform() < 0.08) w += ",";
+    if (i + 1 == n_words)
+      w += ".";
+    else if (rng.uniform() < 0.08)
+      w += ",";
     const std::string candidate = lines.back().empty() ? w : lines.back() + " " + w;
-    if (text_width(candidate, size) > flow.width() && !lines.back().empty()) lines.push_back(w);
-    else lines.back() = candidate;
+    if (text_width(candidate, size) > flow.width() && !lines.back().empty())
+      lines.push_back(w);
+    else
+      lines.back() = candidate;
   }
   for (std::size_t i = 0; i < lines.size(); ++i) {
     if (!flow.reserve(lead)) return false;
@@ -94,7 +107,8 @@ bool heading(Rng& rng, DocumentLayout& doc, Flow& flow, const Fonts& f, int numb
   if (!flow.reserve(2.2 * size)) return false;
   std::string text = std::to_string(number) + "  " + capitalised(word(rng));
   for (int i = rng.randint(1, 3); i > 0; --i) text += " " + word(rng);
-  doc.lines.push_back({f.heading, text, flow.x(), flow.y() + 1.4 * size, size, 0, flow.width(), false});
+  doc.lines.push_back(
+      {f.heading, text, flow.x(), flow.y() + 1.4 * size, size, 0, flow.width(), false});
   flow.advance(2.0 * size);
   ++doc.headings;
   return true;
@@ -106,16 +120,20 @@ bool table(Rng& rng, DocumentLayout& doc, Flow& flow, const Fonts& f, double siz
   if (!flow.reserve(h)) return false;
   const double x0 = flow.x(), w = flow.width(), cw = w / cols;
   double y = flow.y();
-  doc.lines.push_back({f.bold, "Table 1: " + capitalised(word(rng)) + " " + word(rng) + " " + word(rng),
-                       x0, y + size, size, 0, w, false});
+  doc.lines.push_back({f.bold,
+                       "Table 1: " + capitalised(word(rng)) + " " + word(rng) + " " + word(rng), x0,
+                       y + size, size, 0, w, false});
   y += 1.6 * size;
   doc.rects.push_back({x0, y, w, 0.35, 0, 0, 0});
   for (int r = 0; r <= rows; ++r) {
     for (int c = 0; c < cols; ++c) {
       std::ostringstream s;
-      if (r == 0) s << capitalised(word(rng));
-      else if (c == 0) s << capitalised(word(rng));
-      else s << std::fixed << std::setprecision(rng.randint(1, 3)) << rng.uniform(0, 100);
+      if (r == 0)
+        s << capitalised(word(rng));
+      else if (c == 0)
+        s << capitalised(word(rng));
+      else
+        s << std::fixed << std::setprecision(rng.randint(1, 3)) << rng.uniform(0, 100);
       doc.lines.push_back({r == 0 ? f.bold : f.body, s.str(), x0 + c * cw + 0.5 * cw,
                            y + row_h * (r + 0.75), size, 0, 0.9 * cw, true});
     }
@@ -133,18 +151,20 @@ bool figure(Rng& rng, DocumentLayout& doc, Flow& flow, const Fonts& f, double si
   if (!flow.reserve(h)) return false;
   const double x0 = flow.x() + 0.08 * w, y0 = flow.y() + 1.0, pw = 0.84 * w;
   const double axis = 0.3;
-  doc.rects.push_back({x0, y0 + plot_h, pw, axis, 0, 0, 0});       // x axis
-  doc.rects.push_back({x0, y0, axis, plot_h, 0, 0, 0});            // y axis
-  for (int k = 1; k <= 4; ++k)                                     // grid
+  doc.rects.push_back({x0, y0 + plot_h, pw, axis, 0, 0, 0});  // x axis
+  doc.rects.push_back({x0, y0, axis, plot_h, 0, 0, 0});       // y axis
+  for (int k = 1; k <= 4; ++k)                                // grid
     doc.rects.push_back({x0, y0 + plot_h * (1 - k / 5.0), pw, 0.12, 0.75, 0.75, 0.75});
-  const double palette[4][3] = {{0.05, 0.2, 0.7}, {0.75, 0.08, 0.05}, {0.05, 0.5, 0.1}, {0.85, 0.45, 0.0}};
+  const double palette[4][3] = {
+      {0.05, 0.2, 0.7}, {0.75, 0.08, 0.05}, {0.05, 0.5, 0.1}, {0.85, 0.45, 0.0}};
   if (rng.uniform() < 0.5) {
     doc.figure_kind = "bar-chart";
     const int n = rng.randint(4, 9);
     for (int i = 0; i < n; ++i) {
       const double bh = plot_h * rng.uniform(0.15, 0.95);
       const auto& c = palette[i % 2 == 0 ? 0 : 3];
-      doc.rects.push_back({x0 + pw * (i + 0.2) / n, y0 + plot_h - bh, 0.6 * pw / n, bh, c[0], c[1], c[2]});
+      doc.rects.push_back(
+          {x0 + pw * (i + 0.2) / n, y0 + plot_h - bh, 0.6 * pw / n, bh, c[0], c[1], c[2]});
     }
   } else {
     doc.figure_kind = "line-plot";
@@ -154,14 +174,16 @@ bool figure(Rng& rng, DocumentLayout& doc, Flow& flow, const Fonts& f, double si
       const double base = rng.uniform(0.3, 0.7);
       for (int i = 0; i < 120; ++i) {
         const double t = i / 119.0;
-        const double v = base + a * std::sin(fr * 6.28 * t + ph) * std::exp(-t * rng.uniform(0, 0.1));
-        doc.rects.push_back({x0 + pw * t, y0 + plot_h * (1 - std::clamp(v, 0.02, 0.98)), pw / 119.0 + 0.1,
-                             0.55, palette[c][0], palette[c][1], palette[c][2]});
+        const double v =
+            base + a * std::sin(fr * 6.28 * t + ph) * std::exp(-t * rng.uniform(0, 0.1));
+        doc.rects.push_back({x0 + pw * t, y0 + plot_h * (1 - std::clamp(v, 0.02, 0.98)),
+                             pw / 119.0 + 0.1, 0.55, palette[c][0], palette[c][1], palette[c][2]});
       }
     }
   }
-  doc.lines.push_back({f.body, "Figure 1: " + capitalised(word(rng)) + " " + word(rng) + " of the " +
-                                   word(rng) + " " + word(rng) + ".",
+  doc.lines.push_back({f.body,
+                       "Figure 1: " + capitalised(word(rng)) + " " + word(rng) + " of the " +
+                           word(rng) + " " + word(rng) + ".",
                        flow.x() + 0.5 * w, y0 + plot_h + 2.6 * size, size, 0, w, true});
   flow.advance(h);
   return true;
@@ -181,13 +203,16 @@ std::vector<std::pair<std::string, std::string>> document_font_files() {
       {"DejaVuSerif.ttf", "/usr/share/fonts/truetype/dejavu/DejaVuSerif.ttf"},
       {"DejaVuSans-Bold.ttf", "/usr/share/fonts/truetype/dejavu/DejaVuSans-Bold.ttf"},
       {"DejaVuSans.ttf", "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf"},
-      {"LiberationSerif-Regular.ttf", "/usr/share/fonts/truetype/liberation/LiberationSerif-Regular.ttf"},
+      {"LiberationSerif-Regular.ttf",
+       "/usr/share/fonts/truetype/liberation/LiberationSerif-Regular.ttf"},
       {"LiberationSerif-Bold.ttf", "/usr/share/fonts/truetype/liberation/LiberationSerif-Bold.ttf"},
-      {"LiberationSans-Regular.ttf", "/usr/share/fonts/truetype/liberation/LiberationSans-Regular.ttf"},
+      {"LiberationSans-Regular.ttf",
+       "/usr/share/fonts/truetype/liberation/LiberationSans-Regular.ttf"},
       {"LiberationSans-Bold.ttf", "/usr/share/fonts/truetype/liberation/LiberationSans-Bold.ttf"}};
   for (const auto& [name, path] : fonts)
     if (!std::filesystem::exists(path))
-      throw IoError("font '" + path + "' not found (install fonts-dejavu-core and fonts-liberation)");
+      throw IoError("font '" + path +
+                    "' not found (install fonts-dejavu-core and fonts-liberation)");
   return fonts;
 }
 
@@ -196,10 +221,11 @@ DocumentLayout generate_document(std::uint64_t seed, const DocumentParams& param
   DocumentLayout doc;
   doc.params = params;
   doc.seed = seed;
-  const Fonts families[] = {{"DejaVuSerif.ttf", "DejaVuSans-Bold.ttf", "DejaVuSans-Bold.ttf"},
-                            {"LiberationSerif-Regular.ttf", "LiberationSerif-Bold.ttf", "LiberationSerif-Bold.ttf"},
-                            {"LiberationSans-Regular.ttf", "LiberationSans-Bold.ttf", "LiberationSans-Bold.ttf"},
-                            {"DejaVuSans.ttf", "DejaVuSans-Bold.ttf", "DejaVuSans-Bold.ttf"}};
+  const Fonts families[] = {
+      {"DejaVuSerif.ttf", "DejaVuSans-Bold.ttf", "DejaVuSans-Bold.ttf"},
+      {"LiberationSerif-Regular.ttf", "LiberationSerif-Bold.ttf", "LiberationSerif-Bold.ttf"},
+      {"LiberationSans-Regular.ttf", "LiberationSans-Bold.ttf", "LiberationSans-Bold.ttf"},
+      {"DejaVuSans.ttf", "DejaVuSans-Bold.ttf", "DejaVuSans-Bold.ttf"}};
   const Fonts& f = families[rng.randint(0, 3)];
   doc.fonts = {f.body, f.bold};
   const double W = params.page_width_mm, H = params.page_height_mm, margin = 0.1 * W;
@@ -209,20 +235,28 @@ DocumentLayout generate_document(std::uint64_t seed, const DocumentParams& param
   std::string title = capitalised(word(rng));
   for (int i = rng.randint(3, 6); i > 0; --i) title += " " + word(rng);
   doc.lines.push_back({f.heading, title, 0.5 * W, margin + 8.0, 7.0, 0, W - 2 * margin, true});
-  doc.lines.push_back({f.body, capitalised(word(rng)) + " " + capitalised(word(rng)) + ", " +
-                               capitalised(word(rng)) + " " + capitalised(word(rng)),
+  doc.lines.push_back({f.body,
+                       capitalised(word(rng)) + " " + capitalised(word(rng)) + ", " +
+                           capitalised(word(rng)) + " " + capitalised(word(rng)),
                        0.5 * W, margin + 16.0, 3.6, 0, W - 2 * margin, true});
   const double gap = 6.0, col_w = (W - 2 * margin - (doc.columns - 1) * gap) / doc.columns;
   Flow flow(doc, margin + 24.0, H - margin - 6.0, margin, col_w, gap);
   const int table_at = rng.randint(1, 3), figure_at = rng.randint(1, 4);
   bool ok = true, table_done = false, figure_done = false;
   for (int block = 0; ok && block < 40; ++block) {
-    if (block % 3 == 0) ok = heading(rng, doc, flow, f, block / 3 + 1);
-    else if (!table_done && block >= table_at) { ok = table(rng, doc, flow, f, size); table_done = ok; }
-    else if (!figure_done && block >= figure_at) { ok = figure(rng, doc, flow, f, size); figure_done = ok; }
-    else ok = paragraph(rng, doc, flow, f, size);
+    if (block % 3 == 0)
+      ok = heading(rng, doc, flow, f, block / 3 + 1);
+    else if (!table_done && block >= table_at) {
+      ok = table(rng, doc, flow, f, size);
+      table_done = ok;
+    } else if (!figure_done && block >= figure_at) {
+      ok = figure(rng, doc, flow, f, size);
+      figure_done = ok;
+    } else
+      ok = paragraph(rng, doc, flow, f, size);
   }
-  doc.lines.push_back({f.body, std::to_string(rng.randint(1, 40)), 0.5 * W, H - 0.6 * margin, 3.2, 0, 0, true});
+  doc.lines.push_back(
+      {f.body, std::to_string(rng.randint(1, 40)), 0.5 * W, H - 0.6 * margin, 3.2, 0, 0, true});
   return doc;
 }
 
@@ -237,8 +271,8 @@ void write_document_pov(std::ostream& out, const DocumentLayout& doc) {
         << t.size << ", " << t.justify_width << ", " << t.max_width << ", " << (t.centred ? 1 : 0)
         << ")\n";
   for (const Rect& r : doc.rects)
-    out << "SG_Rect(" << r.x << ", " << H - r.y - r.h << ", " << r.w << ", " << r.h << ", <"
-        << r.r << ", " << r.g << ", " << r.b << ">)\n";
+    out << "SG_Rect(" << r.x << ", " << H - r.y - r.h << ", " << r.w << ", " << r.h << ", <" << r.r
+        << ", " << r.g << ", " << r.b << ">)\n";
 }
 
 }  // namespace papersim::scenegen

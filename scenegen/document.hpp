@@ -18,18 +18,18 @@ struct DocumentParams {
 
 /// A line of text placed on the page (baseline origin, page millimetres, y down from the top).
 struct TextLine {
-  std::string font;   ///< file name of the TrueType font (copied into the job)
+  std::string font;  ///< file name of the TrueType font (copied into the job)
   std::string text;
   double x = 0, y = 0, size = 3.5;  ///< [mm]
-  double justify_width = 0.0;  ///< > 0: stretch or shrink the line to this width [mm]
-  double max_width = 0.0;      ///< the line is shrunk when wider than this [mm]
-  bool centred = false;        ///< x is the line's centre
+  double justify_width = 0.0;       ///< > 0: stretch or shrink the line to this width [mm]
+  double max_width = 0.0;           ///< the line is shrunk when wider than this [mm]
+  bool centred = false;             ///< x is the line's centre
 };
 
 /// A filled rectangle (rules, table lines, figure marks), page millimetres, y down.
 struct Rect {
   double x = 0, y = 0, w = 0, h = 0;  ///< [mm]
-  double r = 0, g = 0, b = 0;          ///< linear RGB
+  double r = 0, g = 0, b = 0;         ///< linear RGB
 };
 
 /// A generated page: what is drawn, plus a summary recorded in meta.json.

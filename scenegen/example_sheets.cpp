@@ -66,7 +66,8 @@ SheetMesh make_example_sheet(const std::string& kind, const ExampleSheetParams& 
   if (kind == "bump")
     return grid(p, [&](double x, double y) {
       const double dx = x - 0.03, dy = y + 0.04;
-      return Eigen::Vector3d(x, y, p.bump_height * std::exp(-(dx * dx + dy * dy) / (2 * p.bump_sigma * p.bump_sigma)));
+      return Eigen::Vector3d(
+          x, y, p.bump_height * std::exp(-(dx * dx + dy * dy) / (2 * p.bump_sigma * p.bump_sigma)));
     });
   throw InputError("unknown example sheet '" + kind + "' (flat, cylinder, fold, bump)");
 }

@@ -9,15 +9,15 @@ namespace papersim::scenegen {
 
 /// Parameters of an example sheet.
 struct ExampleSheetParams {
-  double width = 0.210;   ///< [m]
-  double height = 0.297;  ///< [m]
-  int nx = 36, ny = 50;   ///< grid vertices along x and y
-  double cylinder_radius = 0.15;   ///< [m] (cylinder)
-  double fold_angle_deg = 60.0;    ///< rotation of the flap (fold; 175 folds it over)
-  double fold_x = 0.04;            ///< fold line, material x from the centre [m]
-  double fold_radius = 0.004;      ///< crease radius [m]
-  double bump_height = 0.02;       ///< [m] (bump)
-  double bump_sigma = 0.04;        ///< [m]
+  double width = 0.210;           ///< [m]
+  double height = 0.297;          ///< [m]
+  int nx = 36, ny = 50;           ///< grid vertices along x and y
+  double cylinder_radius = 0.15;  ///< [m] (cylinder)
+  double fold_angle_deg = 60.0;   ///< rotation of the flap (fold; 175 folds it over)
+  double fold_x = 0.04;           ///< fold line, material x from the centre [m]
+  double fold_radius = 0.004;     ///< crease radius [m]
+  double bump_height = 0.02;      ///< [m] (bump)
+  double bump_sigma = 0.04;       ///< [m]
 };
 
 /// kind: flat | cylinder | fold | bump. Isometric except the bump. Sheet centred at the

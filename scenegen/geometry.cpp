@@ -1,10 +1,9 @@
 #include "scenegen/geometry.hpp"
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <limits>
-
-#include <Eigen/Geometry>
 
 namespace papersim::scenegen {
 
@@ -45,7 +44,9 @@ MeshBvh::MeshBvh(const SheetMesh& mesh) : m_mesh(mesh) {
   for (int f = 0; f < nf; ++f) {
     m_order[f] = f;
     m_centroids[f] = (mesh.positions.row(mesh.faces(f, 0)) + mesh.positions.row(mesh.faces(f, 1)) +
-                      mesh.positions.row(mesh.faces(f, 2))).transpose() / 3.0;
+                      mesh.positions.row(mesh.faces(f, 2)))
+                         .transpose() /
+                     3.0;
   }
   m_nodes.reserve(2 * nf);
   build(0, nf);
@@ -115,8 +116,9 @@ std::optional<RayHit> MeshBvh::first_hit(const Eigen::Vector3d& origin,
     }
     for (int i = node.begin; i < node.end; ++i) {
       const int f = m_order[i];
-      if (skip_vertex >= 0 && (m_mesh.faces(f, 0) == skip_vertex ||
-                               m_mesh.faces(f, 1) == skip_vertex || m_mesh.faces(f, 2) == skip_vertex))
+      if (skip_vertex >= 0 &&
+          (m_mesh.faces(f, 0) == skip_vertex || m_mesh.faces(f, 1) == skip_vertex ||
+           m_mesh.faces(f, 2) == skip_vertex))
         continue;
       const Eigen::Vector3d a = m_mesh.positions.row(m_mesh.faces(f, 0));
       const Eigen::Vector3d e1 = Eigen::Vector3d(m_mesh.positions.row(m_mesh.faces(f, 1))) - a;

@@ -1,10 +1,9 @@
 #pragma once
 /// Geometry on a sheet mesh: normals, centre of mass, ray casting and point location in UV.
+#include <Eigen/Core>
 #include <cmath>
 #include <optional>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "scenegen/sheet_obj.hpp"
 

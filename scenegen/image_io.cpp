@@ -1,5 +1,10 @@
 #include "scenegen/image_io.hpp"
 
+#include <ImfChannelList.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfInputFile.h>
+#include <ImfOutputFile.h>
 #include <png.h>
 
 #include <algorithm>
@@ -8,12 +13,6 @@
 #include <cstring>
 #include <fstream>
 #include <memory>
-
-#include <ImfChannelList.h>
-#include <ImfFrameBuffer.h>
-#include <ImfHeader.h>
-#include <ImfInputFile.h>
-#include <ImfOutputFile.h>
 
 #include "common/atomic_file.hpp"
 #include "scenegen/errors.hpp"
@@ -26,7 +25,9 @@ void png_error_quiet(png_structp png, png_const_charp) { png_longjmp(png, 1); }
 void png_warning_quiet(png_structp, png_const_charp) {}
 
 struct FileCloser {
-  void operator()(FILE* f) const { if (f) std::fclose(f); }
+  void operator()(FILE* f) const {
+    if (f) std::fclose(f);
+  }
 };
 
 bool starts_with(const std::string& path, const unsigned char* sig, std::size_t n) {
@@ -59,11 +60,12 @@ bool png_read_rows(png_structp png, png_bytep* rows) {
 }
 
 /// png_init_io, the header and png_write_info.
-bool png_write_header(png_structp png, png_infop info, FILE* fp, int width, int height, int bits, int type) {
+bool png_write_header(png_structp png, png_infop info, FILE* fp, int width, int height, int bits,
+                      int type) {
   if (setjmp(png_jmpbuf(png))) return false;
   png_init_io(png, fp);
-  png_set_IHDR(png, info, static_cast<png_uint_32>(width), static_cast<png_uint_32>(height), bits, type,
-               PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+  png_set_IHDR(png, info, static_cast<png_uint_32>(width), static_cast<png_uint_32>(height), bits,
+               type, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
   // zlib's fastest level: a whole sample writes four full-size PNGs, and the default level
   // costs about three times the CPU for files ~10% smaller.
   png_set_compression_level(png, 1);
@@ -88,7 +90,8 @@ std::vector<std::uint16_t> decode(const std::string& path, int& w, int& h, int& 
   std::unique_ptr<FILE, FileCloser> fp(std::fopen(path.c_str(), "rb"));
   if (!fp) throw IoError("cannot open image '" + path + "'");
   if (!is_png_file(path)) throw IoError("'" + path + "' is not a PNG file");
-  png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, nullptr, png_error_quiet, png_warning_quiet);
+  png_structp png =
+      png_create_read_struct(PNG_LIBPNG_VER_STRING, nullptr, png_error_quiet, png_warning_quiet);
   png_infop info = png ? png_create_info_struct(png) : nullptr;
   const auto fail = [&] {
     png_destroy_read_struct(&png, &info, nullptr);
@@ -146,21 +149,27 @@ ImageF read_png(const std::string& path) {
 void write_png(const std::string& path, const ImageF& image, int bits) {
   std::unique_ptr<FILE, FileCloser> fp(std::fopen(path.c_str(), "wb"));
   if (!fp) throw common::OutputError("cannot write image '" + path + "'");
-  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, png_error_quiet, png_warning_quiet);
+  png_structp png =
+      png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, png_error_quiet, png_warning_quiet);
   png_infop info = png ? png_create_info_struct(png) : nullptr;
   const auto fail = [&] {
     png_destroy_write_struct(&png, &info);
     return common::OutputError("cannot write PNG '" + path + "'");
   };
-  const int type = image.channels == 1 ? PNG_COLOR_TYPE_GRAY
-                   : image.channels == 3 ? PNG_COLOR_TYPE_RGB : PNG_COLOR_TYPE_RGBA;
-  if (!png || !info || !png_write_header(png, info, fp.get(), image.width, image.height, bits, type)) throw fail();
+  const int type = image.channels == 1   ? PNG_COLOR_TYPE_GRAY
+                   : image.channels == 3 ? PNG_COLOR_TYPE_RGB
+                                         : PNG_COLOR_TYPE_RGBA;
+  if (!png || !info ||
+      !png_write_header(png, info, fp.get(), image.width, image.height, bits, type))
+    throw fail();
   const int bytes = bits / 8;
   const double maxv = bits == 16 ? 65535.0 : 255.0;
   std::vector<unsigned char> row(std::size_t(image.width) * image.channels * bytes);
   for (int y = 0; y < image.height; ++y) {
     for (int i = 0; i < image.width * image.channels; ++i) {
-      const double v = std::clamp(static_cast<double>(image.data[std::size_t(y) * image.width * image.channels + i]), 0.0, 1.0);
+      const double v = std::clamp(
+          static_cast<double>(image.data[std::size_t(y) * image.width * image.channels + i]), 0.0,
+          1.0);
       const auto q = static_cast<unsigned>(std::lround(v * maxv));
       if (bytes == 2) {
         row[2 * i] = static_cast<unsigned char>(q >> 8);  // PNG is big-endian
@@ -179,7 +188,8 @@ void write_png(const std::string& path, const ImageF& image, int bits) {
     throw common::OutputError("cannot write image '" + path + "'");
 }
 
-void write_exr(const std::string& path, const ImageF& image, const std::vector<std::string>& names) {
+void write_exr(const std::string& path, const ImageF& image,
+               const std::vector<std::string>& names) {
   try {
     Imf::Header header(image.width, image.height);
     header.compression() = Imf::ZIP_COMPRESSION;
@@ -201,7 +211,8 @@ void write_exr(const std::string& path, const ImageF& image, const std::vector<s
     complete = Imf::InputFile(path.c_str()).isComplete();
   } catch (const std::exception&) {
   }
-  if (!complete) throw common::OutputError("cannot write EXR '" + path + "' (incomplete file; full disk?)");
+  if (!complete)
+    throw common::OutputError("cannot write EXR '" + path + "' (incomplete file; full disk?)");
 }
 
 ImageF read_exr(const std::string& path, const std::vector<std::string>& names) {
@@ -212,7 +223,9 @@ ImageF read_exr(const std::string& path, const std::vector<std::string>& names) 
     Imf::FrameBuffer fb;
     const std::size_t xs = sizeof(float) * img.channels, ys = xs * img.width;
     for (std::size_t c = 0; c < names.size(); ++c)
-      fb.insert(names[c], Imf::Slice(Imf::FLOAT, (char*)(img.data.data() + c) - (dw.min.x * xs + dw.min.y * ys), xs, ys));
+      fb.insert(names[c],
+                Imf::Slice(Imf::FLOAT,
+                           (char*)(img.data.data() + c) - (dw.min.x * xs + dw.min.y * ys), xs, ys));
     file.setFrameBuffer(fb);
     file.readPixels(dw.min.y, dw.max.y);
     return img;

@@ -5,28 +5,26 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include <csignal>
-#include <cstdio>
-#include <thread>
-
 #include <algorithm>
 #include <chrono>
+#include <csignal>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <functional>
 #include <future>
-#include <sstream>
-
 #include <nlohmann/json.hpp>
+#include <sstream>
+#include <thread>
 
 #include "common/atomic_file.hpp"
 #include "common/interrupt.hpp"
 #include "scenegen/contact_shadow.hpp"
 #include "scenegen/edge_lift.hpp"
 #include "scenegen/errors.hpp"
-#include "scenegen/limits.hpp"
 #include "scenegen/geometry.hpp"
 #include "scenegen/image_io.hpp"
+#include "scenegen/limits.hpp"
 #include "scenegen/meta.hpp"
 #include "scenegen/raycast.hpp"
 #include "scenegen/resting_pose.hpp"
@@ -65,7 +63,9 @@ void write_with(const fs::path& path, Writer&& writer) {
 void copy_output(const fs::path& from, const fs::path& to) {
   std::error_code ec;
   fs::copy_file(from, to, fs::copy_options::overwrite_existing, ec);
-  if (ec) throw common::OutputError("cannot copy '" + from.string() + "' to '" + to.string() + "': " + ec.message());
+  if (ec)
+    throw common::OutputError("cannot copy '" + from.string() + "' to '" + to.string() +
+                              "': " + ec.message());
 }
 
 std::string lower_ext(const fs::path& p) {
@@ -80,7 +80,8 @@ std::vector<fs::path> image_files(const std::string& dir, const std::string& wha
   std::vector<fs::path> files;
   for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
     const std::string e = lower_ext(it->path());
-    if (it->is_regular_file() && (e == ".png" || e == ".jpg" || e == ".jpeg")) files.push_back(it->path());
+    if (it->is_regular_file() && (e == ".png" || e == ".jpg" || e == ".jpeg"))
+      files.push_back(it->path());
   }
   if (ec) throw IoError("cannot list " + what + " folder '" + dir + "': " + ec.message());
   if (files.empty()) throw InputError(what + " folder '" + dir + "' has no PNG or JPEG file");
@@ -117,24 +118,34 @@ std::string hex(std::uint64_t v) {
   return s.str();
 }
 
-json options_json(const SampleOptions& o, const std::vector<std::string>& renders, int doc_w, int doc_h) {
+json options_json(const SampleOptions& o, const std::vector<std::string>& renders, int doc_w,
+                  int doc_h) {
   json passes = json::array();
   for (Pass p : o.passes) passes.push_back(pass_name(p));
   const int gw = o.backward.grid_width > 0 ? o.backward.grid_width : o.width;
   const int gh = o.backward.grid_height > 0 ? o.backward.grid_height : o.height;
-  return {{"passes", passes}, {"raw_renders", renders}, {"width", o.width}, {"height", o.height},
-          {"quality", quality_name(o.quality)}, {"fine_passes", o.fine_passes},
-          {"ground_truth", ground_truth_name(o.ground_truth)},
-          {"backward", {{"grid_width", gw}, {"grid_height", gh},
-                        {"tolerance_pixels", o.backward.tolerance_pixels}}},
-          {"document_render", doc_w > 0 ? json{{"width_px", doc_w}, {"height_px", doc_h}} : json()}};
+  return {
+      {"passes", passes},
+      {"raw_renders", renders},
+      {"width", o.width},
+      {"height", o.height},
+      {"quality", quality_name(o.quality)},
+      {"fine_passes", o.fine_passes},
+      {"ground_truth", ground_truth_name(o.ground_truth)},
+      {"backward",
+       {{"grid_width", gw},
+        {"grid_height", gh},
+        {"tolerance_pixels", o.backward.tolerance_pixels}}},
+      {"document_render", doc_w > 0 ? json{{"width_px", doc_w}, {"height_px", doc_h}} : json()}};
 }
 
 /// Copy the document into the job; returns its file name there and its meta.json entry.
 std::pair<std::string, json> place_document(const SampleOptions& o, const SheetMesh& mesh,
-                                            const fs::path& job, int threads, const std::string& tpl_dir) {
+                                            const fs::path& job, int threads,
+                                            const std::string& tpl_dir) {
   fs::path src;
-  if (!o.document.empty()) src = o.document;
+  if (!o.document.empty())
+    src = o.document;
   else if (!o.documents_dir.empty()) {
     const auto files = image_files(o.documents_dir, "documents");
     Rng rng(o.seed, "document-choice");
@@ -144,7 +155,10 @@ std::pair<std::string, json> place_document(const SampleOptions& o, const SheetM
     check_image(src, "document");
     const std::string name = "document" + std::string(is_png_file(src.string()) ? ".png" : ".jpg");
     copy_output(src, job / name);
-    return {name, {{"source", "file"}, {"file", src.filename().string()}, {"fnv1a64", hex(fnv1a_file(src.string()))}}};
+    return {name,
+            {{"source", "file"},
+             {"file", src.filename().string()},
+             {"fnv1a64", hex(fnv1a_file(src.string()))}}};
   }
   DocumentParams dp;
   dp.page_width_mm = mesh.width * 1000.0;
@@ -159,7 +173,9 @@ std::pair<std::string, json> place_document(const SampleOptions& o, const SheetM
   for (const auto& [name, path] : document_font_files()) copy_output(path, job / name);
   write_text(job / "document.inc", template_text("document.inc", tpl_dir));
   write_with(job / "document.pov", [&](std::ostream& out) { write_document_pov(out, doc); });
-  write_with(job / "document.ini", [&](std::ostream& out) { write_document_ini(out, doc.width_px(), doc.height_px(), 0); });
+  write_with(job / "document.ini", [&](std::ostream& out) {
+    write_document_ini(out, doc.width_px(), doc.height_px(), 0);
+  });
   (void)threads;
   json j = to_json(doc);
   j["source"] = "built-in";
@@ -181,9 +197,11 @@ std::string view_stream(const std::string& component, int view) {
 /// The contact shadow's map (contact.png in the job) and its declaration. Its strength is the
 /// share of the light on an open table that comes from the sky (radiosity) or the ambient fill
 /// (draft), the part of the light the sheet's occlusion of the sky removes.
-ContactShadowDecl place_contact_shadow(const SheetMesh& surface, const Stage& stage, const SceneDescription& scene,
-                                       const fs::path& job, json& meta) {
-  const Eigen::Vector3d span = surface.positions.colwise().maxCoeff() - surface.positions.colwise().minCoeff();
+ContactShadowDecl place_contact_shadow(const SheetMesh& surface, const Stage& stage,
+                                       const SceneDescription& scene, const fs::path& job,
+                                       json& meta) {
+  const Eigen::Vector3d span =
+      surface.positions.colwise().maxCoeff() - surface.positions.colwise().minCoeff();
   ContactParams params = contact_params_for(span.maxCoeff());
   params.gap = scene.background_gap;
   const SheetHeightField field = sheet_height_field(surface, stage, params);
@@ -196,8 +214,14 @@ ContactShadowDecl place_contact_shadow(const SheetMesh& surface, const Stage& st
   c.height = field.height * field.cell;
   const double fill = scene.quality.radiosity ? scene.lighting.sky : scene.quality.ambient;
   c.strength = fill / (fill + scene.lighting.exposure);
-  meta = {{"enabled", true}, {"file", c.file}, {"origin_stage_m", {c.x0, c.y0}}, {"size_m", {c.width, c.height}},
-          {"cell_m", params.cell}, {"reach_m", params.reach}, {"azimuths", params.azimuths}, {"strength", c.strength}};
+  meta = {{"enabled", true},
+          {"file", c.file},
+          {"origin_stage_m", {c.x0, c.y0}},
+          {"size_m", {c.width, c.height}},
+          {"cell_m", params.cell},
+          {"reach_m", params.reach},
+          {"azimuths", params.azimuths},
+          {"strength", c.strength}};
   return c;
 }
 
@@ -219,12 +243,14 @@ const std::string& failed_meta() { return g_failed_meta; }
 void prepare_job(const SampleOptions& o, const std::string& job_dir) {
   if (o.width < 8 || o.height < 8) throw InputError("image size must be at least 8 x 8");
   if (!(o.shadow_offset >= 0.0 && o.shadow_offset < 3e-4))
-    throw InputError("shadow offset must be in [0, 0.3 mm) (the gap to the table), got " + std::to_string(o.shadow_offset) + " m");
+    throw InputError("shadow offset must be in [0, 0.3 mm) (the gap to the table), got " +
+                     std::to_string(o.shadow_offset) + " m");
   const std::vector<std::string> layouts = layout_names();
   if (std::find(layouts.begin(), layouts.end(), o.layout) == layouts.end())
     throw InputError("unknown layout '" + o.layout + "' (scenegen, syntheticdoc)");
   const int bands = (o.quality_override ? *o.quality_override : quality_settings(o.quality)).bands;
-  if (bands < 1 || bands > 64) throw InputError("quality bands must be in [1, 64], got " + std::to_string(bands));
+  if (bands < 1 || bands > 64)
+    throw InputError("quality bands must be in [1, 64], got " + std::to_string(bands));
   if (o.view < 0) throw InputError("view index " + std::to_string(o.view) + " is negative");
   const SheetMesh read_mesh = read_sheet_obj(o.mesh_path);
   const SheetMesh mesh = o.flip ? flip_sheet(read_mesh) : read_mesh;
@@ -234,7 +260,8 @@ void prepare_job(const SampleOptions& o, const std::string& job_dir) {
   // The curl is the sheet's, not the view's: one stream for every view of it.
   Rng lift_rng(o.seed, "edge_lift");
   const EdgeLift lift = draw_edge_lift(lift_rng);
-  const RenderedSurface rendered = rendered_surface(mesh, stage.origin, stage.up, o.surface, o.edge_lift ? lift : EdgeLift{});
+  const RenderedSurface rendered =
+      rendered_surface(mesh, stage.origin, stage.up, o.surface, o.edge_lift ? lift : EdgeLift{});
   const SheetMesh& surface = rendered.surface;
   Rng cam_rng(o.seed, view_stream("camera", o.view));
   const CameraChoice choice = choose_camera(mesh, stage, o.width, o.height, o.camera, cam_rng);
@@ -243,21 +270,27 @@ void prepare_job(const SampleOptions& o, const std::string& job_dir) {
   meta["scenegen_version"] = PAPERSIM_VERSION;
   meta["seed"] = o.seed;
   meta["mesh"] = {{"file", fs::path(o.mesh_path).filename().string()},
-                  {"fnv1a64", hex(fnv1a_file(o.mesh_path))}, {"vertices", mesh.num_vertices()},
-                  {"faces", mesh.num_faces()}, {"width_m", mesh.width}, {"height_m", mesh.height},
+                  {"fnv1a64", hex(fnv1a_file(o.mesh_path))},
+                  {"vertices", mesh.num_vertices()},
+                  {"faces", mesh.num_faces()},
+                  {"width_m", mesh.width},
+                  {"height_m", mesh.height},
                   {"size_from_header", mesh.size_from_header}};
   meta["flip"] = o.flip;
   meta["shadow_offset_m"] = o.shadow_offset;
   meta["view"] = o.view;
-  meta["surface"] = {{"kind", "modified_butterfly"}, {"level", o.surface.level},
-                     {"vertices", surface.num_vertices()}, {"faces", surface.num_faces()},
+  meta["surface"] = {{"kind", "modified_butterfly"},
+                     {"level", o.surface.level},
+                     {"vertices", surface.num_vertices()},
+                     {"faces", surface.num_faces()},
                      {"edge_lift", to_json(lift, o.edge_lift)}};
   meta["stage"] = to_json(stage);
   meta["camera"] = to_json(choice, o.camera);
   if (!choice.valid) {
     meta["status"] = "failed";
-    meta["failure"] = "no valid camera direction: none of the 26 candidates sees the whole sheet "
-                      "in frame (2% margin) without self-occlusion and backfacing";
+    meta["failure"] =
+        "no valid camera direction: none of the 26 candidates sees the whole sheet "
+        "in frame (2% margin) without self-occlusion and backfacing";
     g_failed_meta = meta.dump(2) + "\n";
     throw NoValidCameraError("mesh '" + o.mesh_path + "': " + meta["failure"].get<std::string>());
   }
@@ -266,7 +299,8 @@ void prepare_job(const SampleOptions& o, const std::string& job_dir) {
   remove_quietly(tmp);
   std::error_code ec;
   fs::create_directories(tmp, ec);
-  if (ec) throw common::OutputError("cannot create job folder '" + tmp.string() + "': " + ec.message());
+  if (ec)
+    throw common::OutputError("cannot create job folder '" + tmp.string() + "': " + ec.message());
   try {
     SceneDescription scene;
     scene.camera = choice.camera;
@@ -292,37 +326,53 @@ void prepare_job(const SampleOptions& o, const std::string& job_dir) {
     if (scene.background.kind == "image") {
       const fs::path src = scene.background.image;
       check_image(src, "background image");
-      scene.background.image = "background" + std::string(is_png_file(src.string()) ? ".png" : ".jpg");
+      scene.background.image =
+          "background" + std::string(is_png_file(src.string()) ? ".png" : ".jpg");
       copy_output(src, tmp / scene.background.image);
     }
     scene.paper = draw_paper(paper_rng);
     set_coords_encoding(scene, surface);
     // Only the lit renders (photo, shading) see the table.
-    const bool lit = std::any_of(o.passes.begin(), o.passes.end(), [](Pass p) { return p == Pass::image || p == Pass::shading; });
+    const bool lit = std::any_of(o.passes.begin(), o.passes.end(),
+                                 [](Pass p) { return p == Pass::image || p == Pass::shading; });
     json contact_meta = {{"enabled", false}};
-    if (o.contact_shadow && lit) scene.contact = place_contact_shadow(surface, stage, scene, tmp, contact_meta);
+    if (o.contact_shadow && lit)
+      scene.contact = place_contact_shadow(surface, stage, scene, tmp, contact_meta);
     const auto [doc_file, doc_meta] = place_document(o, mesh, tmp, o.threads, o.templates_dir);
     scene.document_file = doc_file;
 
-    for (const char* name : {"main.pov", "passes.inc", "paper.inc", "backgrounds.inc", "lights.inc"})
+    for (const char* name :
+         {"main.pov", "passes.inc", "paper.inc", "backgrounds.inc", "lights.inc"})
       write_text(tmp / name, template_text(name, o.templates_dir));
     const Eigen::MatrixX3d& normals = rendered.normals;
-    write_with(tmp / "sheet.inc", [&](std::ostream& out) { write_sheet_inc(out, surface, normals); });
-    write_with(tmp / "shadow.inc", [&](std::ostream& out) { write_shadow_inc(out, surface, normals, o.shadow_offset); });
+    write_with(tmp / "sheet.inc",
+               [&](std::ostream& out) { write_sheet_inc(out, surface, normals); });
+    write_with(tmp / "shadow.inc", [&](std::ostream& out) {
+      write_shadow_inc(out, surface, normals, o.shadow_offset);
+    });
     write_with(tmp / "scene.inc", [&](std::ostream& out) { write_scene_inc(out, scene); });
     write_with(tmp / "sheet.obj", [&](std::ostream& out) { write_sheet_obj(out, surface); });
-    if (o.ground_truth == GroundTruth::raycast) write_vertex_normals((tmp / "sheet_normals.txt").string(), normals);
+    if (o.ground_truth == GroundTruth::raycast)
+      write_vertex_normals((tmp / "sheet_normals.txt").string(), normals);
     const auto raw = raw_passes_for(o.passes, o.fine_passes, o.ground_truth);
     std::vector<std::string> renders;
     std::string run_sh =
-        "#!/bin/sh\n# Renders this job with POV-Ray 3.7 alone; then: scenegen finish THIS_DIR --out DIR\nset -e\n"
+        "#!/bin/sh\n# Renders this job with POV-Ray 3.7 alone; then: scenegen finish THIS_DIR "
+        "--out DIR\nset -e\n"
         "cd \"$(dirname \"$0\")\"\n"
-        "# One render, its messages in NAME.log. POV-Ray can fail to start its worker threads on a\n"
-        "# loaded machine; such a render is started again (" + std::to_string(POVRAY_STARTS) + " starts at most).\n"
+        "# One render, its messages in NAME.log. POV-Ray can fail to start its worker threads on "
+        "a\n"
+        "# loaded machine; such a render is started again (" +
+        std::to_string(POVRAY_STARTS) +
+        " starts at most).\n"
         "render() {\n"
-        "  for start in $(seq " + std::to_string(POVRAY_STARTS) + "); do\n"
+        "  for start in $(seq " +
+        std::to_string(POVRAY_STARTS) +
+        "); do\n"
         "    povray \"$1\" > \"${1%.ini}.log\" 2>&1 && return 0\n"
-        "    grep -q '" + POVRAY_STARTUP_TIMEOUT + "' \"${1%.ini}.log\" || break\n"
+        "    grep -q '" +
+        POVRAY_STARTUP_TIMEOUT +
+        "' \"${1%.ini}.log\" || break\n"
         "  done\n"
         "  echo \"POV-Ray failed on $1; the end of ${1%.ini}.log:\" >&2\n"
         "  tail -n 8 \"${1%.ini}.log\" >&2\n"
@@ -342,14 +392,20 @@ void prepare_job(const SampleOptions& o, const std::string& job_dir) {
       }
     }
     write_text(tmp / "run.sh", run_sh);
-    fs::permissions(tmp / "run.sh", fs::perms::owner_exec | fs::perms::group_exec | fs::perms::others_exec, fs::perm_options::add, ec);
-    if (ec) throw common::OutputError("cannot make '" + (tmp / "run.sh").string() + "' executable: " + ec.message());
+    fs::permissions(tmp / "run.sh",
+                    fs::perms::owner_exec | fs::perms::group_exec | fs::perms::others_exec,
+                    fs::perm_options::add, ec);
+    if (ec)
+      throw common::OutputError("cannot make '" + (tmp / "run.sh").string() +
+                                "' executable: " + ec.message());
 
     meta["status"] = "ok";
     meta["image"] = {{"width", o.width}, {"height", o.height}};
     meta["quality"] = quality_name(o.quality);
-    meta["quality_settings"] = {{"radiosity", scene.quality.radiosity}, {"area_samples", scene.quality.area_samples},
-                                {"antialias", scene.quality.antialias}, {"ambient", scene.quality.ambient},
+    meta["quality_settings"] = {{"radiosity", scene.quality.radiosity},
+                                {"area_samples", scene.quality.area_samples},
+                                {"antialias", scene.quality.antialias},
+                                {"ambient", scene.quality.ambient},
                                 {"radiosity_count", scene.quality.radiosity_count},
                                 {"radiosity_error", scene.quality.radiosity_error},
                                 {"radiosity_nearest", scene.quality.radiosity_nearest},
@@ -369,9 +425,12 @@ void prepare_job(const SampleOptions& o, const std::string& job_dir) {
     meta["contact_shadow"] = contact_meta;
     meta["paper"] = to_json(scene.paper);
     meta["document"] = doc_meta;
-    meta["encoding"] = {{"coords_min", to_json(scene.coords_min)}, {"coords_span", scene.coords_span},
-                        {"uv_encoding", UV_ENCODING}, {"fine_factor", FINE_FACTOR}};
-    json job = options_json(o, renders, doc_meta.value("width_px", 0), doc_meta.value("height_px", 0));
+    meta["encoding"] = {{"coords_min", to_json(scene.coords_min)},
+                        {"coords_span", scene.coords_span},
+                        {"uv_encoding", UV_ENCODING},
+                        {"fine_factor", FINE_FACTOR}};
+    json job =
+        options_json(o, renders, doc_meta.value("width_px", 0), doc_meta.value("height_px", 0));
     job["meta"] = meta;
     job["document_file"] = doc_file;
     job["layout"] = o.layout;
@@ -379,7 +438,9 @@ void prepare_job(const SampleOptions& o, const std::string& job_dir) {
     write_text(tmp / "job.json", job.dump(2) + "\n");
     remove_quietly(final_dir);
     fs::rename(tmp, final_dir, ec);
-    if (ec) throw common::OutputError("cannot rename job folder into '" + final_dir.string() + "': " + ec.message());
+    if (ec)
+      throw common::OutputError("cannot rename job folder into '" + final_dir.string() +
+                                "': " + ec.message());
   } catch (...) {
     remove_quietly(tmp);
     throw;
@@ -402,7 +463,11 @@ pid_t start_povray(const fs::path& job_rel, const std::string& povray, const std
     common::reset_signals_in_child();
     if (chdir(job.c_str()) != 0) _exit(126);
     const int fd = open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    if (fd >= 0) { dup2(fd, 1); dup2(fd, 2); close(fd); }
+    if (fd >= 0) {
+      dup2(fd, 1);
+      dup2(fd, 2);
+      close(fd);
+    }
     execlp(povray.c_str(), povray.c_str(), ini.c_str(), static_cast<char*>(nullptr));
     _exit(127);
   }
@@ -421,7 +486,8 @@ bool povray_startup_timed_out(const fs::path& job, const std::string& ini) {
 }
 
 /// Turn a finished POV-Ray's exit status into success or a RenderError with its log's tail.
-void check_povray(const fs::path& job, const std::string& povray, const std::string& ini, int status) {
+void check_povray(const fs::path& job, const std::string& povray, const std::string& ini,
+                  int status) {
   if (WIFEXITED(status) && WEXITSTATUS(status) == 127)
     throw RenderError("cannot run POV-Ray '" + povray + "' (is povray 3.7 installed?)");
   if (WIFEXITED(status) && WEXITSTATUS(status) == 0) return;
@@ -430,10 +496,12 @@ void check_povray(const fs::path& job, const std::string& povray, const std::str
   std::string line, tail;
   std::vector<std::string> lines;
   while (std::getline(in, line)) lines.push_back(line);
-  for (std::size_t i = lines.size() > 8 ? lines.size() - 8 : 0; i < lines.size(); ++i) tail += "\n  " + lines[i];
+  for (std::size_t i = lines.size() > 8 ? lines.size() - 8 : 0; i < lines.size(); ++i)
+    tail += "\n  " + lines[i];
   const std::string how = WIFEXITED(status) ? "exit status " + std::to_string(WEXITSTATUS(status))
-                                             : "signal " + std::to_string(WTERMSIG(status));
-  throw RenderError("POV-Ray failed on " + ini + " (" + how + "); the end of " + log_name + ":" + tail);
+                                            : "signal " + std::to_string(WTERMSIG(status));
+  throw RenderError("POV-Ray failed on " + ini + " (" + how + "); the end of " + log_name + ":" +
+                    tail);
 }
 
 json read_job(const fs::path& job) {
@@ -467,10 +535,15 @@ RunReport run_job(const std::string& job_dir, const RunOptions& run) {
       if (inis[i].rfind(p, 0) == 0) return true;
     return false;
   };
-  const int slots = std::max(1, run.parallel > 0 ? run.parallel : static_cast<int>(std::thread::hardware_concurrency()));
+  const int slots = std::max(
+      1, run.parallel > 0 ? run.parallel : static_cast<int>(std::thread::hardware_concurrency()));
   RunReport report;
   report.seconds.resize(inis.size());
-  struct Running { pid_t pid; std::size_t index; std::chrono::steady_clock::time_point t0; };
+  struct Running {
+    pid_t pid;
+    std::size_t index;
+    std::chrono::steady_clock::time_point t0;
+  };
   std::vector<Running> running;
   std::vector<bool> started(inis.size(), false);
   std::vector<int> starts(inis.size(), 0);  // failed starts so far, per render
@@ -485,7 +558,12 @@ RunReport run_job(const std::string& job_dir, const RunOptions& run) {
     return inis.size();
   };
   // SIGKILL: POV-Ray may ignore SIGTERM while it renders.
-  const auto kill_all = [&] { for (auto& r : running) { kill(r.pid, SIGKILL); waitpid(r.pid, nullptr, 0); } };
+  const auto kill_all = [&] {
+    for (auto& r : running) {
+      kill(r.pid, SIGKILL);
+      waitpid(r.pid, nullptr, 0);
+    }
+  };
   try {
     while (next < order.size() || !running.empty()) {
       while (next < order.size() && static_cast<int>(running.size()) < slots) {
@@ -493,8 +571,10 @@ RunReport run_job(const std::string& job_dir, const RunOptions& run) {
         if (i == inis.size()) break;
         started[i] = true;
         ++next;
-        if (run.progress) run.progress({name_of(i), static_cast<int>(next), static_cast<int>(inis.size()), -1.0});
-        running.push_back({start_povray(job, run.povray, inis[i]), i, std::chrono::steady_clock::now()});
+        if (run.progress)
+          run.progress({name_of(i), static_cast<int>(next), static_cast<int>(inis.size()), -1.0});
+        running.push_back(
+            {start_povray(job, run.povray, inis[i]), i, std::chrono::steady_clock::now()});
       }
       bool reaped = false;
       for (std::size_t k = 0; k < running.size(); ++k) {
@@ -504,16 +584,19 @@ RunReport run_job(const std::string& job_dir, const RunOptions& run) {
         running.erase(running.begin() + static_cast<long>(k));
         if (!(WIFEXITED(status) && WEXITSTATUS(status) == 0) && ++starts[r.index] < POVRAY_STARTS &&
             povray_startup_timed_out(job, inis[r.index])) {
-          running.push_back({start_povray(job, run.povray, inis[r.index]), r.index, std::chrono::steady_clock::now()});
+          running.push_back({start_povray(job, run.povray, inis[r.index]), r.index,
+                             std::chrono::steady_clock::now()});
           reaped = true;
           break;
         }
         check_povray(job, run.povray, inis[r.index], status);
-        const double sec = std::chrono::duration<double>(std::chrono::steady_clock::now() - r.t0).count();
+        const double sec =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - r.t0).count();
         report.seconds[r.index] = {name_of(r.index), sec};
         if (inis[r.index] == "document.ini") document_done = true;
         ++done;
-        if (run.progress) run.progress({name_of(r.index), done, static_cast<int>(inis.size()), sec});
+        if (run.progress)
+          run.progress({name_of(r.index), done, static_cast<int>(inis.size()), sec});
         reaped = true;
         break;
       }
@@ -537,12 +620,14 @@ ImageF to_srgb(const ImageF& linear) {
 
 ImageF channel(const ImageF& img, int c) {
   ImageF out(img.width, img.height, 1);
-  for (std::size_t p = 0; p < std::size_t(img.width) * img.height; ++p) out.data[p] = img.data[p * img.channels + c];
+  for (std::size_t p = 0; p < std::size_t(img.width) * img.height; ++p)
+    out.data[p] = img.data[p * img.channels + c];
   return out;
 }
 
 /// Rename a staged file (when present) and move its meta.json description along.
-void rename_staged(const fs::path& stage, json& files, const std::string& from, const std::string& to) {
+void rename_staged(const fs::path& stage, json& files, const std::string& from,
+                   const std::string& to) {
   if (!fs::exists(stage / from)) return;
   fs::rename(stage / from, stage / to);
   files[to] = files[from];
@@ -565,12 +650,15 @@ void apply_syntheticdoc_layout(const fs::path& stage, json& meta) {
     ImageF grid(back.width, back.height, 2);
     for (int r = 0; r < back.height; ++r)
       for (int c = 0; c < back.width; ++c) {
-        grid.at(c, r, 0) = static_cast<float>(std::clamp(2.0 * back.at(c, r, 0) / w - 1.0, -1.0, 1.0));
-        grid.at(c, r, 1) = static_cast<float>(std::clamp(2.0 * back.at(c, r, 1) / h - 1.0, -1.0, 1.0));
+        grid.at(c, r, 0) =
+            static_cast<float>(std::clamp(2.0 * back.at(c, r, 0) / w - 1.0, -1.0, 1.0));
+        grid.at(c, r, 1) =
+            static_cast<float>(std::clamp(2.0 * back.at(c, r, 1) / h - 1.0, -1.0, 1.0));
       }
     write_npy((stage / "backward_map.npy").string(), grid);
-    files["backward_map.npy"] = "float32 (grid_height, grid_width, 2): 2 x / width - 1, 2 y / height - 1 "
-                                "(clamped to [-1, 1]); row 0 = top of the page";
+    files["backward_map.npy"] =
+        "float32 (grid_height, grid_width, 2): 2 x / width - 1, 2 y / height - 1 "
+        "(clamped to [-1, 1]); row 0 = top of the page";
     // backward.exr keeps the visibility flag the reference's map does not have.
     fs::remove(stage / "backward.npy");
     files.erase("backward.npy");
@@ -583,10 +671,11 @@ void apply_syntheticdoc_layout(const fs::path& stage, json& meta) {
 /// The exact passes by ray casting (raycast ground truth): the pixel rays of `camera` on the
 /// job's sheet.obj with its sheet_normals.txt, at the precision POV-Ray holds them for the
 /// photo. `uv` gets u, v, mask; `xyz` and `normal` are filled when asked for. @throw IoError
-void cast_ground_truth(const fs::path& job, const Camera& camera, bool want_coords, bool want_normal,
-                       ImageF& uv, ImageF& xyz, ImageF& normal) {
+void cast_ground_truth(const fs::path& job, const Camera& camera, bool want_coords,
+                       bool want_normal, ImageF& uv, ImageF& xyz, ImageF& normal) {
   const SheetMesh surface = read_sheet_obj((job / "sheet.obj").string());
-  Eigen::MatrixX3d normals = read_vertex_normals((job / "sheet_normals.txt").string(), surface.num_vertices());
+  Eigen::MatrixX3d normals =
+      read_vertex_normals((job / "sheet_normals.txt").string(), surface.num_vertices());
   const SheetMesh rendered = povray_precision(surface, normals);
   const PixelHits hits = cast_pixel_rays(rendered, camera);
   uv = uv_from_hits(hits, rendered);
@@ -606,7 +695,9 @@ void finish_into(const fs::path& job, const fs::path& stage) {
   json meta = j.at("meta");
   std::vector<std::string> passes;
   for (const auto& p : j.at("passes")) passes.push_back(p.get<std::string>());
-  const auto has = [&](const std::string& p) { return std::find(passes.begin(), passes.end(), p) != passes.end(); };
+  const auto has = [&](const std::string& p) {
+    return std::find(passes.begin(), passes.end(), p) != passes.end();
+  };
   const bool fine = j.at("fine_passes").get<bool>();
   const auto raw = [&](RawPass r) { return raw_path(job, raw_pass_name(r)); };
   const int bands = j.value("lit_bands", 1);
@@ -620,7 +711,8 @@ void finish_into(const fs::path& job, const fs::path& stage) {
       const ImageF part = reader(raw_path(job, raw_render_name(r, band)));
       if (b == 0) out = ImageF(part.width, part.height, part.channels);
       if (part.width != out.width || part.height != height || part.channels != out.channels)
-        throw IoError("raw render '" + raw_render_name(r, band) + "' does not match its other bands");
+        throw IoError("raw render '" + raw_render_name(r, band) +
+                      "' does not match its other bands");
       const std::size_t row = std::size_t(part.width) * part.channels;
       std::copy(part.data.begin() + static_cast<long>(row * band.first_row(height)),
                 part.data.begin() + static_cast<long>(row * band.end_row(height)),
@@ -634,7 +726,9 @@ void finish_into(const fs::path& job, const fs::path& stage) {
   // Independent outputs are decoded and written side by side (each task writes its own files;
   // meta.json is filled here), in two waves: the UV render first gives the mask the others use.
   std::vector<std::future<void>> tasks;
-  const auto spawn = [&](std::function<void()> task) { tasks.push_back(std::async(std::launch::async, std::move(task))); };
+  const auto spawn = [&](std::function<void()> task) {
+    tasks.push_back(std::async(std::launch::async, std::move(task)));
+  };
   const auto wait_all = [&] {
     for (auto& t : tasks) t.wait();
     for (auto& t : tasks) t.get();  // rethrows the first failure, once every task has ended
@@ -653,7 +747,9 @@ void finish_into(const fs::path& job, const fs::path& stage) {
       mask = channel(uv, 2);
     });
   if (has("albedo")) {
-    spawn([&] { write_png((stage / "albedo.png").string(), to_srgb(decode_linear(raw(RawPass::albedo))), 16); });
+    spawn([&] {
+      write_png((stage / "albedo.png").string(), to_srgb(decode_linear(raw(RawPass::albedo))), 16);
+    });
     files["albedo.png"] = "16-bit sRGB document colour times paper colour, unlit, background 0";
   }
   if (has("shading")) {
@@ -689,7 +785,9 @@ void finish_into(const fs::path& job, const fs::path& stage) {
     const Eigen::Vector3d lo(e["coords_min"][0], e["coords_min"][1], e["coords_min"][2]);
     const double span = e.at("coords_span").get<double>();
     spawn([&, lo, span] {
-      if (!cast) xyz = decode_coords(raw(RawPass::coords), fine ? raw(RawPass::coords_fine) : "", lo, span, mask);
+      if (!cast)
+        xyz = decode_coords(raw(RawPass::coords), fine ? raw(RawPass::coords_fine) : "", lo, span,
+                            mask);
       write_exr((stage / "coords.exr").string(), xyz, {"R", "G", "B"});
     });
     files["coords.exr"] = "float32 R, G, B = world x, y, z [m], 0 outside the sheet";
@@ -699,7 +797,8 @@ void finish_into(const fs::path& job, const fs::path& stage) {
       if (!cast) normal = decode_normal(raw(RawPass::normal), mask);
       write_exr((stage / "normal.exr").string(), normal, {"R", "G", "B"});
     });
-    files["normal.exr"] = "float32 unit world normal turned towards the camera, 0 outside the sheet";
+    files["normal.exr"] =
+        "float32 unit world normal turned towards the camera, 0 outside the sheet";
   }
   if (has("backward")) {
     BackwardParams bp;
@@ -712,7 +811,8 @@ void finish_into(const fs::path& job, const fs::path& stage) {
       write_exr((stage / "backward.exr").string(), map, {"R", "G", "B"});
       write_npy((stage / "backward.npy").string(), map);
     });
-    files["backward.exr"] = "float32 grid over the flat page (row 0 = top): R, G = pixel x, y, B = visible";
+    files["backward.exr"] =
+        "float32 grid over the flat page (row 0 = top): R, G = pixel x, y, B = visible";
     files["backward.npy"] = "float32 (grid_height, grid_width, 3): pixel x, y, visible";
     meta["backward"] = j["backward"];
   }
@@ -720,8 +820,10 @@ void finish_into(const fs::path& job, const fs::path& stage) {
   const std::string doc = j.at("document_file").get<std::string>();
   if (fs::exists(job / doc)) {
     // Re-encoded: POV-Ray's PNG carries a creation time, which would break reproducibility.
-    if (is_png_file((job / doc).string())) write_png((stage / doc).string(), read_png((job / doc).string()), 8);
-    else fs::copy_file(job / doc, stage / doc, fs::copy_options::overwrite_existing);
+    if (is_png_file((job / doc).string()))
+      write_png((stage / doc).string(), read_png((job / doc).string()), 8);
+    else
+      fs::copy_file(job / doc, stage / doc, fs::copy_options::overwrite_existing);
     files[doc] = "the flat document page (sRGB)";
   }
   meta["passes"] = j.at("passes");
@@ -743,7 +845,8 @@ void remove_stale_outputs(const fs::path& out, const std::vector<std::string>& k
     if (std::find(keep.begin(), keep.end(), name) != keep.end()) continue;
     std::error_code ec;
     fs::remove_all(out / name, ec);
-    if (ec) throw common::OutputError("cannot remove '" + (out / name).string() + "': " + ec.message());
+    if (ec)
+      throw common::OutputError("cannot remove '" + (out / name).string() + "': " + ec.message());
   }
 }
 
@@ -753,7 +856,8 @@ void publish(const fs::path& stage, const fs::path& out) {
   std::vector<std::string> names;
   for (const auto& e : fs::directory_iterator(stage)) names.push_back(e.path().filename().string());
   std::sort(names.begin(), names.end(), [](const std::string& a, const std::string& b) {
-    return (a == "meta.json") < (b == "meta.json") || ((a == "meta.json") == (b == "meta.json") && a < b);
+    return (a == "meta.json") < (b == "meta.json") ||
+           ((a == "meta.json") == (b == "meta.json") && a < b);
   });
   std::vector<std::string> keep = names;
   keep.erase(std::remove(keep.begin(), keep.end(), "meta.json"), keep.end());
@@ -761,7 +865,9 @@ void publish(const fs::path& stage, const fs::path& out) {
   for (const auto& name : names) {
     std::error_code ec;
     fs::rename(stage / name, out / name, ec);
-    if (ec) throw common::OutputError("cannot move '" + (stage / name).string() + "' into '" + out.string() + "': " + ec.message());
+    if (ec)
+      throw common::OutputError("cannot move '" + (stage / name).string() + "' into '" +
+                                out.string() + "': " + ec.message());
   }
   remove_quietly(stage);
 }
@@ -773,14 +879,16 @@ constexpr const char* STAGE_NAME = ".scenegen-stage";
 
 const std::vector<std::string>& sample_output_names() {
   static const std::vector<std::string> NAMES = {
-      "image.png", "shading.png", "albedo.png", "uv.exr", "coords.exr", "normal.exr", "mask.png",
-      "backward.exr", "backward.npy", "document.png", "document.jpg", "job", "meta.json"};
+      "image.png",    "shading.png", "albedo.png",   "uv.exr",       "coords.exr",
+      "normal.exr",   "mask.png",    "backward.exr", "backward.npy", "document.png",
+      "document.jpg", "job",         "meta.json"};
   return NAMES;
 }
 
 std::vector<std::string> render_staging_paths(const std::string& out_dir) {
   const fs::path out(out_dir);
-  return {(out / JOB_NAME).string(), (out / JOB_NAME).string() + ".partial", (out / STAGE_NAME).string()};
+  return {(out / JOB_NAME).string(), (out / JOB_NAME).string() + ".partial",
+          (out / STAGE_NAME).string()};
 }
 
 void finish_job(const std::string& job_dir, const std::string& out_dir) {
@@ -825,7 +933,9 @@ RunReport render_sample(const SampleOptions& options, const std::string& out_dir
     if (keep_job) {
       remove_quietly(out / "job");
       fs::rename(job, out / "job", ec);
-      if (ec) throw common::OutputError("cannot move the job folder to '" + (out / "job").string() + "': " + ec.message());
+      if (ec)
+        throw common::OutputError("cannot move the job folder to '" + (out / "job").string() +
+                                  "': " + ec.message());
     } else {
       remove_quietly(job);
     }
@@ -853,7 +963,8 @@ RunReport render_views(const SampleOptions& options, int views, const std::strin
     char name[32];
     std::snprintf(name, sizeof name, "view_%02d", k);
     const RunReport r = render_sample(o, (fs::path(out_dir) / name).string(), run, keep_job);
-    for (const auto& [pass, sec] : r.seconds) total.seconds.emplace_back(std::string(name) + "/" + pass, sec);
+    for (const auto& [pass, sec] : r.seconds)
+      total.seconds.emplace_back(std::string(name) + "/" + pass, sec);
   }
   return total;
 }

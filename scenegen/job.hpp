@@ -19,39 +19,40 @@ namespace papersim::scenegen {
 
 /// Everything that defines a sample. Same options and seed: identical files.
 struct SampleOptions {
-  std::string mesh_path;           ///< sheet OBJ with vt
-  std::string document;            ///< PNG / JPEG page; empty: documents_dir or built-in
-  std::string documents_dir;       ///< draw the page from this folder's PNG / JPEG files
-  std::string backgrounds_dir;     ///< add image backgrounds from this folder
+  std::string mesh_path;        ///< sheet OBJ with vt
+  std::string document;         ///< PNG / JPEG page; empty: documents_dir or built-in
+  std::string documents_dir;    ///< draw the page from this folder's PNG / JPEG files
+  std::string backgrounds_dir;  ///< add image backgrounds from this folder
   std::uint64_t seed = 0;
-  int width = 1024;                ///< [pixels]
-  int height = 1440;               ///< [pixels]
+  int width = 1024;   ///< [pixels]
+  int height = 1440;  ///< [pixels]
   std::vector<Pass> passes = all_passes();
   Quality quality = Quality::final;
-  std::optional<QualitySettings> quality_override;  ///< replaces quality_settings(quality) (studies)
+  std::optional<QualitySettings>
+      quality_override;  ///< replaces quality_settings(quality) (studies)
   GroundTruth ground_truth = GroundTruth::raycast;  ///< uv, coords, normal, mask: cast by
                                                     ///< scenegen or rendered by POV-Ray
-  bool fine_passes = true;         ///< povray ground truth: float32-exact uv / coords (two
-                                   ///< renders each); ray casting is float32-exact anyway
-  std::string rig;                 ///< light rig; empty: drawn
+  bool fine_passes = true;  ///< povray ground truth: float32-exact uv / coords (two
+                            ///< renders each); ray casting is float32-exact anyway
+  std::string rig;          ///< light rig; empty: drawn
   CameraParams camera;
   BackwardParams backward;
-  double document_dpi = 100.0;     ///< built-in page raster [dpi]: ~1 texel per pixel at 1024 x 1440
-  int threads = 1;                 ///< threads per POV-Ray process (1: reproducible radiosity)
-  std::string templates_dir;       ///< empty: the templates embedded in the binary
-  SurfaceParams surface;           ///< smooth render surface through the mesh (PN triangles)
-  double shadow_offset = 1e-4;     ///< shadow caster behind the printed side [m] (paper thickness)
+  double document_dpi = 100.0;  ///< built-in page raster [dpi]: ~1 texel per pixel at 1024 x 1440
+  int threads = 1;              ///< threads per POV-Ray process (1: reproducible radiosity)
+  std::string templates_dir;    ///< empty: the templates embedded in the binary
+  SurfaceParams surface;        ///< smooth render surface through the mesh (PN triangles)
+  double shadow_offset = 1e-4;  ///< shadow caster behind the printed side [m] (paper thickness)
   std::string layout = "scenegen";  ///< file names: scenegen | syntheticdoc (the reference's)
-  bool flip = false;               ///< render the sheet from its other side (flip_sheet)
-  std::vector<Light> lights;       ///< non-empty: these lights replace the drawn rig's (studies,
-                                   ///< tests); colour and sky are still drawn
-  bool contact_shadow = true;      ///< darken the table where the sheet hides its sky
-                                   ///< (contact_shadow.hpp); the ground truth does not change
-  bool edge_lift = true;           ///< curl the resting edges of the rendered surface by a drawn
-                                   ///< amplitude (edge_lift.hpp; stream "edge_lift", the same
-                                   ///< for every view of a sheet)
-  int view = 0;                    ///< view index: views > 0 draw camera, lights, background
-                                   ///< and paper from their own streams; the page is shared
+  bool flip = false;                ///< render the sheet from its other side (flip_sheet)
+  std::vector<Light> lights;        ///< non-empty: these lights replace the drawn rig's (studies,
+                                    ///< tests); colour and sky are still drawn
+  bool contact_shadow = true;       ///< darken the table where the sheet hides its sky
+                                    ///< (contact_shadow.hpp); the ground truth does not change
+  bool edge_lift = true;            ///< curl the resting edges of the rendered surface by a drawn
+                                    ///< amplitude (edge_lift.hpp; stream "edge_lift", the same
+                                    ///< for every view of a sheet)
+  int view = 0;                     ///< view index: views > 0 draw camera, lights, background
+                                    ///< and paper from their own streams; the page is shared
 };
 
 /// What a pass render reports while a job runs.

@@ -9,8 +9,16 @@ namespace papersim::scenegen {
 enum class Pass { image, shading, albedo, uv, coords, normal, mask, backward };
 
 /// POV-Ray renders. The number is SG_PASS in render_templates/passes.inc.
-enum class RawPass { image = 1, shading = 2, albedo = 3, uv = 4, uv_fine = 5, coords = 6,
-                     coords_fine = 7, normal = 8 };
+enum class RawPass {
+  image = 1,
+  shading = 2,
+  albedo = 3,
+  uv = 4,
+  uv_fine = 5,
+  coords = 6,
+  coords_fine = 7,
+  normal = 8
+};
 
 /// Where the exact ground-truth passes (uv, coords, normal, mask) come from.
 enum class GroundTruth {

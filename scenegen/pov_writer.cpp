@@ -21,7 +21,8 @@ std::string num(double v) {
   int start = 6;
   if (v != 0.0 && std::isfinite(v)) {
     char shortest[40];
-    const auto res = std::to_chars(shortest, shortest + sizeof shortest, v, std::chars_format::scientific);
+    const auto res =
+        std::to_chars(shortest, shortest + sizeof shortest, v, std::chars_format::scientific);
     int first = -1, last = -1, digits = 0;  // significant digits: first to last nonzero digit
     for (const char* c = shortest; c != res.ptr && *c != 'e'; ++c) {
       if (*c < '0' || *c > '9') continue;
@@ -80,8 +81,8 @@ void write_lighting(std::ostream& out, const SceneDescription& s) {
   for (const Light& light : l.lights) total += light.intensity;
   for (const Light& light : l.lights) {
     const bool dim = light.intensity < s.quality.dim_light_share * total;
-    out << (dim ? "  SG_Light_Samples(" : "  SG_Light(") << vec(light.position) << ", " << num(light.size)
-        << ", " << num(light.intensity) << ", " << num(light.fade_distance);
+    out << (dim ? "  SG_Light_Samples(" : "  SG_Light(") << vec(light.position) << ", "
+        << num(light.size) << ", " << num(light.intensity) << ", " << num(light.fade_distance);
     if (dim) out << ", " << s.quality.dim_area_samples;
     out << ")  // " << light.name << ", " << num(light.power) << " W\n";
   }
@@ -105,11 +106,11 @@ void write_background(std::ostream& out, const SceneDescription& s) {
     out << "#declare SG_Bg_Image_File = \"" << b.image << "\";\n"
         << "#declare SG_Bg_Image_Size = " << num(b.image_size) << ";\n"
         << "#macro SG_Bg_Image_Type() " << image_type(b.image) << " #end\n";
-  out << "#declare SG_Stage_Transform = transform { matrix <" << num(st.ex.x()) << ", " << num(st.ex.y()) << ", "
-      << num(st.ex.z()) << ", " << num(st.ey.x()) << ", " << num(st.ey.y()) << ", "
-      << num(st.ey.z()) << ", " << num(st.up.x()) << ", " << num(st.up.y()) << ", "
-      << num(st.up.z()) << ", " << num(st.origin.x()) << ", " << num(st.origin.y()) << ", "
-      << num(st.origin.z()) << "> }\n";
+  out << "#declare SG_Stage_Transform = transform { matrix <" << num(st.ex.x()) << ", "
+      << num(st.ex.y()) << ", " << num(st.ex.z()) << ", " << num(st.ey.x()) << ", "
+      << num(st.ey.y()) << ", " << num(st.ey.z()) << ", " << num(st.up.x()) << ", "
+      << num(st.up.y()) << ", " << num(st.up.z()) << ", " << num(st.origin.x()) << ", "
+      << num(st.origin.y()) << ", " << num(st.origin.z()) << "> }\n";
 }
 
 void write_paper(std::ostream& out, const SceneDescription& s) {
@@ -209,10 +210,12 @@ void write_sheet_inc(std::ostream& out, const SheetMesh& mesh, const Eigen::Matr
   out << " }\n  normal_vectors { " << nv;
   for (int i = 0; i < nv; ++i) out << ",\n    " << vec(normals.row(i).transpose());
   out << " }\n  uv_vectors { " << nv;
-  for (int i = 0; i < nv; ++i) out << ",\n    <" << num(mesh.uv(i, 0)) << ", " << num(mesh.uv(i, 1)) << ">";
+  for (int i = 0; i < nv; ++i)
+    out << ",\n    <" << num(mesh.uv(i, 0)) << ", " << num(mesh.uv(i, 1)) << ">";
   out << " }\n  face_indices { " << mesh.num_faces();
   for (int f = 0; f < mesh.num_faces(); ++f)
-    out << ",\n    <" << mesh.faces(f, 0) << ", " << mesh.faces(f, 1) << ", " << mesh.faces(f, 2) << ">";
+    out << ",\n    <" << mesh.faces(f, 0) << ", " << mesh.faces(f, 1) << ", " << mesh.faces(f, 2)
+        << ">";
   out << " }\n}\n";
 }
 
@@ -224,13 +227,16 @@ void write_shadow_inc(std::ostream& out, const SheetMesh& mesh, const Eigen::Mat
     return;
   }
   const int nv = mesh.num_vertices();
-  out << "#declare SG_Shadow_Caster = 1;\n// papersim scenegen: shadow caster, the sheet moved " << num(offset)
-      << " m behind its printed side\n#declare SG_Sheet_Shadow_Mesh = mesh2 {\n  vertex_vectors { " << nv;
+  out << "#declare SG_Shadow_Caster = 1;\n// papersim scenegen: shadow caster, the sheet moved "
+      << num(offset)
+      << " m behind its printed side\n#declare SG_Sheet_Shadow_Mesh = mesh2 {\n  vertex_vectors { "
+      << nv;
   for (int i = 0; i < nv; ++i)
     out << ",\n    " << vec((mesh.positions.row(i) - offset * normals.row(i)).transpose());
   out << " }\n  face_indices { " << mesh.num_faces();
   for (int f = 0; f < mesh.num_faces(); ++f)
-    out << ",\n    <" << mesh.faces(f, 0) << ", " << mesh.faces(f, 1) << ", " << mesh.faces(f, 2) << ">";
+    out << ",\n    <" << mesh.faces(f, 0) << ", " << mesh.faces(f, 1) << ", " << mesh.faces(f, 2)
+        << ">";
   out << " }\n}\n";
 }
 
@@ -252,7 +258,8 @@ void write_scene_inc(std::ostream& out, const SceneDescription& s) {
 }
 
 std::string raw_render_name(RawPass pass, RowBand band) {
-  return band.count <= 1 ? raw_pass_name(pass) : raw_pass_name(pass) + "_b" + std::to_string(band.index);
+  return band.count <= 1 ? raw_pass_name(pass)
+                         : raw_pass_name(pass) + "_b" + std::to_string(band.index);
 }
 
 void write_pass_ini(std::ostream& out, RawPass pass, int width, int height,
@@ -267,8 +274,10 @@ void write_pass_ini(std::ostream& out, RawPass pass, int width, int height,
       << "Width=" << width << "\nHeight=" << height << "\n";
   // POV-Ray rows are 1-based and inclusive; rows outside the band are written black.
   if (band.count > 1)
-    out << "Start_Row=" << band.first_row(height) + 1 << "\nEnd_Row=" << band.end_row(height) << "\n";
-  out << "Declare=SG_PASS=" << static_cast<int>(pass) << "\n"
+    out << "Start_Row=" << band.first_row(height) + 1 << "\nEnd_Row=" << band.end_row(height)
+        << "\n";
+  out << "Declare=SG_PASS=" << static_cast<int>(pass)
+      << "\n"
       // Ground truth: linear 16-bit. Photo: 16-bit sRGB (quantised to 8 bits after vignetting).
       << "Bits_Per_Color=16\n"
       << "File_Gamma=" << (photo ? "sRGB" : "1.0") << "\n"
@@ -289,7 +298,8 @@ void write_document_ini(std::ostream& out, int width_px, int height_px, int thre
       << "Input_File_Name=document.pov\nOutput_File_Name=document.png\nOutput_File_Type=N\n"
       << "Width=" << width_px << "\nHeight=" << height_px << "\n"
       << "Bits_Per_Color=8\nFile_Gamma=sRGB\nOutput_Alpha=Off\n"
-      << "Antialias=On\nSampling_Method=2\nAntialias_Threshold=0.05\nAntialias_Depth=3\nJitter=Off\n"
+      << "Antialias=On\nSampling_Method=2\nAntialias_Threshold=0.05\nAntialias_Depth=3\nJitter="
+         "Off\n"
       << "Display=Off\nVerbose=Off\nPause_When_Done=Off\nWarning_Level=0\n";
   // No radiosity: multi-threaded rendering of the page is reproducible.
   if (threads > 0) out << "Work_Threads=" << threads << "\n";

@@ -1,10 +1,9 @@
 #pragma once
 /// Writers of the generated POV-Ray text: the sheet as a mesh2, the per-sample scene.inc and
 /// one .ini per pass. All take std::ostream& so the text is golden-file tested.
+#include <Eigen/Core>
 #include <iosfwd>
 #include <string>
-
-#include <Eigen/Core>
 
 #include "scenegen/camera.hpp"
 #include "scenegen/passes.hpp"
@@ -22,13 +21,14 @@ enum class Quality { draft, final, best };
 
 /// Settings of the lit passes per quality.
 struct QualitySettings {
-  bool radiosity = false;          ///< final: radiosity (1 bounce)
-  int radiosity_count = 35;        ///< rays per radiosity sample
-  double radiosity_error = 1.8;    ///< error_bound
-  int radiosity_nearest = 5;       ///< nearest_count: samples averaged per lookup
-  double radiosity_pretrace_end = 0.02;  ///< pretrace_end (pretrace_start 0.08; each pass halves it)
-  int area_samples = 1;            ///< area light samples per side (1: point lights)
-  int area_adaptive = 1;           ///< adaptive depth of area lights
+  bool radiosity = false;        ///< final: radiosity (1 bounce)
+  int radiosity_count = 35;      ///< rays per radiosity sample
+  double radiosity_error = 1.8;  ///< error_bound
+  int radiosity_nearest = 5;     ///< nearest_count: samples averaged per lookup
+  /// pretrace_end (pretrace_start 0.08; each pass halves it)
+  double radiosity_pretrace_end = 0.02;
+  int area_samples = 1;   ///< area light samples per side (1: point lights)
+  int area_adaptive = 1;  ///< adaptive depth of area lights
   /// Jittered area-light samples (POV-Ray `jitter`, over the drawn light: lights.inc shortens
   /// the axes by (n - 1) / n): a smooth, slightly grainy penumbra instead of area_samples^2
   /// overlapping hard shadows; reproducible for a single-threaded render.
@@ -38,11 +38,11 @@ struct QualitySettings {
   /// that casts no shadow, POV-Ray `shadowless`). 0: every light gets `area_samples`.
   double dim_light_share = 0.0;
   int dim_area_samples = 1;
-  bool antialias = false;          ///< image pass only (non-jittered adaptive supersampling)
-  int antialias_method = 2;       ///< POV-Ray Sampling_Method: 1 (non-adaptive) or 2 (adaptive)
+  bool antialias = false;    ///< image pass only (non-jittered adaptive supersampling)
+  int antialias_method = 2;  ///< POV-Ray Sampling_Method: 1 (non-adaptive) or 2 (adaptive)
   double antialias_threshold = 0.1;
-  int antialias_depth = 1;        ///< 1: corner samples shared by neighbouring pixels (cheap)
-  double ambient = 0.12;           ///< ambient fill when radiosity is off
+  int antialias_depth = 1;  ///< 1: corner samples shared by neighbouring pixels (cheap)
+  double ambient = 0.12;    ///< ambient fill when radiosity is off
   /// Row bands of each lit render (photo, shading): one POV-Ray process per band, so one
   /// single-threaded (reproducible) render uses several cores. Radiosity is sampled per band
   /// (the pretrace covers the band's rows), so the count is part of the sample.
@@ -72,8 +72,8 @@ struct SceneDescription {
   BackgroundDraw background;
   PaperDraw paper;
   QualitySettings quality;
-  double sheet_width = 0.21, sheet_height = 0.297;  ///< [m]
-  std::string document_file = "document.png";      ///< in the job folder
+  double sheet_width = 0.21, sheet_height = 0.297;       ///< [m]
+  std::string document_file = "document.png";            ///< in the job folder
   Eigen::Vector3d coords_min = Eigen::Vector3d::Zero();  ///< coords pass offset [m]
   double coords_span = 1.0;                              ///< coords pass scale [m]
   double background_gap = 3e-4;  ///< background slab below the support plane [m]
@@ -103,8 +103,12 @@ void write_scene_inc(std::ostream& out, const SceneDescription& scene);
 struct RowBand {
   int index = 0;
   int count = 1;
-  int first_row(int height) const { return static_cast<int>(static_cast<long>(index) * height / count); }
-  int end_row(int height) const { return static_cast<int>(static_cast<long>(index + 1) * height / count); }
+  int first_row(int height) const {
+    return static_cast<int>(static_cast<long>(index) * height / count);
+  }
+  int end_row(int height) const {
+    return static_cast<int>(static_cast<long>(index + 1) * height / count);
+  }
 };
 /// Name of a render in the job folder: "image" for a whole image, "image_b0", ... for bands.
 /// Its .ini is NAME.ini, its output raw_NAME.png.

@@ -1,13 +1,12 @@
 #include "scenegen/raycast.hpp"
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <limits>
 #include <sstream>
 #include <thread>
-
-#include <Eigen/Geometry>
 
 #include "common/atomic_file.hpp"
 #include "scenegen/errors.hpp"
@@ -36,7 +35,9 @@ void pixel_range(FaceSetup& f, const Eigen::Vector3d (&p)[3], const Camera& cam)
     lo_y = std::min(lo_y, q.y()), hi_y = std::max(hi_y, q.y());
   }
   // Centre i + 0.5 in [lo - 1, hi + 1].
-  const auto clamp_to = [](double v, int n) { return static_cast<int>(std::clamp(v, -1.0, static_cast<double>(n))); };
+  const auto clamp_to = [](double v, int n) {
+    return static_cast<int>(std::clamp(v, -1.0, static_cast<double>(n)));
+  };
   f.x0 = std::max(0, clamp_to(std::ceil(lo_x - 1.5), cam.width));
   f.x1 = std::min(cam.width - 1, clamp_to(std::floor(hi_x + 0.5), cam.width));
   f.y0 = std::max(0, clamp_to(std::ceil(lo_y - 1.5), cam.height));
@@ -46,7 +47,8 @@ void pixel_range(FaceSetup& f, const Eigen::Vector3d (&p)[3], const Camera& cam)
 std::vector<FaceSetup> setup_faces(const SheetMesh& mesh, const Camera& cam) {
   std::vector<FaceSetup> faces(static_cast<std::size_t>(mesh.num_faces()));
   for (int i = 0; i < mesh.num_faces(); ++i) {
-    const Eigen::Vector3d p[3] = {mesh.positions.row(mesh.faces(i, 0)), mesh.positions.row(mesh.faces(i, 1)),
+    const Eigen::Vector3d p[3] = {mesh.positions.row(mesh.faces(i, 0)),
+                                  mesh.positions.row(mesh.faces(i, 1)),
                                   mesh.positions.row(mesh.faces(i, 2))};
     FaceSetup& f = faces[static_cast<std::size_t>(i)];
     f.e1 = p[1] - p[0];
@@ -88,13 +90,15 @@ void cast_rows(const std::vector<FaceSetup>& faces, const Camera& cam, int row_b
 
 void check_hits(const PixelHits& hits, const SheetMesh& mesh) {
   for (int f : hits.face)
-    if (f >= mesh.num_faces()) throw InputError("pixel hits refer to face " + std::to_string(f) + " of a mesh with " +
-                                                std::to_string(mesh.num_faces()) + " faces");
+    if (f >= mesh.num_faces())
+      throw InputError("pixel hits refer to face " + std::to_string(f) + " of a mesh with " +
+                       std::to_string(mesh.num_faces()) + " faces");
 }
 
 /// Interpolate per-vertex rows of `values` (#V by N) at every hit into channels [0, N).
 template <class Matrix>
-ImageF interpolate(const PixelHits& hits, const SheetMesh& mesh, const Matrix& values, int channels) {
+ImageF interpolate(const PixelHits& hits, const SheetMesh& mesh, const Matrix& values,
+                   int channels) {
   check_hits(hits, mesh);
   ImageF out(hits.width, hits.height, channels);
   const int n = static_cast<int>(values.cols());
@@ -103,9 +107,10 @@ ImageF interpolate(const PixelHits& hits, const SheetMesh& mesh, const Matrix& v
     if (f < 0) continue;
     const Eigen::Vector2d w = hits.weight[px];
     for (int c = 0; c < n; ++c) {
-      const double v = (1.0 - w.x() - w.y()) * values(mesh.faces(f, 0), c) + w.x() * values(mesh.faces(f, 1), c) +
-                       w.y() * values(mesh.faces(f, 2), c);
-      out.data[px * static_cast<std::size_t>(channels) + static_cast<std::size_t>(c)] = static_cast<float>(v);
+      const double v = (1.0 - w.x() - w.y()) * values(mesh.faces(f, 0), c) +
+                       w.x() * values(mesh.faces(f, 1), c) + w.y() * values(mesh.faces(f, 2), c);
+      out.data[px * static_cast<std::size_t>(channels) + static_cast<std::size_t>(c)] =
+          static_cast<float>(v);
     }
   }
   return out;
@@ -124,18 +129,22 @@ PixelHits cast_pixel_rays(const SheetMesh& mesh, const Camera& camera, int threa
   PixelHits hits;
   hits.width = camera.width;
   hits.height = camera.height;
-  const std::size_t n = static_cast<std::size_t>(camera.width) * static_cast<std::size_t>(camera.height);
+  const std::size_t n =
+      static_cast<std::size_t>(camera.width) * static_cast<std::size_t>(camera.height);
   hits.face.assign(n, -1);
   hits.weight.assign(n, Eigen::Vector2d::Zero());
   std::vector<double> depth(n, std::numeric_limits<double>::infinity());
   const std::vector<FaceSetup> faces = setup_faces(mesh, camera);
-  int t = threads > 0 ? threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  int t =
+      threads > 0 ? threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   t = std::clamp(t, 1, camera.height);
   // Each thread owns a band of rows: no two write the same pixel, and a pixel's result is the
   // same face loop in the same order whatever the band.
   std::vector<std::thread> pool;
   for (int k = 1; k < t; ++k)
-    pool.emplace_back([&, k] { cast_rows(faces, camera, k * camera.height / t, (k + 1) * camera.height / t, hits, depth); });
+    pool.emplace_back([&, k] {
+      cast_rows(faces, camera, k * camera.height / t, (k + 1) * camera.height / t, hits, depth);
+    });
   cast_rows(faces, camera, 0, camera.height / t, hits, depth);
   for (auto& th : pool) th.join();
   return hits;
@@ -152,8 +161,8 @@ ImageF coords_from_hits(const PixelHits& hits, const SheetMesh& mesh) {
   return interpolate(hits, mesh, mesh.positions, 3);
 }
 
-ImageF normals_from_hits(const PixelHits& hits, const SheetMesh& mesh, const Eigen::MatrixX3d& normals,
-                         const Camera& camera) {
+ImageF normals_from_hits(const PixelHits& hits, const SheetMesh& mesh,
+                         const Eigen::MatrixX3d& normals, const Camera& camera) {
   if (normals.rows() != mesh.num_vertices())
     throw InputError("normals_from_hits: " + std::to_string(normals.rows()) + " normals for " +
                      std::to_string(mesh.num_vertices()) + " vertices");
@@ -172,7 +181,8 @@ ImageF normals_from_hits(const PixelHits& hits, const SheetMesh& mesh, const Eig
       if (!(len > 0.0)) continue;
       n /= len;
       if (n.dot(camera.ray(x + 0.5, y + 0.5)) > 0.0) n = -n;
-      for (int c = 0; c < 3; ++c) out.data[px * 3 + static_cast<std::size_t>(c)] = static_cast<float>(n[c]);
+      for (int c = 0; c < 3; ++c)
+        out.data[px * 3 + static_cast<std::size_t>(c)] = static_cast<float>(n[c]);
     }
   return out;
 }
@@ -181,7 +191,8 @@ void write_vertex_normals(const std::string& path, const Eigen::MatrixX3d& norma
   common::write_file_atomically(path, [&](std::ostream& out) {
     out.precision(17);
     out << "# papersim scenegen: unit shading normal of each vertex of sheet.obj\n";
-    for (int i = 0; i < normals.rows(); ++i) out << normals(i, 0) << ' ' << normals(i, 1) << ' ' << normals(i, 2) << '\n';
+    for (int i = 0; i < normals.rows(); ++i)
+      out << normals(i, 0) << ' ' << normals(i, 1) << ' ' << normals(i, 2) << '\n';
   });
 }
 
@@ -194,14 +205,16 @@ Eigen::MatrixX3d read_vertex_normals(const std::string& path, int count) {
   while (std::getline(in, line)) {
     ++line_no;
     if (line.empty() || line[0] == '#') continue;
-    if (i == count) throw IoError("'" + path + "' holds more than " + std::to_string(count) + " normals");
+    if (i == count)
+      throw IoError("'" + path + "' holds more than " + std::to_string(count) + " normals");
     std::istringstream s(line);
     if (!(s >> n(i, 0) >> n(i, 1) >> n(i, 2)) || !n.row(i).allFinite())
       throw IoError("'" + path + "' line " + std::to_string(line_no) + " is not a finite normal");
     ++i;
   }
   if (in.bad() || i != count)
-    throw IoError("'" + path + "' holds " + std::to_string(i) + " normals, expected " + std::to_string(count));
+    throw IoError("'" + path + "' holds " + std::to_string(i) + " normals, expected " +
+                  std::to_string(count));
   return n;
 }
 

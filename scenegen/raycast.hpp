@@ -3,10 +3,9 @@
 /// triangles POV-Ray renders for the photo, instead of exact emissive POV-Ray renders (each of
 /// which parses the whole mesh2 again). UV, world coordinates, normals and the mask of the
 /// surface actually rendered come from one nearest hit per pixel.
+#include <Eigen/Core>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "scenegen/camera.hpp"
 #include "scenegen/image_io.hpp"
@@ -44,8 +43,8 @@ ImageF coords_from_hits(const PixelHits& hits, const SheetMesh& mesh);
 /// Shading normals: the corners' `normals` (#V by 3) interpolated with the hit's weights,
 /// normalised and turned towards the camera (as POV-Ray turns them for a ray that meets the
 /// back side); 0 off the sheet.
-ImageF normals_from_hits(const PixelHits& hits, const SheetMesh& mesh, const Eigen::MatrixX3d& normals,
-                         const Camera& camera);
+ImageF normals_from_hits(const PixelHits& hits, const SheetMesh& mesh,
+                         const Eigen::MatrixX3d& normals, const Camera& camera);
 
 /// Write #V unit vertex normals as text (one "x y z" line per vertex, 17 digits).
 /// @throw common::OutputError

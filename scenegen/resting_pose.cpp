@@ -1,14 +1,14 @@
 // The only translation unit that includes CGAL (header-only, slow to compile).
 #include "scenegen/resting_pose.hpp"
 
-#include <algorithm>
-#include <cmath>
-#include <vector>
-
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Surface_mesh.h>
 #include <CGAL/convex_hull_3.h>
+
 #include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <vector>
 
 #include "scenegen/geometry.hpp"
 
@@ -24,8 +24,7 @@ double cross2(const Eigen::Vector2d& o, const Eigen::Vector2d& a, const Eigen::V
 }
 
 /// Is q inside the convex hull of pts (Andrew's monotone chain), with margin tol?
-bool inside_convex_hull_2d(std::vector<Eigen::Vector2d> pts, const Eigen::Vector2d& q,
-                           double tol) {
+bool inside_convex_hull_2d(std::vector<Eigen::Vector2d> pts, const Eigen::Vector2d& q, double tol) {
   std::sort(pts.begin(), pts.end(), [](const auto& a, const auto& b) {
     return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y());
   });

@@ -15,9 +15,9 @@ struct Stage {
   Eigen::Vector3d ey = Eigen::Vector3d::UnitY();     ///< in-plane axis: world +y projected (unit)
   Eigen::Vector3d up = Eigen::Vector3d::UnitZ();     ///< plane normal towards the sheet (unit)
   Eigen::Vector3d centre_of_mass = Eigen::Vector3d::Zero();  ///< of the sheet [m]
-  bool flat_sheet = false;     ///< the sheet is planar (hull degenerate)
-  bool stable = true;          ///< false: no hull face holds the centre of mass (fallback used)
-  int stable_faces = 0;        ///< number of hull faces that are stable poses
+  bool flat_sheet = false;  ///< the sheet is planar (hull degenerate)
+  bool stable = true;       ///< false: no hull face holds the centre of mass (fallback used)
+  int stable_faces = 0;     ///< number of hull faces that are stable poses
 
   /// World point of stage coordinates [m].
   Eigen::Vector3d to_world(const Eigen::Vector3d& s) const {

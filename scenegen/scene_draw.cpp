@@ -24,25 +24,59 @@ Eigen::Vector3d temperature_colour(Rng& rng, const std::string& t) {
 Eigen::Vector3d hsv_to_rgb(double h, double s, double v) {
   const double c = v * s, hp = std::fmod(h, 360.0) / 60.0;
   const double x = c * (1 - std::abs(std::fmod(hp, 2.0) - 1));
-  Eigen::Vector3d rgb = hp < 1 ? Eigen::Vector3d(c, x, 0) : hp < 2 ? Eigen::Vector3d(x, c, 0)
-                       : hp < 3 ? Eigen::Vector3d(0, c, x) : hp < 4 ? Eigen::Vector3d(0, x, c)
-                       : hp < 5 ? Eigen::Vector3d(x, 0, c) : Eigen::Vector3d(c, 0, x);
+  Eigen::Vector3d rgb = hp < 1   ? Eigen::Vector3d(c, x, 0)
+                        : hp < 2 ? Eigen::Vector3d(x, c, 0)
+                        : hp < 3 ? Eigen::Vector3d(0, c, x)
+                        : hp < 4 ? Eigen::Vector3d(0, x, c)
+                        : hp < 5 ? Eigen::Vector3d(x, 0, c)
+                                 : Eigen::Vector3d(c, 0, x);
   return rgb + Eigen::Vector3d::Constant(v - c);
 }
 
 /// Colour pairs per material family: (hue range, saturation range, value range).
 void draw_colours(Rng& rng, BackgroundDraw& bg) {
   double h0 = 0, h1 = 360, s0 = 0, s1 = 0.2, v0 = 0.2, v1 = 0.6;
-  if (bg.kind == "wood") { h0 = 18; h1 = 38; s0 = 0.45; s1 = 0.8; v0 = 0.25; v1 = 0.7; }
-  if (bg.kind == "cork") { h0 = 25; h1 = 40; s0 = 0.4; s1 = 0.6; v0 = 0.35; v1 = 0.6; }
-  if (bg.kind == "marble") { s0 = 0.0; s1 = 0.15; v0 = 0.55; v1 = 0.9; }
-  if (bg.kind == "granite" || bg.kind == "concrete") { s0 = 0.0; s1 = 0.12; v0 = 0.25; v1 = 0.6; }
-  if (bg.kind == "fabric") { s0 = 0.2; s1 = 0.7; v0 = 0.15; v1 = 0.6; }
+  if (bg.kind == "wood") {
+    h0 = 18;
+    h1 = 38;
+    s0 = 0.45;
+    s1 = 0.8;
+    v0 = 0.25;
+    v1 = 0.7;
+  }
+  if (bg.kind == "cork") {
+    h0 = 25;
+    h1 = 40;
+    s0 = 0.4;
+    s1 = 0.6;
+    v0 = 0.35;
+    v1 = 0.6;
+  }
+  if (bg.kind == "marble") {
+    s0 = 0.0;
+    s1 = 0.15;
+    v0 = 0.55;
+    v1 = 0.9;
+  }
+  if (bg.kind == "granite" || bg.kind == "concrete") {
+    s0 = 0.0;
+    s1 = 0.12;
+    v0 = 0.25;
+    v1 = 0.6;
+  }
+  if (bg.kind == "fabric") {
+    s0 = 0.2;
+    s1 = 0.7;
+    v0 = 0.15;
+    v1 = 0.6;
+  }
   const double h = rng.uniform(h0, h1), s = rng.uniform(s0, s1), v = rng.uniform(v0, v1);
   // Colours are drawn in display space and stored linear (sRGB-ish gamma 2.2).
   bg.colour_a = hsv_to_rgb(h, s, v).array().pow(2.2);
   bg.colour_b = hsv_to_rgb(h + rng.uniform(-8, 8), std::min(1.0, s * rng.uniform(0.8, 1.3)),
-                           v * rng.uniform(0.45, 0.8)).array().pow(2.2);
+                           v * rng.uniform(0.45, 0.8))
+                    .array()
+                    .pow(2.2);
 }
 
 }  // namespace
@@ -52,17 +86,20 @@ std::vector<std::string> light_rig_names() { return {"three-point", "rim", "soft
 std::vector<RigLight> light_rig(const std::string& rig) {
   // Reference rigs (SCENARIOS.md): position [m], power [W], size [m].
   if (rig == "three-point")
-    return {{"key", -1.3, 1.1, 2.2, 25, 1.0}, {"fill", 1.3, -0.17, 2.4, 25, 1.5},
+    return {{"key", -1.3, 1.1, 2.2, 25, 1.0},
+            {"fill", 1.3, -0.17, 2.4, 25, 1.5},
             {"rim", 0, 2.5, 0.25, 30, 0.8}};
   if (rig == "rim")
-    return {{"rim-left", -2, 1.5, 0.8, 40, 1.0}, {"rim-right", 2, 1.5, 0.8, 40, 1.0},
+    return {{"rim-left", -2, 1.5, 0.8, 40, 1.0},
+            {"rim-right", 2, 1.5, 0.8, 40, 1.0},
             {"fill", 0, -2, 1.5, 10, 1.5}};
   if (rig == "softbox")
-    return {{"top", 0, 0, 3, 30, 2.0}, {"left", -2.5, 0, 1.5, 25, 2.0},
+    return {{"top", 0, 0, 3, 30, 2.0},
+            {"left", -2.5, 0, 1.5, 25, 2.0},
             {"right", 2.5, 0, 1.5, 25, 2.0}};
   if (rig == "natural")
-    return {{"sun", 2, -2, 3, 50, 1.5}, {"sky", 0, 0, 4, 15, 3.0},
-            {"bounce", -1.5, 1.5, 0.5, 8, 1.8}};
+    return {
+        {"sun", 2, -2, 3, 50, 1.5}, {"sky", 0, 0, 4, 15, 3.0}, {"bounce", -1.5, 1.5, 0.5, 8, 1.8}};
   throw InputError("unknown light rig '" + rig + "' (three-point, rim, softbox, natural)");
 }
 
@@ -109,7 +146,8 @@ BackgroundDraw draw_background(Rng& rng, const std::vector<std::string>& images)
   const int k = rng.randint(0, n_kinds - 1);
   bg.kind = k < 6 ? kinds[k] : "image";
   if (bg.kind == "image")
-    bg.image = images[static_cast<std::size_t>(rng.randint(0, static_cast<int>(images.size()) - 1))];
+    bg.image =
+        images[static_cast<std::size_t>(rng.randint(0, static_cast<int>(images.size()) - 1))];
   draw_colours(rng, bg);
   bg.scale = rng.uniform(0.5, 2.0);
   bg.rotation_deg = rng.uniform(0.0, 360.0);

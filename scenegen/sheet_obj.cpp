@@ -1,13 +1,12 @@
 #include "scenegen/sheet_obj.hpp"
 
+#include <Eigen/Dense>
 #include <array>
 #include <cmath>
 #include <fstream>
 #include <iomanip>
 #include <sstream>
 #include <vector>
-
-#include <Eigen/Dense>
 
 #include "scenegen/errors.hpp"
 #include "scenegen/limits.hpp"
@@ -63,7 +62,8 @@ void fit_size(SheetMesh& mesh, const std::string& source) {
     }
   const Eigen::Vector2d sq = ata.ldlt().solve(atb);
   if (!(sq.x() > 0.0) || !(sq.y() > 0.0))
-    throw InputError(source + ": cannot fit the sheet size from the mesh (add a '# papersim "
+    throw InputError(source +
+                     ": cannot fit the sheet size from the mesh (add a '# papersim "
                      "sheet WIDTH HEIGHT' header)");
   mesh.width = std::sqrt(sq.x());
   mesh.height = std::sqrt(sq.y());
@@ -81,8 +81,7 @@ void check_and_orient(SheetMesh& mesh, const std::string& source) {
     for (int k = 0; k < 2; ++k) {
       const double t = mesh.uv(i, k);
       if (!(t >= -1e-9 && t <= 1.0 + 1e-9))
-        throw InputError(source + ": vt of vertex " + std::to_string(i + 1) +
-                         " outside [0, 1]");
+        throw InputError(source + ": vt of vertex " + std::to_string(i + 1) + " outside [0, 1]");
       mesh.uv(i, k) = std::min(1.0, std::max(0.0, t));
     }
   for (int f = 0; f < mesh.num_faces(); ++f) {
@@ -125,13 +124,15 @@ SheetMesh parse_sheet_obj(std::istream& in, const std::string& source) {
       }
     } else if (key == "v") {
       if (static_cast<long>(v.size()) >= MAX_MESH_VERTICES)
-        fail(source, line, "more than " + std::to_string(MAX_MESH_VERTICES) + " vertices (the limit)");
+        fail(source, line,
+             "more than " + std::to_string(MAX_MESH_VERTICES) + " vertices (the limit)");
       Eigen::Vector3d p;
       if (!(ls >> p.x() >> p.y() >> p.z())) fail(source, line, "malformed 'v' line");
       v.push_back(p);
     } else if (key == "vt") {
       if (static_cast<long>(vt.size()) >= MAX_MESH_VERTICES)
-        fail(source, line, "more than " + std::to_string(MAX_MESH_VERTICES) + " vt lines (the limit)");
+        fail(source, line,
+             "more than " + std::to_string(MAX_MESH_VERTICES) + " vt lines (the limit)");
       Eigen::Vector2d t;
       if (!(ls >> t.x() >> t.y())) fail(source, line, "malformed 'vt' line");
       vt.push_back(t);
@@ -141,8 +142,10 @@ SheetMesh parse_sheet_obj(std::istream& in, const std::string& source) {
       while (ls >> tok) poly.push_back(parse_corner(tok, v.size(), vt.size(), source, line));
       if (poly.size() < 3) fail(source, line, "face with fewer than 3 corners");
       if (static_cast<long>(tris.size() + poly.size() - 2) > MAX_MESH_FACES)
-        fail(source, line, "more than " + std::to_string(MAX_MESH_FACES) + " triangles (the limit)");
-      for (std::size_t k = 1; k + 1 < poly.size(); ++k) tris.push_back({poly[0], poly[k], poly[k + 1]});
+        fail(source, line,
+             "more than " + std::to_string(MAX_MESH_FACES) + " triangles (the limit)");
+      for (std::size_t k = 1; k + 1 < poly.size(); ++k)
+        tris.push_back({poly[0], poly[k], poly[k + 1]});
     } else if (key[0] == '#') {
       continue;
     }
@@ -150,7 +153,8 @@ SheetMesh parse_sheet_obj(std::istream& in, const std::string& source) {
   if (in.bad()) throw IoError(source + ": read error");
   if (v.empty()) throw InputError(source + ": no vertices (not an OBJ mesh?)");
   if (vt.empty())
-    throw InputError(source + ": mesh has no texture coordinates (vt); scenegen needs the "
+    throw InputError(source +
+                     ": mesh has no texture coordinates (vt); scenegen needs the "
                      "sheet's material coordinates as UV");
   mesh.positions.resize(static_cast<long>(v.size()), 3);
   mesh.uv.setConstant(static_cast<long>(v.size()), 2, -1.0);
@@ -163,7 +167,8 @@ SheetMesh parse_sheet_obj(std::istream& in, const std::string& source) {
       const long row = c.v;
       if (mesh.uv(row, 0) < -0.5) {
         mesh.uv.row(row) = vt[static_cast<std::size_t>(c.t)];
-      } else if ((Eigen::Vector2d(mesh.uv.row(row)) - vt[static_cast<std::size_t>(c.t)]).norm() > 1e-12) {
+      } else if ((Eigen::Vector2d(mesh.uv.row(row)) - vt[static_cast<std::size_t>(c.t)]).norm() >
+                 1e-12) {
         throw InputError(source + ": vertex " + std::to_string(c.v + 1) +
                          " has two different vt (a sheet needs one UV per vertex)");
       }

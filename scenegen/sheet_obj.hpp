@@ -1,21 +1,20 @@
 #pragma once
 /// The sheet as scenegen sees it: a triangle mesh with world positions and exact material UV,
 /// read from the OBJ files the simulator writes (scenegen does not link the simulator).
+#include <Eigen/Core>
 #include <iosfwd>
 #include <string>
-
-#include <Eigen/Core>
 
 namespace papersim::scenegen {
 
 /// A sheet mesh: one UV per vertex, faces oriented so that their UV area is positive (the side
 /// the document is printed on faces along the face normal).
 struct SheetMesh {
-  Eigen::MatrixX3d positions;  ///< #V by 3 world positions [m]
-  Eigen::MatrixX2d uv;         ///< #V by 2 material UV: u = material x / width, v = y / height
-  Eigen::MatrixX3i faces;      ///< #F by 3 vertex indices
-  double width = 0.0;          ///< sheet size along material x [m]
-  double height = 0.0;         ///< sheet size along material y [m]
+  Eigen::MatrixX3d positions;     ///< #V by 3 world positions [m]
+  Eigen::MatrixX2d uv;            ///< #V by 2 material UV: u = material x / width, v = y / height
+  Eigen::MatrixX3i faces;         ///< #F by 3 vertex indices
+  double width = 0.0;             ///< sheet size along material x [m]
+  double height = 0.0;            ///< sheet size along material y [m]
   bool size_from_header = false;  ///< false: width / height fitted to the world edge lengths
 
   int num_vertices() const { return static_cast<int>(positions.rows()); }

@@ -25,8 +25,9 @@ struct Topology {
     if (a > b) std::swap(a, b);
     return (static_cast<std::uint64_t>(a) << 32) | static_cast<std::uint32_t>(b);
   }
-  explicit Topology(const SheetMesh& m) : next(static_cast<std::size_t>(m.num_vertices())),
-                                          boundary(static_cast<std::size_t>(m.num_vertices()), 0) {
+  explicit Topology(const SheetMesh& m)
+      : next(static_cast<std::size_t>(m.num_vertices())),
+        boundary(static_cast<std::size_t>(m.num_vertices()), 0) {
     for (int f = 0; f < m.num_faces(); ++f)
       for (int k = 0; k < 3; ++k) {
         const int a = m.faces(f, k), b = m.faces(f, (k + 1) % 3), c = m.faces(f, (k + 2) % 3);
@@ -79,9 +80,12 @@ Vec3 extraordinary_rule(const SheetMesh& m, int v, const std::vector<int>& ring)
   Vec3 p = 0.75 * Vec3(m.positions.row(v));
   for (int j = 0; j < k; ++j) {
     double s;
-    if (k == 3) s = j == 0 ? 5.0 / 12.0 : -1.0 / 12.0;
-    else if (k == 4) s = j == 0 ? 3.0 / 8.0 : (j == 2 ? -1.0 / 8.0 : 0.0);
-    else s = (0.25 + std::cos(2 * M_PI * j / k) + 0.5 * std::cos(4 * M_PI * j / k)) / k;
+    if (k == 3)
+      s = j == 0 ? 5.0 / 12.0 : -1.0 / 12.0;
+    else if (k == 4)
+      s = j == 0 ? 3.0 / 8.0 : (j == 2 ? -1.0 / 8.0 : 0.0);
+    else
+      s = (0.25 + std::cos(2 * M_PI * j / k) + 0.5 * std::cos(4 * M_PI * j / k)) / k;
     p += s * Vec3(m.positions.row(ring[static_cast<std::size_t>(j)]));
   }
   return p;
@@ -99,7 +103,8 @@ Vec3 boundary_rule(const SheetMesh& m, const Topology& t, int a, int b) {
     if (std::abs(cross) > 1e-3 * d1.norm() * d2.norm()) return Vec3(2 * pv - pw);  // corner
     return Vec3(m.positions.row(o));
   };
-  return (9.0 * (Vec3(m.positions.row(a)) + Vec3(m.positions.row(b))) - outer(a, b) - outer(b, a)) / 16.0;
+  return (9.0 * (Vec3(m.positions.row(a)) + Vec3(m.positions.row(b))) - outer(a, b) - outer(b, a)) /
+         16.0;
 }
 
 /// New point on interior edge (a, b) with opposite vertices c, d (modified butterfly).
@@ -109,9 +114,11 @@ Vec3 interior_rule(const SheetMesh& m, const Topology& t, int a, int b, int c, i
   if (!t.boundary[static_cast<std::size_t>(a)]) ra = t.ring(a, b);
   if (!t.boundary[static_cast<std::size_t>(b)]) rb = t.ring(b, a);
   const bool reg_a = ra.size() == 6, reg_b = rb.size() == 6;
-  const int w1 = t.across(a, c, b), w2 = t.across(b, c, a), w3 = t.across(a, d, b), w4 = t.across(b, d, a);
+  const int w1 = t.across(a, c, b), w2 = t.across(b, c, a), w3 = t.across(a, d, b),
+            w4 = t.across(b, d, a);
   const bool wings = w1 >= 0 && w2 >= 0 && w3 >= 0 && w4 >= 0;
-  if ((reg_a || t.boundary[static_cast<std::size_t>(a)]) && (reg_b || t.boundary[static_cast<std::size_t>(b)]) && wings)
+  if ((reg_a || t.boundary[static_cast<std::size_t>(a)]) &&
+      (reg_b || t.boundary[static_cast<std::size_t>(b)]) && wings)
     return 0.5 * (P(a) + P(b)) + 0.125 * (P(c) + P(d)) - 0.0625 * (P(w1) + P(w2) + P(w3) + P(w4));
   const bool ext_a = !ra.empty() && !reg_a, ext_b = !rb.empty() && !reg_b;
   if (ext_a && ext_b) return 0.5 * (extraordinary_rule(m, a, ra) + extraordinary_rule(m, b, rb));
@@ -136,7 +143,8 @@ SheetMesh butterfly_step(const SheetMesh& m) {
     const auto [it, fresh] = mid.emplace(Topology::key(a, b), static_cast<int>(pos.size()));
     if (!fresh) return it->second;
     const std::vector<int>& opp = t.opposite.at(Topology::key(a, b));
-    const Vec3 p = opp.size() == 2 ? interior_rule(m, t, a, b, opp[0], opp[1]) : boundary_rule(m, t, a, b);
+    const Vec3 p =
+        opp.size() == 2 ? interior_rule(m, t, a, b, opp[0], opp[1]) : boundary_rule(m, t, a, b);
     // Only the move along the surface normal is kept: the rules at vertices of valence other
     // than 6 assume evenly spread neighbours and would also slide the point along the sheet,
     // drawing the document away from its material place (3 mm on a flat 30 mm grid).
@@ -179,7 +187,8 @@ SheetMesh refine_surface(const SheetMesh& mesh, const SurfaceParams& params) {
   return out;
 }
 
-SheetMesh lift_above_plane(SheetMesh surface, const Eigen::Vector3d& origin, const Eigen::Vector3d& up) {
+SheetMesh lift_above_plane(SheetMesh surface, const Eigen::Vector3d& origin,
+                           const Eigen::Vector3d& up) {
   for (int i = 0; i < surface.num_vertices(); ++i) {
     const Eigen::Vector3d p = surface.positions.row(i).transpose();
     const double h = (p - origin).dot(up);
@@ -195,7 +204,9 @@ Eigen::MatrixX3d carried_normals(const SheetMesh& mesh, const SheetMesh& refined
   const UvLocator loc(mesh);
   for (int i = mesh.num_vertices(); i < refined.num_vertices(); ++i) {
     const auto hit = loc.locate(refined.uv.row(i).transpose(), 1e-9);
-    if (!hit) throw InputError("refined vertex " + std::to_string(i) + " lies outside the sheet's UV domain");
+    if (!hit)
+      throw InputError("refined vertex " + std::to_string(i) +
+                       " lies outside the sheet's UV domain");
     Vec3 n = Vec3::Zero();
     for (int k = 0; k < 3; ++k) n += hit->barycentric[k] * Vec3(vn.row(mesh.faces(hit->face, k)));
     out.row(i) = n.normalized().transpose();

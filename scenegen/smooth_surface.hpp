@@ -28,7 +28,8 @@ SheetMesh refine_surface(const SheetMesh& mesh, const SurfaceParams& params);
 /// through the sheet. Vertices below the plane (point `origin`, unit normal `up`) are moved
 /// onto it along `up` (UV unchanged). The rendered surface is lift_above_plane(refine_surface
 /// (mesh), stage.origin, stage.up) with the stage of meta.json.
-SheetMesh lift_above_plane(SheetMesh surface, const Eigen::Vector3d& origin, const Eigen::Vector3d& up);
+SheetMesh lift_above_plane(SheetMesh surface, const Eigen::Vector3d& origin,
+                           const Eigen::Vector3d& up);
 
 /// Shading normals of the refined surface's vertices: the mesh's area-weighted vertex normals
 /// interpolated linearly at each refined vertex's material point (what the raw mesh's smooth

@@ -126,7 +126,8 @@ Mix load_mix(const std::string& path) {
 std::size_t mix_pick(const Mix& mix, std::uint64_t seed) {
   double total = 0;
   for (double w : mix.weights) total += w;
-  const double u = static_cast<double>(batch::splitmix64(seed ^ 0x6d69785f7069636bULL) >> 11) * 0x1.0p-53;
+  const double u =
+      static_cast<double>(batch::splitmix64(seed ^ 0x6d69785f7069636bULL) >> 11) * 0x1.0p-53;
   double acc = 0;
   for (std::size_t i = 0; i < mix.weights.size(); ++i) {
     acc += mix.weights[i] / total;
@@ -172,16 +173,18 @@ std::vector<SampleDraw> draw_samples(const MeshBatchSelection& sel) {
       mix.overrides.push_back(json::object());
     }
   }
-  // Every sample is drawn before the first runs (an array task keeps its shard's): bound their number.
+  // Every sample is drawn before the first runs (an array task keeps its shard's): bound their
+  // number.
   const std::uint64_t per_seed = sel.mix_path.empty() ? mix.scenarios.size() : 1;
   std::uint64_t samples = 0;
   for (const auto& [first, last] : sel.seeds) {
     const std::uint64_t n = last - first;  // one less than the range's seeds; no overflow
     if (n >= MAX_BATCH_SAMPLES || (samples += (n + 1) * per_seed) > MAX_BATCH_SAMPLES)
-      throw SceneError("--seeds: more than " + std::to_string(MAX_BATCH_SAMPLES) +
-                       " samples in one batch command (each is drawn before the first runs); split the seeds "
-                       "over several commands on the same dataset, each with at most " +
-                       std::to_string(MAX_BATCH_SAMPLES) + " samples");
+      throw SceneError(
+          "--seeds: more than " + std::to_string(MAX_BATCH_SAMPLES) +
+          " samples in one batch command (each is drawn before the first runs); split the seeds "
+          "over several commands on the same dataset, each with at most " +
+          std::to_string(MAX_BATCH_SAMPLES) + " samples");
   }
   std::vector<json> merged(mix.scenarios.size());
   for (std::size_t i = 0; i < merged.size(); ++i) {
@@ -297,9 +300,9 @@ batch::BatchSpec mesh_batch_spec(const fs::path& root, const fs::path& papersim,
   batch::BatchSpec spec;
   spec.root = root;
   spec.prepare = [](const batch::Task& t, const fs::path& stage) {
-    const Scene scene = apply_overrides(
-        make_scenario(t.info.at("scenario").get<std::string>(), t.info.at("seed").get<std::uint64_t>()),
-        t.info.value("set", json::object()), "--set");
+    const Scene scene = apply_overrides(make_scenario(t.info.at("scenario").get<std::string>(),
+                                                      t.info.at("seed").get<std::uint64_t>()),
+                                        t.info.value("set", json::object()), "--set");
     fs::create_directories(stage / "out");
     std::ostringstream text;
     text << std::setw(2) << scene_to_json(scene) << '\n';
@@ -308,8 +311,9 @@ batch::BatchSpec mesh_batch_spec(const fs::path& root, const fs::path& papersim,
   spec.commands = [papersim, with_metrics, checkpoint_every, root](const batch::Task& t,
                                                                    const fs::path& stage) {
     const fs::path out = stage / "out";
-    std::vector<batch::Command> c{{{papersim.string(), "run", (out / "scene.json").string(), "--out",
-                                    out.string(), "--quiet"}, {}}};
+    std::vector<batch::Command> c{{{papersim.string(), "run", (out / "scene.json").string(),
+                                    "--out", out.string(), "--quiet"},
+                                   {}}};
     if (checkpoint_every > 0) {
       const fs::path cdir = checkpoint_folder(root, t);
       std::vector<std::string>& run = c[0].argv;
@@ -366,7 +370,8 @@ batch::BatchSpec mesh_batch_spec(const fs::path& root, const fs::path& papersim,
 
 std::pair<std::uint64_t, std::uint64_t> parse_seed_range(const std::string& text) {
   const auto dash = text.find('-');
-  const std::string a = text.substr(0, dash), b = dash == std::string::npos ? a : text.substr(dash + 1);
+  const std::string a = text.substr(0, dash),
+                    b = dash == std::string::npos ? a : text.substr(dash + 1);
   auto digits = [](const std::string& s) {
     return !s.empty() && s.size() < 19 && s.find_first_not_of("0123456789") == std::string::npos;
   };

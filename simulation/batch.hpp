@@ -26,8 +26,8 @@ struct SampleDraw {
 /// A mix of scenarios: each seed draws one scenario with probability weight / sum of weights.
 struct Mix {
   std::vector<std::string> scenarios;
-  std::vector<double> weights;                   ///< > 0 each [-]
-  std::vector<nlohmann::json> overrides;          ///< per scenario, over `common`
+  std::vector<double> weights;                       ///< > 0 each [-]
+  std::vector<nlohmann::json> overrides;             ///< per scenario, over `common`
   nlohmann::json common = nlohmann::json::object();  ///< overrides for every scenario
 };
 
@@ -49,7 +49,8 @@ nlohmann::json parse_overrides(const std::vector<std::string>& pairs);
 /// `scene` with dotted-key overrides applied ("sheet.edge_length", "obstacles.0.radius"),
 /// checked like a scene file. `source` names where the overrides come from in errors.
 /// @throw SceneError naming the key when it is not a key of the scene, or a value is invalid
-Scene apply_overrides(const Scene& scene, const nlohmann::json& overrides, const std::string& source);
+Scene apply_overrides(const Scene& scene, const nlohmann::json& overrides,
+                      const std::string& source);
 
 /// Which samples a batch makes.
 struct MeshBatchSelection {

@@ -29,14 +29,20 @@ std::vector<std::string> split_commas(const std::string& text) {
 
 /// The same batch as a command line for the Slurm script: absolute paths, no --shard / --jobs.
 std::vector<std::string> shard_command(const BatchCommand& c) {
-  std::vector<std::string> cmd{batch::self_executable().string(), "batch", "--out",
-                               fs::absolute(c.out).string(), "--seeds", c.seeds, "--quiet"};
+  std::vector<std::string> cmd{batch::self_executable().string(),
+                               "batch",
+                               "--out",
+                               fs::absolute(c.out).string(),
+                               "--seeds",
+                               c.seeds,
+                               "--quiet"};
   if (!c.scenarios.empty()) cmd.insert(cmd.end(), {"--scenarios", c.scenarios});
   if (!c.mix.empty()) cmd.insert(cmd.end(), {"--mix", fs::absolute(c.mix).string()});
   for (const auto& s : c.set) cmd.insert(cmd.end(), {"--set", s});
   if (c.checkpoint_every > 0)
     cmd.insert(cmd.end(), {"--checkpoint-every", std::to_string(c.checkpoint_every)});
-  if (c.common.time_limit > 0) cmd.insert(cmd.end(), {"--time-limit", std::to_string(c.common.time_limit)});
+  if (c.common.time_limit > 0)
+    cmd.insert(cmd.end(), {"--time-limit", std::to_string(c.common.time_limit)});
   if (c.common.retry_failed) cmd.push_back("--retry-failed");
   return cmd;
 }
@@ -47,11 +53,12 @@ int run_mesh_batch(const BatchCommand& c, bool with_metrics, std::ostream& out, 
   sel.mix_path = c.mix;
   sel.seeds = parse_seeds(c.seeds);
   sel.overrides = parse_overrides(c.set);
-  const batch::Shard shard = batch::cli_shard(c.common);  // a malformed --shard is refused here
-  if (c.common.slurm_shards == 0) sel.shard = shard;       // the script's line counts them all
+  const batch::Shard shard = batch::cli_shard(c.common);    // a malformed --shard is refused here
+  if (c.common.slurm_shards == 0) sel.shard = shard;        // the script's line counts them all
   const std::vector<SampleDraw> draws = draw_samples(sel);  // checks every option first
   if (c.common.slurm_shards > 0) {
-    const fs::path script = batch::write_slurm_script(c.out, "papersim-batch", shard_command(c), c.common);
+    const fs::path script =
+        batch::write_slurm_script(c.out, "papersim-batch", shard_command(c), c.common);
     out << "wrote " << script.string() << " (" << c.common.slurm_shards << " array tasks over "
         << draws.size() << " samples)\nsubmit it with:  sbatch " << script.string()
         << "\na task that died: sbatch --array=I " << script.string() << "  (it resumes shard I)\n";
@@ -59,7 +66,8 @@ int run_mesh_batch(const BatchCommand& c, bool with_metrics, std::ostream& out, 
   }
   const batch::BatchSpec spec =
       mesh_batch_spec(c.out, batch::self_executable(), with_metrics, c.checkpoint_every);
-  const batch::BatchSummary s = batch::run_cli_batch(mesh_tasks(draws), spec, c.common, err, "papersim batch");
+  const batch::BatchSummary s =
+      batch::run_cli_batch(mesh_tasks(draws), spec, c.common, err, "papersim batch");
   out << batch::summary_line(s, c.out, spec) << '\n';
   if (s.interrupted) return 130;
   return s.done == s.total ? 0 : 1;
@@ -76,9 +84,10 @@ batch::ReadProgress read_printer(std::ostream& err, bool quiet, const std::strin
     if (now - last < std::chrono::seconds(5) || read == 0) return;
     last = now;
     const double t = std::chrono::duration<double>(now - start).count();
-    err << "papersim dataset-stats: reading " << dataset << ": " << read / 1000000 << " of " << total / 1000000
-        << " MB, " << std::lround(t) << " s, ETA "
-        << std::lround(t / static_cast<double>(read) * static_cast<double>(total - read)) << " s" << std::endl;
+    err << "papersim dataset-stats: reading " << dataset << ": " << read / 1000000 << " of "
+        << total / 1000000 << " MB, " << std::lround(t) << " s, ETA "
+        << std::lround(t / static_cast<double>(read) * static_cast<double>(total - read)) << " s"
+        << std::endl;
   };
 }
 
@@ -107,21 +116,33 @@ int run_stats(const BatchCommand& c, std::ostream& out, std::ostream& err) {
 
 void add_batch_subcommands(CLI::App& app, BatchCommand& c) {
   c.batch = app.add_subcommand(
-      "batch", "Make a dataset: one child process per sample, --jobs at once; resumable (run the same "
-               "command again), failures recorded and skipped, at most 10,000,000 samples per command. Writes "
-               "DATASET/meshes/<scenario>/<seed/1000>/<seed>/, manifest.jsonl and failures.jsonl. Exit status 1 "
-               "when a sample failed (failures.jsonl); a full disk stops the batch with status 5 and records "
-               "nothing (docs/batch.md).");
+      "batch",
+      "Make a dataset: one child process per sample, --jobs at once; resumable (run the same "
+      "command again), failures recorded and skipped, at most 10,000,000 samples per command. "
+      "Writes "
+      "DATASET/meshes/<scenario>/<seed/1000>/<seed>/, manifest.jsonl and failures.jsonl. Exit "
+      "status 1 "
+      "when a sample failed (failures.jsonl); a full disk stops the batch with status 5 and "
+      "records "
+      "nothing (docs/batch.md).");
   c.batch->add_option("--out", c.out, "dataset folder")->required();
-  c.batch->add_option("--scenarios", c.scenarios, "comma list of scenarios; every one for every seed ("
-                      + [] { std::string s; for (const auto& n : scenario_names()) s += (s.empty() ? "" : ", ") + n; return s; }() + ")");
-  c.batch->add_option("--mix", c.mix, "JSON mix file instead: {\"scenarios\": {NAME: WEIGHT or {\"weight\": W, \"set\": {...}}}, \"set\": {...}}; each seed draws one scenario");
+  c.batch->add_option(
+      "--scenarios", c.scenarios, "comma list of scenarios; every one for every seed (" + [] {
+        std::string s;
+        for (const auto& n : scenario_names()) s += (s.empty() ? "" : ", ") + n;
+        return s;
+      }() + ")");
+  c.batch->add_option("--mix", c.mix,
+                      "JSON mix file instead: {\"scenarios\": {NAME: WEIGHT or {\"weight\": W, "
+                      "\"set\": {...}}}, \"set\": {...}}; each seed draws one scenario");
   c.batch
       ->add_option(
           "--seeds", c.seeds,
           "seeds: a range A-B (inclusive), one seed A, or a comma list of both (e.g. 3,7,12-13)")
       ->required();
-  c.batch->add_option("--set", c.set, "scene override KEY=VALUE after the draw (dotted scene keys, e.g. duration=0.2 sheet.edge_length=0.02); repeatable");
+  c.batch->add_option("--set", c.set,
+                      "scene override KEY=VALUE after the draw (dotted scene keys, e.g. "
+                      "duration=0.2 sheet.edge_length=0.02); repeatable");
   c.batch
       ->add_option(
           "--checkpoint-every", c.checkpoint_every,
@@ -133,15 +154,19 @@ void add_batch_subcommands(CLI::App& app, BatchCommand& c) {
       ->check(papersim::common::non_negative())
       ->capture_default_str();
   batch::add_batch_cli_options(c.batch, c.common);
-  c.stats = app.add_subcommand("dataset-stats", "Counts per scenario, failure rate by reason, run-time and quality "
-                                                "distributions of a dataset, from its manifests (no mesh is opened).");
+  c.stats =
+      app.add_subcommand("dataset-stats",
+                         "Counts per scenario, failure rate by reason, run-time and quality "
+                         "distributions of a dataset, from its manifests (no mesh is opened).");
   c.stats->add_option("dataset", c.dataset, "dataset folder")->required();
   c.stats->add_option("--plots", c.plots, "also write histograms (SVG, gnuplot) into this folder");
   c.stats->add_flag("--quiet", c.stats_quiet,
-                    "no progress on stderr (otherwise a line every 5 s while the manifests are read: MB read, ETA)");
+                    "no progress on stderr (otherwise a line every 5 s while the manifests are "
+                    "read: MB read, ETA)");
 }
 
-int run_batch_subcommand(const BatchCommand& c, bool with_metrics, std::ostream& out, std::ostream& err) {
+int run_batch_subcommand(const BatchCommand& c, bool with_metrics, std::ostream& out,
+                         std::ostream& err) {
   if (c.stats->parsed()) return run_stats(c, out, err);
   try {
     return run_mesh_batch(c, with_metrics, out, err);

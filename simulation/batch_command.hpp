@@ -33,6 +33,7 @@ void add_batch_subcommands(CLI::App& app, BatchCommand& command);
 /// @return the exit status: 0 all done, 1 some samples failed or are left, 2 bad options,
 ///         130 interrupted
 /// @throw std::runtime_error when the dataset cannot be written
-int run_batch_subcommand(const BatchCommand& command, bool with_metrics, std::ostream& out, std::ostream& err);
+int run_batch_subcommand(const BatchCommand& command, bool with_metrics, std::ostream& out,
+                         std::ostream& err);
 
 }  // namespace papersim::simulation

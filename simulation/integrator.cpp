@@ -78,14 +78,16 @@ Integrator::Integrator(int num_vertices, std::vector<std::unique_ptr<EnergyTerm>
   m_hessian = BlockSymmetricMatrix(m_static_pattern);
 }
 
-void Integrator::set_rigid_state(const Eigen::VectorXd& positions, const Eigen::VectorXd& velocities) {
+void Integrator::set_rigid_state(const Eigen::VectorXd& positions,
+                                 const Eigen::VectorXd& velocities) {
   PAPERSIM_ASSERT(positions.size() == m_rigid_x.size() && velocities.size() == m_rigid_v.size(),
                   "Integrator::set_rigid_state: wrong number of rigid unknowns");
   m_rigid_x = positions;
   m_rigid_v = velocities;
 }
 
-Eigen::VectorXd Integrator::with_rigid(const Eigen::VectorXd& sheet, const Eigen::VectorXd& rigid) const {
+Eigen::VectorXd Integrator::with_rigid(const Eigen::VectorXd& sheet,
+                                       const Eigen::VectorXd& rigid) const {
   if (rigid.size() == 0) return sheet;
   Eigen::VectorXd x(sheet.size() + rigid.size());
   x << sheet, rigid;
@@ -98,17 +100,19 @@ void Integrator::update_pattern(const Eigen::VectorXd& x) {
   if (!changed) return;
   build_matrix();
   ++m_pattern_id;  // the solver redoes its symbolic analysis
-  m_params.trace(Trace::solver, "pattern %ld nnz %zu (structure %zu)", m_pattern_id, m_hessian.values().size(),
-                 m_hessian.structure_rows().size());
+  m_params.trace(Trace::solver, "pattern %ld nnz %zu (structure %zu)", m_pattern_id,
+                 m_hessian.values().size(), m_hessian.structure_rows().size());
 }
 
 void Integrator::adopt_dynamic_patterns() {
-  PAPERSIM_ASSERT(m_factor_pattern < 0, "Integrator::adopt_dynamic_patterns: after a factorisation");
+  PAPERSIM_ASSERT(m_factor_pattern < 0,
+                  "Integrator::adopt_dynamic_patterns: after a factorisation");
   build_matrix();
 }
 
 std::optional<ReusableFactor> Integrator::reusable_factor() const {
-  if (!m_reuse_next || m_params.max_factor_reuse <= 0 || m_factor_pattern != m_pattern_id) return std::nullopt;
+  if (!m_reuse_next || m_params.max_factor_reuse <= 0 || m_factor_pattern != m_pattern_id)
+    return std::nullopt;
   // m_hessian still holds the factored matrix: a converged solve with m_reuse_next set factored
   // the exact Hessian last (or reused the one before), and nothing assembles between steps.
   return ReusableFactor{m_factor_h, m_reused, m_hessian.values()};
@@ -117,16 +121,18 @@ std::optional<ReusableFactor> Integrator::reusable_factor() const {
 void Integrator::adopt_factor(const ReusableFactor& f) {
   PAPERSIM_ASSERT(m_factor_pattern < 0, "Integrator::adopt_factor: after a factorisation");
   if (f.values.size() != m_hessian.values().size())
-    throw std::invalid_argument("the saved factorisation's matrix has " + std::to_string(f.values.size()) +
-                                " entries, this run's " + std::to_string(m_hessian.values().size()));
+    throw std::invalid_argument("the saved factorisation's matrix has " +
+                                std::to_string(f.values.size()) + " entries, this run's " +
+                                std::to_string(m_hessian.values().size()));
   if (!(f.h > 0) || f.reused < 0)
-    throw std::invalid_argument("the saved factorisation has time step " + std::to_string(f.h) + " s and " +
-                                std::to_string(f.reused) + " reuses");
+    throw std::invalid_argument("the saved factorisation has time step " + std::to_string(f.h) +
+                                " s and " + std::to_string(f.reused) + " reuses");
   if (!std::all_of(f.values.begin(), f.values.end(), [](double a) { return std::isfinite(a); }))
     throw std::invalid_argument("the saved factorisation's matrix holds NaN or inf");
   for (int k : m_hessian.outside_positions())
     if (f.values[k] != 0.0)
-      throw std::invalid_argument("the saved factorisation's matrix has an entry outside this run's pattern");
+      throw std::invalid_argument(
+          "the saved factorisation's matrix has an entry outside this run's pattern");
   m_hessian.values() = f.values;
   if (!m_solver.factorize(m_hessian, m_pattern_id))
     throw std::invalid_argument("the saved factorisation's matrix is not positive definite");
@@ -168,8 +174,8 @@ double Integrator::start_energy(const SheetState& state, double h) {
   return e;
 }
 
-StepContext Integrator::begin_step(const SheetState& state, double h, double h_whole, Eigen::VectorXd& x_t0,
-                                   Eigen::VectorXd& v_t0) {
+StepContext Integrator::begin_step(const SheetState& state, double h, double h_whole,
+                                   Eigen::VectorXd& x_t0, Eigen::VectorXd& v_t0) {
   x_t0 = with_rigid(state.positions, m_rigid_x);
   v_t0 = with_rigid(state.velocities, m_rigid_v);
   StepContext ctx;
@@ -194,7 +200,8 @@ void Integrator::begin_step(const StepContext& ctx, const Eigen::VectorXd& x_t0)
   for (const auto& t : m_terms) {
     const auto motion = t->obstacle_motion();
     if (motion == EnergyTerm::ObstacleMotion::unsupported) can_follow = false;
-    if (motion == EnergyTerm::ObstacleMotion::follow && t->obstacles_close_in(x_t0)) m_following.push_back(t.get());
+    if (motion == EnergyTerm::ObstacleMotion::follow && t->obstacles_close_in(x_t0))
+      m_following.push_back(t.get());
   }
   if (!can_follow || !m_params.follow_obstacles) m_following.clear();
   for (EnergyTerm* t : m_following) t->set_obstacle_time(ctx.time_t0);
@@ -212,8 +219,8 @@ void Integrator::assemble(const Eigen::VectorXd& x, Eigen::VectorXd& g, bool pro
   for (const auto& t : m_terms) t->add_derivatives(x, g, &m_hessian, projection);
 }
 
-bool Integrator::factor_newton_matrix(const StepContext& ctx, const Eigen::VectorXd& x, Eigen::VectorXd& g,
-                                      StepStats& stats, bool skip_exact) {
+bool Integrator::factor_newton_matrix(const StepContext& ctx, const Eigen::VectorXd& x,
+                                      Eigen::VectorXd& g, StepStats& stats, bool skip_exact) {
   auto t0 = std::chrono::steady_clock::now();
   bool project = !m_params.exact_hessian_first || skip_exact;
   m_have_exact = false;
@@ -273,7 +280,8 @@ void Integrator::trace_model(const Eigen::VectorXd& x, const Eigen::VectorXd& so
 }
 
 bool Integrator::newton_matrix(const StepContext& ctx, const Eigen::VectorXd& x, Eigen::VectorXd& g,
-                               StepStats& stats, bool reuse, bool factor_projected, ExactSkip& skip, Clock& t0) {
+                               StepStats& stats, bool reuse, bool factor_projected, ExactSkip& skip,
+                               Clock& t0) {
   if (reuse) {
     ++m_reused;
     ++stats.reused_factorizations;
@@ -299,8 +307,8 @@ bool Integrator::newton_matrix(const StepContext& ctx, const Eigen::VectorXd& x,
   return projected;
 }
 
-Integrator::NewtonDirection Integrator::newton_direction(const Eigen::VectorXd& g, double h, bool project,
-                                                         NewtonResult& r) {
+Integrator::NewtonDirection Integrator::newton_direction(const Eigen::VectorXd& g, double h,
+                                                         bool project, NewtonResult& r) {
   NewtonDirection d;
   // Auxiliary unknowns (EnergyTerm::auxiliary_blocks) sit at their optimum, so their part of
   // the right-hand side is zero; their part of the solution is dropped.
@@ -316,22 +324,25 @@ Integrator::NewtonDirection Integrator::newton_direction(const Eigen::VectorXd& 
     const SteihaugResult cg =
         steihaug([&](const Eigen::VectorXd& v) { return m_hessian_exact.multiply(v); },
                  [&](const Eigen::VectorXd& v) { return m_hessian.multiply(v); },
-                 [&](const Eigen::VectorXd& v) { return m_solver.solve(v); }, rhs, d.sol, m_trust_radius,
-                 m_params.trust_region_cg, 0.1);
+                 [&](const Eigen::VectorXd& v) { return m_solver.solve(v); }, rhs, d.sol,
+                 m_trust_radius, m_params.trust_region_cg, 0.1);
     if (cg.model < 0 && cg.z.allFinite()) {  // else the projected step
       d.sol = cg.z;
       d.dx = d.sol.head(g.size());
       d.trust_model = cg.model;
       ++r.trust_region_steps;
     }
-    m_params.trace(Trace::newton, "  trust region: %d iterations, end %d, radius %.3e (projected step %.3e), model %.3e",
-                   cg.iterations, static_cast<int>(cg.end), m_trust_radius, projected_norm, cg.model);
+    m_params.trace(
+        Trace::newton,
+        "  trust region: %d iterations, end %d, radius %.3e (projected step %.3e), model %.3e",
+        cg.iterations, static_cast<int>(cg.end), m_trust_radius, projected_norm, cg.model);
   }
   return d;
 }
 
 Integrator::LineSearch Integrator::line_search(const Eigen::VectorXd& x, const Eigen::VectorXd& dx,
-                                               const Eigen::VectorXd& g, double e, NewtonResult& r) const {
+                                               const Eigen::VectorXd& g, double e,
+                                               NewtonResult& r) const {
   LineSearch ls;
   const EnergyTerm* limiting = nullptr;
   for (const auto& t : m_terms) {
@@ -351,15 +362,16 @@ Integrator::LineSearch Integrator::line_search(const Eigen::VectorXd& x, const E
     if (std::isfinite(ls.e_new) && ls.e_new <= e + m_params.armijo * ls.alpha * ls.slope) break;
   }
   if (m_params.trace.on(Trace::newton))  // the term's name is a string made on each call
-    m_params.trace(Trace::newton, "  step %.3e (feasible %.3e, limited by %s)", ls.alpha, ls.alpha_feasible,
-                   limiting ? limiting->name().c_str() : "none");
+    m_params.trace(Trace::newton, "  step %.3e (feasible %.3e, limited by %s)", ls.alpha,
+                   ls.alpha_feasible, limiting ? limiting->name().c_str() : "none");
   if (ls.alpha < 1e-9 && m_params.trace.on(Trace::line_search)) {
     for (double a = 1e-1; a > 1e-13; a *= 0.1) {
       char buf[96];
       std::snprintf(buf, sizeof buf, "   a %.0e", a);
       std::string text = buf;
       for (const auto& t : m_terms) {
-        std::snprintf(buf, sizeof buf, " %s %.6e", t->name().c_str(), t->value(x + a * dx) - t->value(x));
+        std::snprintf(buf, sizeof buf, " %s %.6e", t->name().c_str(),
+                      t->value(x + a * dx) - t->value(x));
         text += buf;
       }
       std::snprintf(buf, sizeof buf, " slope*a %.3e", a * ls.slope);
@@ -369,8 +381,8 @@ Integrator::LineSearch Integrator::line_search(const Eigen::VectorXd& x, const E
   return ls;
 }
 
-void Integrator::extrapolate(const Eigen::VectorXd& x, const Eigen::VectorXd& dx, double e, LineSearch& ls,
-                             NewtonResult& r) const {
+void Integrator::extrapolate(const Eigen::VectorXd& x, const Eigen::VectorXd& dx, double e,
+                             LineSearch& ls, NewtonResult& r) const {
   // Lengthen the projected step while the energy keeps falling (sufficient decrease against the
   // longer step too) and every term allows the longer step.
   for (int m = 2; m <= m_params.max_extrapolation; m *= 2) {
@@ -381,7 +393,8 @@ void Integrator::extrapolate(const Eigen::VectorXd& x, const Eigen::VectorXd& dx
     Eigen::VectorXd x_try = x + dm;
     const double e_try = energy(x_try);
     ++r.line_search_evaluations;
-    if (!(std::isfinite(e_try) && e_try < ls.e_new && e_try <= e + m_params.armijo * m * ls.slope)) break;
+    if (!(std::isfinite(e_try) && e_try < ls.e_new && e_try <= e + m_params.armijo * m * ls.slope))
+      break;
     ls.x_new.swap(x_try);
     ls.e_new = e_try;
     if (m == 2) ++r.extrapolations;
@@ -411,10 +424,11 @@ NewtonResult Integrator::solve(const StepContext& ctx, Eigen::VectorXd& x, StepS
   // Modified Newton (NewtonParams::max_factor_reuse), in quiet phases only: when the last step
   // converged within 2 iterations on an exact-Hessian factorisation with the same h, this step
   // starts from that factorisation, and its iterations reuse it while Newton converges fast (a
-  // full step, the residual falling tenfold or more).
-  const bool quiet = m_reuse_next && m_factor_h == ctx.h;  // the last step needed at most 2 iterations
+  // full step, the residual falling tenfold or more). `quiet`: the last step needed at most 2
+  // iterations.
+  const bool quiet = m_reuse_next && m_factor_h == ctx.h;
   bool may_reuse = quiet;
-  double residual_before = INF;  // residual of the iteration before the last
+  double residual_before = INF;   // residual of the iteration before the last
   bool factor_projected = false;  // the factorisation in use is of the projected Hessian
   ExactSkip skip;
   for (r.iterations = 1; r.iterations <= m_params.max_iterations; ++r.iterations) {
@@ -428,7 +442,8 @@ NewtonResult Integrator::solve(const StepContext& ctx, Eigen::VectorXd& x, StepS
       }
     }
     update_pattern(x);
-    const bool reuse = may_reuse && m_reused < m_params.max_factor_reuse && m_factor_pattern == m_pattern_id;
+    const bool reuse =
+        may_reuse && m_reused < m_params.max_factor_reuse && m_factor_pattern == m_pattern_id;
     m_reuse_next = false;
     factor_projected = newton_matrix(ctx, x, g, stats, reuse, factor_projected, skip, t0);
     const bool project = factor_projected;
@@ -436,8 +451,11 @@ NewtonResult Integrator::solve(const StepContext& ctx, Eigen::VectorXd& x, StepS
     stats.seconds_solve += seconds_since(t0);
     if (m_params.trace.on(Trace::model)) trace_model(x, d.sol, project);
     if (m_params.trace.on(Trace::newton))  // the decrement costs a dot product
-      m_params.trace(Trace::newton, "t %.4f it %d E %.12g residual %.3e decrement %.3e %s", ctx.time_t0,
-                     r.iterations, e, r.residual, -g.dot(d.dx), reuse ? "reused" : project ? "projected" : "exact");
+      m_params.trace(Trace::newton, "t %.4f it %d E %.12g residual %.3e decrement %.3e %s",
+                     ctx.time_t0, r.iterations, e, r.residual, -g.dot(d.dx),
+                     reuse     ? "reused"
+                     : project ? "projected"
+                               : "exact");
     if (!d.dx.allFinite()) {
       r.failure = "NaN in the Newton direction";
       return r;
@@ -462,10 +480,11 @@ NewtonResult Integrator::solve(const StepContext& ctx, Eigen::VectorXd& x, StepS
       r.failure = "line search found no decrease";
       return r;
     }
-    if (project && ls.alpha == 1.0 && m_params.max_extrapolation > 1) extrapolate(x, d.dx, e, ls, r);
+    if (project && ls.alpha == 1.0 && m_params.max_extrapolation > 1)
+      extrapolate(x, d.dx, e, ls, r);
     if (d.trust_model < 0) update_trust_radius(ls.alpha, ls.e_new - e, d.trust_model);
-    may_reuse =
-        quiet && ls.alpha == 1.0 && !factor_projected && (r.iterations == 1 || r.residual < 0.1 * residual_before);
+    may_reuse = quiet && ls.alpha == 1.0 && !factor_projected &&
+                (r.iterations == 1 || r.residual < 0.1 * residual_before);
     residual_before = r.residual;
     x = ls.x_new;
     e = ls.e_new;
@@ -491,8 +510,8 @@ NewtonResult Integrator::solve(const StepContext& ctx, Eigen::VectorXd& x, StepS
 // (solve) then converges with the obstacles at t1: the step solves the same backward Euler
 // problem as without following, from a start that the obstacles' motion does not make
 // infeasible.
-bool Integrator::follow_obstacles(const StepContext& ctx, Eigen::VectorXd& x, double tau, StepStats& stats,
-                                  NewtonResult& r) {
+bool Integrator::follow_obstacles(const StepContext& ctx, Eigen::VectorXd& x, double tau,
+                                  StepStats& stats, NewtonResult& r) {
   const double t1 = ctx.time_t1();
   const auto set_time = [&](double t) {
     for (EnergyTerm* term : m_following) term->set_obstacle_time(t);
@@ -502,7 +521,8 @@ bool Integrator::follow_obstacles(const StepContext& ctx, Eigen::VectorXd& x, do
   while (tau < t1) {
     if (r.iterations >= m_params.max_iterations) {
       std::ostringstream s;
-      s << "the obstacles could not be moved with the sheet to the step's end (stopped at t = " << tau << " s)";
+      s << "the obstacles could not be moved with the sheet to the step's end (stopped at t = "
+        << tau << " s)";
       r.failure = s.str();
       set_time(t1);
       return false;
@@ -529,7 +549,8 @@ bool Integrator::follow_obstacles(const StepContext& ctx, Eigen::VectorXd& x, do
     }
     t0 = std::chrono::steady_clock::now();
     double alpha = 1.0;
-    for (const auto& term : m_terms) alpha = std::min(alpha, term->max_step_with_obstacles(x, dx, dt));
+    for (const auto& term : m_terms)
+      alpha = std::min(alpha, term->max_step_with_obstacles(x, dx, dt));
     for (; alpha > 1e-12; alpha *= 0.5) {
       set_time(alpha == 1.0 ? t1 : tau + alpha * dt);
       ++r.line_search_evaluations;
@@ -543,7 +564,8 @@ bool Integrator::follow_obstacles(const StepContext& ctx, Eigen::VectorXd& x, do
       set_time(t1);
       return false;
     }
-    m_params.trace(Trace::newton, "t %.4f following: obstacles at %.6f, step %.3e", ctx.time_t0, tau, alpha);
+    m_params.trace(Trace::newton, "t %.4f following: obstacles at %.6f, step %.3e", ctx.time_t0,
+                   tau, alpha);
     x += alpha * dx;
     tau = alpha == 1.0 ? t1 : tau + alpha * dt;
   }
@@ -570,7 +592,8 @@ bool Integrator::advance(SheetState& state, double h, int depth, int max_depth, 
     }
   }
   NewtonResult r;
-  m_params.trace(Trace::newton, "step t %.6f h %.3e: %zu terms follow obstacles", ctx.time_t0, h, m_following.size());
+  m_params.trace(Trace::newton, "step t %.6f h %.3e: %zu terms follow obstacles", ctx.time_t0, h,
+                 m_following.size());
   if (m_following.empty() || follow_obstacles(ctx, x, ctx.time_t0, stats, r)) {
     const int following = r.iterations, evaluations = r.line_search_evaluations;
     r = solve(ctx, x, stats);

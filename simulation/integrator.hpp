@@ -21,8 +21,8 @@ struct NewtonParams {
   /// Stopping test (IPC): the Newton step's largest vertex displacement divided by h is below
   /// this speed [m/s]. With h = 5 ms the default stops at 0.5 micrometre per step.
   double tolerance = 1e-4;
-  double armijo = 1e-4;        ///< sufficient decrease constant [-]
-  int max_halvings = 10;       ///< a failed step is split in two up to this depth
+  double armijo = 1e-4;   ///< sufficient decrease constant [-]
+  int max_halvings = 10;  ///< a failed step is split in two up to this depth
   /// Try the exact Hessian (no PSD projection of indefinite element matrices) first in every
   /// iteration, and project only when it is not positive definite. Projection throws away the
   /// negative curvature of compressed, buckling regions, and Newton then converges linearly
@@ -70,10 +70,11 @@ struct NewtonResult {
   bool converged = false;
   int iterations = 0;
   int line_search_evaluations = 0;
-  int extrapolations = 0;  ///< iterations whose step was lengthened (NewtonParams::max_extrapolation)
+  /// iterations whose step was lengthened (NewtonParams::max_extrapolation)
+  int extrapolations = 0;
   int trust_region_steps = 0;  ///< directions from NewtonParams::trust_region_cg
-  double residual = 0.0;  ///< last max |dx_v| / h [m/s]
-  std::string failure;    ///< why it did not converge
+  double residual = 0.0;       ///< last max |dx_v| / h [m/s]
+  std::string failure;         ///< why it did not converge
 };
 
 /// The factorisation a quiet step leaves for the next one (NewtonParams::max_factor_reuse), as
@@ -89,14 +90,14 @@ struct ReusableFactor {
 /// Statistics of one accepted time step (accumulated over substeps).
 struct StepStats {
   int substeps = 0;
-  int failed_solves = 0;   ///< solves that did not converge and were retried with h / 2
+  int failed_solves = 0;       ///< solves that did not converge and were retried with h / 2
   int projected_hessians = 0;  ///< iterations whose exact Hessian was indefinite (projected)
   /// iterations that factored the projected Hessian without trying the exact one
   /// (NewtonParams::exact_retry_skip_max)
   int exact_skipped = 0;
   int newton_iterations = 0;
   int line_search_evaluations = 0;
-  int extrapolations = 0;  ///< Newton steps lengthened beyond the full step
+  int extrapolations = 0;         ///< Newton steps lengthened beyond the full step
   int trust_region_steps = 0;     ///< Newton steps from conjugate gradients on the exact Hessian
   int reused_factorizations = 0;  ///< iterations that reused the previous factorisation
   /// Newton iterations that moved obstacles from the step start to its end with the sheet
@@ -177,8 +178,9 @@ class Integrator {
   /// (factor_newton_matrix). `t0`: when the iteration's assembly began, reset at its end.
   /// @return whether the factorisation in use is of the projected Hessian (`factor_projected`
   ///         when reused)
-  bool newton_matrix(const StepContext& ctx, const Eigen::VectorXd& x, Eigen::VectorXd& g, StepStats& stats,
-                     bool reuse, bool factor_projected, ExactSkip& skip, Clock& t0);
+  bool newton_matrix(const StepContext& ctx, const Eigen::VectorXd& x, Eigen::VectorXd& g,
+                     StepStats& stats, bool reuse, bool factor_projected, ExactSkip& skip,
+                     Clock& t0);
   /// A Newton direction: the factored system's solution (with the auxiliary unknowns) and its
   /// position part; trust_model < 0 when it is a trust-region step on the exact Hessian, the
   /// exact model's change along it.
@@ -189,16 +191,18 @@ class Integrator {
   /// Solves for the direction on the factorisation in use (-g on the right), sets r.residual
   /// (the projected step's largest vertex displacement / h) and, where the projected Hessian was
   /// factored and NewtonParams::trust_region_cg is on, takes the Steihaug step instead.
-  NewtonDirection newton_direction(const Eigen::VectorXd& g, double h, bool project, NewtonResult& r);
+  NewtonDirection newton_direction(const Eigen::VectorXd& g, double h, bool project,
+                                   NewtonResult& r);
   /// The backtracking line search along dx from x (energy e, gradient g): alpha starts at the
   /// largest step every term allows (max_step) and halves until the Armijo condition holds or
   /// alpha <= min_alpha.
   struct LineSearch {
-    double alpha = 1.0, alpha_feasible = 1.0, slope = 0.0, min_alpha = 0.0, e_new = std::numeric_limits<double>::infinity();
+    double alpha = 1.0, alpha_feasible = 1.0, slope = 0.0, min_alpha = 0.0,
+           e_new = std::numeric_limits<double>::infinity();
     Eigen::VectorXd x_new;
   };
-  LineSearch line_search(const Eigen::VectorXd& x, const Eigen::VectorXd& dx, const Eigen::VectorXd& g, double e,
-                         NewtonResult& r) const;
+  LineSearch line_search(const Eigen::VectorXd& x, const Eigen::VectorXd& dx,
+                         const Eigen::VectorXd& g, double e, NewtonResult& r) const;
   /// After a full projected step: tries 2, 4, ... times dx up to NewtonParams::max_extrapolation
   /// while the energy keeps falling and every term allows it, updating ls.
   void extrapolate(const Eigen::VectorXd& x, const Eigen::VectorXd& dx, double e, LineSearch& ls,

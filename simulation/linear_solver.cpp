@@ -66,9 +66,9 @@ namespace {
 /// OpenBLAS picks its dense kernels by the CPU's model number; on a CPU it does not know (a
 /// virtual machine's "Intel Xeon Processor" with AVX-512, measured) it falls back to its
 /// Prescott (SSE3) kernels, which made CHOLMOD's supernodal factorisation, most of a Newton
-/// iteration, up to 1.4 times slower (docs/performance.md, "BLAS kernels"). When OPENBLAS_CORETYPE is
-/// not set and OpenBLAS chose a kernel set older than the CPU's instructions (the CPU and the
-/// OS support AVX-512 or AVX2 with FMA), its dynamic dispatch is re-run with SkylakeX or Haswell
+/// iteration, up to 1.4 times slower (docs/performance.md, "BLAS kernels"). When OPENBLAS_CORETYPE
+/// is not set and OpenBLAS chose a kernel set older than the CPU's instructions (the CPU and the OS
+/// support AVX-512 or AVX2 with FMA), its dynamic dispatch is re-run with SkylakeX or Haswell
 /// kernels, as OPENBLAS_CORETYPE would select them at start-up. Runs before the first BLAS call
 /// of the process (the first solver). Symbols looked up at run time: any other BLAS links and
 /// is left alone.
@@ -81,14 +81,15 @@ void select_blas_kernels() {
   std::string current = blas_kernels();
   if (!quit || !init || current.empty()) return;
   for (char& c : current) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  static const char* const older[] = {"prescott", "core2",  "penryn", "dunnington",
-                                      "nehalem",  "atom",   "banias", "northwood",
+  static const char* const older[] = {"prescott", "core2",      "penryn",     "dunnington",
+                                      "nehalem",  "atom",       "banias",     "northwood",
                                       "katmai",   "coppermine", "sandybridge"};
   if (std::find(std::begin(older), std::end(older), current) == std::end(older)) return;
   __builtin_cpu_init();
   const char* wanted = nullptr;
-  if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512cd") && __builtin_cpu_supports("avx512bw") &&
-      __builtin_cpu_supports("avx512dq") && __builtin_cpu_supports("avx512vl"))
+  if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512cd") &&
+      __builtin_cpu_supports("avx512bw") && __builtin_cpu_supports("avx512dq") &&
+      __builtin_cpu_supports("avx512vl"))
     wanted = "SkylakeX";
   else if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma"))
     wanted = "Haswell";
@@ -126,7 +127,8 @@ void limit_openmp_threads() {
   static std::once_flag once;
   std::call_once(once, [] {
     using SetLevels = void (*)(int);
-    if (auto f = reinterpret_cast<SetLevels>(dlsym(RTLD_DEFAULT, "omp_set_max_active_levels"))) f(0);
+    if (auto f = reinterpret_cast<SetLevels>(dlsym(RTLD_DEFAULT, "omp_set_max_active_levels")))
+      f(0);
   });
 }
 
@@ -264,7 +266,8 @@ struct LinearSolver::Impl {
   }
 };
 
-LinearSolver::LinearSolver(Trace trace) : m_impl(std::make_unique<Impl>()), m_trace(std::move(trace)) {}
+LinearSolver::LinearSolver(Trace trace)
+    : m_impl(std::make_unique<Impl>()), m_trace(std::move(trace)) {}
 LinearSolver::~LinearSolver() = default;
 
 bool LinearSolver::factorize(const BlockSymmetricMatrix& A, long pattern_id) {
@@ -285,8 +288,9 @@ bool LinearSolver::factorize(const BlockSymmetricMatrix& A, long pattern_id) {
     m_impl->pattern_id = pattern_id;
     m_impl->n = A.size();
     ++m_analyses;
-    m_trace(Trace::solver, "analyse n %d nnz(A) %zu lnz %.0f flops %.3g ordering %d %s", A.size(), s.nzmax, c.lnz,
-            c.fl, c.selected, m_impl->factor->is_super ? "supernodal" : "simplicial");
+    m_trace(Trace::solver, "analyse n %d nnz(A) %zu lnz %.0f flops %.3g ordering %d %s", A.size(),
+            s.nzmax, c.lnz, c.fl, c.selected,
+            m_impl->factor->is_super ? "supernodal" : "simplicial");
     if (m_impl->factor->is_super) m_impl->build_permuted_lower(A);
   }
   int ok = 1;

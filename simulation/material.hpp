@@ -12,17 +12,18 @@ enum class BendingModel { fit, morley };
 enum class MembraneModel { chord, arc };
 
 struct Material {
-  double density = 0.08;              ///< areal density rho_A [kg/m^2]
-  double stretch_stiffness = 5e5;     ///< Eh, Young's modulus x thickness [N/m]
-  double poisson = 0.3;               ///< Poisson ratio [-], in [0, 0.5)
-  double bending_stiffness = 4e-4;    ///< D = E h^3 / (12 (1 - nu^2)) [N m]
-  double damping = 0.0;               ///< mass-proportional damping coefficient [1/s]
-  double strain_limit = 0.005;        ///< largest principal stretch <= 1 + strain_limit [-]
-  double compression_limit = 0.0;     ///< smallest principal stretch >= 1 - compression_limit (0: none) [-]
-  double thickness = 1e-4;            ///< physical thickness [m] (for reports and contact)
-  double yield_curvature = 200.0;     ///< plastic yield curvature [1/m]
-  double weakening = 1.0;             ///< D / (1 + weakening * damage) [-]
-  BendingModel bending_model = BendingModel::morley;  ///< "fit" or "morley"
+  double density = 0.08;            ///< areal density rho_A [kg/m^2]
+  double stretch_stiffness = 5e5;   ///< Eh, Young's modulus x thickness [N/m]
+  double poisson = 0.3;             ///< Poisson ratio [-], in [0, 0.5)
+  double bending_stiffness = 4e-4;  ///< D = E h^3 / (12 (1 - nu^2)) [N m]
+  double damping = 0.0;             ///< mass-proportional damping coefficient [1/s]
+  double strain_limit = 0.005;      ///< largest principal stretch <= 1 + strain_limit [-]
+  /// smallest principal stretch >= 1 - compression_limit (0: none) [-]
+  double compression_limit = 0.0;
+  double thickness = 1e-4;         ///< physical thickness [m] (for reports and contact)
+  double yield_curvature = 200.0;  ///< plastic yield curvature [1/m]
+  double weakening = 1.0;          ///< D / (1 + weakening * damage) [-]
+  BendingModel bending_model = BendingModel::morley;    ///< "fit" or "morley"
   MembraneModel membrane_model = MembraneModel::chord;  ///< "chord" or "arc"
 };
 

@@ -59,7 +59,8 @@ Staging::Staging(const std::string& out_dir) {
   std::error_code ec;
   m_created = !fs::exists(m_out, ec);
   fs::create_directories(m_out, ec);
-  if (ec) throw common::OutputError("cannot create output folder '" + out_dir + "': " + ec.message());
+  if (ec)
+    throw common::OutputError("cannot create output folder '" + out_dir + "': " + ec.message());
   m_dir = path_for(out_dir);
   remove_or_throw(m_dir);
   fs::create_directories(m_dir, ec);
@@ -79,7 +80,8 @@ Staging::~Staging() {
 
 void Staging::commit() {
   std::vector<std::string> staged;
-  for (const auto& e : fs::directory_iterator(m_dir)) staged.push_back(e.path().filename().string());
+  for (const auto& e : fs::directory_iterator(m_dir))
+    staged.push_back(e.path().filename().string());
   const auto is_staged = [&](const std::string& n) {
     return std::find(staged.begin(), staged.end(), n) != staged.end();
   };
@@ -94,7 +96,8 @@ void Staging::commit() {
   for (const std::string& name : run_output_names())
     if (!is_staged(name) && !is_protected(m_out / name)) remove_or_throw(m_out / name);
   std::sort(staged.begin(), staged.end(), [](const std::string& a, const std::string& b) {
-    return (a == "meta.json") < (b == "meta.json") || ((a == "meta.json") == (b == "meta.json") && a < b);
+    return (a == "meta.json") < (b == "meta.json") ||
+           ((a == "meta.json") == (b == "meta.json") && a < b);
   });
   for (const std::string& name : staged) move_or_throw(m_dir / name, m_out / name);
   m_committed = true;

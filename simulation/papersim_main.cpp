@@ -19,11 +19,10 @@
 #include "remesh/errors.hpp"
 #include "simulation/batch_command.hpp"
 #include "simulation/errors.hpp"
-#include "simulation/scenario.hpp"
 #include "simulation/output_files.hpp"
+#include "simulation/scenario.hpp"
 #include "simulation/scene.hpp"
 #include "simulation/simulate.hpp"
-
 #include "validation/metrics_command.hpp"
 
 namespace ps = papersim::simulation;
@@ -37,12 +36,14 @@ namespace {
 /// The ETA is the rest of the steps at the rate of the last tenth of them (common::RecentRateEta).
 ps::ProgressFn progress_printer(const std::string& label) {
   const bool tty = isatty(fileno(stderr));
-  return [label, tty, last = -1, printed = 0.0, rate = common::RecentRateEta()](double f, double seconds) mutable {
+  return [label, tty, last = -1, printed = 0.0, rate = common::RecentRateEta()](
+             double f, double seconds) mutable {
     const double eta = rate.update(f, seconds);
     const int percent = static_cast<int>(100 * f);
     const bool slow = seconds - printed >= 300.0;
     if (!tty && percent / 10 == last / 10 && percent != 100 && !slow) return;
-    const bool tenth = !tty && percent / 10 == last / 10 && percent != 100;  // a line for the time only
+    const bool tenth =
+        !tty && percent / 10 == last / 10 && percent != 100;  // a line for the time only
     last = percent;
     printed = seconds;
     char amount[16];
@@ -78,7 +79,9 @@ void prepare_output(const std::string& out) {
 /// A non-empty option value.
 CLI::Validator non_empty() {
   return CLI::Validator(
-      [](std::string& value) { return value.empty() ? std::string("must not be empty") : std::string(); },
+      [](std::string& value) {
+        return value.empty() ? std::string("must not be empty") : std::string();
+      },
       "NONEMPTY");
 }
 
@@ -89,9 +92,10 @@ struct CheckpointOptions {
 };
 
 void add_checkpoint_options(CLI::App* app, CheckpointOptions& c) {
-  auto* dir = app->add_option("--checkpoint", c.dir,
-                              "Save the state every --checkpoint-every steps in DIR, a folder "
-                              "outside --out (kept when the run fails; continue with --resume DIR)");
+  auto* dir =
+      app->add_option("--checkpoint", c.dir,
+                      "Save the state every --checkpoint-every steps in DIR, a folder "
+                      "outside --out (kept when the run fails; continue with --resume DIR)");
   app->add_option("--checkpoint-every", c.every, "Steps between checkpoints (default 100)")
       ->check(CLI::Range(1, 1 << 30))
       ->needs(dir);
@@ -109,7 +113,8 @@ void add_trace_option(CLI::App* app, std::string& topics) {
   for (const auto& [n, t] : ps::Trace::names()) names += ", " + n;
   app->add_option("--trace", topics,
                   "Tell how the solver works, by topic (a comma list of " + names +
-                      "): lines on stderr, e.g. one per Newton iteration or remeshing pass (README, Tracing a run)")
+                      "): lines on stderr, e.g. one per Newton iteration or remeshing pass "
+                      "(README, Tracing a run)")
       ->check(CLI::Validator(
           [](std::string& value) {
             try {
@@ -122,8 +127,9 @@ void add_trace_option(CLI::App* app, std::string& topics) {
           "TOPICS"));
 }
 
-int simulate(const ps::Scene& scene, const std::string& out, int frames, bool quiet, const std::string& trace,
-             const std::string& label, const std::string& scene_json, const CheckpointOptions& checkpoint) {
+int simulate(const ps::Scene& scene, const std::string& out, int frames, bool quiet,
+             const std::string& trace, const std::string& label, const std::string& scene_json,
+             const CheckpointOptions& checkpoint) {
   if (!checkpoint.dir.empty()) {
     // A folder the failed run created is removed with everything in it.
     const fs::path c = fs::weakly_canonical(checkpoint.dir), o = fs::weakly_canonical(out);
@@ -134,7 +140,8 @@ int simulate(const ps::Scene& scene, const std::string& out, int frames, bool qu
   }
   ps::RunOptions options;
   options.checkpoint_dir = checkpoint.dir;
-  options.checkpoint_every = checkpoint.dir.empty() ? 0 : (checkpoint.every > 0 ? checkpoint.every : 100);
+  options.checkpoint_every =
+      checkpoint.dir.empty() ? 0 : (checkpoint.every > 0 ? checkpoint.every : 100);
   options.resume_from = checkpoint.resume;
   options.out_dir = out;
   options.frames_every = frames;
@@ -206,10 +213,13 @@ int main(int argc, char** argv) {
   auto* run = app.add_subcommand("run", "Simulate a scene file (JSON; see docs/scene.md).");
   run->add_option("scene", scene_path, "Scene file (JSON)")->required();
   run->add_option("--out", out_dir, "Output folder: sheet.obj, sheet.ply, meta.json")
-      ->required()->check(non_empty());
+      ->required()
+      ->check(non_empty());
   run->add_option("--frames", frames, "Write every K-th step to OUT/frames/ (0: none)")
       ->check(CLI::Range(0, 1 << 30));
-  run->add_flag("--quiet", quiet, "No progress on stderr (otherwise a redrawn line on a terminal, else a line per 10% of the steps and one every 5 minutes while they are slow)");
+  run->add_flag("--quiet", quiet,
+                "No progress on stderr (otherwise a redrawn line on a terminal, else a line per "
+                "10% of the steps and one every 5 minutes while they are slow)");
   CheckpointOptions checkpoint;
   add_checkpoint_options(run, checkpoint);
   std::string trace;
@@ -218,20 +228,26 @@ int main(int argc, char** argv) {
   std::string name;
   long long seed = 0;
   auto* scen = app.add_subcommand(
-      "scenario", "Draw the scene of a named scenario for a seed, write it as OUT/scene.json and "
-                  "simulate it. Same name and seed: same scene, same mesh.");
-  scen->add_option("name", name, "Scenario name")->required()->check(
-      CLI::IsMember(ps::scenario_names()));
+      "scenario",
+      "Draw the scene of a named scenario for a seed, write it as OUT/scene.json and "
+      "simulate it. Same name and seed: same scene, same mesh.");
+  scen->add_option("name", name, "Scenario name")
+      ->required()
+      ->check(CLI::IsMember(ps::scenario_names()));
   scen->add_option("--seed", seed, "Random seed, 0 to 2147483647")
-      ->required()->check(CLI::Range(0LL, 2147483647LL));
+      ->required()
+      ->check(CLI::Range(0LL, 2147483647LL));
   scen->add_option("--out", out_dir, "Output folder")->required()->check(non_empty());
   scen->add_option("--frames", frames, "Write every K-th step to OUT/frames/ (0: none)")
       ->check(CLI::Range(0, 1 << 30));
-  scen->add_flag("--quiet", quiet, "No progress on stderr (otherwise a redrawn line on a terminal, else a line per 10% of the steps and one every 5 minutes while they are slow)");
+  scen->add_flag("--quiet", quiet,
+                 "No progress on stderr (otherwise a redrawn line on a terminal, else a line per "
+                 "10% of the steps and one every 5 minutes while they are slow)");
   add_checkpoint_options(scen, checkpoint);
   add_trace_option(scen, trace);
   bool draw_only = false;
-  scen->add_flag("--draw-only", draw_only, "Only write OUT/scene.json (edit it, then: papersim run)");
+  scen->add_flag("--draw-only", draw_only,
+                 "Only write OUT/scene.json (edit it, then: papersim run)");
 
   ps::BatchCommand batch_command;
   ps::add_batch_subcommands(app, batch_command);
@@ -265,8 +281,8 @@ int main(int argc, char** argv) {
         std::cout << "wrote " << (fs::path(out_dir) / "scene.json").string() << '\n';
         return 0;
       }
-      return simulate(scene, out_dir, frames, quiet, trace, name + " seed " + std::to_string(seed), text.str(),
-                      checkpoint);
+      return simulate(scene, out_dir, frames, quiet, trace, name + " seed " + std::to_string(seed),
+                      text.str(), checkpoint);
     }
     return metrics_code;
   } catch (...) {

@@ -30,7 +30,8 @@ PlasticUpdate return_mapping(const Eigen::MatrixX3d& curvature, double yield_cur
     const Eigen::Vector3d elastic = (curvature.row(f) - plastic_curvature.row(f)).transpose();
     const double norm = curvature_norm(elastic);
     if (!std::isfinite(norm))
-      throw NumericError("plasticity: the curvature of face " + std::to_string(f) + " is not finite");
+      throw NumericError("plasticity: the curvature of face " + std::to_string(f) +
+                         " is not finite");
     // A face left on the yield surface by the last update measures k_y up to rounding; the
     // relative slack keeps it from yielding again by 1e-16 (and re-factoring Morley's slopes).
     if (norm <= yield_curvature * (1 + YIELD_SLACK)) continue;
@@ -49,11 +50,12 @@ bool plasticity_enabled(const Material& material) {
   return material.bending_model == BendingModel::morley;
 }
 
-PlasticUpdate apply_plasticity(BendingEnergy& bending, const Eigen::VectorXd& x, double yield_curvature,
-                               remesh::SheetMesh& mesh) {
+PlasticUpdate apply_plasticity(BendingEnergy& bending, const Eigen::VectorXd& x,
+                               double yield_curvature, remesh::SheetMesh& mesh) {
   Eigen::MatrixX3d plastic = mesh.plastic_curvature();
   Eigen::VectorXd damage = mesh.damage();
-  const PlasticUpdate u = return_mapping(bending.yield_curvatures(x), yield_curvature, plastic, damage);
+  const PlasticUpdate u =
+      return_mapping(bending.yield_curvatures(x), yield_curvature, plastic, damage);
   if (u.yielded_faces == 0) return u;
   bending.set_plastic_state(plastic, damage);
   mesh.set_plastic_curvature(plastic);

@@ -9,8 +9,8 @@
 /// tensor, |Ke| = sqrt(k_xx^2 + k_yy^2 + 2 k_xy^2) [1/m]. Where |Ke| > k_y (the yield
 /// curvature), perfect plasticity moves the plastic curvature by the excess along Ke:
 ///   dKp = (1 - k_y / |Ke|) Ke,   so that afterwards |K - Kp| = k_y exactly;
-/// below yield (|Ke| <= k_y (1 + 1e-9), the slack absorbing rounding) nothing changes. Damage (dimensionless) accumulates the plastic curvature
-/// increment measured in yield curvatures:
+/// below yield (|Ke| <= k_y (1 + 1e-9), the slack absorbing rounding) nothing changes. Damage
+/// (dimensionless) accumulates the plastic curvature increment measured in yield curvatures:
 ///   damage += |dKp| / k_y,
 /// and the bending energies divide the face's stiffness by (1 + weakening damage).
 ///
@@ -30,9 +30,9 @@ double curvature_norm(const Eigen::Vector3d& k);
 
 /// What one return mapping changed.
 struct PlasticUpdate {
-  int yielded_faces = 0;           ///< faces whose elastic curvature exceeded the yield [-]
-  double max_increment = 0.0;      ///< largest |dKp| over the faces [1/m]
-  double damage_added = 0.0;       ///< sum over the faces of the damage increments [-]
+  int yielded_faces = 0;       ///< faces whose elastic curvature exceeded the yield [-]
+  double max_increment = 0.0;  ///< largest |dKp| over the faces [1/m]
+  double damage_added = 0.0;   ///< sum over the faces of the damage increments [-]
 };
 
 /// The return mapping on arrays: updates `plastic_curvature` (#F by 3) [1/m] and `damage` (#F)
@@ -50,7 +50,7 @@ bool plasticity_enabled(const Material& material);
 /// positions x (3N) [m], applies the return mapping to the plastic state of `mesh`, and hands
 /// the new state to `bending` when a face yielded (the state is left untouched otherwise).
 /// @throw NumericError as return_mapping, or when `bending` cannot take the new state
-PlasticUpdate apply_plasticity(BendingEnergy& bending, const Eigen::VectorXd& x, double yield_curvature,
-                               remesh::SheetMesh& mesh);
+PlasticUpdate apply_plasticity(BendingEnergy& bending, const Eigen::VectorXd& x,
+                               double yield_curvature, remesh::SheetMesh& mesh);
 
 }  // namespace papersim::simulation

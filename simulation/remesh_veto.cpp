@@ -15,7 +15,8 @@ namespace {
 
 /// True when segment p q crosses triangle t (rows = corners), interior or boundary
 /// (Moller-Trumbore on the segment's parameter range).
-bool segment_crosses_triangle(const Eigen::Vector3d& p, const Eigen::Vector3d& q, const Eigen::Matrix3d& t) {
+bool segment_crosses_triangle(const Eigen::Vector3d& p, const Eigen::Vector3d& q,
+                              const Eigen::Matrix3d& t) {
   const Eigen::Vector3d e1 = t.row(1) - t.row(0), e2 = t.row(2) - t.row(0), d = q - p;
   const Eigen::Vector3d h = d.cross(e2);
   const double a = e1.dot(h);
@@ -57,8 +58,10 @@ double triangle_distance(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) {
   }
   double d2 = INFINITY;
   for (int i = 0; i < 3; ++i) {
-    d2 = std::min(d2, collision::point_triangle_distance_squared({a.row(i), b.row(0), b.row(1), b.row(2)}));
-    d2 = std::min(d2, collision::point_triangle_distance_squared({b.row(i), a.row(0), a.row(1), a.row(2)}));
+    d2 = std::min(
+        d2, collision::point_triangle_distance_squared({a.row(i), b.row(0), b.row(1), b.row(2)}));
+    d2 = std::min(
+        d2, collision::point_triangle_distance_squared({b.row(i), a.row(0), a.row(1), a.row(2)}));
     for (int j = 0; j < 3; ++j)
       d2 = std::min(d2, collision::edge_edge_distance_squared(
                             {a.row(i), a.row((i + 1) % 3), b.row(j), b.row((j + 1) % 3)}));
@@ -92,7 +95,8 @@ RemeshVeto::RemeshVeto(std::vector<std::shared_ptr<const collision::Collider>> o
   if (params.self_gap <= 0) return;
   const Eigen::MatrixX3i F = mesh.faces();
   double mean_edge = 0;
-  for (int f = 0; f < F.rows(); ++f) mean_edge += (positions.row(F(f, 1)) - positions.row(F(f, 0))).norm();
+  for (int f = 0; f < F.rows(); ++f)
+    mean_edge += (positions.row(F(f, 1)) - positions.row(F(f, 0))).norm();
   m_cell = std::max(2 * params.self_gap, 2 * mean_edge / std::max<Eigen::Index>(1, F.rows()));
   for (int f = 0; f < F.rows(); ++f) {
     Eigen::Vector3d lo = positions.row(F(f, 0)).transpose(), hi = lo;
@@ -100,7 +104,8 @@ RemeshVeto::RemeshVeto(std::vector<std::shared_ptr<const collision::Collider>> o
       lo = lo.cwiseMin(positions.row(F(f, k)).transpose());
       hi = hi.cwiseMax(positions.row(F(f, k)).transpose());
     }
-    const Eigen::Vector3i c0 = (lo / m_cell).array().floor().cast<int>(), c1 = (hi / m_cell).array().floor().cast<int>();
+    const Eigen::Vector3i c0 = (lo / m_cell).array().floor().cast<int>(),
+                          c1 = (hi / m_cell).array().floor().cast<int>();
     for (int i = c0.x(); i <= c1.x(); ++i)
       for (int j = c0.y(); j <= c1.y(); ++j)
         for (int k = c0.z(); k <= c1.z(); ++k) m_grid[cell_key({i, j, k})].push_back(f);
@@ -108,13 +113,16 @@ RemeshVeto::RemeshVeto(std::vector<std::shared_ptr<const collision::Collider>> o
 }
 
 long long RemeshVeto::cell_key(const Eigen::Vector3i& c) const {
-  return (static_cast<long long>(c.x() & 0x1FFFFF) << 42) | (static_cast<long long>(c.y() & 0x1FFFFF) << 21) |
+  return (static_cast<long long>(c.x() & 0x1FFFFF) << 42) |
+         (static_cast<long long>(c.y() & 0x1FFFFF) << 21) |
          static_cast<long long>(c.z() & 0x1FFFFF);
 }
 
-std::vector<int> RemeshVeto::faces_near(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) const {
+std::vector<int> RemeshVeto::faces_near(const Eigen::Vector3d& lo,
+                                        const Eigen::Vector3d& hi) const {
   std::vector<int> faces;
-  const Eigen::Vector3i c0 = (lo / m_cell).array().floor().cast<int>(), c1 = (hi / m_cell).array().floor().cast<int>();
+  const Eigen::Vector3i c0 = (lo / m_cell).array().floor().cast<int>(),
+                        c1 = (hi / m_cell).array().floor().cast<int>();
   for (int i = c0.x(); i <= c1.x(); ++i)
     for (int j = c0.y(); j <= c1.y(); ++j)
       for (int k = c0.z(); k <= c1.z(); ++k) {
@@ -133,9 +141,10 @@ std::string RemeshVeto::stretch_reason(const remesh::EditProposal& edit) const {
   const double hi = 1 + (split ? m_params.strain_limit : m_params.strain_tolerance);
   const double lo = split ? 0.0 : 1 - m_params.strain_tolerance;
   for (size_t f = 0; f < edit.world.size(); ++f) {
-    const Eigen::Vector2d s = split || m_curvatures.rows() == 0
-                                  ? principal_stretches(cauchy_green(edit.world[f], edit.material[f]))
-                                  : arc_stretches(edit, f);
+    const Eigen::Vector2d s =
+        split || m_curvatures.rows() == 0
+            ? principal_stretches(cauchy_green(edit.world[f], edit.material[f]))
+            : arc_stretches(edit, f);
     if (!(s[1] < hi)) return "stretch";
     if (!(s[0] > lo)) return "compression";
   }
@@ -155,14 +164,16 @@ Eigen::Vector2d RemeshVeto::arc_stretches(const remesh::EditProposal& edit, size
   K /= known;
   // C' = C + G delta as the arc membrane has it: row j of A maps C to the squared length of the
   // edge opposite corner j, so G = A^-1.
-  const double area = 0.5 * std::abs((X(1, 0) - X(0, 0)) * (X(2, 1) - X(0, 1)) - (X(1, 1) - X(0, 1)) * (X(2, 0) - X(0, 0)));
+  const double area = 0.5 * std::abs((X(1, 0) - X(0, 0)) * (X(2, 1) - X(0, 1)) -
+                                     (X(1, 1) - X(0, 1)) * (X(2, 0) - X(0, 0)));
   Eigen::Matrix3d A;
   Eigen::Vector3d delta;
   for (int j = 0; j < 3; ++j) {
     const Eigen::Vector2d e = (X.row((j + 2) % 3) - X.row((j + 1) % 3)).transpose();
     const double L = e.norm();
     A.row(j) << e.x() * e.x(), e.y() * e.y(), 2 * e.x() * e.y();
-    const Eigen::RowVector3d q(e.x() * e.x() / (L * L), e.y() * e.y() / (L * L), 2 * e.x() * e.y() / (L * L));
+    const Eigen::RowVector3d q(e.x() * e.x() / (L * L), e.y() * e.y() / (L * L),
+                               2 * e.x() * e.y() / (L * L));
     delta[j] = MembraneEnergy::arc_correction(L, std::sqrt(2 * area), q, K);
   }
   const Eigen::Vector3d c = Eigen::Vector3d(C(0, 0), C(1, 1), C(0, 1)) + A.inverse() * delta;
@@ -203,19 +214,22 @@ bool RemeshVeto::deeper_in_barrier(const Eigen::Matrix3d& t) const {
 bool RemeshVeto::near_polytope_features(const Eigen::Matrix3d& t) const {
   const double gap2 = m_params.obstacle_gap * m_params.obstacle_gap;
   for (const auto& c : m_corners)
-    if (collision::point_triangle_distance_squared({c, t.row(0), t.row(1), t.row(2)}) < gap2) return true;
+    if (collision::point_triangle_distance_squared({c, t.row(0), t.row(1), t.row(2)}) < gap2)
+      return true;
   for (const auto& [i, j] : m_edges) {
     const Eigen::Vector3d &p = m_corners[i], &q = m_corners[j];
     if (segment_crosses_triangle(p, q, t)) return true;
     for (int k = 0; k < 3; ++k)
-      if (collision::edge_edge_distance_squared({p, q, t.row(k), t.row((k + 1) % 3)}) < gap2) return true;
+      if (collision::edge_edge_distance_squared({p, q, t.row(k), t.row((k + 1) % 3)}) < gap2)
+        return true;
   }
   return false;
 }
 
 bool RemeshVeto::near_sphere(const Eigen::Matrix3d& t) const {
   for (const auto& [centre, radius] : m_spheres) {
-    const double d2 = collision::point_triangle_distance_squared({centre, t.row(0), t.row(1), t.row(2)});
+    const double d2 =
+        collision::point_triangle_distance_squared({centre, t.row(0), t.row(1), t.row(2)});
     if (!(d2 >= (radius + m_params.obstacle_gap) * (radius + m_params.obstacle_gap))) return true;
   }
   return false;
@@ -227,14 +241,17 @@ bool RemeshVeto::near_sheet(const remesh::EditProposal& edit, int f) const {
   const Eigen::Vector3d lo = tri.colwise().minCoeff().transpose().array() - m_params.self_gap;
   const Eigen::Vector3d hi = tri.colwise().maxCoeff().transpose().array() + m_params.self_gap;
   for (int g : faces_near(lo, hi)) {
-    if (std::find(edit.removed_faces.begin(), edit.removed_faces.end(), g) != edit.removed_faces.end()) continue;
+    if (std::find(edit.removed_faces.begin(), edit.removed_faces.end(), g) !=
+        edit.removed_faces.end())
+      continue;
     const OpenMesh::FaceHandle fh(g);
     if (mesh.status(fh).deleted()) continue;
     Eigen::Matrix3d other;
     bool shares = false;
     int k = 0;
     for (auto v : mesh.fv_range(fh)) {
-      shares = shares || std::find(edit.vertices[f].begin(), edit.vertices[f].end(), v.idx()) != edit.vertices[f].end();
+      shares = shares || std::find(edit.vertices[f].begin(), edit.vertices[f].end(), v.idx()) !=
+                             edit.vertices[f].end();
       other.row(k++) = edit.editor->position(v).transpose();
     }
     if (!shares && triangle_distance(tri, other) < m_params.self_gap) return true;
@@ -248,7 +265,8 @@ std::string RemeshVeto::operator()(const remesh::EditProposal& edit) const {
     // The inserted vertex (index -1) is the only new point; its triangles lie in the old planes.
     for (size_t f = 0; f < edit.vertices.size(); ++f)
       for (int k = 0; k < 3; ++k)
-        if (edit.vertices[f][k] < 0 && near_obstacle(edit.world[f].row(k).transpose())) return "obstacle";
+        if (edit.vertices[f][k] < 0 && near_obstacle(edit.world[f].row(k).transpose()))
+          return "obstacle";
     // Faces (a, new, c) and (new, b, c): the new vertex lies between a and b.
     if (edit.world.size() >= 2 &&
         deeper_in_barrier(edit.world[0].row(1).transpose(), edit.world[0].row(0).transpose(),
@@ -272,10 +290,12 @@ std::string RemeshVeto::operator()(const remesh::EditProposal& edit) const {
   return {};
 }
 
-Eigen::VectorXd approach_distance(const std::vector<std::shared_ptr<const collision::Collider>>& obstacles,
-                                  const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& velocities,
-                                  double t, double lookahead) {
-  Eigen::VectorXd d = Eigen::VectorXd::Constant(positions.rows(), std::numeric_limits<double>::infinity());
+Eigen::VectorXd approach_distance(
+    const std::vector<std::shared_ptr<const collision::Collider>>& obstacles,
+    const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& velocities, double t,
+    double lookahead) {
+  Eigen::VectorXd d =
+      Eigen::VectorXd::Constant(positions.rows(), std::numeric_limits<double>::infinity());
   for (const auto& o : obstacles) {
     const Eigen::Affine3d pose = o->motion.pose(t);
     const Eigen::Vector3d obstacle_velocity = o->motion.linear_velocity(t);

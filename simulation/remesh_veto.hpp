@@ -34,19 +34,19 @@
 namespace papersim::simulation {
 
 struct RemeshVetoParams {
-  double strain_limit = 0.005;   ///< largest principal stretch 1 + strain_limit [-]
+  double strain_limit = 0.005;  ///< largest principal stretch 1 + strain_limit [-]
   /// Flips and collapses may not make a face whose principal stretches leave
   /// [1 - strain_tolerance, 1 + strain_tolerance] [-].
   double strain_tolerance = 2e-4;
-  double obstacle_gap = 3e-5;    ///< closest a new point may come to an obstacle [m]
+  double obstacle_gap = 3e-5;  ///< closest a new point may come to an obstacle [m]
   /// Reach of the obstacle barrier (the contact's dhat) [m]; <= 0 off. Within it a new point (a
   /// split's vertex, a new face's edge midpoint) may not be closer to an obstacle than the mean
   /// of the distances of the two corners it lies between (less 1e-3 of the reach): refining a
   /// chord across a convex obstacle would start the next step with a barrier force many times
   /// the neighbours' ("barrier").
   double obstacle_reach = 0.0;
-  double self_gap = 3e-5;        ///< closest a new triangle may come to the sheet [m]; <= 0 off
-  double time = 0.0;             ///< obstacles' time [s]
+  double self_gap = 3e-5;  ///< closest a new triangle may come to the sheet [m]; <= 0 off
+  double time = 0.0;       ///< obstacles' time [s]
 };
 
 class RemeshVeto {
@@ -81,7 +81,7 @@ class RemeshVeto {
   long long cell_key(const Eigen::Vector3i& c) const;
 
   std::vector<std::shared_ptr<const collision::Collider>> m_obstacles;
-  std::vector<collision::Aabb> m_bounds;  // obstacles at the pass's time, grown by the gap
+  std::vector<collision::Aabb> m_bounds;        // obstacles at the pass's time, grown by the gap
   std::vector<collision::Aabb> m_reach_bounds;  // the same, grown by the barrier's reach
   /// Corners and edges of the polytope obstacles (box, gable) at the pass's time [m].
   std::vector<Eigen::Vector3d> m_corners;
@@ -89,8 +89,8 @@ class RemeshVeto {
   /// Centres and radii of the sphere obstacles at the pass's time [m].
   std::vector<std::pair<Eigen::Vector3d, double>> m_spheres;
   RemeshVetoParams m_params;
-  Eigen::MatrixX3d m_curvatures;          // per vertex of the starting mesh; empty: chords
-  double m_cell = 1.0;                    // grid cell size [m]
+  Eigen::MatrixX3d m_curvatures;  // per vertex of the starting mesh; empty: chords
+  double m_cell = 1.0;            // grid cell size [m]
   std::unordered_map<long long, std::vector<int>> m_grid;  // faces of the starting mesh by cell
 };
 
@@ -102,8 +102,9 @@ double triangle_distance(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b);
 /// in `lookahead` seconds at its current velocity relative to the obstacle's (0 when it moves
 /// away), so a sheet falling onto an obstacle is refined before it arrives.
 /// @param positions, velocities #V x 3 [m], [m/s]
-Eigen::VectorXd approach_distance(const std::vector<std::shared_ptr<const collision::Collider>>& obstacles,
-                                  const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& velocities,
-                                  double t, double lookahead);
+Eigen::VectorXd approach_distance(
+    const std::vector<std::shared_ptr<const collision::Collider>>& obstacles,
+    const Eigen::MatrixX3d& positions, const Eigen::MatrixX3d& velocities, double t,
+    double lookahead);
 
 }  // namespace papersim::simulation

@@ -1,12 +1,11 @@
 #include "simulation/run.hpp"
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-
-#include <Eigen/Geometry>
 
 #include "collision/errors.hpp"
 #include "collision/self_intersection.hpp"
@@ -39,7 +38,8 @@ bool inside(const Eigen::Vector4d& box, const Eigen::Vector2d& p) {
 
 /// The clamps of `setup` on `mesh`: a handle on every vertex inside a clamp's region, anchored
 /// where its material point was at the start.
-std::vector<AnchoredHandle> clamp_handles(const remesh::SheetMesh& mesh, const PhysicsSetup& setup) {
+std::vector<AnchoredHandle> clamp_handles(const remesh::SheetMesh& mesh,
+                                          const PhysicsSetup& setup) {
   std::vector<AnchoredHandle> handles;
   const Eigen::MatrixX2d X = mesh.material_coords();
   for (size_t c = 0; c < setup.clamps.size(); ++c) {
@@ -55,13 +55,16 @@ std::vector<AnchoredHandle> clamp_handles(const remesh::SheetMesh& mesh, const P
       handles.push_back(h);
       ++held;
     }
-    if (held == 0) throw SceneError("clamps[" + std::to_string(c) + "]: the region holds no vertex of the sheet");
+    if (held == 0)
+      throw SceneError("clamps[" + std::to_string(c) +
+                       "]: the region holds no vertex of the sheet");
   }
   return handles;
 }
 
 /// Faces held by clamps that are never released: they keep their slopes (Morley model).
-std::vector<int> clamped_faces(const remesh::SheetMesh& mesh, const std::vector<ClampSpec>& clamps) {
+std::vector<int> clamped_faces(const remesh::SheetMesh& mesh,
+                               const std::vector<ClampSpec>& clamps) {
   std::vector<int> faces;
   for (const ClampSpec& c : clamps)
     if (std::isinf(c.release_time))
@@ -71,13 +74,13 @@ std::vector<int> clamped_faces(const remesh::SheetMesh& mesh, const std::vector<
   return faces;
 }
 
-void add_contact_terms(const remesh::SheetMesh& mesh, const PhysicsSetup& setup, TermStatistics* stats,
-                       Terms& t) {
+void add_contact_terms(const remesh::SheetMesh& mesh, const PhysicsSetup& setup,
+                       TermStatistics* stats, Terms& t) {
   const Eigen::MatrixX2d X = mesh.material_coords();
   const Eigen::MatrixX3i F = mesh.faces();
   if (!setup.obstacles.empty()) {
-    auto c = std::make_unique<ObstacleContactEnergy>(t.masses / setup.material.density, setup.obstacles,
-                                                     setup.contact);
+    auto c = std::make_unique<ObstacleContactEnergy>(t.masses / setup.material.density,
+                                                     setup.obstacles, setup.contact);
     if (setup.contact.faces) c->set_faces(F, X);
     if (setup.impact_rule) c->set_impact_density(setup.material.density);
     if (stats) c->set_statistics(&stats->contact);
@@ -100,7 +103,8 @@ std::string sheet_mesh_key(const Scene& scene) {
 /// The error for a sheet read from a file (key `sheet.mesh`, a checkpoint) whose terms cannot be
 /// built, e.g. a bending system that cannot be factored on faces far thinner or larger than the
 /// rest: an input error naming the sheet and its thinnest face in material space.
-SceneError unusable_sheet(const std::string& sheet, const remesh::SheetMesh& mesh, const NumericError& e) {
+SceneError unusable_sheet(const std::string& sheet, const remesh::SheetMesh& mesh,
+                          const NumericError& e) {
   const Eigen::MatrixX2d X = mesh.material_coords();
   const Eigen::MatrixX3i F = mesh.faces();
   double thinnest = INF;
@@ -110,8 +114,10 @@ SceneError unusable_sheet(const std::string& sheet, const remesh::SheetMesh& mes
     if (a < thinnest) thinnest = a, face = f;
   }
   char what[160];
-  std::snprintf(what, sizeof what, " (its thinnest face in material space is face %d, of aspect ratio %.3g; 1: equilateral)",
-                face, thinnest);
+  std::snprintf(
+      what, sizeof what,
+      " (its thinnest face in material space is face %d, of aspect ratio %.3g; 1: equilateral)",
+      face, thinnest);
   return SceneError(sheet + " cannot be simulated: " + e.what() + what);
 }
 
@@ -165,7 +171,8 @@ Eigen::Vector3d InitialPlacement::operator()(const Eigen::Vector2d& p) const {
   return anchor_handles(*m_mesh, m_positions, {point}).front().anchor;
 }
 
-PhysicsSetup physics_setup(const Scene& scene, const remesh::SheetMesh& mesh, const SheetState& initial) {
+PhysicsSetup physics_setup(const Scene& scene, const remesh::SheetMesh& mesh,
+                           const SheetState& initial) {
   PhysicsSetup s;
   s.material = scene.sheet.material;
   s.gravity = scene.gravity;
@@ -182,11 +189,12 @@ PhysicsSetup physics_setup(const Scene& scene, const remesh::SheetMesh& mesh, co
       std::shared_ptr<collision::Collider> c = collision::make_collider(scene.obstacles[i]);
       const collision::LiftSpec& lift = scene.obstacles[i].lift;
       if (lift.enabled() && lift.coupled && (scene.contact.faces || !(scene.gravity.norm() > 0)))
-        throw collision::ColliderError(std::string("lift.coupled needs ") +
-                                       (scene.contact.faces ? "vertex contact (contact.faces false)" : "gravity"));
+        throw collision::ColliderError(
+            std::string("lift.coupled needs ") +
+            (scene.contact.faces ? "vertex contact (contact.faces false)" : "gravity"));
       if (scene.obstacles[i].lift.enabled())
-        s.lifts.push_back({static_cast<int>(s.obstacles.size()), static_cast<int>(i), scene.obstacles[i].lift, c,
-                           c->motion});
+        s.lifts.push_back({static_cast<int>(s.obstacles.size()), static_cast<int>(i),
+                           scene.obstacles[i].lift, c, c->motion});
       s.obstacles.push_back(std::move(c));
     } catch (const collision::ColliderError& e) {
       throw SceneError((scene.source.empty() ? std::string("scene") : scene.source) +
@@ -194,7 +202,8 @@ PhysicsSetup physics_setup(const Scene& scene, const remesh::SheetMesh& mesh, co
     }
   }
   s.contact = scene.contact;
-  if (s.contact.stiffness <= 0) s.contact.stiffness = s.material.density * std::max(scene.gravity.norm(), 1.0);
+  if (s.contact.stiffness <= 0)
+    s.contact.stiffness = s.material.density * std::max(scene.gravity.norm(), 1.0);
   s.self_contact = scene.self_contact.enabled;
   s.self_contact_params = scene.self_contact;
   if (s.self_contact_params.dhat <= 0) s.self_contact_params.dhat = s.contact.dhat;
@@ -204,7 +213,8 @@ PhysicsSetup physics_setup(const Scene& scene, const remesh::SheetMesh& mesh, co
   return s;
 }
 
-Terms build_terms(const remesh::SheetMesh& mesh, const PhysicsSetup& setup, TermStatistics* statistics) {
+Terms build_terms(const remesh::SheetMesh& mesh, const PhysicsSetup& setup,
+                  TermStatistics* statistics) {
   const Eigen::MatrixX2d X = mesh.material_coords();
   const Eigen::MatrixX3i F = mesh.faces();
   const Material& m = setup.material;
@@ -212,11 +222,13 @@ Terms build_terms(const remesh::SheetMesh& mesh, const PhysicsSetup& setup, Term
   t.masses = lumped_masses(X, F, m.density);
   t.list.push_back(std::make_unique<InertiaEnergy>(t.masses));
   if (m.damping > 0) t.list.push_back(std::make_unique<DampingEnergy>(t.masses, m.damping));
-  if (setup.gravity.squaredNorm() > 0) t.list.push_back(std::make_unique<GravityEnergy>(t.masses, setup.gravity));
+  if (setup.gravity.squaredNorm() > 0)
+    t.list.push_back(std::make_unique<GravityEnergy>(t.masses, setup.gravity));
   auto membrane = std::make_unique<MembraneEnergy>(mesh, m);
   t.membrane = membrane.get();
   t.list.push_back(std::move(membrane));
-  auto bending = make_bending_energy(mesh, m, BendingHessian::gauss_newton, clamped_faces(mesh, setup.clamps));
+  auto bending =
+      make_bending_energy(mesh, m, BendingHessian::gauss_newton, clamped_faces(mesh, setup.clamps));
   t.bending = bending.get();
   t.list.push_back(std::move(bending));
   std::vector<AnchoredHandle> handles = setup.handles;
@@ -239,7 +251,8 @@ Terms build_terms(const remesh::SheetMesh& mesh, const PhysicsSetup& setup, Term
   return t;
 }
 
-EnergyBreakdown energy_breakdown(const Terms& terms, const Eigen::Vector3d& gravity, const SheetState& s) {
+EnergyBreakdown energy_breakdown(const Terms& terms, const Eigen::Vector3d& gravity,
+                                 const SheetState& s) {
   EnergyBreakdown e;
   for (int v = 0; v < s.num_vertices(); ++v) {
     e.kinetic += 0.5 * terms.masses[v] * s.velocities.segment<3>(3 * v).squaredNorm();
@@ -275,8 +288,10 @@ Run::~Run() = default;
 void Run::check_state(const std::string& what) const {
   if (m_terms.self_contact) {
     // The barrier keeps an intersection-free sheet so; it cannot undo an intersection.
-    const int crossings = collision::count_self_intersections(m_state.positions_matrix(), m_mesh.faces());
-    if (crossings > 0 || !(m_terms.self_contact->min_distance(m_state.positions, m_setup.self_contact_params.dhat) > 0))
+    const int crossings =
+        collision::count_self_intersections(m_state.positions_matrix(), m_mesh.faces());
+    if (crossings > 0 || !(m_terms.self_contact->min_distance(
+                               m_state.positions, m_setup.self_contact_params.dhat) > 0))
       throw SceneError("the sheet " + what + " intersecting itself (" + std::to_string(crossings) +
                        " triangle pairs); self-contact needs an intersection-free start");
   }
@@ -288,10 +303,13 @@ void Run::check_state(const std::string& what) const {
 }
 
 std::vector<std::array<int, 3>> Run::self_contact_pattern() const {
-  return m_terms.self_contact ? m_terms.self_contact->pattern_pairs() : std::vector<std::array<int, 3>>{};
+  return m_terms.self_contact ? m_terms.self_contact->pattern_pairs()
+                              : std::vector<std::array<int, 3>>{};
 }
 
-std::optional<ReusableFactor> Run::reusable_factor() const { return m_integrator->reusable_factor(); }
+std::optional<ReusableFactor> Run::reusable_factor() const {
+  return m_integrator->reusable_factor();
+}
 
 void Run::adopt_factor(const ReusableFactor& factor) {
   try {
@@ -303,19 +321,24 @@ void Run::adopt_factor(const ReusableFactor& factor) {
   }
 }
 
-void Run::resume(const remesh::SheetMesh& mesh, const SheetState& state, int step, const Scene* saved,
-                 const RunTally* tally, const std::vector<std::array<int, 3>>* self_contact_pattern) {
-  if (state.positions.size() != 3 * mesh.num_vertices() || state.velocities.size() != state.positions.size())
+void Run::resume(const remesh::SheetMesh& mesh, const SheetState& state, int step,
+                 const Scene* saved, const RunTally* tally,
+                 const std::vector<std::array<int, 3>>* self_contact_pattern) {
+  if (state.positions.size() != 3 * mesh.num_vertices() ||
+      state.velocities.size() != state.positions.size())
     throw SceneError("resume: the state has " + std::to_string(state.positions.size() / 3) +
                      " vertices, the mesh " + std::to_string(mesh.num_vertices()));
   if (step < 0 || step > m_steps)
-    throw SceneError("resume: step " + std::to_string(step) + " is outside the run's 0.." + std::to_string(m_steps));
+    throw SceneError("resume: step " + std::to_string(step) + " is outside the run's 0.." +
+                     std::to_string(m_steps));
   if (std::abs(state.time - step * m_h) > 1e-9 * std::max(1.0, m_scene.duration))
     throw SceneError("resume: the state's time does not match step " + std::to_string(step) +
                      " of this scene's time step (another time_step or duration?)");
   if (saved) {
     for (const PhysicsSetup::Lift& l : m_setup.lifts) {
-      if (l.spec >= static_cast<int>(saved->obstacles.size()) || !saved->obstacles[l.spec].lift.enabled()) continue;
+      if (l.spec >= static_cast<int>(saved->obstacles.size()) ||
+          !saved->obstacles[l.spec].lift.enabled())
+        continue;
       // Times and translations as saved (exact in JSON), rotations and scales from the scene's
       // motion at those times, as the run that saved them made them (RigidMotion::translate_from).
       collision::RigidMotion m = l.keyframed;
@@ -351,9 +374,11 @@ void Run::resume(const remesh::SheetMesh& mesh, const SheetState& state, int ste
   track();
   if (!tally) return;
   const RunQuality& q = tally->quality;
-  if (q.min_obstacle_distance.size() != m_quality.min_obstacle_distance.size() || q.lifts.size() != m_quality.lifts.size())
-    throw SceneError("resume: the saved run figures are for " + std::to_string(q.min_obstacle_distance.size()) +
-                     " obstacles (" + std::to_string(q.lifts.size()) + " lifting), this scene has " +
+  if (q.min_obstacle_distance.size() != m_quality.min_obstacle_distance.size() ||
+      q.lifts.size() != m_quality.lifts.size())
+    throw SceneError("resume: the saved run figures are for " +
+                     std::to_string(q.min_obstacle_distance.size()) + " obstacles (" +
+                     std::to_string(q.lifts.size()) + " lifting), this scene has " +
                      std::to_string(m_quality.min_obstacle_distance.size()) + " (" +
                      std::to_string(m_quality.lifts.size()) + ")");
   m_totals = tally->totals;
@@ -363,11 +388,14 @@ void Run::resume(const remesh::SheetMesh& mesh, const SheetState& state, int ste
   m_counts.vertices_max = std::max(m_counts.vertices_max, tally->sheet.vertices_max);
   m_counts.faces_max = std::max(m_counts.faces_max, tally->sheet.faces_max);
   m_term_stats = tally->terms;  // in place: the terms count into these
-  m_quality.max_principal_stretch = std::max(m_quality.max_principal_stretch, q.max_principal_stretch);
-  m_quality.min_principal_stretch = std::min(m_quality.min_principal_stretch, q.min_principal_stretch);
+  m_quality.max_principal_stretch =
+      std::max(m_quality.max_principal_stretch, q.max_principal_stretch);
+  m_quality.min_principal_stretch =
+      std::min(m_quality.min_principal_stretch, q.min_principal_stretch);
   m_quality.max_speed = std::max(m_quality.max_speed, q.max_speed);
   for (size_t o = 0; o < q.min_obstacle_distance.size(); ++o)
-    m_quality.min_obstacle_distance[o] = std::min(m_quality.min_obstacle_distance[o], q.min_obstacle_distance[o]);
+    m_quality.min_obstacle_distance[o] =
+        std::min(m_quality.min_obstacle_distance[o], q.min_obstacle_distance[o]);
   for (size_t l = 0; l < q.lifts.size(); ++l) {
     m_quality.lifts[l].max_load = std::max(m_quality.lifts[l].max_load, q.lifts[l].max_load);
     m_quality.lifts[l].max_rise = std::max(m_quality.lifts[l].max_rise, q.lifts[l].max_rise);
@@ -389,8 +417,8 @@ void add_counts(Map& into, const Map& from) {
 void Run::rebuild() {
   if (m_integrator) m_pattern_changes_done += m_integrator->pattern_id();
   m_terms = build_terms(m_mesh, m_setup, &m_term_stats);
-  m_integrator =
-      std::make_unique<Integrator>(m_mesh.num_vertices(), std::move(m_terms.list), newton_params(), coupled_lifts());
+  m_integrator = std::make_unique<Integrator>(m_mesh.num_vertices(), std::move(m_terms.list),
+                                              newton_params(), coupled_lifts());
 }
 
 NewtonParams Run::newton_params() const {
@@ -400,8 +428,9 @@ NewtonParams Run::newton_params() const {
 }
 
 int Run::coupled_lifts() const {
-  return static_cast<int>(std::count_if(m_setup.lifts.begin(), m_setup.lifts.end(),
-                                        [](const PhysicsSetup::Lift& l) { return l.lift.coupled; }));
+  return static_cast<int>(
+      std::count_if(m_setup.lifts.begin(), m_setup.lifts.end(),
+                    [](const PhysicsSetup::Lift& l) { return l.lift.coupled; }));
 }
 
 double Run::rise(const PhysicsSetup::Lift& l, double t) {
@@ -434,13 +463,16 @@ void Run::track() {
   m_quality.max_principal_stretch = std::max(m_quality.max_principal_stretch, m_step_stretch);
   m_quality.min_principal_stretch = std::min(m_quality.min_principal_stretch, st.col(1).minCoeff());
   for (int v = 0; v < m_state.num_vertices(); ++v)
-    m_quality.max_speed = std::max(m_quality.max_speed, m_state.velocities.segment<3>(3 * v).norm());
+    m_quality.max_speed =
+        std::max(m_quality.max_speed, m_state.velocities.segment<3>(3 * v).norm());
   const size_t n = m_setup.obstacles.size();
   m_quality.min_obstacle_distance.resize(n, INF);
   m_step_distance.assign(n, INF);
   for (size_t o = 0; o < n; ++o) {
-    m_step_distance[o] = m_terms.contact->surface_distance(static_cast<int>(o), m_state.positions, m_state.time);
-    m_quality.min_obstacle_distance[o] = std::min(m_quality.min_obstacle_distance[o], m_step_distance[o]);
+    m_step_distance[o] =
+        m_terms.contact->surface_distance(static_cast<int>(o), m_state.positions, m_state.time);
+    m_quality.min_obstacle_distance[o] =
+        std::min(m_quality.min_obstacle_distance[o], m_step_distance[o]);
   }
 }
 
@@ -504,7 +536,9 @@ void Run::lift_obstacles(double step_start) {
     q.max_load = std::max(q.max_load, load);
     q.max_rise = std::max(q.max_rise, rise);
     if (l.lift.coupled) {
-      m_trace(Trace::lift, "t %.4f lift: obstacle %d force (%.4g, %.4g, %.4g) N, rise %.4g m (coupled, %+.3g m in the step)",
+      m_trace(Trace::lift,
+              "t %.4f lift: obstacle %d force (%.4g, %.4g, %.4g) N, rise %.4g m (coupled, %+.3g m "
+              "in the step)",
               t, l.spec, force.x(), force.y(), force.z(), rise, moved);
       continue;
     }
@@ -512,8 +546,9 @@ void Run::lift_obstacles(double step_start) {
     // keyframed path; changes below a nanometre are not made (they would only add keyframes).
     const double rate = l.lift.speed * std::clamp((load - l.lift.load) / l.lift.load, -1.0, 1.0);
     const double dz = std::max(rate * m_h, -std::max(rise, 0.0));
-    m_trace(Trace::lift, "t %.4f lift: obstacle %d force (%.4g, %.4g, %.4g) N, rise %.4g m, next %+.3g m", t, l.spec,
-            force.x(), force.y(), force.z(), rise, dz);
+    m_trace(Trace::lift,
+            "t %.4f lift: obstacle %d force (%.4g, %.4g, %.4g) N, rise %.4g m, next %+.3g m", t,
+            l.spec, force.x(), force.y(), force.z(), rise, dz);
     if (std::abs(dz) < 1e-9) continue;
     l.collider->motion.translate_from(t, t + m_h, Eigen::Vector3d(0, 0, dz), l.keyframed);
     m_scene.obstacles[l.spec].keyframes = l.collider->motion.keyframes();
@@ -523,12 +558,15 @@ void Run::lift_obstacles(double step_start) {
 Eigen::VectorXd Run::vertex_obstacle_distance() const {
   // The mesh a pass makes must already resolve the contact the sheet reaches before the pass
   // after next (a fall meets its obstacle at a few centimetres per step).
-  return approach_distance(m_setup.obstacles, m_state.positions_matrix(), m_state.velocities_matrix(), m_state.time,
+  return approach_distance(m_setup.obstacles, m_state.positions_matrix(),
+                           m_state.velocities_matrix(), m_state.time,
                            2.0 * m_scene.remesh.every * m_h);
 }
 
-std::string Run::check_remeshed(const remesh::SheetMesh& mesh, const SheetState& state, Terms& terms) {
-  if (m_setup.self_contact && collision::count_self_intersections(state.positions_matrix(), mesh.faces()) > 0)
+std::string Run::check_remeshed(const remesh::SheetMesh& mesh, const SheetState& state,
+                                Terms& terms) {
+  if (m_setup.self_contact &&
+      collision::count_self_intersections(state.positions_matrix(), mesh.faces()) > 0)
     return "self-intersection";
   try {
     terms = build_terms(mesh, m_setup, &m_term_stats);
@@ -553,7 +591,8 @@ std::string Run::check_remeshed(const remesh::SheetMesh& mesh, const SheetState&
 
 remesh::RemeshParams Run::remesh_params() const {
   remesh::RemeshParams p = m_scene.remesh.params;
-  if (m_remesh.rescues > 0 && p.obstacle_distance <= 0) p.obstacle_distance = m_scene.remesh.rescue_distance;
+  if (m_remesh.rescues > 0 && p.obstacle_distance <= 0)
+    p.obstacle_distance = m_scene.remesh.rescue_distance;
   return p;
 }
 
@@ -562,7 +601,8 @@ remesh::RemeshState Run::remesh_state() const {
   rs.positions = m_state.positions_matrix();
   rs.velocities = m_state.velocities_matrix();
   if (!m_setup.obstacles.empty()) rs.obstacle_distance = vertex_obstacle_distance();
-  if (m_terms.membrane->arc()) rs.membrane_strain = m_terms.membrane->green_strains(m_state.positions);
+  if (m_terms.membrane->arc())
+    rs.membrane_strain = m_terms.membrane->green_strains(m_state.positions);
   return rs;
 }
 
@@ -577,7 +617,8 @@ void Run::remesh_pass() {
   vp.self_gap = m_setup.self_contact ? 0.1 * m_setup.self_contact_params.dhat : 0.0;
   vp.time = m_state.time;
   RemeshVeto veto(m_setup.obstacles, m_mesh, rs.positions, vp);
-  if (m_terms.membrane->arc()) veto.set_vertex_curvatures(m_terms.membrane->vertex_curvatures(m_state.positions));
+  if (m_terms.membrane->arc())
+    veto.set_vertex_curvatures(m_terms.membrane->vertex_curvatures(m_state.positions));
   const remesh::RemeshStats st = remesh::remesh(mesh, rs, remesh_params(), std::cref(veto));
   add_counts(m_remesh.refusals, st.refusals);
   m_remesh.seconds_remesh += seconds_since(t0);
@@ -601,13 +642,14 @@ void Run::remesh_pass() {
   if (failure.empty()) failure = check_remeshed(mesh, state, terms);
   std::unique_ptr<Integrator> integrator;
   if (failure.empty()) {
-    integrator = std::make_unique<Integrator>(mesh.num_vertices(), std::move(terms.list), newton_params(),
-                                              coupled_lifts());
+    integrator = std::make_unique<Integrator>(mesh.num_vertices(), std::move(terms.list),
+                                              newton_params(), coupled_lifts());
     begin_lift_bodies(terms, *integrator);
     if (!std::isfinite(integrator->start_energy(state, m_h))) failure = "infeasible";
   }
-  m_trace(Trace::remesh, "remesh t %.6f: %d splits, %d flips, %d collapses -> %d vertices%s%s", m_state.time,
-          st.splits, st.flips, st.collapses, mesh.num_vertices(), failure.empty() ? "" : ", undone: ", failure.c_str());
+  m_trace(Trace::remesh, "remesh t %.6f: %d splits, %d flips, %d collapses -> %d vertices%s%s",
+          m_state.time, st.splits, st.flips, st.collapses, mesh.num_vertices(),
+          failure.empty() ? "" : ", undone: ", failure.c_str());
   if (!failure.empty()) {
     ++m_remesh.rollbacks;
     ++m_remesh.rollback_reasons[failure];
@@ -629,9 +671,11 @@ void Run::remesh_pass() {
   const double jump = std::abs(after - before);
   m_remesh.max_energy_jump = std::max(m_remesh.max_energy_jump, jump);
   const double range = m_energy_max - m_energy_min;
-  if (range > 0) m_remesh.max_energy_jump_relative = std::max(m_remesh.max_energy_jump_relative, jump / range);
-  m_trace(Trace::remesh, "remesh t %.6f: energy %.6g -> %.6g J (jump %.3g of the range so far, %.6g J)", m_state.time,
-          before, after, range > 0 ? jump / range : 0.0, range);
+  if (range > 0)
+    m_remesh.max_energy_jump_relative = std::max(m_remesh.max_energy_jump_relative, jump / range);
+  m_trace(Trace::remesh,
+          "remesh t %.6f: energy %.6g -> %.6g J (jump %.3g of the range so far, %.6g J)",
+          m_state.time, before, after, range > 0 ? jump / range : 0.0, range);
   m_counts.vertices_max = std::max(m_counts.vertices_max, m_mesh.num_vertices());
   m_counts.faces_max = std::max(m_counts.faces_max, m_mesh.num_faces());
   m_remesh.seconds_rebuild += seconds_since(t0);
@@ -666,7 +710,8 @@ RunResult Run::result(double wall_seconds) const {
   if (m_terms.contact) r.contact = m_term_stats.contact;
   if (m_terms.self_contact) r.self_contact = m_term_stats.self_contact;
   r.quality = m_quality;
-  r.quality.self_intersections = collision::count_self_intersections(m_state.positions_matrix(), m_mesh.faces());
+  r.quality.self_intersections =
+      collision::count_self_intersections(m_state.positions_matrix(), m_mesh.faces());
   if (m_terms.handles) {
     double worst = 0;
     for (int i = 0; i < m_terms.handles->size(); ++i)

@@ -11,8 +11,8 @@
 #include <functional>
 #include <map>
 #include <memory>
-#include <string>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "remesh/sheet_mesh.hpp"
@@ -86,7 +86,8 @@ struct PhysicsSetup {
 /// The physics of a scene: obstacles built, contact stiffness resolved, handles anchored at the
 /// sheet's initial world positions.
 /// @throw SceneError for an obstacle that cannot be built or a handle outside the sheet.
-PhysicsSetup physics_setup(const Scene& scene, const remesh::SheetMesh& mesh, const SheetState& initial);
+PhysicsSetup physics_setup(const Scene& scene, const remesh::SheetMesh& mesh,
+                           const SheetState& initial);
 
 /// Counters kept by the terms of a run (owned by the run, see ContactStatistics).
 struct TermStatistics {
@@ -97,12 +98,12 @@ struct TermStatistics {
 /// The incremental potential of one mesh, and typed views of the terms the run reports on.
 struct Terms {
   std::vector<std::unique_ptr<EnergyTerm>> list;  ///< handed to the Integrator
-  Eigen::VectorXd masses;                          ///< lumped vertex masses (#V) [kg]
+  Eigen::VectorXd masses;                         ///< lumped vertex masses (#V) [kg]
   MembraneEnergy* membrane = nullptr;
   BendingEnergy* bending = nullptr;
-  HandleEnergy* handles = nullptr;                 ///< null without handles or clamps
-  ObstacleContactEnergy* contact = nullptr;        ///< null without obstacles
-  SelfContactEnergy* self_contact = nullptr;       ///< null when self-contact is off
+  HandleEnergy* handles = nullptr;            ///< null without handles or clamps
+  ObstacleContactEnergy* contact = nullptr;   ///< null without obstacles
+  SelfContactEnergy* self_contact = nullptr;  ///< null when self-contact is off
   /// Coupled lifting obstacles (collision::LiftSpec::coupled), in the order of PhysicsSetup::lifts
   /// that are coupled; the k-th is rigid block #V + k of the integrator.
   std::vector<LiftBodyEnergy*> lift_bodies;
@@ -121,7 +122,8 @@ struct EnergyBreakdown {
   double stretch = 0, bend = 0, gravity = 0, kinetic = 0;
   double mechanical() const { return stretch + bend + gravity + kinetic; }
 };
-EnergyBreakdown energy_breakdown(const Terms& terms, const Eigen::Vector3d& gravity, const SheetState& state);
+EnergyBreakdown energy_breakdown(const Terms& terms, const Eigen::Vector3d& gravity,
+                                 const SheetState& state);
 
 /// Quality figures of a run (running extremes over every step, self-intersections at the end).
 struct RunQuality {
@@ -131,7 +133,7 @@ struct RunQuality {
   double max_speed = 0.0;              ///< largest vertex speed [m/s]
   /// Smallest signed distance of the sheet's surface to each obstacle (the ground first) [m].
   std::vector<double> min_obstacle_distance;
-  int self_intersections = 0;          ///< intersecting non-adjacent triangle pairs at the end
+  int self_intersections = 0;              ///< intersecting non-adjacent triangle pairs at the end
   std::optional<double> max_handle_error;  ///< [m], when the scene has handles
   /// Per obstacle that yields upwards (PhysicsSetup::lifts, in that order): the largest upward
   /// load the sheet pressed it with after a step [N] and the largest height it rose above its
@@ -146,7 +148,7 @@ struct RunQuality {
 /// Vertex and face counts of the sheet over a run.
 struct MeshCounts {
   int vertices_start = 0, faces_start = 0;
-  int vertices = 0, faces = 0;          ///< at the end
+  int vertices = 0, faces = 0;  ///< at the end
   int vertices_max = 0, faces_max = 0;
 };
 
@@ -159,8 +161,8 @@ struct RemeshTotals {
   int rescues = 0;
   std::map<std::string, int> rollback_reasons;
   int splits = 0, flips = 0, collapses = 0;  ///< edits of the kept passes
-  std::map<std::string, int> refusals;       ///< edits refused, by reason ("veto: ..." from the run)
-  double seconds_remesh = 0.0;   ///< wall time in the remeshing passes [s]
+  std::map<std::string, int> refusals;  ///< edits refused, by reason ("veto: ..." from the run)
+  double seconds_remesh = 0.0;          ///< wall time in the remeshing passes [s]
   double seconds_rebuild = 0.0;  ///< wall time in checking the result and rebuilding the terms [s]
   /// Largest change of the mechanical energy (EnergyBreakdown) across a kept pass [J], and that
   /// change relative to the range the mechanical energy spanned over the run until then [-].
@@ -174,14 +176,14 @@ struct RunResult {
   SheetState state;
   double wall_seconds = 0.0;
   int steps = 0;
-  double time_step = 0.0;  ///< [s]
-  StepStats totals;        ///< summed over the steps
+  double time_step = 0.0;    ///< [s]
+  StepStats totals;          ///< summed over the steps
   long pattern_changes = 0;  ///< Hessian pattern rebuilds (dynamic terms)
   MeshCounts sheet;
   std::optional<ContactStatistics> contact;
   std::optional<SelfContactStatistics> self_contact;
   RunQuality quality;
-  EnergyBreakdown energy;  ///< at the end
+  EnergyBreakdown energy;              ///< at the end
   std::optional<RemeshTotals> remesh;  ///< when the scene remeshes
 };
 
@@ -225,8 +227,8 @@ class Run {
   /// `saved`: the scene the checkpoint was saved with (Run::scene() of that run); obstacles that
   /// yield upwards continue on the motion saved there. `self_contact_pattern`: the saved run's
   /// (self_contact_pattern()), so that the continued run factors the matrices it would have.
-  void resume(const remesh::SheetMesh& mesh, const SheetState& state, int step, const Scene* saved = nullptr,
-              const RunTally* tally = nullptr,
+  void resume(const remesh::SheetMesh& mesh, const SheetState& state, int step,
+              const Scene* saved = nullptr, const RunTally* tally = nullptr,
               const std::vector<std::array<int, 3>>* self_contact_pattern = nullptr);
   /// The self-contact term's Hessian pattern pairs (SelfContactEnergy::pattern_pairs; empty
   /// without self-contact), for a checkpoint.

@@ -1,12 +1,11 @@
 #include "simulation/scenario.hpp"
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <random>
 #include <string>
 #include <string_view>
-
-#include <Eigen/Geometry>
 
 #include "simulation/errors.hpp"
 
@@ -29,7 +28,9 @@ class Draw {
   double unit() { return static_cast<double>(m_rng() >> 11) * 0x1.0p-53; }
   bool chance(double p) { return unit() < p; }
   /// Uniform integer in [a, b] (inclusive).
-  int integer(int a, int b) { return a + static_cast<int>(std::min<double>(b - a, std::floor(unit() * (b - a + 1)))); }
+  int integer(int a, int b) {
+    return a + static_cast<int>(std::min<double>(b - a, std::floor(unit() * (b - a + 1))));
+  }
 
  private:
   /// splitmix64 of the seed mixed with the FNV-1a hash of the stream name.
@@ -90,7 +91,6 @@ Scene pull(std::uint64_t seed) {
   }
   return s;
 }
-
 
 /// Rotation (x, y, z Euler angles in degrees, applied in that order) as a quaternion, the
 /// convention of scene files (obstacle `rotation_deg`).
@@ -239,7 +239,8 @@ Scene fall_spheres(std::uint64_t seed) {
   // (those with a run-time study reference) ended within 1.4e-7 m of the exactly factored runs
   // (docs/performance.md, "First cut").
   s.newton.max_factor_reuse = 4;
-  const int g = static_cast<int>(std::floor(std::sqrt(static_cast<double>(Draw(seed, "count").integer(30, 150)))));
+  const int g = static_cast<int>(
+      std::floor(std::sqrt(static_cast<double>(Draw(seed, "count").integer(30, 150)))));
   const double friction = Draw(seed, "friction").uniform(0.25, 0.5);
   const double dx = 0.30 / (g - 1), dy = 0.42 / (g - 1);
   for (int i = 0; i < g; ++i)
@@ -271,11 +272,12 @@ Eigen::Vector2d boundary_point(Draw& d, double width, double height) {
 /// and perpendicular to d, at height z, resting at centre + 0.35 d until t = 3 s and rolling
 /// without slipping to centre - 0.35 d by t = 6 s (one keyframe per 0.1 s: slerp turns less
 /// than pi per segment).
-std::vector<collision::Keyframe> roller_keyframes(const Eigen::Vector3d& centre, const Eigen::Vector3d& d,
-                                                  double r, double z) {
+std::vector<collision::Keyframe> roller_keyframes(const Eigen::Vector3d& centre,
+                                                  const Eigen::Vector3d& d, double r, double z) {
   const Eigen::Vector3d axis = Eigen::Vector3d::UnitZ().cross(d).normalized();
   // Local x (the cylinder's axis) onto `axis`.
-  const Eigen::Quaterniond base = Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitX(), axis);
+  const Eigen::Quaterniond base =
+      Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitX(), axis);
   const Eigen::Vector3d start = centre + 0.35 * d + Eigen::Vector3d(0, 0, z - centre.z());
   const double travel = 0.7, t0 = 3.0, t1 = 6.0;
   constexpr int SEGMENTS = 30;
@@ -359,13 +361,15 @@ Scene fold(std::uint64_t seed) {
   // ~1e-8 m, far less than the roller moves in a step (2.3 mm at 10 ms; halving cannot catch
   // up). Measured on seed 0: with a rigid grip (1e6 N/m) the run fails when the roller reaches
   // the held point (t = 3.67 s); with the 100 N/m grip and 1e3 Pa it crawled there on halved
-  // steps for minutes; with both changes it passes the point (on the uniform mesh the run then jammed at the
-  // fold's loop, hence the remeshing above).
+  // steps for minutes; with both changes it passes the point (on the uniform mesh the run then
+  // jammed at the fold's loop, hence the remeshing above).
   h.stiffness = 100.0;
   s.contact.stiffness = 1e4;
-  auto at = [&](double along, double up) { return Eigen::Vector3d(along * d + Eigen::Vector3d(0, 0, up)); };
-  h.keyframes = {{0.0, at(0, 0)},           {1.0, at(0.5 * D, lift)}, {2.0, at(D, 0.02)},
-                 {6.0, at(D, 0.02)},        {7.0, at(0.7 * D, 0.16)}, {8.0, at(0.15 * D, 0.08)},
+  auto at = [&](double along, double up) {
+    return Eigen::Vector3d(along * d + Eigen::Vector3d(0, 0, up));
+  };
+  h.keyframes = {{0.0, at(0, 0)},    {1.0, at(0.5 * D, lift)}, {2.0, at(D, 0.02)},
+                 {6.0, at(D, 0.02)}, {7.0, at(0.7 * D, 0.16)}, {8.0, at(0.15 * D, 0.08)},
                  {9.0, at(0, 0)}};
   s.handles.push_back(h);
   collision::ColliderSpec roller;
@@ -429,9 +433,11 @@ Scene crumple(std::uint64_t seed) {
   s.contact.static_whole_step = true;
   const Eigen::Vector3d centre(0, 0, 0.25);
   Draw pose(seed, "pose");
-  const double tilt_x = pose.uniform(-3, 3), tilt_y = pose.uniform(-3, 3), turn = pose.uniform(0, 360);
+  const double tilt_x = pose.uniform(-3, 3), tilt_y = pose.uniform(-3, 3),
+               turn = pose.uniform(0, 360);
   s.sheet.rotation_deg = Eigen::Vector3d(85 + tilt_x, tilt_y, turn);
-  s.sheet.position = centre + Eigen::Vector3d(pose.uniform(-5e-3, 5e-3), pose.uniform(-5e-3, 5e-3), 0);
+  s.sheet.position =
+      centre + Eigen::Vector3d(pose.uniform(-5e-3, 5e-3), pose.uniform(-5e-3, 5e-3), 0);
   // Held until 1 s (a keyframe before it is not needed: the placement is held before the first).
   const collision::ColliderSpec sphere = collision::shrinking_cavity(centre, 0.2, 1.0, 5.0, 0.25);
   s.obstacles.push_back(sphere);

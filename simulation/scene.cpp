@@ -49,7 +49,8 @@ class Reader {
     const json* v = take(key);
     if (!v) return fallback;
     if (!v->is_number_integer()) fail(key, "expected an integer");
-    if (v->is_number_unsigned() && v->get<unsigned long long>() > static_cast<unsigned long long>(hi))
+    if (v->is_number_unsigned() &&
+        v->get<unsigned long long>() > static_cast<unsigned long long>(hi))
       fail(key, "value " + std::to_string(v->get<unsigned long long>()) + " out of range [" +
                     std::to_string(lo) + ", " + std::to_string(hi) + "]");
     const long long x = v->get<long long>();
@@ -74,10 +75,12 @@ class Reader {
   }
 
   template <int N>
-  Eigen::Matrix<double, N, 1> vector(const std::string& key, const Eigen::Matrix<double, N, 1>& fallback) {
+  Eigen::Matrix<double, N, 1> vector(const std::string& key,
+                                     const Eigen::Matrix<double, N, 1>& fallback) {
     const json* v = take(key);
     if (!v) return fallback;
-    if (!v->is_array() || v->size() != N) fail(key, "expected an array of " + std::to_string(N) + " numbers");
+    if (!v->is_array() || v->size() != N)
+      fail(key, "expected an array of " + std::to_string(N) + " numbers");
     Eigen::Matrix<double, N, 1> r;
     for (int i = 0; i < N; ++i) {
       if (!(*v)[i].is_number()) fail(key, "expected an array of " + std::to_string(N) + " numbers");
@@ -102,7 +105,8 @@ class Reader {
     if (!v) return out;
     if (!v->is_array()) fail(key, "expected an array");
     for (size_t i = 0; i < v->size(); ++i)
-      out.emplace_back((*v)[i], (m_path.empty() ? key : m_path + "." + key) + "[" + std::to_string(i) + "]",
+      out.emplace_back((*v)[i],
+                       (m_path.empty() ? key : m_path + "." + key) + "[" + std::to_string(i) + "]",
                        m_source);
     return out;
   }
@@ -135,7 +139,8 @@ class Reader {
   std::set<std::string> m_used;
 };
 
-remesh::Triangulation triangulation_from(Reader& r, const std::string& key, remesh::Triangulation d) {
+remesh::Triangulation triangulation_from(Reader& r, const std::string& key,
+                                         remesh::Triangulation d) {
   const std::string name = r.string(key, "");
   if (name.empty()) return d;
   if (name == "alternating") return remesh::Triangulation::alternating;
@@ -146,9 +151,12 @@ remesh::Triangulation triangulation_from(Reader& r, const std::string& key, reme
 
 const char* to_string(remesh::Triangulation t) {
   switch (t) {
-    case remesh::Triangulation::alternating: return "alternating";
-    case remesh::Triangulation::random: return "random";
-    case remesh::Triangulation::regular: return "regular";
+    case remesh::Triangulation::alternating:
+      return "alternating";
+    case remesh::Triangulation::random:
+      return "random";
+    case remesh::Triangulation::regular:
+      return "regular";
   }
   return "alternating";
 }
@@ -322,8 +330,9 @@ collision::ColliderSpec read_obstacle(Reader r) {
                                           common::format_number(q.norm()));
       const double apart = q.angularDistance(f.rotation) * 180 / M_PI;
       if (k.has("rotation_deg") && !(apart <= 1e-6))
-        k.fail("rotation_quaternion", "is " + common::format_number(apart) +
-                                          " degrees from rotation_deg; give one of the two, or both for one rotation");
+        k.fail("rotation_quaternion",
+               "is " + common::format_number(apart) +
+                   " degrees from rotation_deg; give one of the two, or both for one rotation");
       f.rotation = q;
     }
     f.scale = k.number("scale", scale, 0, 1e6, true);
@@ -385,10 +394,12 @@ Scene scene_from_json(const json& j, const std::string& source) {
     s.newton.max_iterations = n.integer("max_iterations", s.newton.max_iterations, 1, 10000);
     s.newton.tolerance = n.number("tolerance", s.newton.tolerance, 0, 1e3, true);
     s.newton.max_halvings = n.integer("max_halvings", s.newton.max_halvings, 0, 30);
-    s.newton.max_extrapolation = n.integer("max_extrapolation", s.newton.max_extrapolation, 1, 1024);
+    s.newton.max_extrapolation =
+        n.integer("max_extrapolation", s.newton.max_extrapolation, 1, 1024);
     s.newton.max_factor_reuse = n.integer("max_factor_reuse", s.newton.max_factor_reuse, 0, 1000);
     s.newton.follow_obstacles = n.boolean("follow_obstacles", s.newton.follow_obstacles);
-    s.newton.exact_retry_skip_max = n.integer("exact_retry_skip_max", s.newton.exact_retry_skip_max, 0, 1000);
+    s.newton.exact_retry_skip_max =
+        n.integer("exact_retry_skip_max", s.newton.exact_retry_skip_max, 0, 1000);
     s.newton.trust_region_cg = n.integer("trust_region_cg", s.newton.trust_region_cg, 0, 1000);
     n.finish();
   }
@@ -458,12 +469,16 @@ json obstacle_json(const collision::ColliderSpec& c) {
   o["mesh_scale"] = c.obj_scale;
   o["voxel_size"] = c.level_set.voxel_size;
   o["friction"] = c.friction;
-  if (c.lift.enabled()) o["lift"] = {{"load", c.lift.load}, {"speed", c.lift.speed}, {"coupled", c.lift.coupled}};
+  if (c.lift.enabled())
+    o["lift"] = {{"load", c.lift.load}, {"speed", c.lift.speed}, {"coupled", c.lift.coupled}};
   json keys = json::array();
   for (const auto& k : c.keyframes) {
     const Eigen::Vector3d e = k.rotation.toRotationMatrix().eulerAngles(2, 1, 0) * 180 / M_PI;
     const Eigen::Vector3d deg(e[2], e[1], e[0]);
-    json key = {{"time", k.time}, {"position", vec(k.translation)}, {"rotation_deg", vec(deg)}, {"scale", k.scale}};
+    json key = {{"time", k.time},
+                {"position", vec(k.translation)},
+                {"rotation_deg", vec(deg)},
+                {"scale", k.scale}};
     // Degrees rarely give a quaternion back to the bit, and a run that differs by a bit in its
     // obstacle's pose can end elsewhere: the file then also carries the exact rotation.
     if (to_q(deg).coeffs() != k.rotation.coeffs())
@@ -501,7 +516,8 @@ json scene_to_json(const Scene& s, bool every_key) {
   // Written only when not the default (or asked for), so that scenes of the default model keep
   // their bytes.
   if (m.membrane_model == MembraneModel::arc || every_key)
-    j["sheet"]["material"]["membrane_model"] = m.membrane_model == MembraneModel::arc ? "arc" : "chord";
+    j["sheet"]["material"]["membrane_model"] =
+        m.membrane_model == MembraneModel::arc ? "arc" : "chord";
   if (!s.sheet.mesh_path.empty()) j["sheet"]["mesh"] = s.sheet.mesh_path;
   j["gravity"] = vec(s.gravity);
   j["duration"] = s.duration;

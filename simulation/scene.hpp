@@ -20,11 +20,11 @@ namespace papersim::simulation {
 constexpr double MAX_SCENE_COORDINATE = 1e3;
 
 struct SheetSpec {
-  double width = 0.210;        ///< [m] along material x
-  double height = 0.297;       ///< [m] along material y
-  double edge_length = 6e-3;   ///< target edge length of the initial mesh [m]
+  double width = 0.210;       ///< [m] along material x
+  double height = 0.297;      ///< [m] along material y
+  double edge_length = 6e-3;  ///< target edge length of the initial mesh [m]
   remesh::Triangulation triangulation = remesh::Triangulation::alternating;
-  std::string mesh_path;       ///< optional OBJ/PLY to start from instead of a rectangle
+  std::string mesh_path;  ///< optional OBJ/PLY to start from instead of a rectangle
   Material material;
   /// Initial pose: the sheet's centre goes to `position` [m], then it is rotated by
   /// `rotation_deg` (x, y, z Euler angles applied in that order) about its centre [deg].
@@ -35,8 +35,8 @@ struct SheetSpec {
 /// A clamp: every vertex whose material point lies in the box is held in place.
 struct ClampSpec {
   Eigen::Vector4d region = Eigen::Vector4d::Zero();  ///< (x_min, y_min, x_max, y_max) [m]
-  double release_time = INF;  ///< [s]
-  double stiffness = 1e6;     ///< [N/m]
+  double release_time = INF;                         ///< [s]
+  double stiffness = 1e6;                            ///< [N/m]
 };
 
 struct OutputSpec {
@@ -68,10 +68,10 @@ struct Scene {
   std::string source;  ///< the file the scene was read from, for messages (not written back)
   SheetSpec sheet;
   Eigen::Vector3d gravity = Eigen::Vector3d(0, 0, -9.8);  ///< [m/s^2]
-  double duration = 1.0;    ///< [s]
-  double time_step = 2e-3;  ///< [s]
-  bool ground = true;       ///< the plane z = 0
-  double ground_friction = 0.3;  ///< [-]
+  double duration = 1.0;                                  ///< [s]
+  double time_step = 2e-3;                                ///< [s]
+  bool ground = true;                                     ///< the plane z = 0
+  double ground_friction = 0.3;                           ///< [-]
   std::vector<collision::ColliderSpec> obstacles;
   std::vector<HandleSpec> handles;
   std::vector<ClampSpec> clamps;

@@ -103,7 +103,8 @@ SelfContactStatistics self_contact_from_json(const json& c) {
   o.seconds = c.at("seconds").get<double>();
   o.max_active_pairs = c.at("max_active_pairs").get<int>();
   o.pattern_changes = c.at("pattern_changes").get<int>();
-  o.stiffness_doublings = c.value("stiffness_doublings", 0);  // absent before the adaptive stiffness
+  // absent before the adaptive stiffness
+  o.stiffness_doublings = c.value("stiffness_doublings", 0);
   o.max_stiffness = c.value("max_stiffness", 0.0);
   return o;
 }
@@ -182,10 +183,14 @@ json meta_json(const Scene& scene, const RunResult& r, const json& extra) {
   if (!scene.scenario.empty()) m["scenario"] = scene.scenario;
   if (scene.seed >= 0) m["seed"] = scene.seed;
   const MeshCounts& c = r.sheet;
-  m["sheet"] = {{"width", scene.sheet.width},      {"height", scene.sheet.height},
-                {"vertices", c.vertices},          {"faces", c.faces},
-                {"vertices_start", c.vertices_start}, {"faces_start", c.faces_start},
-                {"vertices_max", c.vertices_max},  {"faces_max", c.faces_max}};
+  m["sheet"] = {{"width", scene.sheet.width},
+                {"height", scene.sheet.height},
+                {"vertices", c.vertices},
+                {"faces", c.faces},
+                {"vertices_start", c.vertices_start},
+                {"faces_start", c.faces_start},
+                {"vertices_max", c.vertices_max},
+                {"faces_max", c.faces_max}};
   json& run = m["run"] = step_stats_json(r.totals);
   run["wall_seconds"] = r.wall_seconds;
   run["steps"] = r.steps;
@@ -209,7 +214,8 @@ json meta_json(const Scene& scene, const RunResult& r, const json& extra) {
   if (q.max_handle_error) m["quality"]["max_handle_error"] = *q.max_handle_error;
   if (!q.lifts.empty()) m["quality"]["lifts"] = lifts_json(q.lifts);
   const EnergyBreakdown& e = r.energy;
-  m["energy"] = {{"stretch", e.stretch}, {"bend", e.bend}, {"gravity", e.gravity}, {"kinetic", e.kinetic}};
+  m["energy"] = {
+      {"stretch", e.stretch}, {"bend", e.bend}, {"gravity", e.gravity}, {"kinetic", e.kinetic}};
   for (auto it = extra.begin(); it != extra.end(); ++it) m[it.key()] = it.value();
   return m;
 }
@@ -262,7 +268,8 @@ void write_matrix_file(const fs::path& file, const std::vector<double>& values) 
     const std::uint64_t n = values.size();
     out.write(MATRIX_HEADER, MATRIX_HEADER_SIZE);
     out.write(reinterpret_cast<const char*>(&n), sizeof n);
-    out.write(reinterpret_cast<const char*>(values.data()), static_cast<std::streamsize>(n * sizeof(double)));
+    out.write(reinterpret_cast<const char*>(values.data()),
+              static_cast<std::streamsize>(n * sizeof(double)));
   });
 }
 
@@ -276,7 +283,8 @@ std::vector<double> read_matrix_file(const fs::path& file, std::uint64_t entries
   in.read(reinterpret_cast<char*>(&n), sizeof n);
   if (!in || header != MATRIX_HEADER) throw std::runtime_error("is not a papersim matrix file");
   if (n != entries)
-    throw std::runtime_error("holds " + std::to_string(n) + " entries, checkpoint.json says " + std::to_string(entries));
+    throw std::runtime_error("holds " + std::to_string(n) + " entries, checkpoint.json says " +
+                             std::to_string(entries));
   // The size first, so that a count no file could hold allocates nothing.
   std::error_code ec;
   const std::uintmax_t size = fs::file_size(file, ec);
@@ -297,9 +305,10 @@ std::string checkpoint_file_name(int step, const char* extension) {
 
 }  // namespace
 
-void save_checkpoint(const std::string& dir, const Scene& scene, int step, const remesh::SheetMesh& mesh,
-                     const SheetState& state, const RunTally* tally,
-                     const std::vector<std::array<int, 3>>* self_contact_pattern, const ReusableFactor* factor) {
+void save_checkpoint(const std::string& dir, const Scene& scene, int step,
+                     const remesh::SheetMesh& mesh, const SheetState& state, const RunTally* tally,
+                     const std::vector<std::array<int, 3>>* self_contact_pattern,
+                     const ReusableFactor* factor) {
   const fs::path d(dir);
   std::error_code ec;
   fs::create_directories(d, ec);
@@ -308,29 +317,38 @@ void save_checkpoint(const std::string& dir, const Scene& scene, int step, const
   try {
     const json p = json::parse(std::ifstream(d / "checkpoint.json"));
     previous.push_back(p.at("sheet").get<std::string>());
-    if (p.contains("reusable_factor")) previous.push_back(p.at("reusable_factor").at("file").get<std::string>());
+    if (p.contains("reusable_factor"))
+      previous.push_back(p.at("reusable_factor").at("file").get<std::string>());
   } catch (const std::exception&) {
   }
   const std::string name = checkpoint_file_name(step, ".ply");
-  remesh::write_sheet_file((d / name).string(), mesh, state.positions_matrix(), state.velocities_matrix(),
-                           scene.sheet.width, scene.sheet.height);
-  json j = {{"format", CHECKPOINT_FORMAT}, {"step", step},        {"time", state.time},
-            {"sheet", name},               {"version", version()}, {"scene", scene_to_json(scene)},
+  remesh::write_sheet_file((d / name).string(), mesh, state.positions_matrix(),
+                           state.velocities_matrix(), scene.sheet.width, scene.sheet.height);
+  json j = {{"format", CHECKPOINT_FORMAT},
+            {"step", step},
+            {"time", state.time},
+            {"sheet", name},
+            {"version", version()},
+            {"scene", scene_to_json(scene)},
             {"contact_stiffness", state.contact_stiffness},
             {"self_contact_stiffness", state.self_contact_stiffness}};
   if (tally) j["run"] = tally_to_json(*tally);
-  if (self_contact_pattern && !self_contact_pattern->empty()) j["self_contact_pattern"] = *self_contact_pattern;
+  if (self_contact_pattern && !self_contact_pattern->empty())
+    j["self_contact_pattern"] = *self_contact_pattern;
   std::vector<std::string> current = {name};
   if (factor) {
     const std::string matrix = checkpoint_file_name(step, ".factor");
     write_matrix_file(d / matrix, factor->values);
-    j["reusable_factor"] = {
-        {"file", matrix}, {"h", factor->h}, {"reused", factor->reused}, {"entries", factor->values.size()}};
+    j["reusable_factor"] = {{"file", matrix},
+                            {"h", factor->h},
+                            {"reused", factor->reused},
+                            {"entries", factor->values.size()}};
     current.push_back(matrix);
   }
   common::write_text_atomically(d / "checkpoint.json", j.dump(1) + "\n");
   for (const std::string& p : previous)
-    if (!p.empty() && p.find('/') == std::string::npos && std::find(current.begin(), current.end(), p) == current.end())
+    if (!p.empty() && p.find('/') == std::string::npos &&
+        std::find(current.begin(), current.end(), p) == current.end())
       fs::remove(d / p, ec);
 }
 
@@ -348,12 +366,14 @@ Checkpoint load_checkpoint(const std::string& dir) {
     c.step = j.at("step").get<int>();
     c.time = j.at("time").get<double>();
     c.state.contact_stiffness = j.value("contact_stiffness", 0.0);  // absent before the load rule
-    c.state.self_contact_stiffness = j.value("self_contact_stiffness", 0.0);  // and the adaptive stiffness
+    // absent before the adaptive stiffness
+    c.state.self_contact_stiffness = j.value("self_contact_stiffness", 0.0);
     sheet = j.at("sheet").get<std::string>();
     c.scene = j.at("scene");
     if (j.contains("self_contact_pattern")) {  // absent before it was saved, and when empty
       try {
-        c.self_contact_pattern = j.at("self_contact_pattern").get<std::vector<std::array<int, 3>>>();
+        c.self_contact_pattern =
+            j.at("self_contact_pattern").get<std::vector<std::array<int, 3>>>();
       } catch (const json::exception& e) {
         throw SceneError(where + "key 'self_contact_pattern': " + e.what());
       }
@@ -412,12 +432,15 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
   json resumed;
   if (!options.resume_from.empty()) {
     const Checkpoint c = load_checkpoint(options.resume_from);
-    const Scene saved = scene_from_json(c.scene, (fs::path(options.resume_from) / "checkpoint.json").string());
+    const Scene saved =
+        scene_from_json(c.scene, (fs::path(options.resume_from) / "checkpoint.json").string());
     // Another time step continues from the step at the checkpoint's time (Run::resume refuses
     // a time that is not a whole number of the scene's steps).
-    const int step = saved.time_step == scene.time_step ? c.step
-                                                         : static_cast<int>(std::lround(c.time / run.time_step()));
-    run.resume(c.mesh, c.state, step, &saved, c.tally ? &*c.tally : nullptr, &c.self_contact_pattern);
+    const int step = saved.time_step == scene.time_step
+                         ? c.step
+                         : static_cast<int>(std::lround(c.time / run.time_step()));
+    run.resume(c.mesh, c.state, step, &saved, c.tally ? &*c.tally : nullptr,
+               &c.self_contact_pattern);
     if (c.tally) wall_before = c.tally->wall_seconds;
     // Numbers that differ only in rounding are not changes: the keyframes of an obstacle that
     // yields are rebuilt from its motion, whose Euler angles come back within 1e-13 degrees.
@@ -434,16 +457,20 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
     // The same scene's next step starts from the factorisation the saved run would have
     // started from; a changed scene (other solver settings or time step) factors its own.
     if (c.factor && changes.empty()) run.adopt_factor(*c.factor);
-    resumed = {{"from", options.resume_from}, {"step", step}, {"time", c.time}, {"scene_changes", changes},
+    resumed = {{"from", options.resume_from},
+               {"step", step},
+               {"time", c.time},
+               {"scene_changes", changes},
                {"whole_run", c.tally.has_value()}};
   }
   Staging staging(options.out_dir);
   if (!scene.source.empty()) staging.protect(scene.source);
-  const int frames_every = options.frames_every >= 0 ? options.frames_every : scene.output.frames_every;
+  const int frames_every =
+      options.frames_every >= 0 ? options.frames_every : scene.output.frames_every;
   if (staging.active() && frames_every > 0) fs::create_directories(staging.dir() / "frames");
   const int steps = run.steps_total();
   int last_percent = -1;
-  double last_report = 0.0;  // elapsed() at the last progress call
+  double last_report = 0.0;            // elapsed() at the last progress call
   const int first = run.steps_done();  // > 0 when resumed
   for (int k = first + 1; k <= steps; ++k) {
     run.step();
@@ -452,8 +479,8 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
       const RunTally tally = run.tally(wall_before + elapsed());
       const std::vector<std::array<int, 3>> pattern = run.self_contact_pattern();
       const std::optional<ReusableFactor> factor = run.reusable_factor();
-      save_checkpoint(options.checkpoint_dir, run.scene(), k, run.mesh(), run.state(), &tally, &pattern,
-                      factor ? &*factor : nullptr);
+      save_checkpoint(options.checkpoint_dir, run.scene(), k, run.mesh(), run.state(), &tally,
+                      &pattern, factor ? &*factor : nullptr);
     }
     if (options.on_step) {
       StepReport report;
@@ -475,7 +502,8 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
     }
     const double fraction = double(k - first) / (steps - first);
     const int percent = static_cast<int>(100.0 * fraction);
-    if (options.progress && (percent != last_percent || elapsed() - last_report >= options.progress_every)) {
+    if (options.progress &&
+        (percent != last_percent || elapsed() - last_report >= options.progress_every)) {
       last_percent = percent;
       last_report = elapsed();
       options.progress(fraction, last_report);

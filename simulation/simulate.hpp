@@ -21,8 +21,8 @@ using ProgressFn = std::function<void(double fraction, double seconds)>;
 
 /// What a step observer sees after each accepted step.
 struct StepReport {
-  int step = 0;                          ///< 1-based
-  const SheetState* state = nullptr;     ///< the state after the step
+  int step = 0;                             ///< 1-based
+  const SheetState* state = nullptr;        ///< the state after the step
   const remesh::SheetMesh* mesh = nullptr;  ///< the mesh of that state (it may change during a run)
   /// Kinetic + gravity + stretching (with the strain-limit barrier) + bending energy [J];
   /// contact and handle potentials are not included.
@@ -31,7 +31,7 @@ struct StepReport {
   /// (after - before; 0 without remeshing) [J]: `mechanical_energy` less it is what the steps
   /// alone changed. Counted from the start of this process's run (not across a resume).
   double remesh_energy_change = 0.0;
-  double max_stretch = 1.0;              ///< largest principal stretch at this step [-]
+  double max_stretch = 1.0;  ///< largest principal stretch at this step [-]
   /// Smallest signed distance of a sheet vertex to each obstacle (0 is the ground when the
   /// scene has one) at this step [m].
   std::vector<double> obstacle_distance;
@@ -39,12 +39,12 @@ struct StepReport {
 using StepObserver = std::function<void(const StepReport&)>;
 
 struct RunOptions {
-  std::string out_dir;      ///< created if missing; files appear only when the run succeeds
-  int frames_every = -1;    ///< overrides scene.output.frames_every when >= 0
+  std::string out_dir;    ///< created if missing; files appear only when the run succeeds
+  int frames_every = -1;  ///< overrides scene.output.frames_every when >= 0
   /// Called about once per percent of the steps, and after a step at least every
   /// `progress_every` seconds of wall time (so a run whose steps slow down still reports).
   ProgressFn progress;
-  double progress_every = 30.0;  ///< [s]
+  double progress_every = 30.0;                          ///< [s]
   nlohmann::json extra_meta = nlohmann::json::object();  ///< merged into meta.json
   /// Called after every step (costs one energy evaluation per step; none when unset).
   StepObserver on_step;
@@ -76,7 +76,7 @@ struct Checkpoint {
   double time = 0.0;  ///< [s]
   remesh::SheetMesh mesh;
   SheetState state;
-  nlohmann::json scene;  ///< scene_to_json of the run that saved it
+  nlohmann::json scene;           ///< scene_to_json of the run that saved it
   std::optional<RunTally> tally;  ///< absent in checkpoints that do not have `run`
   /// The self-contact term's Hessian pattern pairs (Run::self_contact_pattern); empty when it
   /// had none, or in checkpoints written before it was saved.
@@ -92,8 +92,9 @@ struct Checkpoint {
 /// new names, then checkpoint.json naming them, then the previous ones are removed; a run
 /// stopped at any moment leaves a complete checkpoint (the new or the previous one).
 /// @throw common::OutputError when a file cannot be written
-void save_checkpoint(const std::string& dir, const Scene& scene, int step, const remesh::SheetMesh& mesh,
-                     const SheetState& state, const RunTally* tally = nullptr,
+void save_checkpoint(const std::string& dir, const Scene& scene, int step,
+                     const remesh::SheetMesh& mesh, const SheetState& state,
+                     const RunTally* tally = nullptr,
                      const std::vector<std::array<int, 3>>* self_contact_pattern = nullptr,
                      const ReusableFactor* factor = nullptr);
 

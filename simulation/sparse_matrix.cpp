@@ -1,6 +1,5 @@
 #include "simulation/sparse_matrix.hpp"
 
-
 #include <algorithm>
 #include <atomic>
 #include <cstdint>
@@ -155,13 +154,16 @@ void BlockSymmetricMatrix::add_element(const int* vertices, int n, const double*
 
 void BlockSymmetricMatrix::find_slots(const int* vertices, int n, std::vector<int>& slots) const {
   for (int a = 0; a < n; ++a)
-    PAPERSIM_ASSERT(vertices[a] >= 0 && 3 * vertices[a] < size(), "BlockSymmetricMatrix: a block index out of range");
+    PAPERSIM_ASSERT(vertices[a] >= 0 && 3 * vertices[a] < size(),
+                    "BlockSymmetricMatrix: a block index out of range");
   for (int b = 0; b < n; ++b)
     for (int a = 0; a < n; ++a)
-      if (vertices[a] < vertices[b] || a == b) slots.push_back(3 * block_offset(vertices[a], vertices[b]));
+      if (vertices[a] < vertices[b] || a == b)
+        slots.push_back(3 * block_offset(vertices[a], vertices[b]));
 }
 
-void BlockSymmetricMatrix::add_element(const int* vertices, int n, const int* slots, const double* hessian) {
+void BlockSymmetricMatrix::add_element(const int* vertices, int n, const int* slots,
+                                       const double* hessian) {
   // As add_block, block by block, with the places from `slots` (find_slots's order).
   const int ld = 3 * n;
   for (int b = 0; b < n; ++b) {
@@ -185,7 +187,8 @@ void BlockSymmetricMatrix::add_element(const int* vertices, int n, const int* sl
 
 void BlockSymmetricMatrix::add_column(int column, const int* blocks, int n, const double* values) {
   for (int k = 0; k < n; ++k) {
-    PAPERSIM_ASSERT(blocks[k] <= column / 3, "BlockSymmetricMatrix::add_column: an entry below the diagonal");
+    PAPERSIM_ASSERT(blocks[k] <= column / 3,
+                    "BlockSymmetricMatrix::add_column: an entry below the diagonal");
     const int position = this->position(3 * blocks[k], column);
     add_column(column, blocks + k, 1, &position, values + 3 * k);
   }
@@ -201,7 +204,9 @@ void BlockSymmetricMatrix::add_column(int column, const int* blocks, int n, cons
   }
 }
 
-void BlockSymmetricMatrix::add_entry(int row, int column, double v) { add_at(position(row, column), v); }
+void BlockSymmetricMatrix::add_entry(int row, int column, double v) {
+  add_at(position(row, column), v);
+}
 
 int BlockSymmetricMatrix::position(int row, int column) const {
   PAPERSIM_ASSERT(row <= column, "BlockSymmetricMatrix::add_entry: an entry below the diagonal");
@@ -220,7 +225,8 @@ Eigen::VectorXd BlockSymmetricMatrix::diagonal() const {
 }
 
 Eigen::VectorXd BlockSymmetricMatrix::multiply(const Eigen::VectorXd& x) const {
-  PAPERSIM_ASSERT(x.size() == size(), "BlockSymmetricMatrix::multiply: x is not of the matrix's size");
+  PAPERSIM_ASSERT(x.size() == size(),
+                  "BlockSymmetricMatrix::multiply: x is not of the matrix's size");
   Eigen::VectorXd y = Eigen::VectorXd::Zero(size());
   for (int c = 0; c < size(); ++c)
     for (int k = m_col_start[c]; k < m_col_start[c + 1]; ++k) {

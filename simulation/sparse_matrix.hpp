@@ -141,10 +141,13 @@ class ElementSlots {
     m_start.assign(1, 0);
     m_positions.clear();
   }
-  void add(const BlockSymmetricMatrix& matrix, const int* vertices, int n) { add(matrix, vertices, n, {}); }
+  void add(const BlockSymmetricMatrix& matrix, const int* vertices, int n) {
+    add(matrix, vertices, n, {});
+  }
   /// Same, and keeps `positions` (BlockSymmetricMatrix::position) of the entries the element adds
   /// column by column or one by one, for positions(element).
-  void add(const BlockSymmetricMatrix& matrix, const int* vertices, int n, const std::vector<int>& positions) {
+  void add(const BlockSymmetricMatrix& matrix, const int* vertices, int n,
+           const std::vector<int>& positions) {
     matrix.find_slots(vertices, n, m_slots);
     m_positions.push_back(static_cast<int>(m_slots.size()));
     m_slots.insert(m_slots.end(), positions.begin(), positions.end());

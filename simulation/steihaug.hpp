@@ -25,8 +25,9 @@ struct SteihaugResult {
 /// the result is y0 after one iteration. Every iterate lowers the model, so the result is a
 /// descent direction of the function whose gradient is -b.
 template <class MultiplyH, class MultiplyM, class SolveM>
-SteihaugResult steihaug(MultiplyH&& multiply_h, MultiplyM&& multiply_m, SolveM&& solve_m, const Eigen::VectorXd& b,
-                        const Eigen::VectorXd& y0, double radius, int max_iterations, double eta) {
+SteihaugResult steihaug(MultiplyH&& multiply_h, MultiplyM&& multiply_m, SolveM&& solve_m,
+                        const Eigen::VectorXd& b, const Eigen::VectorXd& y0, double radius,
+                        int max_iterations, double eta) {
   SteihaugResult out;
   Eigen::VectorXd z = Eigen::VectorXd::Zero(b.size()), r = b, y = y0, d = y0;
   double ry = r.dot(y);

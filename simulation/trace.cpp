@@ -32,9 +32,9 @@ void Trace::line(Topic t, const std::string& text) const {
 
 const std::vector<std::pair<std::string, Trace::Topic>>& Trace::names() {
   static const std::vector<std::pair<std::string, Topic>> n = {
-      {"newton", newton},       {"model", model},         {"line-search", line_search},
-      {"inf", inf},             {"solver", solver},       {"contact", contact},
-      {"intersect", intersect}, {"lift", lift},           {"remesh", remesh}};
+      {"newton", newton}, {"model", model},     {"line-search", line_search}, {"inf", inf},
+      {"solver", solver}, {"contact", contact}, {"intersect", intersect},     {"lift", lift},
+      {"remesh", remesh}};
   return n;
 }
 

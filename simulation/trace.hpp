@@ -27,7 +27,8 @@ class Trace {
 
   Trace() = default;  ///< off
   /// `topics`: a set of Topic bits; `write` gets each line without its newline (null: stderr).
-  explicit Trace(unsigned topics, Writer write = {}) : m_topics(topics), m_write(std::move(write)) {}
+  explicit Trace(unsigned topics, Writer write = {})
+      : m_topics(topics), m_write(std::move(write)) {}
 
   bool on(Topic t) const { return (m_topics & t) != 0; }
   unsigned topics() const { return m_topics; }

@@ -27,8 +27,6 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
-#include <nlohmann/json.hpp>
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -37,6 +35,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -60,8 +59,8 @@ struct BenchError : std::runtime_error {
 
 /// Converged settings of a scenario's references.
 struct ReferenceSettings {
-  double edge_mm = 5;        ///< edge length of the reference [mm]
-  double step_ms = 2.5;      ///< time step of the reference (and of its check) [ms]
+  double edge_mm = 5;          ///< edge length of the reference [mm]
+  double step_ms = 2.5;        ///< time step of the reference (and of its check) [ms]
   double check_edge_mm = 3.5;  ///< the check's edge length [mm]
 };
 
@@ -82,11 +81,11 @@ ReferenceSettings reference_settings(const std::string& scenario) {
 /// What one child run measured.
 struct Measurement {
   bool ok = false;
-  std::string failure;  ///< why not ok: exit status and the end of its log
+  std::string failure;       ///< why not ok: exit status and the end of its log
   double wall = 0, cpu = 0;  ///< [s]
   long newton = 0;
   int vertices = 0;
-  std::string unsafe;  ///< the safety checks that failed ("" when all hold)
+  std::string unsafe;   ///< the safety checks that failed ("" when all hold)
   double rms_mm = NAN;  ///< against the draw's reference (NaN: none or it does not hold)
 };
 
@@ -102,7 +101,8 @@ std::string tail_of(const fs::path& path, std::size_t n = 400) {
 /// Runs argv with stdout and stderr to `log`, OMP_NUM_THREADS=1; wall and CPU time of the child.
 /// Returns the exit status (128 + signal when a signal ended it).
 /// @throw BenchError when the program cannot be started.
-int run_child(const std::vector<std::string>& argv, const fs::path& log, double& wall, double& cpu) {
+int run_child(const std::vector<std::string>& argv, const fs::path& log, double& wall,
+              double& cpu) {
   const auto t0 = std::chrono::steady_clock::now();
   const pid_t pid = fork();
   if (pid < 0) throw BenchError("cannot fork to run " + argv.front());
@@ -125,7 +125,8 @@ int run_child(const std::vector<std::string>& argv, const fs::path& log, double&
   rusage usage{};
   if (wait4(pid, &status, 0, &usage) < 0) throw BenchError("wait4 failed for " + argv.front());
   wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  cpu = usage.ru_utime.tv_sec + usage.ru_stime.tv_sec + 1e-6 * (usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
+  cpu = usage.ru_utime.tv_sec + usage.ru_stime.tv_sec +
+        1e-6 * (usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
   return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
 }
 
@@ -139,15 +140,17 @@ json read_json(const fs::path& path) {
 
 /// `BIN scenario NAME --seed N --out DIR --draw-only`: the drawn scene.
 /// @throw BenchError when the binary fails.
-json draw_scene(const std::string& bin, const std::string& scenario, long seed, const fs::path& dir) {
+json draw_scene(const std::string& bin, const std::string& scenario, long seed,
+                const fs::path& dir) {
   fs::create_directories(dir);
   double wall = 0, cpu = 0;
   const fs::path log = dir.string() + ".log";
-  const int status = run_child({bin, "scenario", scenario, "--seed", std::to_string(seed), "--out", dir.string(),
-                                "--draw-only"}, log, wall, cpu);
+  const int status = run_child({bin, "scenario", scenario, "--seed", std::to_string(seed), "--out",
+                                dir.string(), "--draw-only"},
+                               log, wall, cpu);
   if (status != 0)
-    throw BenchError(bin + " scenario " + scenario + " --seed " + std::to_string(seed) + " failed (status " +
-                     std::to_string(status) + "): " + tail_of(log));
+    throw BenchError(bin + " scenario " + scenario + " --seed " + std::to_string(seed) +
+                     " failed (status " + std::to_string(status) + "): " + tail_of(log));
   return read_json(dir / "scene.json");
 }
 
@@ -189,7 +192,8 @@ void read_meta(const fs::path& dir, Measurement& m) {
   m.vertices = meta.at("sheet").at("vertices").get<int>();
   const json& q = meta.at("quality");
   std::string unsafe;
-  if (!(q.at("max_principal_stretch").get<double>() <= 1 + q.at("strain_limit").get<double>())) unsafe += "stretch ";
+  if (!(q.at("max_principal_stretch").get<double>() <= 1 + q.at("strain_limit").get<double>()))
+    unsafe += "stretch ";
   for (const json& d : q.at("min_obstacle_distance"))
     if (!(d.is_number() && d.get<double>() > 0)) {
       unsafe += "penetration ";
@@ -206,7 +210,8 @@ Measurement run_scene(const std::string& bin, const json& scene, const fs::path&
   papersim::common::write_text_atomically(scene_path, scene.dump(2) + "\n");
   Measurement m;
   const fs::path log = dir.string() + ".log";
-  const int status = run_child({bin, "run", scene_path.string(), "--out", dir.string(), "--quiet"}, log, m.wall, m.cpu);
+  const int status = run_child({bin, "run", scene_path.string(), "--out", dir.string(), "--quiet"},
+                               log, m.wall, m.cpu);
   if (status != 0) {
     m.failure = "status " + std::to_string(status) + ": " + tail_of(log, 200);
     return m;
@@ -249,7 +254,8 @@ struct BenchOptions {
   std::vector<long> seeds;
   fs::path work, references, make_references;
   double duration = 0;  ///< override of every scene's duration [s] (0: the scenario's)
-  std::vector<std::pair<json::json_pointer, json>> sets;  ///< --set: keys of the test binary's scenes
+  std::vector<std::pair<json::json_pointer, json>>
+      sets;  ///< --set: keys of the test binary's scenes
   double target_mm = 2;
   ReferenceSettings reference_override;  ///< fields > 0 replace reference_settings()
   std::string csv;
@@ -267,11 +273,13 @@ std::vector<std::pair<json::json_pointer, json>> parse_sets(const std::vector<st
   std::vector<std::pair<json::json_pointer, json>> out;
   for (const std::string& item : items) {
     const std::size_t eq = item.find('=');
-    if (eq == std::string::npos || eq == 0) throw BenchError("--set: '" + item + "' is not KEY=VALUE");
+    if (eq == std::string::npos || eq == 0)
+      throw BenchError("--set: '" + item + "' is not KEY=VALUE");
     std::string pointer = "/" + item.substr(0, eq);
     std::replace(pointer.begin(), pointer.end(), '.', '/');
     const json value = json::parse(item.substr(eq + 1), nullptr, false);
-    if (value.is_discarded()) throw BenchError("--set: the value of '" + item + "' is not JSON (a number, true, \"text\")");
+    if (value.is_discarded())
+      throw BenchError("--set: the value of '" + item + "' is not JSON (a number, true, \"text\")");
     out.emplace_back(json::json_pointer(pointer), value);
   }
   return out;
@@ -293,7 +301,8 @@ json test_scene(const BenchOptions& o, const json& drawn) {
 }
 
 /// Makes (or keeps, when made from the same scene) one draw's reference and its check.
-void make_reference(const BenchOptions& o, const std::string& scenario, long seed, const json& drawn) {
+void make_reference(const BenchOptions& o, const std::string& scenario, long seed,
+                    const json& drawn) {
   ReferenceSettings s = reference_settings(scenario);
   if (o.reference_override.edge_mm > 0) s.edge_mm = o.reference_override.edge_mm;
   if (o.reference_override.step_ms > 0) s.step_ms = o.reference_override.step_ms;
@@ -304,26 +313,40 @@ void make_reference(const BenchOptions& o, const std::string& scenario, long see
   json check = scene;
   check["sheet"]["edge_length"] = 1e-3 * s.check_edge_mm;
   const fs::path dir = reference_dir(o.make_references, scenario, seed);
-  if (fs::exists(dir / "reference.json") && read_json(dir / "reference.json").value("scene", json()) == scene) {
+  if (fs::exists(dir / "reference.json") &&
+      read_json(dir / "reference.json").value("scene", json()) == scene) {
     std::printf("%s seed %ld: reference kept (made from the same scene)\n", scenario.c_str(), seed);
     return;
   }
   fs::remove(dir / "reference.json");
   const Measurement ref = run_scene(o.papersim, scene, dir / "reference");
-  if (!ref.ok) throw BenchError(scenario + " seed " + std::to_string(seed) + ": the reference run failed, " + ref.failure);
+  if (!ref.ok)
+    throw BenchError(scenario + " seed " + std::to_string(seed) + ": the reference run failed, " +
+                     ref.failure);
   const Measurement chk = run_scene(o.papersim, check, dir / "check");
-  if (!chk.ok) throw BenchError(scenario + " seed " + std::to_string(seed) + ": the check run failed, " + chk.failure);
+  if (!chk.ok)
+    throw BenchError(scenario + " seed " + std::to_string(seed) + ": the check run failed, " +
+                     chk.failure);
   const pv::SheetDifference d = pv::compare_sheets(read_geometry(dir / "check" / "sheet.obj"),
                                                    read_geometry(dir / "reference" / "sheet.obj"));
   const bool holds = 1e3 * d.rms <= o.target_mm;
-  const json info = {{"holds", holds}, {"check_rms_mm", 1e3 * d.rms}, {"check_max_mm", 1e3 * d.max},
-                     {"target_mm", o.target_mm}, {"edge_mm", s.edge_mm}, {"step_ms", s.step_ms},
-                     {"check_edge_mm", s.check_edge_mm}, {"reference_cpu_seconds", ref.cpu},
-                     {"check_cpu_seconds", chk.cpu}, {"scene", scene}};
+  const json info = {{"holds", holds},
+                     {"check_rms_mm", 1e3 * d.rms},
+                     {"check_max_mm", 1e3 * d.max},
+                     {"target_mm", o.target_mm},
+                     {"edge_mm", s.edge_mm},
+                     {"step_ms", s.step_ms},
+                     {"check_edge_mm", s.check_edge_mm},
+                     {"reference_cpu_seconds", ref.cpu},
+                     {"check_cpu_seconds", chk.cpu},
+                     {"scene", scene}};
   papersim::common::write_text_atomically(dir / "reference.json", info.dump(2) + "\n");
-  std::printf("%s seed %ld: reference %g mm / %g ms (%d vertices, CPU %.1f s), check at %g mm (CPU %.1f s): RMS %.3f "
-              "mm, max %.3f mm: %s\n", scenario.c_str(), seed, s.edge_mm, s.step_ms, ref.vertices, ref.cpu,
-              s.check_edge_mm, chk.cpu, 1e3 * d.rms, 1e3 * d.max, holds ? "holds" : "does NOT hold");
+  std::printf(
+      "%s seed %ld: reference %g mm / %g ms (%d vertices, CPU %.1f s), check at %g mm (CPU %.1f "
+      "s): RMS %.3f "
+      "mm, max %.3f mm: %s\n",
+      scenario.c_str(), seed, s.edge_mm, s.step_ms, ref.vertices, ref.cpu, s.check_edge_mm, chk.cpu,
+      1e3 * d.rms, 1e3 * d.max, holds ? "holds" : "does NOT hold");
   std::fflush(stdout);
 }
 
@@ -366,7 +389,8 @@ struct Summary {
   Spread wall, cpu, newton, rms;
 };
 
-Summary summarise(const std::vector<Row>& rows, const std::string& scenario, const std::string& binary) {
+Summary summarise(const std::vector<Row>& rows, const std::string& scenario,
+                  const std::string& binary) {
   Summary s;
   std::vector<double> wall, cpu, newton, rms;
   for (const Row& r : rows) {
@@ -388,9 +412,9 @@ Summary summarise(const std::vector<Row>& rows, const std::string& scenario, con
 }
 
 void print_summary(const std::string& scenario, const std::string& binary, const Summary& s) {
-  std::printf("%-13s %-8s %4d %6d %6d %9.2f %9.2f %9.2f %9.2f %9.0f %9.0f", scenario.c_str(), binary.c_str(), s.runs,
-              s.failed, s.unsafe, s.wall.median, s.wall.worst, s.cpu.median, s.cpu.worst, s.newton.median,
-              s.newton.worst);
+  std::printf("%-13s %-8s %4d %6d %6d %9.2f %9.2f %9.2f %9.2f %9.0f %9.0f", scenario.c_str(),
+              binary.c_str(), s.runs, s.failed, s.unsafe, s.wall.median, s.wall.worst, s.cpu.median,
+              s.cpu.worst, s.newton.median, s.newton.worst);
   if (s.with_error > 0)
     std::printf(" %9.3f %9.3f %3d\n", s.rms.median, s.rms.worst, s.with_error);
   else
@@ -399,14 +423,16 @@ void print_summary(const std::string& scenario, const std::string& binary, const
 
 void write_csv(const std::string& path, const std::vector<Row>& rows) {
   std::ostringstream out;
-  out << "scenario,seed,binary,ok,vertices,wall_seconds,cpu_seconds,newton_iterations,rms_error_mm,safety,failure\n";
+  out << "scenario,seed,binary,ok,vertices,wall_seconds,cpu_seconds,newton_iterations,rms_error_mm,"
+         "safety,failure\n";
   for (const Row& r : rows) {
     std::string failure = r.m.failure;
     std::replace(failure.begin(), failure.end(), ',', ';');
     std::replace(failure.begin(), failure.end(), '\n', ' ');
-    out << r.scenario << ',' << r.seed << ',' << r.binary << ',' << (r.m.ok ? "yes" : "no") << ',' << r.m.vertices
-        << ',' << r.m.wall << ',' << r.m.cpu << ',' << r.m.newton << ',' << r.m.rms_mm << ','
-        << (r.m.unsafe.empty() ? "safe" : r.m.unsafe) << ',' << failure << '\n';
+    out << r.scenario << ',' << r.seed << ',' << r.binary << ',' << (r.m.ok ? "yes" : "no") << ','
+        << r.m.vertices << ',' << r.m.wall << ',' << r.m.cpu << ',' << r.m.newton << ','
+        << r.m.rms_mm << ',' << (r.m.unsafe.empty() ? "safe" : r.m.unsafe) << ',' << failure
+        << '\n';
   }
   papersim::common::write_text_atomically(path, out.str());
 }
@@ -423,10 +449,12 @@ void bench_scenario(const BenchOptions& o, const std::string& scenario, std::vec
     const long seed = o.seeds[k];
     const fs::path dir = o.work / scenario / ("seed_" + std::to_string(seed));
     const json drawn = draw_scene(o.papersim, scenario, seed, dir / "draw");
-    const Reference ref = o.references.empty() ? Reference{} : load_reference(o.references, scenario, seed);
+    const Reference ref =
+        o.references.empty() ? Reference{} : load_reference(o.references, scenario, seed);
     if (!o.references.empty() && !ref.present)
-      throw BenchError("--references: no reference for " + scenario + " seed " + std::to_string(seed) + " in " +
-                       o.references.string() + " (make it with --make-references)");
+      throw BenchError("--references: no reference for " + scenario + " seed " +
+                       std::to_string(seed) + " in " + o.references.string() +
+                       " (make it with --make-references)");
     std::vector<std::pair<std::string, json>> runs = {{"test", test_scene(o, drawn)}};
     if (!o.baseline.empty()) {
       const json own = draw_scene(o.baseline, scenario, seed, dir / "baseline_draw");
@@ -478,22 +506,24 @@ void bench_scenario(const BenchOptions& o, const std::string& scenario, std::vec
 double ratio(double a, double b) { return b > 0 ? a / b : NAN; }
 
 void print_summaries(const BenchOptions& o, const std::vector<Row>& rows) {
-  std::printf("\n%-13s %-8s %4s %6s %6s %9s %9s %9s %9s %9s %9s %9s %9s %3s\n", "scenario", "binary", "runs", "failed",
-              "unsafe", "wall_med", "wall_max", "cpu_med", "cpu_max", "newt_med", "newt_max", "rms_med", "rms_max",
-              "n");
+  std::printf("\n%-13s %-8s %4s %6s %6s %9s %9s %9s %9s %9s %9s %9s %9s %3s\n", "scenario",
+              "binary", "runs", "failed", "unsafe", "wall_med", "wall_max", "cpu_med", "cpu_max",
+              "newt_med", "newt_max", "rms_med", "rms_max", "n");
   for (const std::string& s : o.scenarios) {
     print_summary(s, "test", summarise(rows, s, "test"));
     if (!o.baseline.empty()) print_summary(s, "baseline", summarise(rows, s, "baseline"));
   }
   if (o.baseline.empty()) return;
-  std::printf("\nratios test / baseline (medians; worst wall time over median wall time per binary)\n");
-  std::printf("%-13s %9s %9s %9s %9s %11s %11s\n", "scenario", "wall", "cpu", "newton", "rms", "worst/med", "base w/m");
+  std::printf(
+      "\nratios test / baseline (medians; worst wall time over median wall time per binary)\n");
+  std::printf("%-13s %9s %9s %9s %9s %11s %11s\n", "scenario", "wall", "cpu", "newton", "rms",
+              "worst/med", "base w/m");
   for (const std::string& s : o.scenarios) {
     const Summary t = summarise(rows, s, "test"), b = summarise(rows, s, "baseline");
-    std::printf("%-13s %9.3f %9.3f %9.3f %9.3f %11.2f %11.2f\n", s.c_str(), ratio(t.wall.median, b.wall.median),
-                ratio(t.cpu.median, b.cpu.median), ratio(t.newton.median, b.newton.median),
-                ratio(t.rms.median, b.rms.median), ratio(t.wall.worst, t.wall.median),
-                ratio(b.wall.worst, b.wall.median));
+    std::printf("%-13s %9.3f %9.3f %9.3f %9.3f %11.2f %11.2f\n", s.c_str(),
+                ratio(t.wall.median, b.wall.median), ratio(t.cpu.median, b.cpu.median),
+                ratio(t.newton.median, b.newton.median), ratio(t.rms.median, b.rms.median),
+                ratio(t.wall.worst, t.wall.median), ratio(b.wall.worst, b.wall.median));
   }
 }
 
@@ -505,13 +535,15 @@ std::vector<long> parse_seeds(const std::string& text) {
   while (std::getline(items, item, ',')) {
     long a = 0, b = 0;
     int used = 0;
-    if (std::sscanf(item.c_str(), "%ld-%ld%n", &a, &b, &used) == 2 && used == static_cast<int>(item.size()) && a >= 0 &&
-        b >= a && b - a < 100000) {
+    if (std::sscanf(item.c_str(), "%ld-%ld%n", &a, &b, &used) == 2 &&
+        used == static_cast<int>(item.size()) && a >= 0 && b >= a && b - a < 100000) {
       for (long s = a; s <= b; ++s) seeds.push_back(s);
-    } else if (std::sscanf(item.c_str(), "%ld%n", &a, &used) == 1 && used == static_cast<int>(item.size()) && a >= 0) {
+    } else if (std::sscanf(item.c_str(), "%ld%n", &a, &used) == 1 &&
+               used == static_cast<int>(item.size()) && a >= 0) {
       seeds.push_back(a);
     } else {
-      throw BenchError("--seeds: '" + item + "' is not a seed (N) or a range (A-B) of non-negative integers");
+      throw BenchError("--seeds: '" + item +
+                       "' is not a seed (N) or a range (A-B) of non-negative integers");
     }
   }
   if (seeds.empty()) throw BenchError("--seeds: no seed given");
@@ -519,8 +551,8 @@ std::vector<long> parse_seeds(const std::string& text) {
 }
 
 std::vector<std::string> parse_scenarios(const std::string& text) {
-  static const std::vector<std::string> known = {"pull", "fall-cylinder", "fall-gable", "fall-sphere", "fall-spheres",
-                                                 "fold"};
+  static const std::vector<std::string> known = {"pull",        "fall-cylinder", "fall-gable",
+                                                 "fall-sphere", "fall-spheres",  "fold"};
   std::vector<std::string> out;
   std::stringstream items(text);
   std::string item;
@@ -544,32 +576,48 @@ std::string executable(const std::string& path, const char* option) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"papersim_bench: scenario draws at the defaults through papersim child processes: median and worst "
-               "wall time, CPU time and Newton iterations per scenario, safety checks, error against converged "
-               "references, and ratios against a baseline binary"};
+  CLI::App app{
+      "papersim_bench: scenario draws at the defaults through papersim child processes: median and "
+      "worst "
+      "wall time, CPU time and Newton iterations per scenario, safety checks, error against "
+      "converged "
+      "references, and ratios against a baseline binary"};
   BenchOptions o;
-  std::string seeds = "0-4", scenarios = "pull,fall-cylinder,fall-gable,fall-sphere,fall-spheres", work, papersim = PAPERSIM_EXE;
+  std::string seeds = "0-4", scenarios = "pull,fall-cylinder,fall-gable,fall-sphere,fall-spheres",
+              work, papersim = PAPERSIM_EXE;
   std::string make_references, references;
   app.add_option("--papersim", papersim, "the papersim binary measured")->capture_default_str();
   app.add_option("--scenarios", scenarios, "scenarios, comma separated")->capture_default_str();
   app.add_option("--seeds", seeds, "seeds: N, A-B, comma separated")->capture_default_str();
-  app.add_option("--baseline", o.baseline, "another papersim binary run on the same draws at its own defaults, "
+  app.add_option("--baseline", o.baseline,
+                 "another papersim binary run on the same draws at its own defaults, "
                  "interleaved run by run; prints the ratios");
-  app.add_option("--work", work, "folder for the runs' outputs (default: a new folder under the temporary directory, "
-                 "removed at the end)");
-  app.add_option("--references", references, "folder made by --make-references: the error of every run against its "
+  app.add_option(
+      "--work", work,
+      "folder for the runs' outputs (default: a new folder under the temporary directory, "
+      "removed at the end)");
+  app.add_option("--references", references,
+                 "folder made by --make-references: the error of every run against its "
                  "draw's reference (draws whose reference holds)");
-  app.add_option("--make-references", make_references, "make the references of the draws in this folder (the converged "
+  app.add_option("--make-references", make_references,
+                 "make the references of the draws in this folder (the converged "
                  "settings of docs/performance.md, each checked one refinement finer) and stop");
-  app.add_option("--target", o.target_mm, "with --make-references: a reference holds when the check run is within "
-                 "this RMS distance [mm]")->capture_default_str()->check(papersim::common::positive());
-  app.add_option("--reference-edge", o.reference_override.edge_mm, "override the references' edge length [mm]")
+  app.add_option("--target", o.target_mm,
+                 "with --make-references: a reference holds when the check run is within "
+                 "this RMS distance [mm]")
+      ->capture_default_str()
       ->check(papersim::common::positive());
-  app.add_option("--reference-step", o.reference_override.step_ms, "override the references' time step [ms]")
+  app.add_option("--reference-edge", o.reference_override.edge_mm,
+                 "override the references' edge length [mm]")
       ->check(papersim::common::positive());
-  app.add_option("--check-edge", o.reference_override.check_edge_mm, "override the checks' edge length [mm]")
+  app.add_option("--reference-step", o.reference_override.step_ms,
+                 "override the references' time step [ms]")
       ->check(papersim::common::positive());
-  app.add_option("--duration", o.duration, "override every scene's duration [s] (short runs for tests)")
+  app.add_option("--check-edge", o.reference_override.check_edge_mm,
+                 "override the checks' edge length [mm]")
+      ->check(papersim::common::positive());
+  app.add_option("--duration", o.duration,
+                 "override every scene's duration [s] (short runs for tests)")
       ->check(papersim::common::positive());
   app.add_option("--repeat", o.repeat,
                  "run every draw K times with each binary, interleaved, and keep the fastest "
@@ -580,11 +628,15 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1, 100));
   app.add_option("--csv", o.csv, "also write every draw as CSV (with --repeat, its fastest times)");
   std::vector<std::string> sets;
-  app.add_option("--set", sets, "KEY=VALUE: set a key of the measured binary's scenes (dotted, e.g. "
-                 "solver.max_factor_reuse=4; the value is JSON), repeatable; not applied to the baseline or the "
+  app.add_option("--set", sets,
+                 "KEY=VALUE: set a key of the measured binary's scenes (dotted, e.g. "
+                 "solver.max_factor_reuse=4; the value is JSON), repeatable; not applied to the "
+                 "baseline or the "
                  "references");
-  app.footer("Exit status: 0 every run succeeded and passed the safety checks; 1 a run failed or is unsafe; 2 bad "
-             "option or input.");
+  app.footer(
+      "Exit status: 0 every run succeeded and passed the safety checks; 1 a run failed or is "
+      "unsafe; 2 bad "
+      "option or input.");
   CLI11_PARSE(app, argc, argv);
   fs::path scratch;
   try {
@@ -615,11 +667,13 @@ int main(int argc, char** argv) {
     if (!o.make_references.empty()) {
       for (const std::string& s : o.scenarios)
         for (long seed : o.seeds)
-          make_reference(o, s, seed, draw_scene(o.papersim, s, seed, o.work / s / ("seed_" + std::to_string(seed)) / "draw"));
+          make_reference(o, s, seed,
+                         draw_scene(o.papersim, s, seed,
+                                    o.work / s / ("seed_" + std::to_string(seed)) / "draw"));
     } else {
       std::vector<Row> rows;
-      std::printf("%-13s %5s %-8s %8s %9s %9s %8s %10s %s\n", "scenario", "seed", "binary", "vertices", "wall_s",
-                  "cpu_s", "newton", "rms_mm", "safety");
+      std::printf("%-13s %5s %-8s %8s %9s %9s %8s %10s %s\n", "scenario", "seed", "binary",
+                  "vertices", "wall_s", "cpu_s", "newton", "rms_mm", "safety");
       for (const std::string& s : o.scenarios) bench_scenario(o, s, rows);
       print_summaries(o, rows);
       if (!o.csv.empty()) write_csv(o.csv, rows);

@@ -16,21 +16,21 @@
 // [--mode-shape] [--cylinder]; papersim_bending_probe --modes; papersim_bending_probe --fold R
 // (--help lists them).
 #include <CLI/CLI.hpp>
+#include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 #include <Eigen/Sparse>
-#include <map>
 #include <array>
 #include <cmath>
 #include <cstdio>
 #include <functional>
+#include <map>
 #include <string>
 #include <vector>
 
 #include "remesh/sheet_generator.hpp"
-#include "simulation/energies/fit_bending_energy.hpp"
 #include "simulation/energies/bending_energy.hpp"
+#include "simulation/energies/fit_bending_energy.hpp"
 #include "simulation/energies/vertex_energies.hpp"
-#include <Eigen/Eigenvalues>
 
 namespace ps = papersim::simulation;
 namespace rm = papersim::remesh;
@@ -41,15 +41,15 @@ constexpr double L = 0.1, W = 0.01;
 
 /// The command line's choices, read once in main.
 struct ProbeOptions {
-  double edge = 2.5e-3;    // [m]
-  double width = W;        // [m]
-  double angle = 30;       // lattice angle [deg]
-  bool bins = false;       // energy and K_xx by x bins
-  bool sag_only = false;   // the sags alone, no energies of prescribed shapes
-  bool mode_shape = false; // the first mode's displacements
-  bool cylinder = false;   // the Morley plate's cylinder energies
-  bool modes = false;      // zero modes and twist of the Morley plate
-  double fold = 0;         // > 0: a 180-degree fold of this radius [m]
+  double edge = 2.5e-3;     // [m]
+  double width = W;         // [m]
+  double angle = 30;        // lattice angle [deg]
+  bool bins = false;        // energy and K_xx by x bins
+  bool sag_only = false;    // the sags alone, no energies of prescribed shapes
+  bool mode_shape = false;  // the first mode's displacements
+  bool cylinder = false;    // the Morley plate's cylinder energies
+  bool modes = false;       // zero modes and twist of the Morley plate
+  double fold = 0;          // > 0: a 180-degree fold of this radius [m]
 };
 ProbeOptions options;
 
@@ -82,7 +82,9 @@ struct Curve {
     for (int i = 0; i < n; ++i) {
       const double s = i * ds;
       // theta' = kappa, x' = cos, z' = sin; RK4 on (th, x, z).
-      auto f = [&](double ss, double t) { return std::array<double, 3>{kappa(ss), std::cos(t), std::sin(t)}; };
+      auto f = [&](double ss, double t) {
+        return std::array<double, 3>{kappa(ss), std::cos(t), std::sin(t)};
+      };
       auto k1 = f(s, th[i]);
       auto k2 = f(s + ds / 2, th[i] + ds / 2 * k1[0]);
       auto k3 = f(s + ds / 2, th[i] + ds / 2 * k2[0]);
@@ -99,8 +101,9 @@ struct Curve {
     // cubic Hermite with derivatives (cos th, sin th)
     const double h00 = 2 * t * t * t - 3 * t * t + 1, h10 = t * t * t - 2 * t * t + t,
                  h01 = -2 * t * t * t + 3 * t * t, h11 = t * t * t - t * t;
-    return {h00 * x[i] + h10 * ds * std::cos(th[i]) + h01 * x[i + 1] + h11 * ds * std::cos(th[i + 1]),
-            h00 * z[i] + h10 * ds * std::sin(th[i]) + h01 * z[i + 1] + h11 * ds * std::sin(th[i + 1])};
+    return {
+        h00 * x[i] + h10 * ds * std::cos(th[i]) + h01 * x[i + 1] + h11 * ds * std::cos(th[i + 1]),
+        h00 * z[i] + h10 * ds * std::sin(th[i]) + h01 * z[i + 1] + h11 * ds * std::sin(th[i + 1])};
   }
 };
 
@@ -111,7 +114,9 @@ std::vector<double> elastica_kappa(double G, int n, double* tip_drop) {
     if (out) out->assign(n + 1, 0), (*out)[0] = k;
     for (int i = 0; i < n; ++i) {
       const double s = i * ds;
-      auto f = [&](double ss, double tt, double kk) { return std::array<double, 3>{kk, -G * (1 - ss) * std::cos(tt), std::sin(tt)}; };
+      auto f = [&](double ss, double tt, double kk) {
+        return std::array<double, 3>{kk, -G * (1 - ss) * std::cos(tt), std::sin(tt)};
+      };
       auto a = f(s, t, k);
       auto b = f(s + ds / 2, t + ds / 2 * a[0], k + ds / 2 * a[1]);
       auto c = f(s + ds / 2, t + ds / 2 * b[0], k + ds / 2 * b[1]);
@@ -177,11 +182,12 @@ void probe(const char* label, const rm::SheetMesh& mesh, double clamp, double wi
     kc[b] += A * std::abs(kappa_of_x(xc));
     area[b] += A;
   }
-  std::printf("%-34s E/Ec = %.4f  fit/Ec = %.4f  resid/Ec = %.4f\n", label, E / Ec, Efit / Ec, (E - Efit) / Ec);
+  std::printf("%-34s E/Ec = %.4f  fit/Ec = %.4f  resid/Ec = %.4f\n", label, E / Ec, Efit / Ec,
+              (E - Efit) / Ec);
   if (options.bins) {
     for (int b = 0; b < nb; ++b)
-      std::printf("    bin %d x=[%.3f,%.3f]  fit/cont(centroid) %.4f   Kxx/kappa %.4f\n", b, b * xmax / nb,
-                  (b + 1) * xmax / nb, fit[b] / cont[b], kd[b] / kc[b]);
+      std::printf("    bin %d x=[%.3f,%.3f]  fit/cont(centroid) %.4f   Kxx/kappa %.4f\n", b,
+                  b * xmax / nb, (b + 1) * xmax / nb, fit[b] / cont[b], kd[b] / kc[b]);
   }
   (void)clamp;
 }
@@ -228,16 +234,17 @@ void linear_sag(const char* label, const rm::SheetMesh& mesh, double clamp, doub
   Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(Mi.asDiagonal() * H * Mi.asDiagonal());
   const double w1 = 1.8751 * 1.8751 * std::sqrt(m.bending_stiffness / (m.density * std::pow(L, 4)));
   std::printf("%-28s linear sag / (G/8) = %.4f   omega_k/omega_beam1:", label, drop / (G / 8));
-  for (int k = 0; k < 6; ++k) std::printf(" %.3f", std::sqrt(std::max(0.0, es.eigenvalues()[k])) / w1);
+  for (int k = 0; k < 6; ++k)
+    std::printf(" %.3f", std::sqrt(std::max(0.0, es.eigenvalues()[k])) / w1);
   std::printf("\n");
   if (options.mode_shape) {
     const Eigen::VectorXd v = Mi.asDiagonal() * es.eigenvectors().col(0);
     for (int i = 0; i < n; ++i)
-      std::printf("  x=%.5f y=%.5f w=%.5f\n", X(free[i], 0), X(free[i], 1), v[i] / v.cwiseAbs().maxCoeff());
+      std::printf("  x=%.5f y=%.5f w=%.5f\n", X(free[i], 0), X(free[i], 1),
+                  v[i] / v.cwiseAbs().maxCoeff());
   }
   (void)width;
 }
-
 
 /// Linear Morley plate: the heights z of the vertices and one normal slope phi per edge (at its
 /// midpoint) determine a constant curvature per face, exact for every quadratic height field:
@@ -250,7 +257,7 @@ void linear_sag(const char* label, const rm::SheetMesh& mesh, double clamp, doub
 struct Morley {
   int nv = 0, ne = 0;
   std::map<std::pair<int, int>, int> edge_of;  // sorted vertex pair -> edge
-  Eigen::SparseMatrix<double> K;                // (nv + ne)^2
+  Eigen::SparseMatrix<double> K;               // (nv + ne)^2
   double area = 0;
 };
 
@@ -281,7 +288,7 @@ Morley morley_system(const rm::SheetMesh& mesh, bool extrapolate) {
   Q += m.poisson * Eigen::Vector3d(1, 1, 0) * Eigen::RowVector3d(1, 1, 0);
   std::vector<Eigen::Triplet<double>> trip;
   std::vector<Eigen::Matrix<double, 3, 6>> C(nf), S(nf);  // K_f = C s_dofs, s = S dofs
-  std::vector<Eigen::Matrix3d> R(nf);                      // R K = s
+  std::vector<Eigen::Matrix3d> R(nf);                     // R K = s
   std::vector<double> area(nf);
   auto dofs = [&](int f, int* d) {
     for (int k = 0; k < 3; ++k) d[k] = F(f, k), d[3 + k] = nv + fe(f, k);
@@ -317,7 +324,8 @@ Morley morley_system(const rm::SheetMesh& mesh, bool extrapolate) {
       S[f].block<1, 3>(k, 0) = -(n.transpose() * grad);
     }
     C[f] = R[f].inverse() * S[f];
-    const Eigen::Matrix<double, 6, 6> Ke = area[f] * m.bending_stiffness * C[f].transpose() * Q * C[f];
+    const Eigen::Matrix<double, 6, 6> Ke =
+        area[f] * m.bending_stiffness * C[f].transpose() * Q * C[f];
     int d[6];
     dofs(f, d);
     for (int r = 0; r < 6; ++r)
@@ -369,7 +377,8 @@ double morley_sag(const rm::SheetMesh& mesh, double clamp, bool extrapolate, boo
   }
   if (clamp_slopes)
     for (const auto& [key, e] : M.edge_of)
-      if (X(key.first, 0) <= clamp + 1e-12 && X(key.second, 0) <= clamp + 1e-12) M.K.coeffRef(M.nv + e, M.nv + e) += big;
+      if (X(key.first, 0) <= clamp + 1e-12 && X(key.second, 0) <= clamp + 1e-12)
+        M.K.coeffRef(M.nv + e, M.nv + e) += big;
   const Eigen::VectorXd w = Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>(M.K).solve(f);
   const double tip_x = X.col(0).maxCoeff();
   double drop = 0;
@@ -391,46 +400,57 @@ double morley_cylinder(const rm::SheetMesh& mesh, double angle, bool extrapolate
   const Eigen::SparseMatrix<double> Kpp = M.K.block(M.nv, M.nv, M.ne, M.ne);
   const Eigen::SparseMatrix<double> Kpz = M.K.block(M.nv, 0, M.ne, M.nv);
   const Eigen::SparseMatrix<double> Kzz = M.K.block(0, 0, M.nv, M.nv);
-  const Eigen::VectorXd phi = -Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>(Kpp).solve(Kpz * z);
+  const Eigen::VectorXd phi =
+      -Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>(Kpp).solve(Kpz * z);
   const double E = 0.5 * z.dot(Kzz * z) + z.dot(Kpz.transpose() * phi) + 0.5 * phi.dot(Kpp * phi);
   return E / (0.5 * ps::Material{}.bending_stiffness * kappa * kappa * M.area);
 }
 
 void morley_report(const char* label, const rm::SheetMesh& mesh, double clamp) {
-  std::printf("%-28s Morley sag / (G/8): free edges %.4f (slopes clamped %.4f), extrapolated edges "
-              "%.4f (slopes clamped %.4f)\n",
-              label, morley_sag(mesh, clamp, false, false), morley_sag(mesh, clamp, false, true),
-              morley_sag(mesh, clamp, true, false), morley_sag(mesh, clamp, true, true));
+  std::printf(
+      "%-28s Morley sag / (G/8): free edges %.4f (slopes clamped %.4f), extrapolated edges "
+      "%.4f (slopes clamped %.4f)\n",
+      label, morley_sag(mesh, clamp, false, false), morley_sag(mesh, clamp, false, true),
+      morley_sag(mesh, clamp, true, false), morley_sag(mesh, clamp, true, true));
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"papersim_bending_probe: the discrete bending energies against the elastica strips of "
-               "papersim_known_answers, and the linear Morley plate (docs/elastica_30deg_diagnosis.md)"};
+  CLI::App app{
+      "papersim_bending_probe: the discrete bending energies against the elastica strips of "
+      "papersim_known_answers, and the linear Morley plate (docs/elastica_30deg_diagnosis.md)"};
   ProbeOptions& o = options;
   app.add_option("--edge", o.edge, "edge length of the strips [m]")->check(CLI::Range(5e-4, 0.02));
   app.add_option("--width", o.width, "width of the strips [m]")->check(CLI::Range(2e-3, 0.2));
-  app.add_option("--angle", o.angle, "angle of the rotated lattice [deg]")->check(CLI::Range(0.0, 90.0));
+  app.add_option("--angle", o.angle, "angle of the rotated lattice [deg]")
+      ->check(CLI::Range(0.0, 90.0));
   app.add_flag("--bins", o.bins, "print the energy and K_xx in bins along the strip");
-  app.add_flag("--sag-only", o.sag_only, "the sags alone, without the energies of prescribed shapes");
+  app.add_flag("--sag-only", o.sag_only,
+               "the sags alone, without the energies of prescribed shapes");
   app.add_flag("--mode-shape", o.mode_shape, "print the first mode's displacements");
-  app.add_flag("--cylinder", o.cylinder, "the Morley plate's energy of a small-slope cylinder on a 15 cm wide sheet");
-  auto* modes = app.add_flag("--modes", o.modes, "only: zero modes and twist of the Morley plate on a 12 x 4 cm sheet");
-  auto* fold = app.add_option("--fold", o.fold, "only: a 180-degree fold of this radius [m] under both bending models")
-                   ->check(CLI::Range(1e-3, 0.05));
+  app.add_flag("--cylinder", o.cylinder,
+               "the Morley plate's energy of a small-slope cylinder on a 15 cm wide sheet");
+  auto* modes = app.add_flag("--modes", o.modes,
+                             "only: zero modes and twist of the Morley plate on a 12 x 4 cm sheet");
+  auto* fold =
+      app.add_option("--fold", o.fold,
+                     "only: a 180-degree fold of this radius [m] under both bending models")
+          ->check(CLI::Range(1e-3, 0.05));
   modes->excludes(fold);
   CLI11_PARSE(app, argc, argv);
   if (o.edge > o.width / 2) {
-    std::fprintf(stderr, "papersim_bending_probe: --edge %g leaves fewer than two faces across --width %g\n", o.edge,
-                 o.width);
+    std::fprintf(
+        stderr, "papersim_bending_probe: --edge %g leaves fewer than two faces across --width %g\n",
+        o.edge, o.width);
     return 2;
   }
   // The linear sag solves a dense eigenproblem in the strip's free vertices: bound their count.
   const double strip_vertices = ((L + 2 * o.edge) / o.edge + 1) * (o.width / o.edge + 1);
   if (strip_vertices > 3000) {
     std::fprintf(stderr,
-                 "papersim_bending_probe: --edge %g on --width %g makes about %.0f vertices, more than the 3000 "
+                 "papersim_bending_probe: --edge %g on --width %g makes about %.0f vertices, more "
+                 "than the 3000 "
                  "the dense eigenproblem is made for\n",
                  o.edge, o.width, strip_vertices);
     return 2;
@@ -439,7 +459,10 @@ int main(int argc, char** argv) {
     // A 180-degree fold of radius r (isometric) on a 12 x 4 cm sheet at 8 mm, its start x0 swept
     // over two edge lengths: bending energy of both models over the continuum pi D w / r.
     rm::RectangleOptions o;
-    o.width = 0.12; o.height = 0.04; o.nx = 16; o.ny = 6;
+    o.width = 0.12;
+    o.height = 0.04;
+    o.nx = 16;
+    o.ny = 6;
     const rm::SheetMesh mesh = rm::make_rectangle(o);
     const Eigen::MatrixX2d X = mesh.material_coords();
     const double r = options.fold;
@@ -448,15 +471,19 @@ int main(int argc, char** argv) {
       m.bending_model = model;
       const auto e = ps::make_bending_energy(mesh, m);
       const double ec = M_PI * m.bending_stiffness * o.height / r;
-      std::printf("%s fold r = %g mm, E/Ec over x0:", model == ps::BendingModel::fit ? "fit   " : "morley", 1e3 * r);
+      std::printf("%s fold r = %g mm, E/Ec over x0:",
+                  model == ps::BendingModel::fit ? "fit   " : "morley", 1e3 * r);
       for (double x0 = 0.04; x0 <= 0.056 + 1e-9; x0 += 0.002) {
         Eigen::VectorXd x(3 * X.rows());
         for (int v = 0; v < X.rows(); ++v) {
           const double s = X(v, 0), len = M_PI * r;
           double px, pz;
-          if (s <= x0) px = s, pz = 0;
-          else if (s <= x0 + len) px = x0 + r * std::sin((s - x0) / r), pz = r * (1 - std::cos((s - x0) / r));
-          else px = x0 - (s - x0 - len), pz = 2 * r;
+          if (s <= x0)
+            px = s, pz = 0;
+          else if (s <= x0 + len)
+            px = x0 + r * std::sin((s - x0) / r), pz = r * (1 - std::cos((s - x0) / r));
+          else
+            px = x0 - (s - x0 - len), pz = 2 * r;
           x.segment<3>(3 * v) << px, X(v, 1), pz;
         }
         std::printf(" %.3f", e->value(x) / ec);
@@ -468,7 +495,10 @@ int main(int argc, char** argv) {
   if (o.modes) {
     // smallest eigenvalues of the condensed Morley stiffness on a free sheet
     rm::RectangleOptions o;
-    o.width = 0.12; o.height = 0.04; o.nx = 16; o.ny = 6;
+    o.width = 0.12;
+    o.height = 0.04;
+    o.nx = 16;
+    o.ny = 6;
     o.triangulation = rm::Triangulation::alternating;
     const rm::SheetMesh mesh = rm::make_rectangle(o);
     for (bool ex : {false, true}) {
@@ -479,14 +509,21 @@ int main(int argc, char** argv) {
         Eigen::VectorXd z(M.nv);
         const double tau = 10;
         for (int v = 0; v < M.nv; ++v) z[v] = tau * X(v, 0) * X(v, 1);
-        const Eigen::SparseMatrix<double> Kpp = M.K.block(M.nv, M.nv, M.ne, M.ne), Kpz = M.K.block(M.nv, 0, M.ne, M.nv), Kzz = M.K.block(0, 0, M.nv, M.nv);
-        const Eigen::VectorXd phi = -Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>(Kpp).solve(Kpz * z);
-        const double E = 0.5 * z.dot(Kzz * z) + z.dot(Kpz.transpose() * phi) + 0.5 * phi.dot(Kpp * phi);
-        std::printf("extrapolate %d twist E/Ec %.4f\n", ex, E / (ps::Material{}.bending_stiffness * tau * tau * M.area));
+        const Eigen::SparseMatrix<double> Kpp = M.K.block(M.nv, M.nv, M.ne, M.ne),
+                                          Kpz = M.K.block(M.nv, 0, M.ne, M.nv),
+                                          Kzz = M.K.block(0, 0, M.nv, M.nv);
+        const Eigen::VectorXd phi =
+            -Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>(Kpp).solve(Kpz * z);
+        const double E =
+            0.5 * z.dot(Kzz * z) + z.dot(Kpz.transpose() * phi) + 0.5 * phi.dot(Kpp * phi);
+        std::printf("extrapolate %d twist E/Ec %.4f\n", ex,
+                    E / (ps::Material{}.bending_stiffness * tau * tau * M.area));
       }
       const Eigen::MatrixXd K(M.K);
       const int n = M.nv, m = M.ne;
-      const Eigen::MatrixXd S = K.topLeftCorner(n, n) - K.topRightCorner(n, m) * K.bottomRightCorner(m, m).ldlt().solve(K.bottomLeftCorner(m, n));
+      const Eigen::MatrixXd S =
+          K.topLeftCorner(n, n) -
+          K.topRightCorner(n, m) * K.bottomRightCorner(m, m).ldlt().solve(K.bottomLeftCorner(m, n));
       Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(S);
       std::printf("extrapolate %d eigenvalues:", ex);
       for (int k = 0; k < 8; ++k) std::printf(" %.3g", es.eigenvalues()[k]);
@@ -505,8 +542,10 @@ int main(int argc, char** argv) {
       // A sheet of width x 15 cm, every mesh: cylinder energies at 0, 30, 45, 90 degrees.
       rm::SheetMesh sheet = rotated ? strip(true, h, 0.15) : strip(false, h, 0.15);
       for (bool ex : {false, true}) {
-        std::printf("%s Morley cylinder E/Ec (%s edges):", rotated ? "rot " : "grid", ex ? "extrapolated" : "free");
-        for (double a : {0.0, 30.0, 45.0, 90.0}) std::printf(" %g deg %.4f", a, morley_cylinder(sheet, a * M_PI / 180, ex));
+        std::printf("%s Morley cylinder E/Ec (%s edges):", rotated ? "rot " : "grid",
+                    ex ? "extrapolated" : "free");
+        for (double a : {0.0, 30.0, 45.0, 90.0})
+          std::printf(" %g deg %.4f", a, morley_cylinder(sheet, a * M_PI / 180, ex));
         std::printf("\n");
       }
     }
@@ -516,8 +555,10 @@ int main(int argc, char** argv) {
     probe((tag + " constant").c_str(), mesh, c, width, [&](double) { return k0; });
     probe((tag + " linear (no clamp)").c_str(), mesh, c, width,
           [&](double xx) { return k0 * (1 - xx / (L + c)); });
-    probe((tag + " quadratic (no clamp)").c_str(), mesh, c, width,
-          [&](double xx) { const double t = 1 - xx / (L + c); return k0 * t * t; });
+    probe((tag + " quadratic (no clamp)").c_str(), mesh, c, width, [&](double xx) {
+      const double t = 1 - xx / (L + c);
+      return k0 * t * t;
+    });
     probe((tag + " constant after clamp").c_str(), mesh, c, width,
           [&](double xx) { return xx < c ? 0.0 : k0; });
     for (double G : {1.0, 8.0, 20.0}) {

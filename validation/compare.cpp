@@ -54,7 +54,8 @@ class MaterialLocator {
       }
       const Eigen::Vector2i c0 = cell(flo), c1 = cell(fhi);
       for (int i = c0.x(); i <= c1.x(); ++i)
-        for (int j = c0.y(); j <= c1.y(); ++j) m_cells[static_cast<size_t>(j) * m_nx + i].push_back(f);
+        for (int j = c0.y(); j <= c1.y(); ++j)
+          m_cells[static_cast<size_t>(j) * m_nx + i].push_back(f);
     }
   }
 
@@ -63,7 +64,8 @@ class MaterialLocator {
     const Eigen::Vector2i c = cell(X);
     double best = -std::numeric_limits<double>::infinity();
     for (int f : m_cells[static_cast<size_t>(c.y()) * m_nx + c.x()]) {
-      const Eigen::Vector2d a = m_s.material.row(m_s.faces(f, 0)), b = m_s.material.row(m_s.faces(f, 1)),
+      const Eigen::Vector2d a = m_s.material.row(m_s.faces(f, 0)),
+                            b = m_s.material.row(m_s.faces(f, 1)),
                             d = m_s.material.row(m_s.faces(f, 2));
       Eigen::Matrix2d T;
       T << b - a, d - a;
@@ -84,7 +86,8 @@ class MaterialLocator {
  private:
   Eigen::Vector2i cell(const Eigen::Vector2d& X) const {
     const Eigen::Vector2d r = (X - m_lo) / m_cell;
-    return {std::clamp(static_cast<int>(r.x()), 0, m_nx - 1), std::clamp(static_cast<int>(r.y()), 0, m_ny - 1)};
+    return {std::clamp(static_cast<int>(r.x()), 0, m_nx - 1),
+            std::clamp(static_cast<int>(r.y()), 0, m_ny - 1)};
   }
   const SheetGeometry& m_s;
   Eigen::Vector2d m_lo;
@@ -101,9 +104,10 @@ double one_sided_hausdorff(const SheetGeometry& from, const SheetGeometry& to) {
     const Eigen::Vector3d p = from.positions.row(v).transpose();
     double best = std::numeric_limits<double>::infinity();
     for (int f = 0; f < to.faces.rows(); ++f) {
-      const Eigen::Vector3d q = closest_point_on_triangle(p, to.positions.row(to.faces(f, 0)).transpose(),
-                                                          to.positions.row(to.faces(f, 1)).transpose(),
-                                                          to.positions.row(to.faces(f, 2)).transpose());
+      const Eigen::Vector3d q =
+          closest_point_on_triangle(p, to.positions.row(to.faces(f, 0)).transpose(),
+                                    to.positions.row(to.faces(f, 1)).transpose(),
+                                    to.positions.row(to.faces(f, 2)).transpose());
       best = std::min(best, (p - q).squaredNorm());
     }
     d[static_cast<size_t>(v)] = std::sqrt(best);
@@ -113,9 +117,11 @@ double one_sided_hausdorff(const SheetGeometry& from, const SheetGeometry& to) {
 
 }  // namespace
 
-void best_rigid_motion(const Eigen::MatrixX3d& p, const Eigen::MatrixX3d& q, Eigen::Matrix3d& R, Eigen::Vector3d& t) {
+void best_rigid_motion(const Eigen::MatrixX3d& p, const Eigen::MatrixX3d& q, Eigen::Matrix3d& R,
+                       Eigen::Vector3d& t) {
   const Eigen::RowVector3d cp = p.colwise().mean(), cq = q.colwise().mean();
-  const Eigen::Matrix3d C = (p.rowwise() - cp).transpose() * (q.rowwise() - cq);  // sum p_i q_i^T, centred
+  const Eigen::Matrix3d C =
+      (p.rowwise() - cp).transpose() * (q.rowwise() - cq);  // sum p_i q_i^T, centred
   Eigen::JacobiSVD<Eigen::Matrix3d> svd(C, Eigen::ComputeFullU | Eigen::ComputeFullV);
   Eigen::Matrix3d D = Eigen::Matrix3d::Identity();
   D(2, 2) = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0 ? -1.0 : 1.0;
@@ -138,7 +144,9 @@ SheetDifference compare_sheets(const SheetGeometry& reference, const SheetGeomet
     q.row(n) = x.transpose();
     p.row(n++) = test.positions.row(v);
   }
-  if (n == 0) throw CompareError("compare_sheets: no vertex of the test sheet lies in the reference's material domain");
+  if (n == 0)
+    throw CompareError(
+        "compare_sheets: no vertex of the test sheet lies in the reference's material domain");
   p.conservativeResize(n, 3);
   q.conservativeResize(n, 3);
   Eigen::Matrix3d R;
@@ -154,7 +162,8 @@ SheetDifference compare_sheets(const SheetGeometry& reference, const SheetGeomet
   }
   r.rms = std::sqrt(sum / n);
   r.rms_aligned = std::sqrt(sum_aligned / n);
-  r.hausdorff = std::max(one_sided_hausdorff(reference, test), one_sided_hausdorff(test, reference));
+  r.hausdorff =
+      std::max(one_sided_hausdorff(reference, test), one_sided_hausdorff(test, reference));
   return r;
 }
 

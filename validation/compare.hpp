@@ -16,18 +16,18 @@
 namespace papersim::validation {
 
 struct SheetGeometry {
-  Eigen::MatrixX2d material;  ///< #V by 2 [m]
+  Eigen::MatrixX2d material;   ///< #V by 2 [m]
   Eigen::MatrixX3d positions;  ///< #V by 3 [m]
   Eigen::MatrixX3i faces;      ///< #F by 3
 };
 
 struct SheetDifference {
-  double rms = 0.0;        ///< RMS position error at the same material points [m]
-  double max = 0.0;        ///< max position error at the same material points [m]
+  double rms = 0.0;          ///< RMS position error at the same material points [m]
+  double max = 0.0;          ///< max position error at the same material points [m]
   double rms_aligned = 0.0;  ///< RMS error after the best rigid alignment (shape error) [m]
   double max_aligned = 0.0;  ///< max error after the best rigid alignment [m]
-  double hausdorff = 0.0;  ///< symmetric vertex-to-surface Hausdorff distance [m]
-  int outside = 0;         ///< test vertices outside the reference's material domain (skipped)
+  double hausdorff = 0.0;    ///< symmetric vertex-to-surface Hausdorff distance [m]
+  int outside = 0;           ///< test vertices outside the reference's material domain (skipped)
 };
 
 struct CompareError : std::runtime_error {
@@ -40,7 +40,8 @@ Eigen::Vector3d closest_point_on_triangle(const Eigen::Vector3d& p, const Eigen:
 
 /// The rotation R and translation t minimising sum_i |R p_i + t - q_i|^2 (Kabsch; a proper
 /// rotation, det R = 1). p and q are #N by 3, N >= 1.
-void best_rigid_motion(const Eigen::MatrixX3d& p, const Eigen::MatrixX3d& q, Eigen::Matrix3d& R, Eigen::Vector3d& t);
+void best_rigid_motion(const Eigen::MatrixX3d& p, const Eigen::MatrixX3d& q, Eigen::Matrix3d& R,
+                       Eigen::Vector3d& t);
 
 /// Differences of `test` against `reference` (see the file comment). Material points of the
 /// test within 1e-9 m of the reference's domain count as inside.

@@ -1,8 +1,8 @@
 // Crumple-and-unfold cycles (Gottesman, Andrejevic, Rycroft, Rubinstein 2018): the crumple
 // scenario's sheet is crumpled in the shrinking cavity, released, opened by its corners and edges
 // and laid on the ground, then crumpled again, K times; after each cycle the plastic crease
-// network of the opened sheet is measured. Gottesman et al. find the total crease length growing like
-// the logarithm of the number of cycles; Andresen et al. (2007) find ridge lengths log-normal.
+// network of the opened sheet is measured. Gottesman et al. find the total crease length growing
+// like the logarithm of the number of cycles; Andresen et al. (2007) find ridge lengths log-normal.
 //
 // One cycle:
 //  1. crumple: the scenario's cavity (held until 1 s, then shrunk to --end-radius at 5 s) around
@@ -23,7 +23,8 @@
 //     two plates before the next cycle (Gottesman et al.).
 // Each phase is a run of its own scene whose sheet is the previous phase's state read back from
 // its PLY (plastic state and damage included, velocities zero): DIR/cycle_K_crumpled.ply and
-// DIR/cycle_K_open.ply (and DIR/cycle_K_pressed.ply). DIR/cycles.csv has one line per phase (rewritten after each).
+// DIR/cycle_K_open.ply (and DIR/cycle_K_pressed.ply). DIR/cycles.csv has one line per phase
+// (rewritten after each).
 #include <CLI/CLI.hpp>
 #include <Eigen/Geometry>
 #include <chrono>
@@ -51,26 +52,26 @@ namespace {
 struct Options {
   int seed = 0;
   int cycles = 5;
-  double edge = 0.0;          ///< [m]; 0: the scenario's
-  double time_step = 0.0;     ///< [s]; 0: the scenario's
-  double scale = 1.0;         ///< sheet size and cavity radii as a fraction of the scenario's
-  double end_radius = 0.0;    ///< cavity radius at the end of each crumple [m]; 0: scale x 0.05
-  int max_iterations = 0;     ///< Newton iterations per step; 0: the scenario's 200
-  double strain_limit = 0;    ///< largest principal strain; 0: the scenario's
-  int open_points = 8;        ///< handles that open the sheet: 4 (corners) or 8 (and edge midpoints)
-  double spread = 0.8;        ///< handle targets as a fraction of the flat sheet's positions
-  double lift = 0.02;         ///< height of the opened sheet's corners above the ground [m]
-  double open_time = 1.5;     ///< handles pull until 2/3 of this and release at it [s]
-  bool lay_down = false;      ///< lower the held points to the ground before the release
-  double settle = 1.0;        ///< time on the ground after the release [s]
-  double press = 0.0;         ///< gap under the pressing plate [m]; 0: no pressing
-  double press_time = 1.0;    ///< the plate's way down [s]
-  double press_friction = 0;  ///< Coulomb coefficient between the plate and the sheet [-]
+  double edge = 0.0;        ///< [m]; 0: the scenario's
+  double time_step = 0.0;   ///< [s]; 0: the scenario's
+  double scale = 1.0;       ///< sheet size and cavity radii as a fraction of the scenario's
+  double end_radius = 0.0;  ///< cavity radius at the end of each crumple [m]; 0: scale x 0.05
+  int max_iterations = 0;   ///< Newton iterations per step; 0: the scenario's 200
+  double strain_limit = 0;  ///< largest principal strain; 0: the scenario's
+  int open_points = 8;      ///< handles that open the sheet: 4 (corners) or 8 (and edge midpoints)
+  double spread = 0.8;      ///< handle targets as a fraction of the flat sheet's positions
+  double lift = 0.02;       ///< height of the opened sheet's corners above the ground [m]
+  double open_time = 1.5;   ///< handles pull until 2/3 of this and release at it [s]
+  bool lay_down = false;    ///< lower the held points to the ground before the release
+  double settle = 1.0;      ///< time on the ground after the release [s]
+  double press = 0.0;       ///< gap under the pressing plate [m]; 0: no pressing
+  double press_time = 1.0;  ///< the plate's way down [s]
+  double press_friction = 0;     ///< Coulomb coefficient between the plate and the sheet [-]
   double press_stiffness = 1e4;  ///< contact and self-contact barrier pressure while pressing [Pa]
-  double crease_angle = 30;   ///< [deg]
-  double report = 0.5;        ///< simulated time between progress lines [s]
-  std::string open_only;      ///< a crumpled sheet (PLY) to open, instead of the cycles
-  std::string press_only;     ///< an opened sheet (PLY) to press, instead of the cycles
+  double crease_angle = 30;      ///< [deg]
+  double report = 0.5;           ///< simulated time between progress lines [s]
+  std::string open_only;         ///< a crumpled sheet (PLY) to open, instead of the cycles
+  std::string press_only;        ///< an opened sheet (PLY) to press, instead of the cycles
   std::string out;
 };
 
@@ -106,10 +107,13 @@ double plastic_integral(const papersim::remesh::SheetMesh& mesh) {
 
 /// Runs `scene` to its end with progress lines; returns its figures and leaves the final state
 /// in `mesh` / `positions`.
-PhaseFigures run_phase(const ps::Scene& scene, int cycle, const std::string& phase, const Options& o,
-                       papersim::remesh::SheetMesh& mesh, Eigen::MatrixX3d& positions) {
+PhaseFigures run_phase(const ps::Scene& scene, int cycle, const std::string& phase,
+                       const Options& o, papersim::remesh::SheetMesh& mesh,
+                       Eigen::MatrixX3d& positions) {
   const auto start = std::chrono::steady_clock::now();
-  const auto wall = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
+  const auto wall = [&] {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  };
   ps::Run run(scene);
   double next = o.report, lowest_top = INFINITY;
   while (!run.finished()) {
@@ -118,9 +122,10 @@ PhaseFigures run_phase(const ps::Scene& scene, int cycle, const std::string& pha
     if (run.state().time + 1e-9 < next || run.finished()) continue;
     next += o.report;
     const double w = wall(), t = run.state().time;
-    std::printf("  cycle %d %-8s t %6.3f / %.3f s  wall %7.1f s  ETA %7.1f s  Newton %d  stretch %.5f\n", cycle,
-                phase.c_str(), t, scene.duration, w, w * (scene.duration - t) / t,
-                run.result(w).totals.newton_iterations, run.step_stretch());
+    std::printf(
+        "  cycle %d %-8s t %6.3f / %.3f s  wall %7.1f s  ETA %7.1f s  Newton %d  stretch %.5f\n",
+        cycle, phase.c_str(), t, scene.duration, w, w * (scene.duration - t) / t,
+        run.result(w).totals.newton_iterations, run.step_stretch());
     std::fflush(stdout);
   }
   const ps::RunResult r = run.result(wall());
@@ -141,18 +146,21 @@ PhaseFigures run_phase(const ps::Scene& scene, int cycle, const std::string& pha
   pv::MetricsOptions mo;
   mo.crease_angle_deg = o.crease_angle;
   mo.self_intersections = false;  // counted by the run
-  p.creases = pv::compute_metrics(mesh.material_coords(), positions, mesh.faces(), mesh.plastic_curvature(), mo).creases;
+  p.creases = pv::compute_metrics(mesh.material_coords(), positions, mesh.faces(),
+                                  mesh.plastic_curvature(), mo)
+                  .creases;
   p.plastic_integral = plastic_integral(mesh);
   p.height = positions.col(2).maxCoeff() - positions.col(2).minCoeff();
   p.lowest_top = lowest_top;
   return p;
 }
 
-std::string save(const std::string& dir, const std::string& name, const papersim::remesh::SheetMesh& mesh,
-                 const Eigen::MatrixX3d& x, const ps::Scene& scene) {
+std::string save(const std::string& dir, const std::string& name,
+                 const papersim::remesh::SheetMesh& mesh, const Eigen::MatrixX3d& x,
+                 const ps::Scene& scene) {
   const std::string path = (fs::path(dir) / name).string();
-  papersim::remesh::write_sheet_file(path, mesh, x, Eigen::MatrixX3d::Zero(x.rows(), 3), scene.sheet.width,
-                                     scene.sheet.height);
+  papersim::remesh::write_sheet_file(path, mesh, x, Eigen::MatrixX3d::Zero(x.rows(), 3),
+                                     scene.sheet.width, scene.sheet.height);
   return path;
 }
 
@@ -186,8 +194,8 @@ ps::Scene crumple_scene(const Options& o, int k, const std::string& flat_path,
     }
     radius = std::max(radius, reach + 0.01);
     const std::string turned = fs::path(flat_path).replace_extension(".upright.ply").string();
-    papersim::remesh::write_sheet_file(turned, mesh, y, Eigen::MatrixX3d::Zero(y.rows(), 3), s.sheet.width,
-                                       s.sheet.height);
+    papersim::remesh::write_sheet_file(turned, mesh, y, Eigen::MatrixX3d::Zero(y.rows(), 3),
+                                       s.sheet.width, s.sheet.height);
     s.sheet.mesh_path = turned;
   }
   cavity = papersim::collision::shrinking_cavity(centre, radius, t_hold, t_end, end_radius / radius,
@@ -220,9 +228,10 @@ ps::Scene open_scene(const Options& o, const ps::Scene& crumple, const std::stri
   const Eigen::Vector3d c = x.colwise().mean().transpose();
   const Eigen::Vector3d shift(-c.x(), -c.y(), o.lift - x.col(2).minCoeff());
   Eigen::MatrixX3d y = x.rowwise() + shift.transpose();
-  const std::string lowered = (fs::path(o.out) / fs::path(crumpled_path).stem()).string() + ".lowered.ply";
-  papersim::remesh::write_sheet_file(lowered, mesh, y, Eigen::MatrixX3d::Zero(y.rows(), 3), s.sheet.width,
-                                     s.sheet.height);
+  const std::string lowered =
+      (fs::path(o.out) / fs::path(crumpled_path).stem()).string() + ".lowered.ply";
+  papersim::remesh::write_sheet_file(lowered, mesh, y, Eigen::MatrixX3d::Zero(y.rows(), 3),
+                                     s.sheet.width, s.sheet.height);
   s.sheet.mesh_path = lowered;
   // The handles' material points: the corners, and with --open-points 8 the edges' midpoints.
   const double w = s.sheet.width, h = s.sheet.height;
@@ -250,9 +259,11 @@ ps::Scene open_scene(const Options& o, const ps::Scene& crumple, const std::stri
     hs.stiffness = 100.0;  // N/m: lags ~0.5 mm under the sheet's weight, yields to a tangle
     hs.release_time = o.open_time;
     const Eigen::Vector3d target =
-        o.spread * ((points[i].x() - 0.5 * w) * ax + (points[i].y() - 0.5 * h) * by) + Eigen::Vector3d(0, 0, o.lift);
+        o.spread * ((points[i].x() - 0.5 * w) * ax + (points[i].y() - 0.5 * h) * by) +
+        Eigen::Vector3d(0, 0, o.lift);
     hs.keyframes = {{0.0, Eigen::Vector3d::Zero()}, {t_pull, target - at[i]}};
-    if (o.lay_down) hs.keyframes.push_back({t_lower, target - at[i] - Eigen::Vector3d(0, 0, o.lift - 1e-3)});
+    if (o.lay_down)
+      hs.keyframes.push_back({t_lower, target - at[i] - Eigen::Vector3d(0, 0, o.lift - 1e-3)});
     s.handles.push_back(hs);
   }
   return s;
@@ -278,7 +289,8 @@ ps::Scene press_scene(const Options& o, const ps::Scene& crumple, const std::str
   plate.friction = o.press_friction;
   papersim::collision::Keyframe k;
   k.rotation = Eigen::Quaterniond(Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX()));
-  for (const auto& [t, z] : {std::pair{0.0, top}, {t_down, o.press}, {t_down + 0.25, o.press}, {t_up, top + 0.05}}) {
+  for (const auto& [t, z] :
+       {std::pair{0.0, top}, {t_down, o.press}, {t_down + 0.25, o.press}, {t_up, top + 0.05}}) {
     k.time = t;
     k.translation = Eigen::Vector3d(0, 0, z);
     plate.keyframes.push_back(k);
@@ -289,15 +301,19 @@ ps::Scene press_scene(const Options& o, const ps::Scene& crumple, const std::str
 
 void print_figures(const PhaseFigures& p) {
   const auto& c = p.creases;
-  std::printf("cycle %d %s: wall %.1f s, %d vertices, %d Newton, %d halved, %d intersecting pairs, max stretch %.5f, "
-              "min gap %.2e m, height %.1f mm (top at least %.1f mm)\n",
-              p.cycle, p.phase.c_str(), p.wall, p.vertices, p.newton, p.halved, p.self_intersections, p.max_stretch,
-              p.min_gap, 1e3 * p.height, 1e3 * p.lowest_top);
-  std::printf("  creases (> %.0f deg): %d lines, %.4f m; plastic network: %d lines, %.4f m (mu %.3f sigma %.3f KS %.3f); "
-              "plastic curvature integral %.4f m\n",
-              c.threshold_deg, c.lines, c.total_length, c.plastic_network_lines, c.plastic_network_length,
-              c.plastic_network_log_length_mean, c.plastic_network_log_length_std, c.plastic_network_log_normal_ks,
-              p.plastic_integral);
+  std::printf(
+      "cycle %d %s: wall %.1f s, %d vertices, %d Newton, %d halved, %d intersecting pairs, max "
+      "stretch %.5f, "
+      "min gap %.2e m, height %.1f mm (top at least %.1f mm)\n",
+      p.cycle, p.phase.c_str(), p.wall, p.vertices, p.newton, p.halved, p.self_intersections,
+      p.max_stretch, p.min_gap, 1e3 * p.height, 1e3 * p.lowest_top);
+  std::printf(
+      "  creases (> %.0f deg): %d lines, %.4f m; plastic network: %d lines, %.4f m (mu %.3f sigma "
+      "%.3f KS %.3f); "
+      "plastic curvature integral %.4f m\n",
+      c.threshold_deg, c.lines, c.total_length, c.plastic_network_lines, c.plastic_network_length,
+      c.plastic_network_log_length_mean, c.plastic_network_log_length_std,
+      c.plastic_network_log_normal_ks, p.plastic_integral);
   std::fflush(stdout);
 }
 
@@ -320,51 +336,75 @@ Eigen::Vector3d log_fit(const std::vector<double>& y) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"papersim_crumple_cycles: crumple, open and lay down the crumple scenario's sheet K times; the "
-               "plastic crease network after each cycle"};
+  CLI::App app{
+      "papersim_crumple_cycles: crumple, open and lay down the crumple scenario's sheet K times; "
+      "the "
+      "plastic crease network after each cycle"};
   Options o;
   app.add_option("--seed", o.seed, "scenario seed")->check(papersim::common::non_negative());
-  app.add_option("--cycles", o.cycles, "number of crumple-and-open cycles")->check(CLI::Range(1, 50));
-  app.add_option("--edge", o.edge, "edge length [m] (0: the scenario's 10 mm)")->check(CLI::Range(0.0, 0.05));
-  app.add_option("--time-step", o.time_step, "time step [s] (0: the scenario's 2 ms)")->check(CLI::Range(0.0, 0.01));
-  app.add_option("--scale", o.scale, "sheet size and cavity radii as a fraction of the scenario's (A4, 0.2 -> 0.05 m)")
-      ->check(CLI::Range(0.1, 1.0));
-  app.add_option("--end-radius", o.end_radius, "cavity radius at the end of each crumple [m] (0: 0.05 x --scale)")
-      ->check(CLI::Range(0.0, 0.2));
-  app.add_option("--max-iterations", o.max_iterations, "Newton iterations per step (0: the scenario's 200)")
-      ->check(CLI::Range(0, 10000));
-  app.add_option("--strain-limit", o.strain_limit, "largest principal strain of the sheet (0: the scenario's 0.005)")
-      ->check(CLI::Range(0.0, 0.1));
-  app.add_option("--open-points", o.open_points, "handles that open the sheet: 4 (its corners) or 8 (and its edges' "
-                                                 "midpoints)")
-      ->check(CLI::IsMember({4, 8}));
-  app.add_option("--spread", o.spread, "opened handles' targets as a fraction of the flat sheet's positions")
-      ->check(CLI::Range(0.3, 0.95));
-  app.add_option("--lift", o.lift, "height of the opened corners (and of the ball's lowest point) [m]")
-      ->check(CLI::Range(0.002, 0.2));
-  app.add_option("--open-time", o.open_time, "the handles pull for 2/3 of it, hold the sheet (or lower it: "
-                                             "--lay-down), then let go [s]")
-      ->check(CLI::Range(0.1, 10.0));
-  app.add_flag("--lay-down", o.lay_down, "lower the held sheet to 1 mm above the ground before letting go (default: "
-                                         "let go at --lift)");
-  app.add_option("--settle", o.settle, "time on the ground after the release (and after the press) [s]")
-      ->check(CLI::Range(0.0, 10.0));
-  app.add_option("--press", o.press, "after each opening, press the sheet flat under a plate down to this gap above "
-                                     "the ground [m] (0: no pressing)")
+  app.add_option("--cycles", o.cycles, "number of crumple-and-open cycles")
+      ->check(CLI::Range(1, 50));
+  app.add_option("--edge", o.edge, "edge length [m] (0: the scenario's 10 mm)")
       ->check(CLI::Range(0.0, 0.05));
-  app.add_option("--press-time", o.press_time, "the plate's way down [s]")->check(CLI::Range(0.05, 10.0));
-  app.add_option("--press-friction", o.press_friction, "friction coefficient between the plate and the sheet")
+  app.add_option("--time-step", o.time_step, "time step [s] (0: the scenario's 2 ms)")
+      ->check(CLI::Range(0.0, 0.01));
+  app.add_option("--scale", o.scale,
+                 "sheet size and cavity radii as a fraction of the scenario's (A4, 0.2 -> 0.05 m)")
+      ->check(CLI::Range(0.1, 1.0));
+  app.add_option("--end-radius", o.end_radius,
+                 "cavity radius at the end of each crumple [m] (0: 0.05 x --scale)")
+      ->check(CLI::Range(0.0, 0.2));
+  app.add_option("--max-iterations", o.max_iterations,
+                 "Newton iterations per step (0: the scenario's 200)")
+      ->check(CLI::Range(0, 10000));
+  app.add_option("--strain-limit", o.strain_limit,
+                 "largest principal strain of the sheet (0: the scenario's 0.005)")
+      ->check(CLI::Range(0.0, 0.1));
+  app.add_option("--open-points", o.open_points,
+                 "handles that open the sheet: 4 (its corners) or 8 (and its edges' "
+                 "midpoints)")
+      ->check(CLI::IsMember({4, 8}));
+  app.add_option("--spread", o.spread,
+                 "opened handles' targets as a fraction of the flat sheet's positions")
+      ->check(CLI::Range(0.3, 0.95));
+  app.add_option("--lift", o.lift,
+                 "height of the opened corners (and of the ball's lowest point) [m]")
+      ->check(CLI::Range(0.002, 0.2));
+  app.add_option("--open-time", o.open_time,
+                 "the handles pull for 2/3 of it, hold the sheet (or lower it: "
+                 "--lay-down), then let go [s]")
+      ->check(CLI::Range(0.1, 10.0));
+  app.add_flag("--lay-down", o.lay_down,
+               "lower the held sheet to 1 mm above the ground before letting go (default: "
+               "let go at --lift)");
+  app.add_option("--settle", o.settle,
+                 "time on the ground after the release (and after the press) [s]")
+      ->check(CLI::Range(0.0, 10.0));
+  app.add_option("--press", o.press,
+                 "after each opening, press the sheet flat under a plate down to this gap above "
+                 "the ground [m] (0: no pressing)")
+      ->check(CLI::Range(0.0, 0.05));
+  app.add_option("--press-time", o.press_time, "the plate's way down [s]")
+      ->check(CLI::Range(0.05, 10.0));
+  app.add_option("--press-friction", o.press_friction,
+                 "friction coefficient between the plate and the sheet")
       ->check(CLI::Range(0.0, 5.0));
-  app.add_option("--press-stiffness", o.press_stiffness, "contact and self-contact barrier pressure while pressing "
-                                                         "[Pa] (the crumple's is 400)")
+  app.add_option("--press-stiffness", o.press_stiffness,
+                 "contact and self-contact barrier pressure while pressing "
+                 "[Pa] (the crumple's is 400)")
       ->check(CLI::Range(1.0, 1e7));
-  app.add_option("--crease-angle", o.crease_angle, "crease threshold [deg]")->check(CLI::Range(0.1, 179.0));
-  app.add_option("--report", o.report, "simulated time between progress lines [s]")->check(CLI::Range(1e-3, 100.0));
-  app.add_option("--open-only", o.open_only, "only open (and with --press press) this crumpled sheet (a cycle_K_crumpled.ply) into "
-                                                "DIR/open.ply (and DIR/pressed.ply)")
+  app.add_option("--crease-angle", o.crease_angle, "crease threshold [deg]")
+      ->check(CLI::Range(0.1, 179.0));
+  app.add_option("--report", o.report, "simulated time between progress lines [s]")
+      ->check(CLI::Range(1e-3, 100.0));
+  app.add_option(
+         "--open-only", o.open_only,
+         "only open (and with --press press) this crumpled sheet (a cycle_K_crumpled.ply) into "
+         "DIR/open.ply (and DIR/pressed.ply)")
       ->check(CLI::ExistingFile);
-  app.add_option("--press-only", o.press_only, "only press this opened sheet (a cycle_K_open.ply) into DIR/pressed.ply "
-                                               "(needs --press)")
+  app.add_option("--press-only", o.press_only,
+                 "only press this opened sheet (a cycle_K_open.ply) into DIR/pressed.ply "
+                 "(needs --press)")
       ->check(CLI::ExistingFile)
       ->excludes("--open-only");
   app.add_option("--out", o.out, "folder for each phase's sheet (PLY) and cycles.csv")->required();
@@ -390,24 +430,30 @@ int main(int argc, char** argv) {
     // DIR/cycles.csv, rewritten after every phase so a run stopped early leaves its figures.
     const auto write_csv = [&] {
       std::string csv =
-          "cycle,phase,wall_s,sim_time_s,vertices,newton,halved,self_intersections,max_stretch,min_gap_m,crease_lines,"
-          "crease_length_m,plastic_lines,plastic_length_m,plastic_log_mu,plastic_log_sigma,plastic_ks,"
+          "cycle,phase,wall_s,sim_time_s,vertices,newton,halved,self_intersections,max_stretch,min_"
+          "gap_m,crease_lines,"
+          "crease_length_m,plastic_lines,plastic_length_m,plastic_log_mu,plastic_log_sigma,plastic_"
+          "ks,"
           "plastic_curvature_integral_m,height_m,lowest_top_m\n";
       for (const auto& p : all) {
         char line[640];
         const auto& c = p.creases;
-        std::snprintf(line, sizeof line, "%d,%s,%.2f,%.4f,%d,%d,%d,%d,%.6f,%.4e,%d,%.5f,%d,%.5f,%.4f,%.4f,%.4f,%.5f,%.5f,%.5f\n",
-                      p.cycle, p.phase.c_str(), p.wall, p.sim_time, p.vertices, p.newton, p.halved,
-                      p.self_intersections, p.max_stretch, p.min_gap, c.lines, c.total_length, c.plastic_network_lines,
-                      c.plastic_network_length, c.plastic_network_log_length_mean, c.plastic_network_log_length_std,
-                      c.plastic_network_log_normal_ks, p.plastic_integral, p.height, p.lowest_top);
+        std::snprintf(
+            line, sizeof line,
+            "%d,%s,%.2f,%.4f,%d,%d,%d,%d,%.6f,%.4e,%d,%.5f,%d,%.5f,%.4f,%.4f,%.4f,%.5f,%.5f,%.5f\n",
+            p.cycle, p.phase.c_str(), p.wall, p.sim_time, p.vertices, p.newton, p.halved,
+            p.self_intersections, p.max_stretch, p.min_gap, c.lines, c.total_length,
+            c.plastic_network_lines, c.plastic_network_length, c.plastic_network_log_length_mean,
+            c.plastic_network_log_length_std, c.plastic_network_log_normal_ks, p.plastic_integral,
+            p.height, p.lowest_top);
         csv += line;
       }
       papersim::common::write_text_atomically(fs::path(o.out) / "cycles.csv", csv);
     };
     // Runs one phase, writes its sheet to DIR/`file` and its line of DIR/cycles.csv; returns
     // the sheet's path.
-    const auto phase = [&](const ps::Scene& scene, int k, const std::string& name, const std::string& file) {
+    const auto phase = [&](const ps::Scene& scene, int k, const std::string& name,
+                           const std::string& file) {
       const PhaseFigures p = run_phase(scene, k, name, o, mesh, x);
       const std::string written = save(o.out, file, mesh, x, scene);
       print_figures(p);
@@ -423,12 +469,15 @@ int main(int argc, char** argv) {
       mesh = d.mesh;
       x = d.positions;
       const ps::Scene crumple = crumple_scene(o, 1, "", mesh, x);
-      if (std::abs(d.width - crumple.sheet.width) > 1e-9 || std::abs(d.height - crumple.sheet.height) > 1e-9)
-        throw std::runtime_error(option + path + ": the sheet is " + std::to_string(d.width) + " x " +
-                                 std::to_string(d.height) + " m, --scale gives " + std::to_string(crumple.sheet.width) +
-                                 " x " + std::to_string(crumple.sheet.height) + " m");
+      if (std::abs(d.width - crumple.sheet.width) > 1e-9 ||
+          std::abs(d.height - crumple.sheet.height) > 1e-9)
+        throw std::runtime_error(option + path + ": the sheet is " + std::to_string(d.width) +
+                                 " x " + std::to_string(d.height) + " m, --scale gives " +
+                                 std::to_string(crumple.sheet.width) + " x " +
+                                 std::to_string(crumple.sheet.height) + " m");
       std::string open_path = path;
-      if (!o.open_only.empty()) open_path = phase(open_scene(o, crumple, o.open_only, x, mesh), 1, "open", "open.ply");
+      if (!o.open_only.empty())
+        open_path = phase(open_scene(o, crumple, o.open_only, x, mesh), 1, "open", "open.ply");
       if (o.press > 0) phase(press_scene(o, crumple, open_path, x), 1, "press", "pressed.ply");
       o.cycles = 0;
     }
@@ -436,20 +485,27 @@ int main(int argc, char** argv) {
       const std::string cycle = "cycle_" + std::to_string(k);
       const ps::Scene crumple = crumple_scene(o, k, flat_path, mesh, x);
       const std::string crumpled_path = phase(crumple, k, "crumple", cycle + "_crumpled.ply");
-      flat_path = phase(open_scene(o, crumple, crumpled_path, x, mesh), k, "open", cycle + "_open.ply");
-      if (o.press > 0) flat_path = phase(press_scene(o, crumple, flat_path, x), k, "press", cycle + "_pressed.ply");
+      flat_path =
+          phase(open_scene(o, crumple, crumpled_path, x, mesh), k, "open", cycle + "_open.ply");
+      if (o.press > 0)
+        flat_path =
+            phase(press_scene(o, crumple, flat_path, x), k, "press", cycle + "_pressed.ply");
       const PhaseFigures& po = all.back();
       plastic_length.push_back(po.creases.plastic_network_length);
       plastic_integral_open.push_back(po.plastic_integral);
     }
     if (o.cycles >= 2 && o.open_only.empty()) {
       const Eigen::Vector3d a = log_fit(plastic_length), b = log_fit(plastic_integral_open);
-      std::printf("plastic network length after cycle k = a + b ln k: a %.4f m, b %.4f m, R^2 %.3f\n", a(0), a(1), a(2));
-      std::printf("plastic curvature integral after cycle k = a + b ln k: a %.4f m, b %.4f m, R^2 %.3f\n", b(0), b(1),
-                  b(2));
+      std::printf(
+          "plastic network length after cycle k = a + b ln k: a %.4f m, b %.4f m, R^2 %.3f\n", a(0),
+          a(1), a(2));
+      std::printf(
+          "plastic curvature integral after cycle k = a + b ln k: a %.4f m, b %.4f m, R^2 %.3f\n",
+          b(0), b(1), b(2));
     }
-    std::printf("%s\n", pass ? "PASS: no penetration, no self-intersection, stretch within the limit"
-                             : "FAIL (lines above)");
+    std::printf("%s\n", pass
+                            ? "PASS: no penetration, no self-intersection, stretch within the limit"
+                            : "FAIL (lines above)");
     return pass ? 0 : 1;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "papersim_crumple_cycles: %s\n", e.what());

@@ -10,15 +10,14 @@
 // Sizes in mm. The loop of a pressed fold is a teardrop, not a semicircle: the ratio measures
 // how much of the fold's energy a mesh keeps relative to the arc that spans the same height, so
 // it is compared between meshes, not expected to be 1.
-#include <CLI/CLI.hpp>
+#include <sys/resource.h>
 
+#include <CLI/CLI.hpp>
 #include <cmath>
 #include <cstdio>
 #include <sstream>
 #include <string>
 #include <vector>
-
-#include <sys/resource.h>
 
 #include "common/cli_checks.hpp"
 #include "simulation/simulate.hpp"
@@ -77,13 +76,15 @@ Row run(const std::string& label, const ps::Scene& scene) {
   row.bend = r.energy.bend;
   const Eigen::VectorXd& x = r.state.positions;
   double zmin = INFINITY, zmax = -INFINITY;
-  for (Eigen::Index i = 2; i < x.size(); i += 3) zmin = std::min(zmin, x(i)), zmax = std::max(zmax, x(i));
+  for (Eigen::Index i = 2; i < x.size(); i += 3)
+    zmin = std::min(zmin, x(i)), zmax = std::max(zmax, x(i));
   row.radius = 0.5 * (zmax - zmin);
   row.continuum = M_PI * scene.sheet.material.bending_stiffness * scene.sheet.height / row.radius;
   row.self = r.quality.self_intersections;
   row.stretch = r.quality.max_principal_stretch;
   row.limit = r.quality.strain_limit;
-  row.ground = r.quality.min_obstacle_distance.empty() ? NAN : r.quality.min_obstacle_distance.front();
+  row.ground =
+      r.quality.min_obstacle_distance.empty() ? NAN : r.quality.min_obstacle_distance.front();
   if (r.remesh) row.rollbacks = r.remesh->rollbacks;
   return row;
 }
@@ -91,14 +92,19 @@ Row run(const std::string& label, const ps::Scene& scene) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"papersim_fold_remesh: the 180-degree fold's energy against the continuum, uniform vs remeshed"};
+  CLI::App app{
+      "papersim_fold_remesh: the 180-degree fold's energy against the continuum, uniform vs "
+      "remeshed"};
   std::string edges_text = "8,4", remesh_text = "1:100", csv;
   double start_edge = 8;
-  app.add_option("--edges", edges_text, "uniform edge lengths [mm], comma separated")->capture_default_str();
-  app.add_option("--remesh", remesh_text,
-                 "remeshed runs, comma separated MIN:MAX (remesh.size_min and size_max [mm]); empty: none")
+  app.add_option("--edges", edges_text, "uniform edge lengths [mm], comma separated")
       ->capture_default_str();
-  app.add_option("--start-edge", start_edge, "start mesh of the remeshed runs [mm]")->capture_default_str()
+  app.add_option(
+         "--remesh", remesh_text,
+         "remeshed runs, comma separated MIN:MAX (remesh.size_min and size_max [mm]); empty: none")
+      ->capture_default_str();
+  app.add_option("--start-edge", start_edge, "start mesh of the remeshed runs [mm]")
+      ->capture_default_str()
       ->check(papersim::common::positive());
   app.add_option("--csv", csv, "also write the table as CSV");
   CLI11_PARSE(app, argc, argv);
@@ -110,15 +116,17 @@ int main(int argc, char** argv) {
     while (std::getline(in, item, ',')) {
       double lo = 0, hi = 0;
       int used = 0;
-      if (std::sscanf(item.c_str(), "%lf:%lf%n", &lo, &hi, &used) != 2 || used != static_cast<int>(item.size()) ||
-          !(lo > 0) || !(hi >= lo) || !std::isfinite(hi))
-        throw std::runtime_error("--remesh: '" + item + "' is not MIN:MAX in mm with 0 < MIN <= MAX");
+      if (std::sscanf(item.c_str(), "%lf:%lf%n", &lo, &hi, &used) != 2 ||
+          used != static_cast<int>(item.size()) || !(lo > 0) || !(hi >= lo) || !std::isfinite(hi))
+        throw std::runtime_error("--remesh: '" + item +
+                                 "' is not MIN:MAX in mm with 0 < MIN <= MAX");
       remeshes.emplace_back(lo, hi);
     }
     const std::vector<double> edges = numbers(edges_text, "--edges");
     papersim::validation::StudyTable table(
-        csv, "mesh,vertices,vertices_max,cpu_seconds,bending_energy_J,radius_m,continuum_J,ratio,"
-             "self_intersections,max_stretch,min_ground_m,remesh_rollbacks,failure");
+        csv,
+        "mesh,vertices,vertices_max,cpu_seconds,bending_energy_J,radius_m,continuum_J,ratio,"
+        "self_intersections,max_stretch,min_ground_m,remesh_rollbacks,failure");
     std::vector<Row> rows;
     for (double e : edges) {
       char label[32];
@@ -134,24 +142,27 @@ int main(int argc, char** argv) {
       std::snprintf(label, sizeof label, "remesh %g:%g", lo, hi);
       rows.push_back(run(label, s));
     }
-    std::printf("%-16s %8s %8s %8s %12s %9s %12s %7s %5s %10s %10s %6s\n", "mesh", "vertices", "max_vert", "cpu_s",
-                "bend_J", "radius_mm", "continuum_J", "ratio", "self", "max_s1", "ground_mm", "rollb");
+    std::printf("%-16s %8s %8s %8s %12s %9s %12s %7s %5s %10s %10s %6s\n", "mesh", "vertices",
+                "max_vert", "cpu_s", "bend_J", "radius_mm", "continuum_J", "ratio", "self",
+                "max_s1", "ground_mm", "rollb");
     bool safe = true;
     for (const Row& r : rows) {
       std::ostringstream out;
       if (!r.failure.empty()) {
-        std::printf("%-16s FAILED after %.1f s of CPU: %s\n", r.mesh.c_str(), r.cpu, r.failure.c_str());
+        std::printf("%-16s FAILED after %.1f s of CPU: %s\n", r.mesh.c_str(), r.cpu,
+                    r.failure.c_str());
         out << r.mesh << ",,," << r.cpu << ",,,,,,,,,\"" << r.failure << '"';
         table.add(out.str());
         safe = false;
         continue;
       }
-      std::printf("%-16s %8d %8d %8.1f %12.4g %9.2f %12.4g %7.3f %5d %10.6f %10.4f %6d\n", r.mesh.c_str(), r.vertices,
-                  r.vertices_max, r.cpu, r.bend, 1e3 * r.radius, r.continuum, r.bend / r.continuum, r.self, r.stretch,
-                  1e3 * r.ground, r.rollbacks);
-      out << r.mesh << ',' << r.vertices << ',' << r.vertices_max << ',' << r.cpu << ',' << r.bend << ','
-          << r.radius << ',' << r.continuum << ',' << r.bend / r.continuum << ',' << r.self << ',' << r.stretch
-          << ',' << r.ground << ',' << r.rollbacks << ',';
+      std::printf("%-16s %8d %8d %8.1f %12.4g %9.2f %12.4g %7.3f %5d %10.6f %10.4f %6d\n",
+                  r.mesh.c_str(), r.vertices, r.vertices_max, r.cpu, r.bend, 1e3 * r.radius,
+                  r.continuum, r.bend / r.continuum, r.self, r.stretch, 1e3 * r.ground,
+                  r.rollbacks);
+      out << r.mesh << ',' << r.vertices << ',' << r.vertices_max << ',' << r.cpu << ',' << r.bend
+          << ',' << r.radius << ',' << r.continuum << ',' << r.bend / r.continuum << ',' << r.self
+          << ',' << r.stretch << ',' << r.ground << ',' << r.rollbacks << ',';
       table.add(out.str());
       safe = safe && r.self == 0 && r.ground > 0 && r.stretch <= 1 + r.limit;
     }

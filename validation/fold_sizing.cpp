@@ -14,8 +14,10 @@
 // With --checkpoint the run is the checkpoint's scene resumed from its state (papersim run
 // --checkpoint): the report is made there and after the (absolute) steps listed, and the sizing
 // parameters are the scene's unless --size is given.
-#include <CLI/CLI.hpp>
+#include <sys/resource.h>
 
+#include <CLI/CLI.hpp>
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -23,9 +25,6 @@
 #include <sstream>
 #include <string>
 #include <vector>
-
-#include <Eigen/Eigenvalues>
-#include <sys/resource.h>
 
 #include "common/atomic_file.hpp"
 #include "remesh/remesh.hpp"
@@ -59,12 +58,14 @@ void report(const ps::Run& run, const rm::RemeshParams& p, const std::string& du
   const Eigen::MatrixX3d& x = rs.positions;
   double zmin = INFINITY, zmax = -INFINITY;
   for (int v = 0; v < x.rows(); ++v) zmin = std::min(zmin, x(v, 2)), zmax = std::max(zmax, x(v, 2));
-  std::printf("step %d (t = %.3f s): %d vertices, %d faces, loop height %.1f mm\n", run.steps_done(),
-              run.state().time, mesh.num_vertices(), mesh.num_faces(), 1e3 * (zmax - zmin));
+  std::printf("step %d (t = %.3f s): %d vertices, %d faces, loop height %.1f mm\n",
+              run.steps_done(), run.state().time, mesh.num_vertices(), mesh.num_faces(),
+              1e3 * (zmax - zmin));
   const char* names[5] = {"curvature", "plastic", "compression", "velocity", "obstacle"};
   // --dump: the faces' table, written at the end of this step through a temporary name.
   const bool dumping = !dump.empty();
-  std::string faces_csv = "mx,my,wx,wy,wz,l_curvature,l_plastic,l_compression,kp_xx,kp_yy,kp_xy,size\n";
+  std::string faces_csv =
+      "mx,my,wx,wy,wz,l_curvature,l_plastic,l_compression,kp_xx,kp_yy,kp_xy,size\n";
   const Eigen::MatrixX3d kp = mesh.plastic_curvature();
   const double at_min = 1.0 / (p.size_min * p.size_min) * (1 - 1e-9);
   std::vector<int> finest(5, 0), dominant(5, 0);
@@ -82,7 +83,8 @@ void report(const ps::Run& run, const rm::RemeshParams& p, const std::string& du
       if (l >= at_min) {
         ++finest[k];
         const double cx = (mesh.material_coord(f(i, 0)).x() + mesh.material_coord(f(i, 1)).x() +
-                           mesh.material_coord(f(i, 2)).x()) / 3;
+                           mesh.material_coord(f(i, 2)).x()) /
+                          3;
         ++finest_at[k][std::clamp(static_cast<int>(cx / 0.01), 0, 11)];
       }
       if (l > 0) wanted[k].push_back(1 / std::sqrt(l));
@@ -96,15 +98,18 @@ void report(const ps::Run& run, const rm::RemeshParams& p, const std::string& du
       for (int c = 0; c < 3; ++c) {
         mc += mesh.material_coord(f(i, c)) / 3;
         wc += x.row(f(i, c)).transpose() / 3;
-        size = std::max(size, (mesh.material_coord(f(i, (c + 1) % 3)) - mesh.material_coord(f(i, c))).norm());
+        size = std::max(
+            size, (mesh.material_coord(f(i, (c + 1) % 3)) - mesh.material_coord(f(i, c))).norm());
       }
       auto len = [&](int k) {
         const double l = largest_eigenvalue(m[k]);
         return l > 0 ? 1 / std::sqrt(l) : INFINITY;
       };
       char line[256];
-      std::snprintf(line, sizeof line, "%.6g,%.6g,%.6g,%.6g,%.6g,%.4g,%.4g,%.4g,%.4g,%.4g,%.4g,%.4g\n", mc.x(),
-                    mc.y(), wc.x(), wc.y(), wc.z(), len(0), len(1), len(2), kp(i, 0), kp(i, 1), kp(i, 2), size);
+      std::snprintf(line, sizeof line,
+                    "%.6g,%.6g,%.6g,%.6g,%.6g,%.4g,%.4g,%.4g,%.4g,%.4g,%.4g,%.4g\n", mc.x(), mc.y(),
+                    wc.x(), wc.y(), wc.z(), len(0), len(1), len(2), kp(i, 0), kp(i, 1), kp(i, 2),
+                    size);
       faces_csv += line;
     }
     const Eigen::Vector2d a = mesh.material_coord(f(i, 0)), b = mesh.material_coord(f(i, 1)),
@@ -128,20 +133,24 @@ void report(const ps::Run& run, const rm::RemeshParams& p, const std::string& du
   if (dumping) {
     const std::string step = std::to_string(run.steps_done());
     papersim::common::write_text_atomically(dump + "/faces_" + step + ".csv", faces_csv);
-    papersim::common::write_file_atomically(dump + "/sheet_" + step + ".obj", [&](std::ostream& obj) {
-      rm::write_obj(obj, mesh, x, run.scene().sheet.width, run.scene().sheet.height);
-    });
+    papersim::common::write_file_atomically(
+        dump + "/sheet_" + step + ".obj", [&](std::ostream& obj) {
+          rm::write_obj(obj, mesh, x, run.scene().sheet.width, run.scene().sheet.height);
+        });
   }
   if (run.scene().remesh.enabled) {
     const ps::RunResult r = run.result(0);
-    std::printf("  remeshing so far: %d passes, %d rollbacks, %d splits, %d flips, %d collapses; refused:",
-                r.remesh->passes, r.remesh->rollbacks, r.remesh->splits, r.remesh->flips, r.remesh->collapses);
+    std::printf(
+        "  remeshing so far: %d passes, %d rollbacks, %d splits, %d flips, %d collapses; refused:",
+        r.remesh->passes, r.remesh->rollbacks, r.remesh->splits, r.remesh->flips,
+        r.remesh->collapses);
     for (const auto& [reason, n] : r.remesh->refusals) std::printf(" %s %d,", reason.c_str(), n);
     std::printf("\n");
   }
-  std::printf("  smallest principal Green strain %.3g; faces compressed beyond 1e-3: %d\n", green_min,
-              compressed);
-  std::printf("  implied by the clamped sizing: about %.0f vertices (%.0f faces)\n", 0.5 * implied, implied);
+  std::printf("  smallest principal Green strain %.3g; faces compressed beyond 1e-3: %d\n",
+              green_min, compressed);
+  std::printf("  implied by the clamped sizing: about %.0f vertices (%.0f faces)\n", 0.5 * implied,
+              implied);
   {
     // What the remesher sees: face metrics averaged at the vertices (remesh::vertex_metrics), each
     // face measured by the mean of its corners' metrics.
@@ -153,9 +162,11 @@ void report(const ps::Run& run, const rm::RemeshParams& p, const std::string& du
       Eigen::Matrix2d dm;
       dm << b - a, c - a;
       const Eigen::Matrix2d m = (vm[f(i, 0)] + vm[f(i, 1)] + vm[f(i, 2)]) / 3;
-      by_vertex += 0.5 * std::abs(dm.determinant()) * std::sqrt(std::max(m.determinant(), 0.0)) / (std::sqrt(3.0) / 4);
+      by_vertex += 0.5 * std::abs(dm.determinant()) * std::sqrt(std::max(m.determinant(), 0.0)) /
+                   (std::sqrt(3.0) / 4);
     }
-    std::printf("  implied by the metrics averaged at the vertices: about %.0f vertices\n", 0.5 * by_vertex);
+    std::printf("  implied by the metrics averaged at the vertices: about %.0f vertices\n",
+                0.5 * by_vertex);
     // Edge lengths under the metric the remesher uses (mean of the end vertices' metrics): a pass
     // splits above 1 and collapses only where no new edge exceeds 0.9.
     std::set<std::pair<int, int>> edges;
@@ -175,7 +186,8 @@ void report(const ps::Run& run, const rm::RemeshParams& p, const std::string& du
         "90%% %.2f\n",
         pct(0.1), pct(0.25), pct(0.5), pct(0.75), pct(0.9));
   }
-  std::printf("  %-12s %8s %8s %10s %10s\n", "criterion", "finest", "largest", "min_l_mm", "median_mm");
+  std::printf("  %-12s %8s %8s %10s %10s\n", "criterion", "finest", "largest", "min_l_mm",
+              "median_mm");
   for (int k = 0; k < 5; ++k) {
     std::vector<double>& w = wanted[k];
     std::sort(w.begin(), w.end());
@@ -193,8 +205,8 @@ void report(const ps::Run& run, const rm::RemeshParams& p, const std::string& du
 
 bool parse_pair(const std::string& text, double& lo, double& hi) {
   int used = 0;
-  return std::sscanf(text.c_str(), "%lf:%lf%n", &lo, &hi, &used) == 2 && used == static_cast<int>(text.size()) &&
-         lo > 0 && hi >= lo;
+  return std::sscanf(text.c_str(), "%lf:%lf%n", &lo, &hi, &used) == 2 &&
+         used == static_cast<int>(text.size()) && lo > 0 && hi >= lo;
 }
 
 }  // namespace
@@ -205,29 +217,38 @@ int main(int argc, char** argv) {
   std::string remesh_text, size_text = "1:100", steps_text = "1,2,50,100,160", dump, checkpoint;
   app.add_option("--edge", edge, "start edge length [mm]")->capture_default_str();
   app.add_option("--remesh", remesh_text, "remesh the run with MIN:MAX [mm] (default: uniform)");
-  app.add_option("--size", size_text, "size_min:size_max [mm] of the report's sizing")->capture_default_str();
-  app.add_option("--steps", steps_text, "steps after which to report, comma separated")->capture_default_str();
-  app.add_option("--dump", dump, "write faces_STEP.csv (per face: material and world centroid [m], the edge each "
-                 "criterion asks for [m], plastic curvature [1/m], longest edge [m]) into this directory");
+  app.add_option("--size", size_text, "size_min:size_max [mm] of the report's sizing")
+      ->capture_default_str();
+  app.add_option("--steps", steps_text, "steps after which to report, comma separated")
+      ->capture_default_str();
+  app.add_option(
+      "--dump", dump,
+      "write faces_STEP.csv (per face: material and world centroid [m], the edge each "
+      "criterion asks for [m], plastic curvature [1/m], longest edge [m]) into this directory");
   CLI::Option* checkpoint_option =
-      app.add_option("--checkpoint", checkpoint, "report on the checkpoint in DIR (its scene and state) and "
-                     "after the steps listed")->check(CLI::ExistingDirectory);
+      app.add_option("--checkpoint", checkpoint,
+                     "report on the checkpoint in DIR (its scene and state) and "
+                     "after the steps listed")
+          ->check(CLI::ExistingDirectory);
   checkpoint_option->excludes(app.get_option("--edge"))->excludes(app.get_option("--remesh"));
   CLI11_PARSE(app, argc, argv);
   try {
     ps::Checkpoint cp;
     if (!checkpoint.empty()) cp = ps::load_checkpoint(checkpoint);
-    ps::Scene scene = checkpoint.empty() ? papersim::validation::fold_180_scene(1e-3 * edge)
-                                         : ps::scene_from_json(cp.scene, checkpoint + "/checkpoint.json");
+    ps::Scene scene = checkpoint.empty()
+                          ? papersim::validation::fold_180_scene(1e-3 * edge)
+                          : ps::scene_from_json(cp.scene, checkpoint + "/checkpoint.json");
     double lo = 0, hi = 0;
-    if (!parse_pair(size_text, lo, hi)) throw std::runtime_error("--size: '" + size_text + "' is not MIN:MAX");
+    if (!parse_pair(size_text, lo, hi))
+      throw std::runtime_error("--size: '" + size_text + "' is not MIN:MAX");
     rm::RemeshParams p = scene.remesh.params;
     if (checkpoint.empty() || app.count("--size")) {
       p.size_min = 1e-3 * lo;
       p.size_max = 1e-3 * hi;
     }
     if (!remesh_text.empty()) {
-      if (!parse_pair(remesh_text, lo, hi)) throw std::runtime_error("--remesh: '" + remesh_text + "' is not MIN:MAX");
+      if (!parse_pair(remesh_text, lo, hi))
+        throw std::runtime_error("--remesh: '" + remesh_text + "' is not MIN:MAX");
       scene.remesh.enabled = true;
       scene.remesh.params.size_min = 1e-3 * lo;
       scene.remesh.params.size_max = 1e-3 * hi;
@@ -257,14 +278,18 @@ int main(int argc, char** argv) {
       const ps::RunResult r = run.result(0);
       const Eigen::VectorXd& x = r.state.positions;
       double zmin = INFINITY, zmax = -INFINITY;
-      for (Eigen::Index i = 2; i < x.size(); i += 3) zmin = std::min(zmin, x(i)), zmax = std::max(zmax, x(i));
+      for (Eigen::Index i = 2; i < x.size(); i += 3)
+        zmin = std::min(zmin, x(i)), zmax = std::max(zmax, x(i));
       const double radius = 0.5 * (zmax - zmin);
-      const double continuum = M_PI * scene.sheet.material.bending_stiffness * scene.sheet.height / radius;
-      std::printf("end: %d vertices (%d at most), bending energy %.4g J, radius %.2f mm, pi D w / r %.4g J, "
-                  "ratio %.3f, self-intersections %d, max stretch %.6f, min ground %.3g m\n",
-                  r.sheet.vertices, r.sheet.vertices_max, r.energy.bend, 1e3 * radius, continuum,
-                  r.energy.bend / continuum, r.quality.self_intersections, r.quality.max_principal_stretch,
-                  r.quality.min_obstacle_distance.empty() ? NAN : r.quality.min_obstacle_distance.front());
+      const double continuum =
+          M_PI * scene.sheet.material.bending_stiffness * scene.sheet.height / radius;
+      std::printf(
+          "end: %d vertices (%d at most), bending energy %.4g J, radius %.2f mm, pi D w / r %.4g "
+          "J, "
+          "ratio %.3f, self-intersections %d, max stretch %.6f, min ground %.3g m\n",
+          r.sheet.vertices, r.sheet.vertices_max, r.energy.bend, 1e3 * radius, continuum,
+          r.energy.bend / continuum, r.quality.self_intersections, r.quality.max_principal_stretch,
+          r.quality.min_obstacle_distance.empty() ? NAN : r.quality.min_obstacle_distance.front());
     }
     return 0;
   } catch (const std::exception& e) {

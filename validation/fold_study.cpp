@@ -14,8 +14,8 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <nlohmann/json.hpp>
 #include <iomanip>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -75,7 +75,8 @@ CreaseFound find_crease(const ps::Scene& scene, const papersim::remesh::SheetMes
 
 /// The study's verdict: the safety verdict, and a crease along at least half the fitted line.
 std::string crease_verdict(const std::string& safety, const CreaseFound& f) {
-  if (safety == "PASS" && f.crease.longest < 0.5 * f.line.chord) return "FAIL no plastic crease along the fold";
+  if (safety == "PASS" && f.crease.longest < 0.5 * f.line.chord)
+    return "FAIL no plastic crease along the fold";
   return safety;
 }
 
@@ -100,12 +101,14 @@ int measure(const std::vector<std::string>& dirs, double crease_angle, const std
       throw std::runtime_error(dir + ": not a finished run (no sheet.ply)");
   // One list of columns for both the table and the CSV: name and table width.
   static const std::vector<std::pair<const char*, int>> columns = {
-      {"seed", 5},      {"wall_s", 8},    {"newton", 7},   {"max_s1", 9},   {"min_roller", 10}, {"min_ground", 10},
-      {"self", 5},      {"lines", 6},     {"longest_m", 9}, {"creased_m", 9}, {"line_m", 9},       {"rest_deg", 9},
-      {"mean_deg", 8},  {"network", 8},   {"offset_mm", 9}, {"turn_deg", 8},  {"run", 24},         {"verdict", 0}};
+      {"seed", 5},        {"wall_s", 8},   {"newton", 7},   {"max_s1", 9},    {"min_roller", 10},
+      {"min_ground", 10}, {"self", 5},     {"lines", 6},    {"longest_m", 9}, {"creased_m", 9},
+      {"line_m", 9},      {"rest_deg", 9}, {"mean_deg", 8}, {"network", 8},   {"offset_mm", 9},
+      {"turn_deg", 8},    {"run", 24},     {"verdict", 0}};
   std::ostringstream rows;
   const auto emit = [&](const std::vector<std::string>& cells) {
-    if (cells.size() != columns.size()) throw std::logic_error("fold_study: a row of the wrong width");
+    if (cells.size() != columns.size())
+      throw std::logic_error("fold_study: a row of the wrong width");
     for (std::size_t c = 0; c < columns.size(); ++c) {
       std::printf(c + 1 < columns.size() ? "%-*s " : "%-*s\n", columns[c].second, cells[c].c_str());
       rows << cells[c] << (c + 1 < columns.size() ? ',' : '\n');
@@ -139,7 +142,8 @@ int measure(const std::vector<std::string>& dirs, double crease_angle, const std
     if (scene.handles.empty()) throw std::runtime_error(dir + ": not a fold scene (no handle)");
     const papersim::remesh::SheetData sheet = papersim::remesh::read_sheet(dir + "/sheet.ply");
     const CreaseFound f = find_crease(scene, sheet.mesh, sheet.positions, crease_angle);
-    std::string wall = "-", newton = "-", s1 = "-", roller = "-", ground = "-", self = "-", verdict = "-";
+    std::string wall = "-", newton = "-", s1 = "-", roller = "-", ground = "-", self = "-",
+                verdict = "-";
     if (has_meta) {
       try {
         const ps::RunQuality q = quality_from_meta(meta.at("quality"));
@@ -156,10 +160,12 @@ int measure(const std::vector<std::string>& dirs, double crease_angle, const std
       }
       if (verdict != "PASS") ++failures;
     }
-    emit({std::to_string(scene.seed), wall, newton, s1, roller, ground, self, std::to_string(f.crease.lines),
-          fixed("%.4f", f.crease.longest), fixed("%.4f", f.crease.creased), fixed("%.4f", f.line.chord),
+    emit({std::to_string(scene.seed), wall, newton, s1, roller, ground, self,
+          std::to_string(f.crease.lines), fixed("%.4f", f.crease.longest),
+          fixed("%.4f", f.crease.creased), fixed("%.4f", f.line.chord),
           fixed("%.1f", f.crease.angle * 180 / M_PI), fixed("%.1f", f.crease.mean_all * 180 / M_PI),
-          std::to_string(f.network), fixed("%.1f", f.offset * 1e3), fixed("%.2f", f.turn), dir, verdict});
+          std::to_string(f.network), fixed("%.1f", f.offset * 1e3), fixed("%.2f", f.turn), dir,
+          verdict});
   }
   if (!csv.empty()) papersim::common::write_text_atomically(csv, rows.str());
   return failures == 0 ? 0 : 1;
@@ -234,9 +240,11 @@ static int study(int argc, char** argv) {
         if (tenth == last && seconds - printed < 300.0) return;
         const double eta = f > 0 ? seconds * (1 - f) / f : 0.0;
         if (tenth == last)
-          std::fprintf(stderr, "fold seed %d %5.1f%%  elapsed %.0f s  ETA %.0f s\n", seed, 100 * f, seconds, eta);
+          std::fprintf(stderr, "fold seed %d %5.1f%%  elapsed %.0f s  ETA %.0f s\n", seed, 100 * f,
+                       seconds, eta);
         else
-          std::fprintf(stderr, "fold seed %d %3d%%  elapsed %.0f s  ETA %.0f s\n", seed, 10 * tenth, seconds, eta);
+          std::fprintf(stderr, "fold seed %d %3d%%  elapsed %.0f s  ETA %.0f s\n", seed, 10 * tenth,
+                       seconds, eta);
         last = tenth;
         printed = seconds;
       };
@@ -278,12 +286,14 @@ static int study(int argc, char** argv) {
         crease.creased, line.chord, crease.angle * deg, crease.mean_all * deg, found.network,
         offset * 1e3, turn, verdict.c_str());
     std::fflush(stdout);
-    if (table.enabled()) {  // rewritten whole after every seed: a stopped study keeps the seeds it finished
+    if (table.enabled()) {  // rewritten whole after every seed: a stopped study keeps the seeds it
+                            // finished
       std::ostringstream row;
-      row << seed << ',' << verts << ',' << wall << ',' << newton << ',' << halved << ',' << s1 << ',' << roller
-          << ',' << ground << ',' << self << ',' << crease.lines << ',' << crease.longest << ',' << crease.creased
-          << ',' << line.chord << ',' << crease.angle * deg << ',' << crease.mean_all * deg << ','
-          << found.network << ',' << offset << ',' << turn << ',' << verdict;
+      row << seed << ',' << verts << ',' << wall << ',' << newton << ',' << halved << ',' << s1
+          << ',' << roller << ',' << ground << ',' << self << ',' << crease.lines << ','
+          << crease.longest << ',' << crease.creased << ',' << line.chord << ','
+          << crease.angle * deg << ',' << crease.mean_all * deg << ',' << found.network << ','
+          << offset << ',' << turn << ',' << verdict;
       table.add(row.str());
     }
   }
@@ -293,4 +303,6 @@ static int study(int argc, char** argv) {
   return failures == 0 ? 0 : 1;
 }
 
-int main(int argc, char** argv) { return papersim::validation::run_study("fold_study", study, argc, argv); }
+int main(int argc, char** argv) {
+  return papersim::validation::run_study("fold_study", study, argc, argv);
+}

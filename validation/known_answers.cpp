@@ -51,20 +51,20 @@ constexpr double PI = 3.14159265358979323846;
 // The report: rows printed as they come, and written as CSV at the end.
 
 struct Row {
-  std::string group;      ///< case family ("elastica", "greenhill", ...)
-  std::string name;       ///< what was measured, with the mesh and parameters
-  double expected = 0;    ///< known answer (or the bound of a one-sided test)
+  std::string group;    ///< case family ("elastica", "greenhill", ...)
+  std::string name;     ///< what was measured, with the mesh and parameters
+  double expected = 0;  ///< known answer (or the bound of a one-sided test)
   double measured = 0;
   double rel_error = NOT_APPLICABLE;  ///< measured / expected - 1, when meaningful
-  std::string tolerance;  ///< "2%", "< 0.1", "info" (reported, not judged)
-  std::string verdict;    ///< PASS, FAIL or info
+  std::string tolerance;              ///< "2%", "< 0.1", "info" (reported, not judged)
+  std::string verdict;                ///< PASS, FAIL or info
 };
 
 class Report {
  public:
   void header() const {
-    std::printf("%-58s %12s %12s %9s %9s %s\n", "case", "expected", "measured", "rel.err",
-                "tol", "verdict");
+    std::printf("%-58s %12s %12s %9s %9s %s\n", "case", "expected", "measured", "rel.err", "tol",
+                "verdict");
   }
   void section(const std::string& title) const {
     std::printf("\n== %s\n", title.c_str());
@@ -82,21 +82,22 @@ class Report {
     std::fflush(stdout);
   }
   /// Two-sided relative test: |measured / expected - 1| <= tol.
-  void relative(const std::string& group, const std::string& name, double expected,
-                double measured, double tol) {
+  void relative(const std::string& group, const std::string& name, double expected, double measured,
+                double tol) {
     const double e = measured / expected - 1;
     add({group, name, expected, measured, e, format("%g%%", 100 * tol),
          std::abs(e) <= tol ? "PASS" : "FAIL"});
   }
   /// One-sided test: measured < bound (below = true) or measured > bound.
-  void bound(const std::string& group, const std::string& name, double bound_value,
-             double measured, bool below) {
+  void bound(const std::string& group, const std::string& name, double bound_value, double measured,
+             bool below) {
     const bool ok = below ? measured < bound_value : measured > bound_value;
     add({group, name, bound_value, measured, NOT_APPLICABLE,
          format("%s %g", below ? "<" : ">", bound_value), ok ? "PASS" : "FAIL"});
   }
   void info(const std::string& group, const std::string& name, double expected, double measured) {
-    const double e = expected != 0 && std::isfinite(expected) ? measured / expected - 1 : NOT_APPLICABLE;
+    const double e =
+        expected != 0 && std::isfinite(expected) ? measured / expected - 1 : NOT_APPLICABLE;
     add({group, name, expected, measured, e, "info", "info"});
   }
   void failure(const std::string& group, const std::string& what) {
@@ -191,7 +192,8 @@ Simulation make_simulation(const rm::SheetMesh& mesh, const Eigen::VectorXd& x0,
   ps::Terms terms = ps::build_terms(mesh, p);
   Simulation sim;
   sim.bending = terms.bending;
-  sim.integrator = std::make_unique<ps::Integrator>(mesh.num_vertices(), std::move(terms.list), s.newton);
+  sim.integrator =
+      std::make_unique<ps::Integrator>(mesh.num_vertices(), std::move(terms.list), s.newton);
   sim.state.positions = x0;
   sim.state.velocities = Eigen::VectorXd::Zero(x0.size());
   return sim;
@@ -234,8 +236,8 @@ struct Strip {
   std::string label;     ///< "grid" or "30deg"
 };
 
-constexpr double STRIP_LENGTH = 0.1;  // [m] L
-constexpr double STRIP_WIDTH = 0.01;  // [m]
+constexpr double STRIP_LENGTH = 0.1;       // [m] L
+constexpr double STRIP_WIDTH = 0.01;       // [m]
 constexpr double THIN_STRIP_WIDTH = 0.05;  // [m] room for faces 5 h long across the strip
 
 Strip strip_along_grid(double h) {
@@ -323,10 +325,12 @@ struct ElasticaCase {
 };
 // VALIDATION.md section 1 (shooting on theta'' = -G (1 - s) cos theta, RK4, 4000 steps).
 const ElasticaCase ELASTICA[] = {
-    {0.1, 0.01250, 0.99991, 0.050},   {0.5, 0.06231, 0.99778, 0.2496}, {1, 0.12347, 0.99125, 0.4969},
-    {2, 0.23851, 0.96689, 0.9767},    {4, 0.42516, 0.89011, 1.8443},   {6, 0.55392, 0.80373, 2.5782},
-    {8, 0.64063, 0.72442, 3.2016},    {10, 0.70020, 0.65635, 3.7422},  {15, 0.78604, 0.52957, 4.8561},
-    {20, 0.82988, 0.44523, 5.7615},   {30, 0.87309, 0.34276, 7.2378},  {50, 0.90792, 0.24501, 9.5285},
+    {0.1, 0.01250, 0.99991, 0.050},   {0.5, 0.06231, 0.99778, 0.2496},
+    {1, 0.12347, 0.99125, 0.4969},    {2, 0.23851, 0.96689, 0.9767},
+    {4, 0.42516, 0.89011, 1.8443},    {6, 0.55392, 0.80373, 2.5782},
+    {8, 0.64063, 0.72442, 3.2016},    {10, 0.70020, 0.65635, 3.7422},
+    {15, 0.78604, 0.52957, 4.8561},   {20, 0.82988, 0.44523, 5.7615},
+    {30, 0.87309, 0.34276, 7.2378},   {50, 0.90792, 0.24501, 9.5285},
     {100, 0.93752, 0.15922, 13.6932},
 };
 
@@ -350,7 +354,8 @@ struct ElasticaResult {
 /// the faces within about two edge lengths of the clamp is not resolved (their least-squares
 /// stencils reach into the flat clamp), so K_xx (material x runs along the strip) is fitted by
 /// a quadratic in s over the faces with s in [3h, 3h + L/4] and extrapolated to the root s = 0.
-double root_curvature(const Strip& strip, const ps::BendingEnergy& bending, const Eigen::VectorXd& x) {
+double root_curvature(const Strip& strip, const ps::BendingEnergy& bending,
+                      const Eigen::VectorXd& x) {
   const Eigen::MatrixX3d K = bending.face_curvatures(x);
   const Eigen::MatrixX2d X = strip.mesh.material_coords();
   const Eigen::MatrixX3i F = strip.mesh.faces();
@@ -391,7 +396,8 @@ ElasticaResult relax_elastica(const Strip& strip, double G) {
   SimulationSetup s;
   s.material = beam_material();
   const double L = strip.length;
-  s.gravity = Eigen::Vector3d(0, 0, -G * s.material.bending_stiffness / (s.material.density * L * L * L));
+  s.gravity =
+      Eigen::Vector3d(0, 0, -G * s.material.bending_stiffness / (s.material.density * L * L * L));
   s.damping = 20.0;  // [1/s], near critical for the first mode (24.9 rad/s)
   s.clamp_x = strip.clamp;
   // The rest test below (|v| < 1e-6 m/s) must not be met by a Newton solve that stops early:
@@ -421,7 +427,8 @@ constexpr double ELASTICA_TOLERANCE = 0.02;  // tip drop, issue 2 acceptance
 
 void report_elastica(Report& report, const Strip& strip, const ElasticaCase& c,
                      const ElasticaResult& r) {
-  const std::string where = fmt("elastica %s h=%.2fmm G=%g", strip.label.c_str(), 1e3 * strip.edge, c.G);
+  const std::string where =
+      fmt("elastica %s h=%.2fmm G=%g", strip.label.c_str(), 1e3 * strip.edge, c.G);
   if (!r.at_rest) report.note(where + ": not at rest after 400 steps of 20 ms");
   report.relative("elastica", where + " tip drop/L", c.tip_drop, r.tip_drop, ELASTICA_TOLERANCE);
   // Judged: the tip drop (issue 2 acceptance). Reported: reach (relative error grows as the
@@ -434,11 +441,12 @@ void report_elastica(Report& report, const Strip& strip, const ElasticaCase& c,
 
 void run_elastica(Report& report, bool quick) {
   const double h = 2.5e-3;
-  const std::vector<double> Gs =
-      quick ? std::vector<double>{1, 8} : std::vector<double>{0.1, 0.5, 1, 2, 4, 8, 10, 20, 50, 100};
-  report.section(fmt("1. Heavy elastica (VALIDATION.md 1): strip L = %g cm x %g cm, clamp 2h, poisson 0, "
-                     "damped backward Euler (c = 20/s, h = 20 ms) to rest; tip drop and reach within 2%%",
-                     100 * STRIP_LENGTH, 100 * STRIP_WIDTH));
+  const std::vector<double> Gs = quick ? std::vector<double>{1, 8}
+                                       : std::vector<double>{0.1, 0.5, 1, 2, 4, 8, 10, 20, 50, 100};
+  report.section(
+      fmt("1. Heavy elastica (VALIDATION.md 1): strip L = %g cm x %g cm, clamp 2h, poisson 0, "
+          "damped backward Euler (c = 20/s, h = 20 ms) to rest; tip drop and reach within 2%%",
+          100 * STRIP_LENGTH, 100 * STRIP_WIDTH));
   for (const Strip& strip : {strip_along_grid(h), strip_rotated(h, 30)}) {
     report.note(fmt("mesh %s: target edge %.2f mm, %d vertices, %d faces", strip.label.c_str(),
                     1e3 * h, strip.mesh.num_vertices(), strip.mesh.num_faces()));
@@ -455,14 +463,15 @@ void run_elastica(Report& report, bool quick) {
 /// Mesh convergence of the 30 degree strip: tip-drop error and observed order p between
 /// successive meshes, p = ln(e1 / e2) / ln(h1 / h2).
 void run_elastica_convergence(Report& report, bool quick) {
-  const std::vector<double> hs = quick ? std::vector<double>{2.5e-3, 1.25e-3}
-                                       : std::vector<double>{2.5e-3, 1.25e-3, 0.8e-3};
+  const std::vector<double> hs =
+      quick ? std::vector<double>{2.5e-3, 1.25e-3} : std::vector<double>{2.5e-3, 1.25e-3, 0.8e-3};
   const std::vector<double> Gs = quick ? std::vector<double>{1} : std::vector<double>{1, 8};
   report.section("1b. Heavy elastica, mesh convergence of the strip at 30 degrees to the grain");
   std::vector<Strip> strips;
   for (double h : hs) {
     strips.push_back(strip_rotated(h, 30));
-    report.note(fmt("mesh 30deg h=%.2f mm: %d vertices", 1e3 * h, strips.back().mesh.num_vertices()));
+    report.note(
+        fmt("mesh 30deg h=%.2f mm: %d vertices", 1e3 * h, strips.back().mesh.num_vertices()));
   }
   for (double G : Gs) {
     const ElasticaCase& c = elastica_case(G);
@@ -470,15 +479,17 @@ void run_elastica_convergence(Report& report, bool quick) {
     for (const Strip& strip : strips) {
       const ElasticaResult r = relax_elastica(strip, G);
       errors.push_back(std::abs(r.tip_drop / c.tip_drop - 1));
-      report.relative("elastica-convergence",
-                      fmt("elastica 30deg h=%.2fmm G=%g tip drop/L (%.1fs)", 1e3 * strip.edge, G, r.seconds),
-                      c.tip_drop, r.tip_drop, ELASTICA_TOLERANCE);
+      report.relative(
+          "elastica-convergence",
+          fmt("elastica 30deg h=%.2fmm G=%g tip drop/L (%.1fs)", 1e3 * strip.edge, G, r.seconds),
+          c.tip_drop, r.tip_drop, ELASTICA_TOLERANCE);
     }
     for (size_t i = 1; i < strips.size(); ++i) {
-      const double p = std::log(errors[i - 1] / errors[i]) / std::log(strips[i - 1].edge / strips[i].edge);
+      const double p =
+          std::log(errors[i - 1] / errors[i]) / std::log(strips[i - 1].edge / strips[i].edge);
       report.info("elastica-convergence",
-                  fmt("elastica 30deg G=%g observed order h=%.2f->%.2fmm", G, 1e3 * strips[i - 1].edge,
-                      1e3 * strips[i].edge),
+                  fmt("elastica 30deg G=%g observed order h=%.2f->%.2fmm", G,
+                      1e3 * strips[i - 1].edge, 1e3 * strips[i].edge),
                   1.0, p);
     }
   }
@@ -501,18 +512,20 @@ void run_thin_faces(Report& report, bool quick) {
   const std::vector<double> angles =
       quick ? std::vector<double>{0, 45} : std::vector<double>{0, 15, 30, 45, 60, 90};
   const std::vector<double> Gs = quick ? std::vector<double>{1} : std::vector<double>{1, 8};
-  report.section(fmt("1c. Heavy elastica on thin faces: strip L = %g cm x %g cm, lattice spacing h "
-                     "along the angle to the strip, h / aspect across it",
-                     100 * STRIP_LENGTH, 100 * THIN_STRIP_WIDTH));
+  report.section(
+      fmt("1c. Heavy elastica on thin faces: strip L = %g cm x %g cm, lattice spacing h "
+          "along the angle to the strip, h / aspect across it",
+          100 * STRIP_LENGTH, 100 * THIN_STRIP_WIDTH));
   for (const Mesh& mesh : meshes)
     for (double angle : angles) {
-      if (mesh.aspect == 1 && angle > 45) continue;  // a square lattice at 60 / 90 degrees is at 30 / 0
+      // a square lattice at 60 / 90 degrees is at 30 / 0
+      if (mesh.aspect == 1 && angle > 45) continue;
       const Strip strip = strip_thin_faces(mesh.h, mesh.aspect, angle);
       for (double G : Gs) {
         const ElasticaResult r = relax_elastica(strip, G);
         const ElasticaCase& c = elastica_case(G);
-        const std::string where = fmt("thin h=%.1fmm %s (%d v) G=%g", 1e3 * mesh.h, strip.label.c_str(),
-                                      strip.mesh.num_vertices(), G);
+        const std::string where = fmt("thin h=%.1fmm %s (%d v) G=%g", 1e3 * mesh.h,
+                                      strip.label.c_str(), strip.mesh.num_vertices(), G);
         if (!r.at_rest) report.note(where + ": not at rest after 400 steps of 20 ms");
         report.info("thin", where + " tip drop/L", c.tip_drop, r.tip_drop);
       }
@@ -561,14 +574,17 @@ BucklingResult relax_vertical(const Strip& strip, double G) {
 }
 
 void run_greenhill(Report& report, bool quick) {
-  report.section("2. Self-buckling (VALIDATION.md 2): vertical strip L = 10 cm, G_c = 7.8373; imperfection "
-                 "1e-3 g sideways; below G_c the tip stays within 5% of L of the axis, above it moves "
-                 "more than 20% of L");
+  report.section(
+      "2. Self-buckling (VALIDATION.md 2): vertical strip L = 10 cm, G_c = 7.8373; imperfection "
+      "1e-3 g sideways; below G_c the tip stays within 5% of L of the axis, above it moves "
+      "more than 20% of L");
   const Strip strip = strip_along_grid(2.5e-3);
-  for (double f : quick ? std::vector<double>{0.9, 1.1} : std::vector<double>{0.9, 0.97, 1.03, 1.1}) {
+  for (double f :
+       quick ? std::vector<double>{0.9, 1.1} : std::vector<double>{0.9, 0.97, 1.03, 1.1}) {
     const BucklingResult r = relax_vertical(strip, f * GREENHILL_G);
-    const std::string where = fmt("greenhill grid h=2.50mm G=%.3g (%.2f G_c) tip sideways/L (%.1fs)",
-                                  f * GREENHILL_G, f, r.seconds);
+    const std::string where =
+        fmt("greenhill grid h=2.50mm G=%.3g (%.2f G_c) tip sideways/L (%.1fs)", f * GREENHILL_G, f,
+            r.seconds);
     if (!r.at_rest) report.note(where + ": not at rest after 12 s");
     report.bound("greenhill", where, f < 1 ? 0.05 : 0.2, r.lateral, f < 1);
   }
@@ -595,8 +611,9 @@ Eigen::VectorXd wrap_on_cylinder(const Eigen::MatrixX2d& X, double R, double phi
 
 void run_cylinder(Report& report, bool quick) {
   constexpr double R = 0.05, W = 0.1, H = 0.15, TOL = 0.03;
-  report.section("3. Cylinder wrap (VALIDATION.md 3): 10 x 15 cm sheet, 5 mm edges, on R = 5 cm; bending "
-                 "energy within 3% of D A / (2 R^2) for every mesh and axis angle; Gauss-Bonnet exact");
+  report.section(
+      "3. Cylinder wrap (VALIDATION.md 3): 10 x 15 cm sheet, 5 mm edges, on R = 5 cm; bending "
+      "energy within 3% of D A / (2 R^2) for every mesh and axis angle; Gauss-Bonnet exact");
   struct MeshCase {
     std::string label;
     rm::SheetMesh mesh;
@@ -625,9 +642,11 @@ void run_cylinder(Report& report, bool quick) {
   ps::Material material;
   material.bending_model = g_bending_model;
   const double expected = material.bending_stiffness * W * H / (2 * R * R);
-  const std::vector<double> angles = quick ? std::vector<double>{0, 30, 90} : std::vector<double>{0, 17, 30, 45, 90};
+  const std::vector<double> angles =
+      quick ? std::vector<double>{0, 30, 90} : std::vector<double>{0, 17, 30, 45, 90};
   for (const MeshCase& m : meshes) {
-    const std::unique_ptr<ps::BendingEnergy> bending_model = ps::make_bending_energy(m.mesh, material);
+    const std::unique_ptr<ps::BendingEnergy> bending_model =
+        ps::make_bending_energy(m.mesh, material);
     const ps::BendingEnergy& bending = *bending_model;
     const Eigen::MatrixX2d X = m.mesh.material_coords();
     const Eigen::MatrixX3i F = m.mesh.faces();
@@ -635,14 +654,16 @@ void run_cylinder(Report& report, bool quick) {
     double worst_gb = 0;
     for (double deg : angles) {
       const Eigen::VectorXd x = wrap_on_cylinder(X, R, deg * PI / 180);
-      report.relative("cylinder", fmt("cylinder %s axis %g deg energy", m.label.c_str(), deg), expected,
-                      bending.value(x), TOL);
-      const Eigen::MatrixX3d P = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(
-          x.data(), X.rows(), 3);
+      report.relative("cylinder", fmt("cylinder %s axis %g deg energy", m.label.c_str(), deg),
+                      expected, bending.value(x), TOL);
+      const Eigen::MatrixX3d P =
+          Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(x.data(),
+                                                                                      X.rows(), 3);
       const auto dev = papersim::validation::developability_metrics(P, F, topology);
       worst_gb = std::max(worst_gb, std::abs(dev.gauss_bonnet_residual));
     }
-    report.bound("cylinder", fmt("cylinder %s |Gauss-Bonnet residual| [rad]", m.label.c_str()), 1e-9, worst_gb, true);
+    report.bound("cylinder", fmt("cylinder %s |Gauss-Bonnet residual| [rad]", m.label.c_str()),
+                 1e-9, worst_gb, true);
   }
 }
 
@@ -665,17 +686,20 @@ std::complex<double> prony_root(const std::vector<double>& z, size_t first) {
 }
 
 void run_damping(Report& report, bool quick) {
-  report.section("4. Backward-Euler damping (VALIDATION.md 5): clamped strip L = 10 cm, undamped, released "
-                 "from its sag at G = 0.2; mode from a Prony fit of the tip height; omega within 2%, "
-                 "decay per period within 2% of (1 + (w h)^2)^(-pi / (w h))");
+  report.section(
+      "4. Backward-Euler damping (VALIDATION.md 5): clamped strip L = 10 cm, undamped, released "
+      "from its sag at G = 0.2; mode from a Prony fit of the tip height; omega within 2%, "
+      "decay per period within 2% of (1 + (w h)^2)^(-pi / (w h))");
   const Strip strip = strip_along_grid(2.5e-3);
   ps::Material material = beam_material();
   const double L = strip.length;
-  const double omega1 = 1.8751 * 1.8751 * std::sqrt(material.bending_stiffness / (material.density * L * L * L * L));
+  const double omega1 =
+      1.8751 * 1.8751 * std::sqrt(material.bending_stiffness / (material.density * L * L * L * L));
   // The released shape: the static sag at G = 0.2 (tip 2.5 mm, linear regime).
   SimulationSetup sag;
   sag.material = material;
-  sag.gravity = Eigen::Vector3d(0, 0, -0.2 * material.bending_stiffness / (material.density * L * L * L));
+  sag.gravity =
+      Eigen::Vector3d(0, 0, -0.2 * material.bending_stiffness / (material.density * L * L * L));
   sag.damping = 20.0;
   sag.clamp_x = strip.clamp;
   sag.newton.tolerance = 1e-7;
@@ -683,7 +707,8 @@ void run_damping(Report& report, bool quick) {
   for (int k = 0; k < 400 && !(k > 10 && relax.state.velocities.cwiseAbs().maxCoeff() < 1e-8); ++k)
     relax.integrator->step(relax.state, 0.02);
   const std::vector<int> tip = tip_vertices(strip.mesh);
-  const std::vector<double> whs = quick ? std::vector<double>{0.1, 1.0} : std::vector<double>{0.025, 0.1, 0.25, 1.0};
+  const std::vector<double> whs =
+      quick ? std::vector<double>{0.1, 1.0} : std::vector<double>{0.025, 0.1, 0.25, 1.0};
   for (double wh : whs) {
     const auto t0 = std::chrono::steady_clock::now();
     SimulationSetup s;
@@ -696,7 +721,8 @@ void run_damping(Report& report, bool quick) {
     const double period_steps = 2 * PI / std::atan(wh);
     // Three discrete periods, or until the amplitude has fallen by 1e-4.
     const double per_step = 1 / std::sqrt(1 + wh * wh);
-    const int steps = static_cast<int>(std::min(3 * period_steps, std::log(1e-4) / std::log(per_step)));
+    const int steps =
+        static_cast<int>(std::min(3 * period_steps, std::log(1e-4) / std::log(per_step)));
     std::vector<double> z{mean_component(sim.state.positions, tip, 2)};
     for (int k = 0; k < steps; ++k) {
       sim.integrator->step(sim.state, h);
@@ -709,9 +735,12 @@ void run_damping(Report& report, bool quick) {
     const double wh_mesh = omega_mesh * h;
     const double expected = std::pow(1 + wh_mesh * wh_mesh, -PI / wh_mesh);
     const double sec = seconds_since(t0);
-    report.relative("damping", fmt("damping w h = %g (h = %.3g ms, %d steps, %.1fs) omega [rad/s]", wh, 1e3 * h, steps, sec),
+    report.relative("damping",
+                    fmt("damping w h = %g (h = %.3g ms, %d steps, %.1fs) omega [rad/s]", wh,
+                        1e3 * h, steps, sec),
                     omega1, omega_mesh, 0.02);
-    report.relative("damping", fmt("damping w h = %g amplitude factor per period", wh), expected, decay, 0.02);
+    report.relative("damping", fmt("damping w h = %g amplitude factor per period", wh), expected,
+                    decay, 0.02);
   }
 }
 
@@ -750,14 +779,16 @@ InclineResult slide_on_incline(double mu) {
   const Eigen::MatrixX2d X = mesh.material_coords();
   Eigen::VectorXd x0(3 * X.rows());
   for (int v = 0; v < X.rows(); ++v)
-    x0.segment<3>(3 * v) = X(v, 0) * down + X(v, 1) * Eigen::Vector3d::UnitY() + 0.5 * s.contact.dhat * normal;
+    x0.segment<3>(3 * v) =
+        X(v, 0) * down + X(v, 1) * Eigen::Vector3d::UnitY() + 0.5 * s.contact.dhat * normal;
   Simulation sim = make_simulation(mesh, x0, s);
   const double h = 0.005;
   std::vector<double> t, d;
   for (int n = 1; n <= 200; ++n) {
     sim.integrator->step(sim.state, h);
     double mean = 0;
-    for (int v = 0; v < X.rows(); ++v) mean += (sim.state.positions - x0).segment<3>(3 * v).dot(down);
+    for (int v = 0; v < X.rows(); ++v)
+      mean += (sim.state.positions - x0).segment<3>(3 * v).dot(down);
     t.push_back(n * h), d.push_back(mean / X.rows());
   }
   // d(t) = c0 + c1 t + a t^2 / 2 over t in [0.2, 1] s (after the sheet has settled on the plane).
@@ -779,9 +810,10 @@ InclineResult slide_on_incline(double mu) {
 }
 
 void run_friction(Report& report, bool) {
-  report.section("5. Friction on an incline (VALIDATION.md 6): tan = 0.5, 4 x 4 cm sheet on a tilted plane "
-                 "collider, 1 s in 5 ms steps; mu = 0.49 slides at g (sin - mu cos) within 5%, mu = 0.51 "
-                 "moves less than 0.1 mm");
+  report.section(
+      "5. Friction on an incline (VALIDATION.md 6): tan = 0.5, 4 x 4 cm sheet on a tilted plane "
+      "collider, 1 s in 5 ms steps; mu = 0.49 slides at g (sin - mu cos) within 5%, mu = 0.51 "
+      "moves less than 0.1 mm");
   const double alpha = std::atan(0.5);
   const InclineResult slide = slide_on_incline(0.49);
   report.relative("friction", fmt("incline mu=0.49 acceleration [m/s^2] (%.1fs)", slide.seconds),
@@ -804,7 +836,9 @@ double arc_curvature(const rm::SheetMesh& mesh, const Eigen::VectorXd& x, double
     int n = 0;
     for (int v = 0; v < X.rows(); ++v)
       if (std::abs(X(v, 0) - mx) < 1e-9) sum += x.segment<3>(3 * v), ++n;
-    if (n == 0) throw std::runtime_error("plasticity: no vertex column at material x = " + std::to_string(mx));
+    if (n == 0)
+      throw std::runtime_error("plasticity: no vertex column at material x = " +
+                               std::to_string(mx));
     return Eigen::Vector3d(sum / n);
   };
   const Eigen::Vector3d a = mean_at(0), m = mean_at(0.5 * length), b = mean_at(length);
@@ -816,8 +850,8 @@ double arc_curvature(const rm::SheetMesh& mesh, const Eigen::VectorXd& x, double
 /// Handles on every vertex of a flat strip (material x along its length, centred at the origin)
 /// that wrap it onto a cylinder about y whose curvature grows linearly to k over [0, t_bend],
 /// held until t_release, then released.
-std::vector<ps::HandleSpec> bending_handles(const rm::SheetMesh& mesh, double length, double k, double t_bend,
-                                            double t_release) {
+std::vector<ps::HandleSpec> bending_handles(const rm::SheetMesh& mesh, double length, double k,
+                                            double t_bend, double t_release) {
   constexpr int KEYFRAMES = 20;
   std::vector<ps::HandleSpec> handles;
   const Eigen::MatrixX2d X = mesh.material_coords();
@@ -831,8 +865,9 @@ std::vector<ps::HandleSpec> bending_handles(const rm::SheetMesh& mesh, double le
       const double kj = k * j / KEYFRAMES;
       ps::HandleKeyframe f;
       f.time = t_bend * j / KEYFRAMES;
-      f.displacement = kj > 0 ? Eigen::Vector3d(std::sin(kj * s) / kj - s, 0, (1 - std::cos(kj * s)) / kj)
-                              : Eigen::Vector3d::Zero();
+      f.displacement =
+          kj > 0 ? Eigen::Vector3d(std::sin(kj * s) / kj - s, 0, (1 - std::cos(kj * s)) / kj)
+                 : Eigen::Vector3d::Zero();
       h.keyframes.push_back(f);
     }
     handles.push_back(h);
@@ -841,8 +876,8 @@ std::vector<ps::HandleSpec> bending_handles(const rm::SheetMesh& mesh, double le
 }
 
 struct PlasticBendResult {
-  double held = 0;      ///< fitted curvature just before the release [1/m]
-  double residual = 0;  ///< fitted curvature at rest after the release [1/m]
+  double held = 0;            ///< fitted curvature just before the release [1/m]
+  double residual = 0;        ///< fitted curvature at rest after the release [1/m]
   double model_residual = 0;  ///< mean k_xx of the bending model's faces at the end [1/m]
   double max_damage = 0;
   double max_speed = 0;  ///< at the end [m/s]
@@ -904,8 +939,9 @@ Eigen::Vector2d folded_point(double s, double phi, double r) {
 }
 
 struct FoldResult {
-  double rest_angle = 0;     ///< fold angle at rest after the release [rad]
-  double press_force = 0;    ///< vertical force of the handles on the upper leg at the end of the press [N]
+  double rest_angle = 0;  ///< fold angle at rest after the release [rad]
+  /// vertical force of the handles on the upper leg at the end of the press [N]
+  double press_force = 0;
   double seconds = 0;
 };
 
@@ -956,7 +992,8 @@ FoldResult fold_and_release(double r, double ky, bool quick) {
         if (X(v, 0) - x_fold <= PI * r) continue;
         const Eigen::Vector3d target = start.positions.segment<3>(3 * v) +
                                        ps::handle_displacement(scene.handles[v], run.state().time);
-        out.press_force += scene.handles[v].stiffness * (target - run.state().positions.segment<3>(3 * v)).z();
+        out.press_force +=
+            scene.handles[v].stiffness * (target - run.state().positions.segment<3>(3 * v)).z();
       }
     }
   }
@@ -978,30 +1015,37 @@ FoldResult fold_and_release(double r, double ky, bool quick) {
 
 void run_plasticity(Report& report, bool quick) {
   constexpr double KY = 50;  // [1/m] yield curvature of the cases
-  report.section("6. Plasticity (issue 16): 4 x 1 cm strip wrapped by handles onto a cylinder of curvature k, "
-                 "held, released, relaxed (k_y = 50 1/m); below yield flat (|k| < 2% of k), above k - k_y within "
-                 "5%. Then a 4 cm x 3 mm strip folded 180 deg at radius r (k_y = 200 1/m), released: rest "
-                 "angle against pi (1 - k_y r)");
+  report.section(
+      "6. Plasticity (issue 16): 4 x 1 cm strip wrapped by handles onto a cylinder of curvature k, "
+      "held, released, relaxed (k_y = 50 1/m); below yield flat (|k| < 2% of k), above k - k_y "
+      "within "
+      "5%. Then a 4 cm x 3 mm strip folded 180 deg at radius r (k_y = 200 1/m), released: rest "
+      "angle against pi (1 - k_y r)");
   if (g_bending_model != ps::BendingModel::morley) {
     report.note("plasticity: skipped under --bending fit (the fit model carries no plasticity)");
     return;
   }
   const PlasticBendResult below = bend_and_release(0.8 * KY, KY, quick);
-  report.info("plasticity", fmt("plastic k=%g held curvature [1/m]", 0.8 * KY), 0.8 * KY, below.held);
-  report.bound("plasticity", fmt("plastic k=%g (below yield) residual |k| [1/m] (%.1fs)", 0.8 * KY, below.seconds),
-               0.02 * 0.8 * KY, std::abs(below.residual), true);
+  report.info("plasticity", fmt("plastic k=%g held curvature [1/m]", 0.8 * KY), 0.8 * KY,
+              below.held);
+  report.bound(
+      "plasticity",
+      fmt("plastic k=%g (below yield) residual |k| [1/m] (%.1fs)", 0.8 * KY, below.seconds),
+      0.02 * 0.8 * KY, std::abs(below.residual), true);
   report.bound("plasticity", fmt("plastic k=%g damage", 0.8 * KY), 1e-12, below.max_damage, true);
   for (double k : {2 * KY, 3 * KY}) {
     const PlasticBendResult r = bend_and_release(k, KY, quick);
     report.info("plasticity", fmt("plastic k=%g held curvature [1/m]", k), k, r.held);
     // Moment-free state of the return mapping: the plastic curvature k_held - k_y.
-    report.relative("plasticity", fmt("plastic k=%g residual curvature [1/m] (%.1fs)", k, r.seconds), r.held - KY,
+    report.relative("plasticity",
+                    fmt("plastic k=%g residual curvature [1/m] (%.1fs)", k, r.seconds), r.held - KY,
                     r.residual, 0.05);
-    report.info("plasticity", fmt("plastic k=%g residual mean face k_xx (model) [1/m]", k), r.held - KY,
-                r.model_residual);
-    report.info("plasticity", fmt("plastic k=%g largest damage (expected (k - k_y) / k_y)", k), (k - KY) / KY,
-                r.max_damage);
-    report.bound("plasticity", fmt("plastic k=%g largest speed at the end [m/s]", k), 1e-3, r.max_speed, true);
+    report.info("plasticity", fmt("plastic k=%g residual mean face k_xx (model) [1/m]", k),
+                r.held - KY, r.model_residual);
+    report.info("plasticity", fmt("plastic k=%g largest damage (expected (k - k_y) / k_y)", k),
+                (k - KY) / KY, r.max_damage);
+    report.bound("plasticity", fmt("plastic k=%g largest speed at the end [m/s]", k), 1e-3,
+                 r.max_speed, true);
   }
   // A strip folded 180 degrees about a bend of radius r and released keeps, moment-free, the
   // plastic curvature 1/r - k_y over the arc of length pi r: a fold of pi (1 - k_y r) (none
@@ -1013,9 +1057,11 @@ void run_plasticity(Report& report, bool quick) {
     // Reported, not judged: the arc spans only 3 to 12 edges (2 to 6 with --quick), and the
     // curvature jump at its ends is smeared over the yield measure's stencil (measured with
     // --quick: -5%, -11%, -12% at r = 4, 2, 1 mm).
-    report.info("plasticity", fmt("fold 180deg r=%gmm rest angle [deg] (%.1fs)", 1e3 * r, f.seconds), expected,
+    report.info("plasticity",
+                fmt("fold 180deg r=%gmm rest angle [deg] (%.1fs)", 1e3 * r, f.seconds), expected,
                 f.rest_angle * 180 / PI);
-    report.info("plasticity", fmt("fold 180deg r=%gmm press: handle force on the upper leg [N/m]", 1e3 * r),
+    report.info("plasticity",
+                fmt("fold 180deg r=%gmm press: handle force on the upper leg [N/m]", 1e3 * r),
                 NOT_APPLICABLE, f.press_force / 0.003);
   }
 }
@@ -1025,48 +1071,56 @@ void run_plasticity(Report& report, bool quick) {
 // ---------------------------------------------------------------------------------------------
 
 int main(int argc, char** argv) {
-  CLI::App app{"papersim_known_answers: the simulator against the known answers of VALIDATION.md "
-               "(heavy elastica, self-buckling, cylinder wrap, backward-Euler damping, friction on "
-               "an incline, bending plasticity; reported only, the elastica on thin faces). Exit status 1 when a "
-               "case fails."};
+  CLI::App app{
+      "papersim_known_answers: the simulator against the known answers of VALIDATION.md "
+      "(heavy elastica, self-buckling, cylinder wrap, backward-Euler damping, friction on "
+      "an incline, bending plasticity; reported only, the elastica on thin faces). Exit status 1 "
+      "when a "
+      "case fails."};
   bool quick = false;
   std::string csv;
   std::vector<std::string> only;
   app.add_flag("--quick", quick, "coarser meshes and fewer cases (a smoke run, about a minute)");
   app.add_option("--csv", csv, "also write the rows as CSV to this file");
-  app.add_option("--only", only,
-                 "run only these families: elastica, convergence, greenhill, cylinder, damping, friction, "
-                 "plasticity, thin (the elastica on thin faces at angles to the bend)")
-      ->check(CLI::IsMember({"elastica", "convergence", "greenhill", "cylinder", "damping", "friction",
-                             "plasticity", "thin"}));
+  app.add_option(
+         "--only", only,
+         "run only these families: elastica, convergence, greenhill, cylinder, damping, friction, "
+         "plasticity, thin (the elastica on thin faces at angles to the bend)")
+      ->check(CLI::IsMember({"elastica", "convergence", "greenhill", "cylinder", "damping",
+                             "friction", "plasticity", "thin"}));
   std::string bending = "morley";
   app.add_option("--bending", bending,
                  "bending discretisation under test: morley (the simulator's default) or fit")
       ->check(CLI::IsMember({"fit", "morley"}));
-  app.add_option("--stretch-stiffness", g_stretch_stiffness,
-                 "membrane stiffness of the strips [N/m] (default: the material's, 5e5); the strain "
-                 "limit stays. With 'thin': how much of the stiffening is membrane locking")
+  app.add_option(
+         "--stretch-stiffness", g_stretch_stiffness,
+         "membrane stiffness of the strips [N/m] (default: the material's, 5e5); the strain "
+         "limit stays. With 'thin': how much of the stiffening is membrane locking")
       ->check(papersim::common::positive());
   std::string membrane = "chord";
-  app.add_option("--membrane", membrane,
-                 "membrane discretisation of the beams and strips: chord (the simulator's default) or "
-                 "arc (edges measured along the bent surface; sheet.material.membrane_model)")
+  app.add_option(
+         "--membrane", membrane,
+         "membrane discretisation of the beams and strips: chord (the simulator's default) or "
+         "arc (edges measured along the bent surface; sheet.material.membrane_model)")
       ->check(CLI::IsMember({"chord", "arc"}));
   CLI11_PARSE(app, argc, argv);
   g_membrane_model = membrane == "arc" ? ps::MembraneModel::arc : ps::MembraneModel::chord;
   g_bending_model = bending == "morley" ? ps::BendingModel::morley : ps::BendingModel::fit;
 
   const std::set<std::string> selected(only.begin(), only.end());
-  const auto wanted = [&](const std::string& name) { return selected.empty() || selected.count(name); };
+  const auto wanted = [&](const std::string& name) {
+    return selected.empty() || selected.count(name);
+  };
   const std::vector<std::pair<std::string, std::function<void(Report&, bool)>>> families = {
-      {"elastica", run_elastica},   {"convergence", run_elastica_convergence},
-      {"greenhill", run_greenhill}, {"cylinder", run_cylinder},
-      {"damping", run_damping},     {"friction", run_friction},
+      {"elastica", run_elastica},     {"convergence", run_elastica_convergence},
+      {"greenhill", run_greenhill},   {"cylinder", run_cylinder},
+      {"damping", run_damping},       {"friction", run_friction},
       {"plasticity", run_plasticity}, {"thin", run_thin_faces},
   };
   const auto t0 = std::chrono::steady_clock::now();
   Report report;
-  std::printf("papersim known answers%s, bending model %s\n", quick ? " (--quick)" : "", bending.c_str());
+  std::printf("papersim known answers%s, bending model %s\n", quick ? " (--quick)" : "",
+              bending.c_str());
   report.header();
   for (const auto& [name, run] : families) {
     if (!wanted(name)) continue;
@@ -1089,5 +1143,3 @@ int main(int argc, char** argv) {
   }
   return report.failures() == 0 ? 0 : 1;
 }
-
-

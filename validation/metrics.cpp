@@ -126,7 +126,8 @@ double aspect(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::V
 Eigen::Vector3d unit_normal(const Eigen::MatrixX3d& positions, const Eigen::MatrixX3i& faces,
                             int f) {
   const Eigen::Vector3d a = world(positions, faces(f, 0));
-  const Eigen::Vector3d n = (world(positions, faces(f, 1)) - a).cross(world(positions, faces(f, 2)) - a);
+  const Eigen::Vector3d n =
+      (world(positions, faces(f, 1)) - a).cross(world(positions, faces(f, 2)) - a);
   const double length = n.norm();
   return length > 0.0 ? Eigen::Vector3d(n / length) : Eigen::Vector3d::Zero();
 }
@@ -163,7 +164,8 @@ Eigen::VectorXd defects_from_angles(const Eigen::MatrixX3d& angles, const Eigen:
 }
 
 /// Smallest corner angle of a triangle [rad]: the one facing the shortest edge.
-double smallest_angle(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
+double smallest_angle(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                      const Eigen::Vector3d& c) {
   const double ab = (b - a).squaredNorm(), bc = (c - b).squaredNorm(), ca = (a - c).squaredNorm();
   if (bc <= ab && bc <= ca) return angle_between(b - a, c - a);
   if (ca <= ab) return angle_between(c - b, a - b);
@@ -232,8 +234,8 @@ CreaseAdjacency crease_adjacency(const MeshTopology& topology, const std::vector
 }
 
 /// Crease edges of one line, walked from `seed` through vertices of crease valence 2.
-std::vector<int> walk_line(const MeshTopology& topology, const CreaseAdjacency& adjacency,
-                           int seed, std::vector<char>& visited, bool& closed) {
+std::vector<int> walk_line(const MeshTopology& topology, const CreaseAdjacency& adjacency, int seed,
+                           std::vector<char>& visited, bool& closed) {
   std::vector<int> line{seed};
   visited[seed] = 1;
   closed = false;
@@ -282,7 +284,8 @@ void fill_plastic_network(const Eigen::MatrixX2d& material_coords, const Eigen::
   std::vector<int> edges;
   for (Eigen::Index e = 0; e < topology.edges.rows(); ++e)
     if (topology.edge_faces(e, 1) >= 0 &&
-        std::abs(rest_dihedral(material_coords, faces, topology, plastic_curvature, static_cast<int>(e))) > threshold)
+        std::abs(rest_dihedral(material_coords, faces, topology, plastic_curvature,
+                               static_cast<int>(e))) > threshold)
       edges.push_back(static_cast<int>(e));
   c.plastic_network_edges = static_cast<int>(edges.size());
   const CreaseAdjacency adjacency = crease_adjacency(topology, edges, material_coords.rows());
@@ -294,7 +297,9 @@ void fill_plastic_network(const Eigen::MatrixX2d& material_coords, const Eigen::
     bool closed = false;
     double length = 0.0;
     for (int e : walk_line(topology, adjacency, seed, visited, closed))
-      length += (material(material_coords, topology.edges(e, 1)) - material(material_coords, topology.edges(e, 0))).norm();
+      length += (material(material_coords, topology.edges(e, 1)) -
+                 material(material_coords, topology.edges(e, 0)))
+                    .norm();
     c.plastic_network_line_lengths.push_back(length);
     c.plastic_network_length += length;
   }
@@ -421,15 +426,16 @@ Eigen::VectorXd dihedral_angles(const Eigen::MatrixX3d& positions, const Eigen::
     if (f2 < 0) continue;
     const Eigen::Vector3d n1 = normals.row(f1).transpose(), n2 = normals.row(f2).transpose();
     const Eigen::Vector3d axis =
-        (world(positions, topology.edges(e, 1)) - world(positions, topology.edges(e, 0))).normalized();
+        (world(positions, topology.edges(e, 1)) - world(positions, topology.edges(e, 0)))
+            .normalized();
     angle(e) = std::atan2(axis.dot(n2.cross(n1)), n1.dot(n2));
   }
   return angle;
 }
 
 IsometryMetrics isometry_metrics(const Eigen::MatrixX2d& material_coords,
-                                 const Eigen::MatrixX3d& positions,
-                                 const Eigen::MatrixX3i& faces, const MeshTopology& topology) {
+                                 const Eigen::MatrixX3d& positions, const Eigen::MatrixX3i& faces,
+                                 const MeshTopology& topology) {
   IsometryMetrics m;
   const Eigen::VectorXd strain = edge_strains(material_coords, positions, topology);
   if (strain.size() > 0) {
@@ -500,7 +506,8 @@ LogNormalFit fit_log_normal(std::vector<double> lengths) {
   if (lengths.size() < 3 || !(fit.std > 0)) return fit;
   std::sort(lengths.begin(), lengths.end());
   for (std::size_t i = 0; i < lengths.size(); ++i) {
-    const double z = (std::log(std::max(lengths[i], 1e-300)) - fit.mean) / (fit.std * std::sqrt(2.0));
+    const double z =
+        (std::log(std::max(lengths[i], 1e-300)) - fit.mean) / (fit.std * std::sqrt(2.0));
     const double cdf = 0.5 * std::erfc(-z);
     fit.ks = std::max({fit.ks, std::abs(cdf - static_cast<double>(i) / n),
                        std::abs(static_cast<double>(i + 1) / n - cdf)});
@@ -536,12 +543,12 @@ CreaseMetrics crease_metrics(const Eigen::MatrixX2d& material_coords,
     CreaseLine line;
     const std::vector<int> edges = walk_line(topology, adjacency, seed, visited, line.closed);
     for (int e : edges) {
-      const double length = (world(positions, topology.edges(e, 1)) -
-                             world(positions, topology.edges(e, 0))).norm();
+      const double length =
+          (world(positions, topology.edges(e, 1)) - world(positions, topology.edges(e, 0))).norm();
       line.length += length;
       line.max_angle_deg = std::max(line.max_angle_deg, std::abs(dihedral(e)) / DEG);
-      if (c.has_plastic_data &&
-          std::abs(rest_dihedral(material_coords, faces, topology, plastic_curvature, e)) > threshold)
+      if (c.has_plastic_data && std::abs(rest_dihedral(material_coords, faces, topology,
+                                                       plastic_curvature, e)) > threshold)
         line.plastic_length += length;
     }
     line.edges = static_cast<int>(edges.size());
@@ -555,7 +562,8 @@ CreaseMetrics crease_metrics(const Eigen::MatrixX2d& material_coords,
   c.lines = static_cast<int>(c.crease_lines.size());
   c.elastic_length = c.total_length - c.plastic_length;
   fill_length_distribution(c);
-  if (c.has_plastic_data) fill_plastic_network(material_coords, faces, topology, plastic_curvature, threshold, c);
+  if (c.has_plastic_data)
+    fill_plastic_network(material_coords, faces, topology, plastic_curvature, threshold, c);
   return c;
 }
 
@@ -597,10 +605,10 @@ namespace {
 
 void collect_samples(const Eigen::MatrixX2d& material_coords, const Eigen::MatrixX3d& positions,
                      const Eigen::MatrixX3i& faces, const MeshTopology& topology,
-                     const MeshMetrics& metrics, std::size_t max_samples,
-                     MetricsSamples& samples) {
+                     const MeshMetrics& metrics, std::size_t max_samples, MetricsSamples& samples) {
   const Eigen::VectorXd strain = edge_strains(material_coords, positions, topology);
-  samples.edge_strain = strided(strain.size(), max_samples, [&](Eigen::Index i) { return strain(i); });
+  samples.edge_strain =
+      strided(strain.size(), max_samples, [&](Eigen::Index i) { return strain(i); });
   const Eigen::MatrixX2d s = principal_stretches(material_coords, positions, faces);
   samples.s1 = strided(s.rows(), max_samples, [&](Eigen::Index i) { return s(i, 0); });
   samples.s2 = strided(s.rows(), max_samples, [&](Eigen::Index i) { return s(i, 1); });
@@ -644,8 +652,8 @@ MeshMetrics compute_metrics(const remesh::SheetData& sheet, const MetricsOptions
                             bool use_plastic_data, MetricsSamples* samples) {
   const Eigen::MatrixX3d plastic =
       use_plastic_data ? sheet.mesh.plastic_curvature() : Eigen::MatrixX3d(0, 3);
-  return compute_metrics(sheet.mesh.material_coords(), sheet.positions, sheet.mesh.faces(),
-                         plastic, options, samples);
+  return compute_metrics(sheet.mesh.material_coords(), sheet.positions, sheet.mesh.faces(), plastic,
+                         options, samples);
 }
 
 }  // namespace papersim::validation

@@ -28,31 +28,31 @@ namespace papersim::validation {
 
 /// Options of compute_metrics.
 struct MetricsOptions {
-  double crease_angle_deg = 30.0;   ///< [deg] an interior edge is a crease when |dihedral| > this
-  bool self_intersections = true;   ///< run the exact self-intersection count (collision module)
-  std::size_t max_samples = 0;      ///< per-element values kept per quantity in MetricsSamples
-                                    ///< (evenly strided); 0 keeps none
+  double crease_angle_deg = 30.0;  ///< [deg] an interior edge is a crease when |dihedral| > this
+  bool self_intersections = true;  ///< run the exact self-intersection count (collision module)
+  std::size_t max_samples = 0;     ///< per-element values kept per quantity in MetricsSamples
+                                   ///< (evenly strided); 0 keeps none
 };
 
 /// Isometric distortion relative to the material coordinates. Edge strain is l / L - 1
 /// (l world, L material length); s1 >= s2 are the singular values of the per-triangle 3x2
 /// deformation gradient F = Dx Dm^-1. "Stretch" is the part above 1, "compression" below 1.
 struct IsometryMetrics {
-  double edge_strain_max = 0.0;        ///< max |l / L - 1| [-]
-  double edge_strain_mean = 0.0;       ///< mean |l / L - 1| over edges [-]
-  double edge_strain_p99 = 0.0;        ///< 99th percentile of |l / L - 1| [-]
-  double edge_stretch_max = 0.0;       ///< max(0, max l / L - 1) [-]
-  double edge_compression_max = 0.0;   ///< max(0, max 1 - l / L) [-]
-  double s1_max = 1.0;                 ///< largest principal stretch over triangles [-]
-  double s2_min = 1.0;                 ///< smallest principal stretch over triangles [-]
-  double stretch_max = 0.0;            ///< max(0, s1_max - 1) [-]
-  double compression_max = 0.0;        ///< max(0, 1 - s2_min) [-]
-  double stretch_p99 = 0.0;            ///< 99th percentile over triangles of max(0, s1 - 1) [-]
-  double compression_p99 = 0.0;        ///< 99th percentile over triangles of max(0, 1 - s2) [-]
-  double area_change_max = 0.0;        ///< max over triangles of s1 s2 - 1 [-]
-  double area_change_min = 0.0;        ///< min over triangles of s1 s2 - 1 [-]
-  double area_change_mean = 0.0;       ///< material-area-weighted mean of |s1 s2 - 1| [-]
-  double total_area_change = 0.0;      ///< world area / material area - 1 [-]
+  double edge_strain_max = 0.0;       ///< max |l / L - 1| [-]
+  double edge_strain_mean = 0.0;      ///< mean |l / L - 1| over edges [-]
+  double edge_strain_p99 = 0.0;       ///< 99th percentile of |l / L - 1| [-]
+  double edge_stretch_max = 0.0;      ///< max(0, max l / L - 1) [-]
+  double edge_compression_max = 0.0;  ///< max(0, max 1 - l / L) [-]
+  double s1_max = 1.0;                ///< largest principal stretch over triangles [-]
+  double s2_min = 1.0;                ///< smallest principal stretch over triangles [-]
+  double stretch_max = 0.0;           ///< max(0, s1_max - 1) [-]
+  double compression_max = 0.0;       ///< max(0, 1 - s2_min) [-]
+  double stretch_p99 = 0.0;           ///< 99th percentile over triangles of max(0, s1 - 1) [-]
+  double compression_p99 = 0.0;       ///< 99th percentile over triangles of max(0, 1 - s2) [-]
+  double area_change_max = 0.0;       ///< max over triangles of s1 s2 - 1 [-]
+  double area_change_min = 0.0;       ///< min over triangles of s1 s2 - 1 [-]
+  double area_change_mean = 0.0;      ///< material-area-weighted mean of |s1 s2 - 1| [-]
+  double total_area_change = 0.0;     ///< world area / material area - 1 [-]
 };
 
 /// Discrete Gaussian curvature. Angle defect K_i = 2 pi - (sum of world corner angles at i) at
@@ -61,26 +61,26 @@ struct IsometryMetrics {
 /// vertex touched by n boundary edges contributes (2 - n / 2) pi - angle sum, which is pi -
 /// angle sum for an ordinary boundary vertex and keeps the identity exact for pinched ones.
 struct DevelopabilityMetrics {
-  double angle_defect_max = 0.0;        ///< max |K_i| over interior vertices [rad]
-  double angle_defect_integral = 0.0;   ///< sum of |K_i| over interior vertices [rad]
-  double gauss_bonnet_residual = 0.0;   ///< signed, [rad]; zero to rounding for any mesh
-  int euler_characteristic = 0;         ///< V - E + F (used vertices only)
+  double angle_defect_max = 0.0;       ///< max |K_i| over interior vertices [rad]
+  double angle_defect_integral = 0.0;  ///< sum of |K_i| over interior vertices [rad]
+  double gauss_bonnet_residual = 0.0;  ///< signed, [rad]; zero to rounding for any mesh
+  int euler_characteristic = 0;        ///< V - E + F (used vertices only)
   /// Stein, Grinspun, Crane 2018 "Developability of triangle meshes", combinatorial covariance
   /// energy: sum over interior vertices of the smallest eigenvalue of
   /// sum_faces (corner angle) N N^T (N unit world face normal) [rad]; zero on a developable
   /// vertex (normals of its faces lie on a great circle).
   double covariance_energy = 0.0;
-  double covariance_max = 0.0;          ///< largest per-vertex smallest eigenvalue [rad]
+  double covariance_max = 0.0;  ///< largest per-vertex smallest eigenvalue [rad]
 };
 
 /// A chain of crease edges walked through vertices of crease valence 2; it ends at a vertex of
 /// crease valence 1 or >= 3, or closes on itself.
 struct CreaseLine {
-  int edges = 0;                  ///< number of crease edges
-  double length = 0.0;            ///< world length [m]
-  double max_angle_deg = 0.0;     ///< largest |dihedral| along the line [deg]
-  double plastic_length = 0.0;    ///< length of its plastic edges [m]
-  bool closed = false;            ///< a loop without end points
+  int edges = 0;                ///< number of crease edges
+  double length = 0.0;          ///< world length [m]
+  double max_angle_deg = 0.0;   ///< largest |dihedral| along the line [deg]
+  double plastic_length = 0.0;  ///< length of its plastic edges [m]
+  bool closed = false;          ///< a loop without end points
   /// More than half of the length is plastic (see CreaseMetrics).
   bool plastic() const { return plastic_length > 0.5 * length; }
 };
@@ -99,18 +99,18 @@ struct CreaseLine {
 /// it would stay a crease if the sheet were released. A line is plastic when more than half
 /// of its length is.
 struct CreaseMetrics {
-  double threshold_deg = 30.0;     ///< the threshold used [deg]
-  int edges = 0;                   ///< crease edges
-  int lines = 0;                   ///< crease lines
-  int junctions = 0;               ///< vertices of crease valence >= 3
-  double total_length = 0.0;       ///< sum of crease edge world lengths [m]
-  double length_min = 0.0;         ///< shortest line [m] (0 without lines)
-  double length_median = 0.0;      ///< [m]
-  double length_mean = 0.0;        ///< [m]
-  double length_max = 0.0;         ///< [m]
-  double log_length_mean = 0.0;    ///< mean of ln(length / 1 m), for a log-normal fit
-  double log_length_std = 0.0;     ///< standard deviation of ln(length / 1 m)
-  double sharpest_angle_deg = 0.0; ///< max |dihedral| over all interior edges [deg]
+  double threshold_deg = 30.0;      ///< the threshold used [deg]
+  int edges = 0;                    ///< crease edges
+  int lines = 0;                    ///< crease lines
+  int junctions = 0;                ///< vertices of crease valence >= 3
+  double total_length = 0.0;        ///< sum of crease edge world lengths [m]
+  double length_min = 0.0;          ///< shortest line [m] (0 without lines)
+  double length_median = 0.0;       ///< [m]
+  double length_mean = 0.0;         ///< [m]
+  double length_max = 0.0;          ///< [m]
+  double log_length_mean = 0.0;     ///< mean of ln(length / 1 m), for a log-normal fit
+  double log_length_std = 0.0;      ///< standard deviation of ln(length / 1 m)
+  double sharpest_angle_deg = 0.0;  ///< max |dihedral| over all interior edges [deg]
   /// Kolmogorov-Smirnov distance between the line lengths and the log-normal of parameters
   /// (log_length_mean, log_length_std): the largest gap between the two cumulative
   /// distributions [-] (0 with fewer than three lines or a zero spread). Ridge lengths of
@@ -119,22 +119,22 @@ struct CreaseMetrics {
   double log_normal_ks = 0.0;
   /// Junctions by crease valence: [0] valence 3, [1] valence 4, [2] valence 5 or more.
   std::array<int, 3> junction_degrees = {0, 0, 0};
-  bool has_plastic_data = false;   ///< plastic_curvature was given
-  int plastic_lines = 0;           ///< lines with CreaseLine::plastic()
-  double plastic_length = 0.0;     ///< world length of plastic crease edges [m]
-  double elastic_length = 0.0;     ///< total_length - plastic_length [m]
+  bool has_plastic_data = false;  ///< plastic_curvature was given
+  int plastic_lines = 0;          ///< lines with CreaseLine::plastic()
+  double plastic_length = 0.0;    ///< world length of plastic crease edges [m]
+  double elastic_length = 0.0;    ///< total_length - plastic_length [m]
   /// The plastic crease network, from the plastic state alone (whatever the current shape):
   /// interior edges whose rest dihedral exceeds the threshold, walked into lines between
   /// junctions as above. Lengths in material space [m] (what a flattened sheet would show).
   int plastic_network_edges = 0;
   int plastic_network_lines = 0;
   int plastic_network_junctions = 0;
-  double plastic_network_length = 0.0;            ///< [m]
-  double plastic_network_log_length_mean = 0.0;   ///< mean of ln(line length / 1 m)
+  double plastic_network_length = 0.0;           ///< [m]
+  double plastic_network_log_length_mean = 0.0;  ///< mean of ln(line length / 1 m)
   double plastic_network_log_length_std = 0.0;
-  double plastic_network_log_normal_ks = 0.0;     ///< as log_normal_ks [-]
+  double plastic_network_log_normal_ks = 0.0;        ///< as log_normal_ks [-]
   std::vector<double> plastic_network_line_lengths;  ///< [m], longest first
-  std::vector<CreaseLine> crease_lines;  ///< every line, longest first
+  std::vector<CreaseLine> crease_lines;              ///< every line, longest first
 };
 
 /// Element quality. Aspect is 12 sqrt(3) area / perimeter^2 (1 for an equilateral triangle,
@@ -152,7 +152,7 @@ struct QualityMetrics {
 
 /// Every figure of one mesh.
 struct MeshMetrics {
-  int vertices = 0;          ///< used vertices
+  int vertices = 0;  ///< used vertices
   int faces = 0;
   int edges = 0;
   int boundary_edges = 0;
@@ -176,11 +176,11 @@ struct MetricsSamples {
 
 /// Edges of a triangle mesh with their faces.
 struct MeshTopology {
-  Eigen::MatrixX2i edges;       ///< #E by 2 (v0, v1), directed as in face edge_faces(e, 0)
-  Eigen::MatrixX2i edge_faces;  ///< #E by 2; second is -1 on a boundary edge
-  Eigen::MatrixX3i face_edges;  ///< #F by 3, edge opposite corner k of the face
+  Eigen::MatrixX2i edges;            ///< #E by 2 (v0, v1), directed as in face edge_faces(e, 0)
+  Eigen::MatrixX2i edge_faces;       ///< #E by 2; second is -1 on a boundary edge
+  Eigen::MatrixX3i face_edges;       ///< #F by 3, edge opposite corner k of the face
   Eigen::VectorXi boundary_valence;  ///< #V number of boundary edges at each vertex
-  Eigen::VectorXi used;         ///< #V 1 when a face uses the vertex
+  Eigen::VectorXi used;              ///< #V 1 when a face uses the vertex
   int num_used_vertices = 0;
   int num_boundary_edges = 0;
 };
@@ -221,8 +221,8 @@ Eigen::VectorXd dihedral_angles(const Eigen::MatrixX3d& positions, const Eigen::
 
 /// Isometry figures (see IsometryMetrics).
 IsometryMetrics isometry_metrics(const Eigen::MatrixX2d& material_coords,
-                                 const Eigen::MatrixX3d& positions,
-                                 const Eigen::MatrixX3i& faces, const MeshTopology& topology);
+                                 const Eigen::MatrixX3d& positions, const Eigen::MatrixX3i& faces,
+                                 const MeshTopology& topology);
 
 /// Developability figures (see DevelopabilityMetrics).
 DevelopabilityMetrics developability_metrics(const Eigen::MatrixX3d& positions,
@@ -256,8 +256,7 @@ QualityMetrics quality_metrics(const Eigen::MatrixX2d& material_coords,
 MeshMetrics compute_metrics(const Eigen::MatrixX2d& material_coords,
                             const Eigen::MatrixX3d& positions, const Eigen::MatrixX3i& faces,
                             const Eigen::MatrixX3d& plastic_curvature,
-                            const MetricsOptions& options = {},
-                            MetricsSamples* samples = nullptr);
+                            const MetricsOptions& options = {}, MetricsSamples* samples = nullptr);
 
 /// Every figure of a sheet read with remesh::read_sheet.
 /// @param use_plastic_data pass the faces' plastic curvature (false for formats without it,

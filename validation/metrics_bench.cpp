@@ -8,6 +8,7 @@
 // measured, verdict; exits non-zero when over the target.
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
+#include <unistd.h>
 
 #include <CLI/CLI.hpp>
 #include <chrono>
@@ -18,7 +19,6 @@
 #include <iostream>
 #include <random>
 #include <sstream>
-#include <unistd.h>
 
 #include "common/clock.hpp"
 #include "remesh/sheet_generator.hpp"
@@ -86,18 +86,28 @@ void write_meshes(const fs::path& dir, const BenchOptions& o) {
 int main(int argc, char** argv) {
   BenchOptions o;
   CLI::App app{"Time the metrics command on many generated meshes"};
-  app.add_option("--meshes", o.meshes, "number of meshes")->capture_default_str()->check(CLI::Range(1, 1000000));
-  app.add_option("--nx", o.nx, "vertices along the sheet width")->capture_default_str()->check(CLI::Range(2, 10000));
-  app.add_option("--ny", o.ny, "vertices along the sheet height")->capture_default_str()->check(CLI::Range(2, 10000));
-  app.add_option("--threads", o.threads, "worker threads")->capture_default_str()->check(CLI::Range(1, 1024));
-  app.add_option("--target", o.target_seconds, "target time [s]")->capture_default_str()->check(CLI::Range(0.0, 1e6));
+  app.add_option("--meshes", o.meshes, "number of meshes")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 1000000));
+  app.add_option("--nx", o.nx, "vertices along the sheet width")
+      ->capture_default_str()
+      ->check(CLI::Range(2, 10000));
+  app.add_option("--ny", o.ny, "vertices along the sheet height")
+      ->capture_default_str()
+      ->check(CLI::Range(2, 10000));
+  app.add_option("--threads", o.threads, "worker threads")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 1024));
+  app.add_option("--target", o.target_seconds, "target time [s]")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1e6));
   app.add_option("--keep", o.keep_dir, "write the meshes to this folder and keep them");
   CLI11_PARSE(app, argc, argv);
   try {
-    const fs::path dir = o.keep_dir.empty()
-                             ? fs::temp_directory_path() / ("papersim_metrics_bench_" +
-                                                            std::to_string(::getpid()))
-                             : fs::path(o.keep_dir);
+    const fs::path dir =
+        o.keep_dir.empty()
+            ? fs::temp_directory_path() / ("papersim_metrics_bench_" + std::to_string(::getpid()))
+            : fs::path(o.keep_dir);
     fs::create_directories(dir / "meshes");
     auto start = std::chrono::steady_clock::now();
     write_meshes(dir / "meshes", o);
@@ -114,10 +124,11 @@ int main(int argc, char** argv) {
     const double seconds = seconds_since(start);
     const bool pass = status == 0 && seconds < o.target_seconds;
     std::cout << std::left << std::setw(44) << "case" << std::setw(12) << "target [s]"
-              << std::setw(14) << "measured [s]" << "verdict\n"
+              << std::setw(14) << "measured [s]"
+              << "verdict\n"
               << std::setw(44)
-              << ("metrics, " + std::to_string(o.meshes) + " meshes, " +
-                  std::to_string(o.threads) + " threads")
+              << ("metrics, " + std::to_string(o.meshes) + " meshes, " + std::to_string(o.threads) +
+                  " threads")
               << std::setw(12) << o.target_seconds << std::setw(14) << std::setprecision(4)
               << seconds << (pass ? "PASS" : "FAIL") << '\n'
               << "per mesh: " << std::setprecision(3) << 1000.0 * seconds * o.threads / o.meshes

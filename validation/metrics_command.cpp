@@ -74,8 +74,8 @@ MeshResult measure(const std::string& path, const MetricsOptions& options, bool 
   try {
     const remesh::SheetData sheet = remesh::read_sheet(path);
     const bool plastic = lower_extension(path) == ".ply";
-    result.metrics = compute_metrics(sheet, options, plastic,
-                                     keep_samples ? &result.samples : nullptr);
+    result.metrics =
+        compute_metrics(sheet, options, plastic, keep_samples ? &result.samples : nullptr);
     result.ok = true;
   } catch (const std::exception& e) {
     result.error = e.what();
@@ -89,7 +89,8 @@ std::vector<MeshResult> measure_all(const std::vector<std::string>& files,
   options.crease_angle_deg = opts.crease_angle_deg;
   options.self_intersections = opts.self_intersections;
   if (keep_samples)
-    options.max_samples = std::max<std::size_t>(1, MAX_POOLED_SAMPLES / std::max<std::size_t>(1, files.size()));
+    options.max_samples =
+        std::max<std::size_t>(1, MAX_POOLED_SAMPLES / std::max<std::size_t>(1, files.size()));
   std::vector<MeshResult> results(files.size());
   tbb::task_arena arena(opts.threads > 0 ? opts.threads : tbb::task_arena::automatic);
   arena.execute([&] {
@@ -255,7 +256,8 @@ int run_metrics_command(const std::vector<std::string>& paths, const MetricsComm
 
   std::vector<std::string> missing;
   const std::vector<std::string> files = find_mesh_files(paths, missing);
-  for (const std::string& path : missing) err << "metrics: no such file or folder: " << path << '\n';
+  for (const std::string& path : missing)
+    err << "metrics: no such file or folder: " << path << '\n';
   if (files.empty()) {
     err << "metrics: no OBJ or PLY mesh found\n";
     return 2;
@@ -301,12 +303,15 @@ void configure_metrics_command(CLI::App& command, int& exit_code, std::ostream& 
       ->required();
   command.add_flag("--json", state->options.json, "print JSON instead of tables");
   const CLI::Validator non_empty(
-      [](std::string& value) { return value.empty() ? std::string("must not be empty") : std::string(); },
+      [](std::string& value) {
+        return value.empty() ? std::string("must not be empty") : std::string();
+      },
       "NONEMPTY");
   command.add_option("--csv", state->options.csv_path, "write one CSV row per mesh to FILE")
       ->check(non_empty);
-  command.add_option("--crease-angle", state->options.crease_angle_deg,
-                     "crease threshold on the dihedral angle [deg]")
+  command
+      .add_option("--crease-angle", state->options.crease_angle_deg,
+                  "crease threshold on the dihedral angle [deg]")
       ->capture_default_str();
   command.add_option("--plots", state->options.plots_dir, "write histogram SVGs to DIR")
       ->check(non_empty);

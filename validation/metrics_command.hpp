@@ -13,12 +13,12 @@ namespace papersim::validation {
 
 /// Options of the metrics command.
 struct MetricsCommandOptions {
-  bool json = false;                ///< print JSON on `out` instead of the tables
-  std::string csv_path;             ///< write one CSV row per mesh to this file when not empty
-  double crease_angle_deg = 30.0;   ///< [deg] crease threshold on the dihedral angle, (0, 180)
-  std::string plots_dir;            ///< write histogram SVGs (gnuplot) here when not empty
-  int threads = 0;                  ///< worker threads; 0 = all cores
-  bool self_intersections = true;   ///< run the exact self-intersection count
+  bool json = false;               ///< print JSON on `out` instead of the tables
+  std::string csv_path;            ///< write one CSV row per mesh to this file when not empty
+  double crease_angle_deg = 30.0;  ///< [deg] crease threshold on the dihedral angle, (0, 180)
+  std::string plots_dir;           ///< write histogram SVGs (gnuplot) here when not empty
+  int threads = 0;                 ///< worker threads; 0 = all cores
+  bool self_intersections = true;  ///< run the exact self-intersection count
 };
 
 /// The mesh files named by `paths`: a file is taken as given; a folder is searched recursively

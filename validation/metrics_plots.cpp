@@ -112,12 +112,24 @@ struct PlotSpec {
 std::vector<PlotSpec> plot_specs(const MetricsSamples& s, const std::string& suffix) {
   return {
       {"edge_strain", "Edge strain " + suffix, "l / L - 1", {&s.edge_strain}, {"edges"}, false},
-      {"principal_stretch", "Principal stretches " + suffix, "stretch", {&s.s1, &s.s2},
-       {"s1", "s2"}, false},
-      {"angle_defect", "Angle defect at interior vertices " + suffix, "K [rad]",
-       {&s.angle_defect}, {"vertices"}, false},
-      {"crease_length", "Crease line lengths " + suffix, "length [m]", {&s.crease_length},
-       {"lines"}, true},
+      {"principal_stretch",
+       "Principal stretches " + suffix,
+       "stretch",
+       {&s.s1, &s.s2},
+       {"s1", "s2"},
+       false},
+      {"angle_defect",
+       "Angle defect at interior vertices " + suffix,
+       "K [rad]",
+       {&s.angle_defect},
+       {"vertices"},
+       false},
+      {"crease_length",
+       "Crease line lengths " + suffix,
+       "length [m]",
+       {&s.crease_length},
+       {"lines"},
+       true},
   };
 }
 
@@ -154,8 +166,10 @@ std::vector<std::string> write_histogram_plots(const std::string& dir,
     if (incomplete.empty() && !complete_svg(svg + ".tmp")) incomplete = svg;
   if (status != 0 || !incomplete.empty()) {
     for (const std::string& svg : written) fs::remove(svg + ".tmp", ec);
-    if (status != 0) throw PlotError("plots: gnuplot failed; see " + (folder / "gnuplot.log").string());
-    throw common::OutputError("plots: cannot write '" + incomplete + "' (incomplete SVG; full disk?)");
+    if (status != 0)
+      throw PlotError("plots: gnuplot failed; see " + (folder / "gnuplot.log").string());
+    throw common::OutputError("plots: cannot write '" + incomplete +
+                              "' (incomplete SVG; full disk?)");
   }
   for (const std::string& svg : written) {
     fs::rename(svg + ".tmp", svg, ec);

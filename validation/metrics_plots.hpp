@@ -16,9 +16,9 @@ struct PlotError : std::runtime_error {
 
 /// Options of write_histogram_plots.
 struct PlotOptions {
-  int bins = 40;                       ///< bins per histogram (>= 1)
-  std::string gnuplot = "gnuplot";     ///< the gnuplot program (looked up in PATH)
-  std::string title_suffix;            ///< appended to every title (e.g. "(1000 meshes)")
+  int bins = 40;                    ///< bins per histogram (>= 1)
+  std::string gnuplot = "gnuplot";  ///< the gnuplot program (looked up in PATH)
+  std::string title_suffix;         ///< appended to every title (e.g. "(1000 meshes)")
 };
 
 /// Write, in `dir` (created if missing), one histogram per quantity that has samples:

@@ -83,11 +83,10 @@ void add_quality(Fields& f, const QualityMetrics& m) {
 
 /// Fields that are counts print as integers.
 bool is_count(const std::string& name) {
-  static const char* const COUNTS[] = {"mesh.",           "euler_characteristic",
-                                       "creases.edges",   "creases.lines",
-                                       "network_edges",   "network_lines",
-                                       "junctions",       "plastic_lines",
-                                       "has_plastic",     "self_intersection"};
+  static const char* const COUNTS[] = {
+      "mesh.",         "euler_characteristic", "creases.edges", "creases.lines",
+      "network_edges", "network_lines",        "junctions",     "plastic_lines",
+      "has_plastic",   "self_intersection"};
   return std::any_of(std::begin(COUNTS), std::end(COUNTS),
                      [&](const char* c) { return name.find(c) != std::string::npos; });
 }

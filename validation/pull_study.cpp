@@ -27,11 +27,13 @@ static int study(int argc, char** argv) {
   int seeds = 20, first = 0;
   std::string csv;
   app.add_option("--seeds", seeds, "number of seeds")->check(papersim::common::positive());
-  app.add_option("--first", first, "first seed (seeds first .. first + N - 1)")->check(papersim::common::non_negative());
+  app.add_option("--first", first, "first seed (seeds first .. first + N - 1)")
+      ->check(papersim::common::non_negative());
   app.add_option("--csv", csv, "also write the table as CSV");
   CLI11_PARSE(app, argc, argv);
-  papersim::validation::StudyTable table(
-      csv, "seed,vertices,wall_seconds,newton_iterations,max_stretch,handle_error,min_ground,gauss_bonnet,points,verdict");
+  papersim::validation::StudyTable table(csv,
+                                         "seed,vertices,wall_seconds,newton_iterations,max_stretch,"
+                                         "handle_error,min_ground,gauss_bonnet,points,verdict");
   std::printf("%-5s %-7s %-9s %-10s %-11s %-11s %-11s %-10s %-8s %s\n", "seed", "verts", "wall_s",
               "newton", "max_s1", "handle_err", "min_ground", "gauss_bon", "points", "verdict");
   int failures = 0;
@@ -50,16 +52,22 @@ static int study(int argc, char** argv) {
       herr = r.quality.max_handle_error.value_or(0.0);
       ground = r.quality.min_obstacle_distance.at(0);
       const Eigen::MatrixX3i F = r.mesh.faces();
-      const Eigen::MatrixX3d P = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(
-          r.state.positions.data(), r.mesh.num_vertices(), 3);
+      const Eigen::MatrixX3d P =
+          Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(
+              r.state.positions.data(), r.mesh.num_vertices(), 3);
       gauss_bonnet = papersim::validation::developability_metrics(
                          P, F, papersim::validation::build_topology(F, r.mesh.num_vertices()))
                          .gauss_bonnet_residual;
-      if (!r.state.positions.allFinite()) verdict = "FAIL nan";
-      else if (s1 > 1 + scene.sheet.material.strain_limit) verdict = "FAIL stretch";
-      else if (herr > 1e-3) verdict = "FAIL handle";
-      else if (ground < -scene.sheet.material.thickness) verdict = "FAIL ground";
-      else if (!(std::abs(gauss_bonnet) < 1e-9)) verdict = "FAIL gauss-bonnet";
+      if (!r.state.positions.allFinite())
+        verdict = "FAIL nan";
+      else if (s1 > 1 + scene.sheet.material.strain_limit)
+        verdict = "FAIL stretch";
+      else if (herr > 1e-3)
+        verdict = "FAIL handle";
+      else if (ground < -scene.sheet.material.thickness)
+        verdict = "FAIL ground";
+      else if (!(std::abs(gauss_bonnet) < 1e-9))
+        verdict = "FAIL gauss-bonnet";
       if (seed == first) {
         const ps::RunResult again = ps::run_scene(scene, {});
         if (!(again.state.positions.array() == r.state.positions.array()).all())
@@ -70,13 +78,14 @@ static int study(int argc, char** argv) {
     }
     if (verdict != "PASS") ++failures;
     walls.push_back(wall);
-    std::printf("%-5d %-7d %-9.2f %-10d %-11.6f %-11.3g %-11.3g %-10.2g %-8zu %s\n", seed, verts, wall,
-                newton, s1, herr, ground, gauss_bonnet, scene.handles.size(), verdict.c_str());
+    std::printf("%-5d %-7d %-9.2f %-10d %-11.6f %-11.3g %-11.3g %-10.2g %-8zu %s\n", seed, verts,
+                wall, newton, s1, herr, ground, gauss_bonnet, scene.handles.size(),
+                verdict.c_str());
     std::fflush(stdout);
     if (table.enabled()) {
       std::ostringstream row;
-      row << seed << ',' << verts << ',' << wall << ',' << newton << ',' << s1 << ',' << herr << ',' << ground << ','
-          << gauss_bonnet << ',' << scene.handles.size() << ',' << verdict;
+      row << seed << ',' << verts << ',' << wall << ',' << newton << ',' << s1 << ',' << herr << ','
+          << ground << ',' << gauss_bonnet << ',' << scene.handles.size() << ',' << verdict;
       table.add(row.str());
     }
   }
@@ -86,4 +95,6 @@ static int study(int argc, char** argv) {
   return failures == 0 ? 0 : 1;
 }
 
-int main(int argc, char** argv) { return papersim::validation::run_study("pull_study", study, argc, argv); }
+int main(int argc, char** argv) {
+  return papersim::validation::run_study("pull_study", study, argc, argv);
+}

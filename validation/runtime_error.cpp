@@ -33,9 +33,10 @@
 // and its runs are stored apart from those without (the CSVs and the plot are the last study's).
 // --set-all KEY=VALUE changes a scene key of every run, the references included: another physics
 // (a material key) measured against references of that physics, in a DIR of its own.
-#include <CLI/CLI.hpp>
-#include <nlohmann/json.hpp>
+#include <sys/resource.h>
+#include <unistd.h>
 
+#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -44,14 +45,12 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <set>
 #include <sstream>
 #include <string>
 #include <vector>
-
-#include <sys/resource.h>
-#include <unistd.h>
 
 #include "common/cli_checks.hpp"
 #include "remesh/sheet_io.hpp"
@@ -85,12 +84,14 @@ struct Sample {
   pv::SheetDifference error;
 };
 
-pv::SheetGeometry geometry_of(const papersim::remesh::SheetMesh& mesh, const Eigen::MatrixX3d& positions) {
+pv::SheetGeometry geometry_of(const papersim::remesh::SheetMesh& mesh,
+                              const Eigen::MatrixX3d& positions) {
   return {mesh.material_coords(), positions, mesh.faces()};
 }
 
 Eigen::MatrixX3d as_rows(const Eigen::VectorXd& x) {
-  return Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(x.data(), x.size() / 3, 3);
+  return Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(
+      x.data(), x.size() / 3, 3);
 }
 
 ps::Scene with_resolution(ps::Scene scene, double edge_mm, double step_ms) {
@@ -137,7 +138,8 @@ ps::RunOptions progress_options(const std::string& label) {
   ps::RunOptions o;
   o.progress = [label](double f, double s) {
     const double eta = f > 0 ? s * (1 - f) / f : 0;
-    std::fprintf(stderr, "\r  %-28s %5.1f%%  %6.1f s, ETA %6.1f s   ", label.c_str(), 100 * f, s, eta);
+    std::fprintf(stderr, "\r  %-28s %5.1f%%  %6.1f s, ETA %6.1f s   ", label.c_str(), 100 * f, s,
+                 eta);
     if (f >= 1) std::fprintf(stderr, "\n");
   };
   return o;
@@ -145,8 +147,8 @@ ps::RunOptions progress_options(const std::string& label) {
 
 /// A reference run, read back from DIR/NAME when it was made from the same scene (every field:
 /// draw, resolution, material and bending model, solver settings).
-pv::SheetGeometry reference_run(const ps::Scene& scene, const fs::path& dir, const std::string& name,
-                                double& wall) {
+pv::SheetGeometry reference_run(const ps::Scene& scene, const fs::path& dir,
+                                const std::string& name, double& wall) {
   const fs::path ref = dir / name;
   const nlohmann::json key = ps::scene_to_json(scene);
   if (fs::exists(ref / "sheet.obj") && fs::exists(ref / "meta.json")) {
@@ -177,7 +179,8 @@ std::vector<double> parse_list(const std::string& text, const char* what, bool s
     const std::string item = text.substr(pos, end - pos);
     char* stop = nullptr;
     const double x = std::strtod(item.c_str(), &stop);
-    const bool ok = !item.empty() && *stop == '\0' && (seeds ? x >= 0 && x == std::floor(x) && x < 9e15 : x > 0);
+    const bool ok = !item.empty() && *stop == '\0' &&
+                    (seeds ? x >= 0 && x == std::floor(x) && x < 9e15 : x > 0);
     if (!ok)
       throw std::runtime_error(std::string("--") + what + ": '" + item + "' is not a " +
                                (seeds ? "non-negative integer" : "positive number"));
@@ -240,7 +243,8 @@ struct Aggregate {
   double edge_mm = 0, step_ms = 0;
   int draws = 0;
   std::string seeds;  ///< the draws used, space separated
-  double median_wall = 0, median_cpu = 0, median_vertices_max = 0, median_rms = 0, worst_rms = 0, worst_max = 0;
+  double median_wall = 0, median_cpu = 0, median_vertices_max = 0, median_rms = 0, worst_rms = 0,
+         worst_max = 0;
   double median_rms_aligned = 0, worst_rms_aligned = 0;  ///< shape error (compare.hpp)
 };
 
@@ -287,7 +291,8 @@ std::vector<Aggregate> aggregate(const std::vector<SeedResult>& draws) {
 
 /// Writes `text` to `path` through a temporary name, so a failure leaves no partial file.
 void write_file(const fs::path& path, const std::string& text) {
-  const fs::path tmp = path.string() + "." + std::to_string(getpid()) + ".tmp";  // processes may share DIR
+  const fs::path tmp =
+      path.string() + "." + std::to_string(getpid()) + ".tmp";  // processes may share DIR
   {
     std::ofstream out(tmp);
     out << text;
@@ -298,26 +303,30 @@ void write_file(const fs::path& path, const std::string& text) {
 
 void write_csv(const fs::path& path, const std::vector<SeedResult>& draws) {
   std::ostringstream out;
-  out << "seed,reference_converged,remesh,edge_mm,step_ms,vertices,vertices_max,steps,newton_iterations,wall_seconds,"
+  out << "seed,reference_converged,remesh,edge_mm,step_ms,vertices,vertices_max,steps,newton_"
+         "iterations,wall_seconds,"
          "cpu_seconds,rms_error_m,max_error_m,hausdorff_m,rms_shape_error_m,max_shape_error_m\n";
   for (const SeedResult& d : draws)
     for (const Sample& s : d.samples)
-      out << d.seed << ',' << (d.checked ? (d.converged ? "yes" : "no") : "unchecked") << ',' << s.remesh << ','
-          << s.edge_mm << ',' << s.step_ms << ',' << s.vertices << ',' << s.vertices_max << ',' << s.steps << ','
-          << s.newton << ',' << s.wall << ',' << s.cpu << ',' << s.error.rms << ',' << s.error.max << ',' << s.error.hausdorff << ','
+      out << d.seed << ',' << (d.checked ? (d.converged ? "yes" : "no") : "unchecked") << ','
+          << s.remesh << ',' << s.edge_mm << ',' << s.step_ms << ',' << s.vertices << ','
+          << s.vertices_max << ',' << s.steps << ',' << s.newton << ',' << s.wall << ',' << s.cpu
+          << ',' << s.error.rms << ',' << s.error.max << ',' << s.error.hausdorff << ','
           << s.error.rms_aligned << ',' << s.error.max_aligned << '\n';
   write_file(path, out.str());
 }
 
 void write_summary_csv(const fs::path& path, const std::vector<Aggregate>& settings) {
   std::ostringstream out;
-  out << "remesh,edge_mm,step_ms,draws,median_wall_seconds,median_cpu_seconds,median_vertices_max,median_rms_error_m,"
-         "worst_rms_error_m,worst_max_error_m,seeds,median_rms_shape_error_m,worst_rms_shape_error_m\n";
+  out << "remesh,edge_mm,step_ms,draws,median_wall_seconds,median_cpu_seconds,median_vertices_max,"
+         "median_rms_error_m,"
+         "worst_rms_error_m,worst_max_error_m,seeds,median_rms_shape_error_m,worst_rms_shape_error_"
+         "m\n";
   for (const Aggregate& a : settings)
-    out << a.remesh << ',' << a.edge_mm << ',' << a.step_ms << ',' << a.draws << ',' << a.median_wall << ','
-        << a.median_cpu << ',' << a.median_vertices_max << ',' << a.median_rms << ','
-        << a.worst_rms << ',' << a.worst_max << ',' << a.seeds << ',' << a.median_rms_aligned << ','
-        << a.worst_rms_aligned << '\n';
+    out << a.remesh << ',' << a.edge_mm << ',' << a.step_ms << ',' << a.draws << ','
+        << a.median_wall << ',' << a.median_cpu << ',' << a.median_vertices_max << ','
+        << a.median_rms << ',' << a.worst_rms << ',' << a.worst_max << ',' << a.seeds << ','
+        << a.median_rms_aligned << ',' << a.worst_rms_aligned << '\n';
   write_file(path, out.str());
 }
 
@@ -332,7 +341,8 @@ void write_plot(const fs::path& dir, const std::vector<double>& steps, const std
      << "set output 'runtime_error.png.tmp'\n"
      << "set title '" << title << "'\n"
      << "set logscale xy\nset grid\n"
-     << "set xlabel 'RMS position error against the reference of each draw: worst (filled), median (open) [mm]'\n"
+     << "set xlabel 'RMS position error against the reference of each draw: worst (filled), median "
+        "(open) [mm]'\n"
      << "set ylabel 'median CPU time per run [s]'\n"
      << "set key top right\nset datafile separator ','\n";
   // Only the series the summary has rows for (gnuplot fails on a labels series with no point).
@@ -344,7 +354,8 @@ void write_plot(const fs::path& dir, const std::vector<double>& steps, const std
     while (std::getline(in, line)) {
       std::stringstream row(line);
       std::string remesh, edge, step;
-      if (std::getline(row, remesh, ',') && std::getline(row, edge, ',') && std::getline(row, step, ','))
+      if (std::getline(row, remesh, ',') && std::getline(row, edge, ',') &&
+          std::getline(row, step, ','))
         present.insert({remesh != "off", std::strtod(step.c_str(), nullptr)});
     }
   }
@@ -353,22 +364,25 @@ void write_plot(const fs::path& dir, const std::vector<double>& steps, const std
   for (const bool remeshed : {false, true})
     for (size_t i = 0; i < steps.size(); ++i) {
       if (!present.count({remeshed, steps[i]})) continue;
-      const std::string pick = std::string("(strcol(1) ") + (remeshed ? "ne" : "eq") + " 'off' && $3==" +
-                               format_number(steps[i]) + " ? ";
+      const std::string pick = std::string("(strcol(1) ") + (remeshed ? "ne" : "eq") +
+                               " 'off' && $3==" + format_number(steps[i]) + " ? ";
       const int filled = remeshed ? 9 : 7, open = remeshed ? 8 : 6;
       if (series++) gp << ", \\\n     ";
-      gp << "'runtime_error_summary.csv' every ::1 using " << pick << "$9*1e3 : 1/0):6 with points pt " << filled
-         << " ps 1.3 lc " << i + 1 << " title '" << (remeshed ? "remeshed" : "uniform") << ", step "
-         << format_number(steps[i]) << " ms', "
-         << "'' every ::1 using " << pick << "$8*1e3 : 1/0):6 with points pt " << open << " ps 1.3 lc " << i + 1
-         << " notitle, "
+      gp << "'runtime_error_summary.csv' every ::1 using " << pick
+         << "$9*1e3 : 1/0):6 with points pt " << filled << " ps 1.3 lc " << i + 1 << " title '"
+         << (remeshed ? "remeshed" : "uniform") << ", step " << format_number(steps[i]) << " ms', "
+         << "'' every ::1 using " << pick << "$8*1e3 : 1/0):6 with points pt " << open
+         << " ps 1.3 lc " << i + 1 << " notitle, "
          << "'' every ::1 using " << pick << "$9*1e3 : 1/0):6:("
-         << (remeshed ? "strcol(1)" : "sprintf('%g mm', $2)") << ") with labels offset 1.2,0.6 font ',9' notitle";
+         << (remeshed ? "strcol(1)" : "sprintf('%g mm', $2)")
+         << ") with labels offset 1.2,0.6 font ',9' notitle";
     }
   if (mark.first > 0)
-    gp << ", \\\n     'runtime_error_summary.csv' every ::1 using (strcol(1) eq 'off' && $2==" << format_number(mark.first)
-       << " && $3==" << format_number(mark.second) << " ? $9*1e3 : 1/0):6 with points pt 4 ps 3.5 lc rgb 'black' "
-       << "title 'old default (" << format_number(mark.first) << " mm, " << format_number(mark.second) << " ms)'";
+    gp << ", \\\n     'runtime_error_summary.csv' every ::1 using (strcol(1) eq 'off' && $2=="
+       << format_number(mark.first) << " && $3==" << format_number(mark.second)
+       << " ? $9*1e3 : 1/0):6 with points pt 4 ps 3.5 lc rgb 'black' "
+       << "title 'old default (" << format_number(mark.first) << " mm, "
+       << format_number(mark.second) << " ms)'";
   gp << "\n";
   write_file(dir / "runtime_error.gp", gp.str());
   const std::string cmd = "cd '" + dir.string() + "' && gnuplot runtime_error.gp 2> gnuplot.log";
@@ -378,9 +392,10 @@ void write_plot(const fs::path& dir, const std::vector<double>& steps, const std
 }
 
 void print_sample(long long seed, const Sample& s, const char* note) {
-  std::printf("%6lld %10s %8g %8g %8d %8d %7d %8ld %9.2f %9.2f %10.3f %10.3f %10.3f %10.3f%s\n", seed,
-              s.remesh.c_str(), s.edge_mm, s.step_ms, s.vertices, s.vertices_max, s.steps, s.newton, s.wall, s.cpu,
-              1e3 * s.error.rms, 1e3 * s.error.max, 1e3 * s.error.hausdorff, 1e3 * s.error.rms_aligned, note);
+  std::printf("%6lld %10s %8g %8g %8d %8d %7d %8ld %9.2f %9.2f %10.3f %10.3f %10.3f %10.3f%s\n",
+              seed, s.remesh.c_str(), s.edge_mm, s.step_ms, s.vertices, s.vertices_max, s.steps,
+              s.newton, s.wall, s.cpu, 1e3 * s.error.rms, 1e3 * s.error.max,
+              1e3 * s.error.hausdorff, 1e3 * s.error.rms_aligned, note);
   std::fflush(stdout);
 }
 
@@ -410,7 +425,8 @@ std::optional<Sample> read_sample(const fs::path& path, const nlohmann::json& ke
   std::ifstream in(path);
   if (!in) return std::nullopt;
   const nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
-  if (j.is_discarded() || !j.is_object() || !j.contains("key") || j["key"] != key) return std::nullopt;
+  if (j.is_discarded() || !j.is_object() || !j.contains("key") || j["key"] != key)
+    return std::nullopt;
   try {
     Sample s;
     s.remesh = j.at("remesh").get<std::string>();
@@ -418,8 +434,10 @@ std::optional<Sample> read_sample(const fs::path& path, const nlohmann::json& ke
     s.vertices = j.at("vertices"), s.vertices_max = j.at("vertices_max"), s.steps = j.at("steps");
     s.newton = j.at("newton_iterations");
     s.wall = j.at("wall_seconds"), s.cpu = j.at("cpu_seconds");
-    s.error.rms = j.at("rms_error_m"), s.error.max = j.at("max_error_m"), s.error.hausdorff = j.at("hausdorff_m");
-    s.error.rms_aligned = j.at("rms_shape_error_m"), s.error.max_aligned = j.at("max_shape_error_m");
+    s.error.rms = j.at("rms_error_m"), s.error.max = j.at("max_error_m"),
+    s.error.hausdorff = j.at("hausdorff_m");
+    s.error.rms_aligned = j.at("rms_shape_error_m"),
+    s.error.max_aligned = j.at("max_shape_error_m");
     return s;
   } catch (const nlohmann::json::exception&) {
     return std::nullopt;  // an older or damaged file: run again
@@ -434,29 +452,33 @@ SeedResult study_draw(const std::string& scenario, long long seed, const fs::pat
                       const nlohmann::json& sets, const nlohmann::json& all_sets) {
   SeedResult d;
   d.seed = seed;
-  const ps::Scene base = ps::apply_overrides(ps::make_scenario(scenario, seed), all_sets, "--set-all");
+  const ps::Scene base =
+      ps::apply_overrides(ps::make_scenario(scenario, seed), all_sets, "--set-all");
   const ps::Scene swept = ps::apply_overrides(base, sets, "--set");
   fs::create_directories(dir);
   const pv::SheetGeometry reference =
       reference_run(with_resolution(base, ref_edge, ref_step), dir, "reference", d.reference_wall);
   d.reference_vertices = static_cast<int>(reference.material.rows());
-  std::printf("seed %lld reference: edge %g mm, step %g ms, %d vertices, %.1f s\n", seed, ref_edge, ref_step,
-              d.reference_vertices, d.reference_wall);
+  std::printf("seed %lld reference: edge %g mm, step %g ms, %d vertices, %.1f s\n", seed, ref_edge,
+              ref_step, d.reference_vertices, d.reference_wall);
   if (check_edge > 0) {
     double check_wall = 0;
-    const pv::SheetGeometry check =
-        reference_run(with_resolution(base, check_edge, ref_step), dir, "reference_check", check_wall);
+    const pv::SheetGeometry check = reference_run(with_resolution(base, check_edge, ref_step), dir,
+                                                  "reference_check", check_wall);
     d.checked = true;
     d.check = pv::compare_sheets(check, reference);
     d.converged = 1e3 * d.check.rms <= target;
-    std::printf("seed %lld reference check: edge %g mm (%ld vertices, %.1f s) against the reference: RMS %.3f mm, "
-                "max %.3f mm, Hausdorff %.3f mm: %s\n", seed, check_edge, static_cast<long>(check.material.rows()),
-                check_wall, 1e3 * d.check.rms, 1e3 * d.check.max, 1e3 * d.check.hausdorff,
-                d.converged ? "converged within the target" : "NOT converged within the target");
+    std::printf(
+        "seed %lld reference check: edge %g mm (%ld vertices, %.1f s) against the reference: RMS "
+        "%.3f mm, "
+        "max %.3f mm, Hausdorff %.3f mm: %s\n",
+        seed, check_edge, static_cast<long>(check.material.rows()), check_wall, 1e3 * d.check.rms,
+        1e3 * d.check.max, 1e3 * d.check.hausdorff,
+        d.converged ? "converged within the target" : "NOT converged within the target");
   }
-  std::printf("%6s %10s %8s %8s %8s %8s %7s %8s %9s %9s %10s %10s %10s %10s\n", "seed", "remesh", "edge_mm", "step_ms",
-              "vertices", "max_vert", "steps", "newton", "wall_s", "cpu_s", "rms_mm", "max_mm", "hausd_mm",
-              "shape_mm");
+  std::printf("%6s %10s %8s %8s %8s %8s %7s %8s %9s %9s %10s %10s %10s %10s\n", "seed", "remesh",
+              "edge_mm", "step_ms", "vertices", "max_vert", "steps", "newton", "wall_s", "cpu_s",
+              "rms_mm", "max_mm", "hausd_mm", "shape_mm");
   const nlohmann::json reference_key = ps::scene_to_json(with_resolution(base, ref_edge, ref_step));
   std::string sets_tag;
   if (!sets.empty()) {
@@ -482,9 +504,11 @@ SeedResult study_draw(const std::string& scenario, long long seed, const fs::pat
       return;
     }
     const double cpu0 = cpu_seconds();
-    const ps::RunResult r = ps::run_scene(scene, progress_options("seed " + std::to_string(seed) + ", " +
-        (remesh == "off" ? "edge " + format_number(edge) + " mm" : "remesh " + remesh) + ", step " +
-        format_number(step) + " ms"));
+    const ps::RunResult r = ps::run_scene(
+        scene, progress_options(
+                   "seed " + std::to_string(seed) + ", " +
+                   (remesh == "off" ? "edge " + format_number(edge) + " mm" : "remesh " + remesh) +
+                   ", step " + format_number(step) + " ms"));
     Sample s;
     s.remesh = remesh;
     s.edge_mm = edge, s.step_ms = step;
@@ -511,35 +535,49 @@ SeedResult study_draw(const std::string& scenario, long long seed, const fs::pat
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"papersim_runtime_error: wall time against error for a sweep of edge length and time step"};
-  std::string out, scenario = "pull", seeds_text = "0,1,2,3,4,5,6,7", edges_text = "20,14,10,7", steps_text = "20,10,5";
+  CLI::App app{
+      "papersim_runtime_error: wall time against error for a sweep of edge length and time step"};
+  std::string out, scenario = "pull", seeds_text = "0,1,2,3,4,5,6,7", edges_text = "20,14,10,7",
+                   steps_text = "20,10,5";
   double ref_edge = 5, ref_step = 2.5, target = 2;
   app.add_option("--out", out, "output folder (CSV, plot, reference runs)")->required();
   app.add_option("--scenario", scenario, "scenario name")->capture_default_str();
-  app.add_option("--seeds", seeds_text, "scenario seeds (draws), comma separated")->capture_default_str();
-  app.add_option("--edges", edges_text,
-                 "edge lengths of the uniform sweep [mm], comma separated (may be empty with --remesh)")
+  app.add_option("--seeds", seeds_text, "scenario seeds (draws), comma separated")
       ->capture_default_str();
-  app.add_option("--steps", steps_text, "time steps of the sweep [ms], comma separated")->capture_default_str();
-  app.add_option("--reference-edge", ref_edge, "edge length of the references [mm]")->capture_default_str();
-  app.add_option("--reference-step", ref_step, "time step of the references [ms]")->capture_default_str();
-  app.add_option("--target", target, "RMS error to recommend a setting for [mm]")->capture_default_str();
+  app.add_option(
+         "--edges", edges_text,
+         "edge lengths of the uniform sweep [mm], comma separated (may be empty with --remesh)")
+      ->capture_default_str();
+  app.add_option("--steps", steps_text, "time steps of the sweep [ms], comma separated")
+      ->capture_default_str();
+  app.add_option("--reference-edge", ref_edge, "edge length of the references [mm]")
+      ->capture_default_str();
+  app.add_option("--reference-step", ref_step, "time step of the references [ms]")
+      ->capture_default_str();
+  app.add_option("--target", target, "RMS error to recommend a setting for [mm]")
+      ->capture_default_str();
   double check_edge = 0;
-  app.add_option("--check-edge", check_edge,
-                 "also run each draw at this finer edge length [mm] (reference step) and compare it with its "
-                 "reference: a draw whose reference moves by more than the target is not converged and is left "
-                 "out of the recommendation; when no draw is converged, no setting is recommended and the exit "
-                 "status is 1");
+  app.add_option(
+      "--check-edge", check_edge,
+      "also run each draw at this finer edge length [mm] (reference step) and compare it with its "
+      "reference: a draw whose reference moves by more than the target is not converged and is "
+      "left "
+      "out of the recommendation; when no draw is converged, no setting is recommended and the "
+      "exit "
+      "status is 1");
   std::string remesh_text;
   double remesh_start = 21;
   app.add_option("--remesh", remesh_text,
                  "remeshing settings of the sweep, comma separated MIN:MAX[:ANGLE][@EVERY] "
                  "(remesh.size_min and size_max in mm, refine_angle in rad, remesh.every in "
                  "steps; run at every --steps, from a uniform start mesh of --remesh-start)");
-  app.add_option("--remesh-start", remesh_start, "edge length of the remeshed runs' start mesh [mm]")
-      ->capture_default_str()->check(papersim::common::positive());
+  app.add_option("--remesh-start", remesh_start,
+                 "edge length of the remeshed runs' start mesh [mm]")
+      ->capture_default_str()
+      ->check(papersim::common::positive());
   std::string mark_text;
-  app.add_option("--mark", mark_text, "EDGE:STEP: circle this uniform setting on the plot as the old default (mm, ms)");
+  app.add_option("--mark", mark_text,
+                 "EDGE:STEP: circle this uniform setting on the plot as the old default (mm, ms)");
   std::vector<std::string> set_pairs;
   app.add_option(
       "--set", set_pairs,
@@ -550,41 +588,48 @@ int main(int argc, char** argv) {
       "every) "
       "are refused");
   std::vector<std::string> all_pairs;
-  app.add_option("--set-all", all_pairs,
-                 "KEY=VALUE: set a scene key of every run, the references and their checks too (another "
-                 "physics, e.g. sheet.material.stretch_stiffness=5000: use a new OUT, as the references "
-                 "of another scene replace those in it); repeatable, the same keys refused as for --set");
+  app.add_option(
+      "--set-all", all_pairs,
+      "KEY=VALUE: set a scene key of every run, the references and their checks too (another "
+      "physics, e.g. sheet.material.stretch_stiffness=5000: use a new OUT, as the references "
+      "of another scene replace those in it); repeatable, the same keys refused as for --set");
   bool replot = false;
-  app.add_flag("--replot", replot, "only redraw OUT/runtime_error.png from OUT/runtime_error_summary.csv");
+  app.add_flag("--replot", replot,
+               "only redraw OUT/runtime_error.png from OUT/runtime_error_summary.csv");
   CLI11_PARSE(app, argc, argv);
   try {
     const std::vector<RemeshSetting> remeshes = parse_remesh(remesh_text);
     // With remeshing settings the uniform sweep may be empty (--edges "").
-    const std::vector<double> edges = edges_text.empty() && !remeshes.empty() ? std::vector<double>{}
-                                                                                : parse_list(edges_text, "edges");
+    const std::vector<double> edges = edges_text.empty() && !remeshes.empty()
+                                          ? std::vector<double>{}
+                                          : parse_list(edges_text, "edges");
     const std::vector<double> steps = parse_list(steps_text, "steps");
     std::pair<double, double> mark{0, 0};
     if (!mark_text.empty()) {
       const size_t colon = mark_text.find(':');
       const std::vector<double> e = parse_list(mark_text.substr(0, colon), "mark");
-      const std::vector<double> h =
-          colon == std::string::npos ? std::vector<double>{} : parse_list(mark_text.substr(colon + 1), "mark");
+      const std::vector<double> h = colon == std::string::npos
+                                        ? std::vector<double>{}
+                                        : parse_list(mark_text.substr(colon + 1), "mark");
       if (e.size() != 1 || h.size() != 1)
-        throw std::runtime_error("--mark: '" + mark_text + "' is not EDGE:STEP (mm and ms, e.g. 10:2)");
+        throw std::runtime_error("--mark: '" + mark_text +
+                                 "' is not EDGE:STEP (mm and ms, e.g. 10:2)");
       mark = {e[0], h[0]};
     }
     std::vector<long long> seeds;
-    for (double x : parse_list(seeds_text, "seeds", true)) seeds.push_back(static_cast<long long>(x));
+    for (double x : parse_list(seeds_text, "seeds", true))
+      seeds.push_back(static_cast<long long>(x));
     // The plot's title names the draws it summarises (those whose reference holds).
     const auto title = [&](const std::string& used) {
-      return scenario + ", seeds " + used + ": references edge " + format_number(ref_edge) + " mm, step " +
-             format_number(ref_step) + " ms";
+      return scenario + ", seeds " + used + ": references edge " + format_number(ref_edge) +
+             " mm, step " + format_number(ref_step) + " ms";
     };
     if (replot) {
       const fs::path summary = fs::path(out) / "runtime_error_summary.csv";
       std::ifstream in(summary);
       std::string header, row;
-      if (!in || !std::getline(in, header) || !std::getline(in, row) || row.rfind(',') == std::string::npos)
+      if (!in || !std::getline(in, header) || !std::getline(in, row) ||
+          row.rfind(',') == std::string::npos)
         throw std::runtime_error("--replot: no summary rows in " + summary.string());
       // The draws used: column "seeds" of the summary (the 11th).
       std::stringstream fields(row);
@@ -601,7 +646,8 @@ int main(int argc, char** argv) {
                                format_number(ref_edge) + " mm)");
     const nlohmann::json sets = ps::parse_overrides(set_pairs);
     const nlohmann::json all_sets = ps::parse_overrides(all_pairs);
-    for (const auto& [option, keys] : {std::pair{"--set", &sets}, std::pair{"--set-all", &all_sets}})
+    for (const auto& [option, keys] :
+         {std::pair{"--set", &sets}, std::pair{"--set-all", &all_sets}})
       for (const auto& [key, value] : keys->items())
         if (key == "time_step" || key == "sheet.edge_length" || key == "remesh" ||
             key == "remesh.enabled" || key == "remesh.size_min" || key == "remesh.size_max" ||
@@ -609,8 +655,9 @@ int main(int argc, char** argv) {
           throw std::runtime_error(std::string(option) + ": '" + key +
                                    "' is set by the sweep (--edges, --steps, --remesh)");
     // An unknown scenario or a bad --set / --set-all key fails here, before any run.
-    ps::apply_overrides(ps::apply_overrides(ps::make_scenario(scenario, seeds.front()), all_sets, "--set-all"),
-                        sets, "--set");
+    ps::apply_overrides(
+        ps::apply_overrides(ps::make_scenario(scenario, seeds.front()), all_sets, "--set-all"),
+        sets, "--set");
     if (!sets.empty())
       std::printf("the sweep's runs with --set %s (not the references)\n", sets.dump().c_str());
     if (!all_sets.empty())
@@ -622,18 +669,22 @@ int main(int argc, char** argv) {
       draws.push_back(study_draw(scenario, seed, fs::path(out) / ("seed_" + std::to_string(seed)),
                                  edges, steps, ref_edge, ref_step, check_edge, target, remeshes,
                                  remesh_start, sets, all_sets));
-      write_csv(fs::path(out) / "runtime_error.csv", draws);  // partial results survive an interruption
+      write_csv(fs::path(out) / "runtime_error.csv",
+                draws);  // partial results survive an interruption
     }
     const std::vector<Aggregate> settings = aggregate(draws);
-    const int held = static_cast<int>(std::count_if(draws.begin(), draws.end(), [](const SeedResult& d) {
-      return d.converged;
-    }));
+    const int held = static_cast<int>(
+        std::count_if(draws.begin(), draws.end(), [](const SeedResult& d) { return d.converged; }));
     if (check_edge > 0)
-      std::printf("\n%d of %zu draws have a reference that holds under refinement", held, draws.size());
+      std::printf("\n%d of %zu draws have a reference that holds under refinement", held,
+                  draws.size());
     else
-      std::printf("\n%zu draws, their references not checked under refinement (no --check-edge)", draws.size());
+      std::printf("\n%zu draws, their references not checked under refinement (no --check-edge)",
+                  draws.size());
     for (const SeedResult& d : draws)
-      if (!d.converged) std::printf("%s seed %lld left out", held < static_cast<int>(draws.size()) ? ";" : "", d.seed);
+      if (!d.converged)
+        std::printf("%s seed %lld left out", held < static_cast<int>(draws.size()) ? ";" : "",
+                    d.seed);
     std::printf("\n");
     if (settings.empty()) {  // no summary: an older one in OUT must not stand in for it
       fs::remove(fs::path(out) / "runtime_error_summary.csv");
@@ -641,22 +692,25 @@ int main(int argc, char** argv) {
     } else {
       write_summary_csv(fs::path(out) / "runtime_error_summary.csv", settings);
       write_plot(out, steps, title(settings.front().seeds), mark);
-      std::printf("%10s %8s %8s %6s %14s %13s %9s %14s %13s %13s %16s %15s\n", "remesh", "edge_mm", "step_ms",
-                  "draws", "median_wall_s", "median_cpu_s", "max_vert", "median_rms_mm", "worst_rms_mm",
-                  "worst_max_mm", "median_shape_mm", "worst_shape_mm");
+      std::printf("%10s %8s %8s %6s %14s %13s %9s %14s %13s %13s %16s %15s\n", "remesh", "edge_mm",
+                  "step_ms", "draws", "median_wall_s", "median_cpu_s", "max_vert", "median_rms_mm",
+                  "worst_rms_mm", "worst_max_mm", "median_shape_mm", "worst_shape_mm");
       for (const Aggregate& a : settings)
-        std::printf("%10s %8g %8g %6d %14.2f %13.2f %9.0f %14.3f %13.3f %13.3f %16.3f %15.3f\n", a.remesh.c_str(),
-                    a.edge_mm, a.step_ms, a.draws, a.median_wall, a.median_cpu, a.median_vertices_max,
-                    1e3 * a.median_rms, 1e3 * a.worst_rms, 1e3 * a.worst_max, 1e3 * a.median_rms_aligned,
-                    1e3 * a.worst_rms_aligned);
-      std::printf("\nPareto front (no other setting is both faster and more accurate, worst RMS over the draws):\n");
+        std::printf("%10s %8g %8g %6d %14.2f %13.2f %9.0f %14.3f %13.3f %13.3f %16.3f %15.3f\n",
+                    a.remesh.c_str(), a.edge_mm, a.step_ms, a.draws, a.median_wall, a.median_cpu,
+                    a.median_vertices_max, 1e3 * a.median_rms, 1e3 * a.worst_rms, 1e3 * a.worst_max,
+                    1e3 * a.median_rms_aligned, 1e3 * a.worst_rms_aligned);
+      std::printf(
+          "\nPareto front (no other setting is both faster and more accurate, worst RMS over the "
+          "draws):\n");
       for (const Aggregate& a : settings) {
         const bool beaten = std::any_of(settings.begin(), settings.end(), [&](const Aggregate& o) {
           return o.median_cpu < a.median_cpu && o.worst_rms < a.worst_rms;
         });
         if (!beaten)
-          std::printf("  %s, step %g ms: CPU %.2f s, worst RMS %.3f mm, worst max %.3f mm\n", describe(a).c_str(),
-                      a.step_ms, a.median_cpu, 1e3 * a.worst_rms, 1e3 * a.worst_max);
+          std::printf("  %s, step %g ms: CPU %.2f s, worst RMS %.3f mm, worst max %.3f mm\n",
+                      describe(a).c_str(), a.step_ms, a.median_cpu, 1e3 * a.worst_rms,
+                      1e3 * a.worst_max);
       }
     }
     const Aggregate* best = nullptr;
@@ -666,15 +720,20 @@ int main(int argc, char** argv) {
     for (const SeedResult& d : draws)
       if (d.converged) ref_walls.push_back(d.reference_wall);
     if (best)
-      std::printf("cheapest setting with RMS error <= %g mm on every draw: %s, step %g ms (median CPU %.2f s, wall "
-                  "%.2f s, worst RMS %.3f mm, worst max %.3f mm; %.1fx less wall time than the references' median)\n",
-                  target, describe(*best).c_str(), best->step_ms, best->median_cpu, best->median_wall,
-                  1e3 * best->worst_rms, 1e3 * best->worst_max, median(ref_walls) / best->median_wall);
+      std::printf(
+          "cheapest setting with RMS error <= %g mm on every draw: %s, step %g ms (median CPU %.2f "
+          "s, wall "
+          "%.2f s, worst RMS %.3f mm, worst max %.3f mm; %.1fx less wall time than the references' "
+          "median)\n",
+          target, describe(*best).c_str(), best->step_ms, best->median_cpu, best->median_wall,
+          1e3 * best->worst_rms, 1e3 * best->worst_max, median(ref_walls) / best->median_wall);
     else if (held > 0)
       std::printf("no setting of the sweep reaches RMS error <= %g mm on every draw\n", target);
     else
-      std::printf("no setting recommended: every draw's reference moves by more than %g mm RMS under refinement\n",
-                  target);
+      std::printf(
+          "no setting recommended: every draw's reference moves by more than %g mm RMS under "
+          "refinement\n",
+          target);
     std::printf("wrote %s/runtime_error.csv%s (%.1f s in all)\n", out.c_str(),
                 settings.empty() ? "" : ", runtime_error_summary.csv and runtime_error.png",
                 std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());

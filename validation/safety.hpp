@@ -40,7 +40,8 @@ inline ObstacleGaps obstacle_gaps(const simulation::Scene& scene, const simulati
 /// gap to the ground or an obstacle that is not positive, a self-intersection, a principal
 /// stretch above 1 + strain_limit, or one below 1 - compression_limit when the scene sets that
 /// limit.
-inline std::string safety_verdict(const simulation::Scene& scene, const simulation::RunQuality& q, bool finite) {
+inline std::string safety_verdict(const simulation::Scene& scene, const simulation::RunQuality& q,
+                                  bool finite) {
   const ObstacleGaps g = obstacle_gaps(scene, q);
   if (!finite) return "FAIL nan";
   if (!(g.obstacles > 0) || !(g.ground > 0)) return "FAIL penetration";

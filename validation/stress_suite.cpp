@@ -9,12 +9,11 @@
 //   strain     largest principal stretch <= 1 + strain limit at every step;
 //   self       zero intersecting triangle pairs at the end (exact predicates);
 //   energy     the mechanical energy (kinetic + gravity + stretching + bending) never exceeds
-//              its value after the first step by more than 0.1% of the energy scale m |g| (z0 + L) of the
-//              case: the scenes have no driven handles or moving obstacles (or are measured only
-//              once these hold still), so nothing does
-//              work on the sheet, contact and friction only take energy out, and backward Euler
-//              dissipates; the tolerance covers the Newton stopping test (at 1e-4 m/s the
-//              energy error per step is far below it).
+//              its value after the first step by more than 0.1% of the energy scale m |g| (z0 + L)
+//              of the case: the scenes have no driven handles or moving obstacles (or are measured
+//              only once these hold still), so nothing does work on the sheet, contact and friction
+//              only take energy out, and backward Euler dissipates; the tolerance covers the Newton
+//              stopping test (at 1e-4 m/s the energy error per step is far below it).
 // With --remesh every case remeshes (remesh.size_min half the case's edge, size_max four times
 // it): the face check follows the changing mesh, every kept pass was checked exactly by the run
 // for self-intersection and stretch (a pass that fails is undone and counted), and the energy
@@ -23,8 +22,9 @@
 // turns remesh.refuse_thin_splits on as well.
 // A case that cannot run yet is listed as not run, with the reason (none today).
 // Exit status 1 when a case fails.
-#include <CLI/CLI.hpp>
+#include <unistd.h>
 
+#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cctype>
 #include <chrono>
@@ -37,7 +37,6 @@
 #include <set>
 #include <sstream>
 #include <string>
-#include <unistd.h>
 #include <vector>
 
 #include "collision/collider_factory.hpp"
@@ -60,7 +59,7 @@ constexpr double INF = std::numeric_limits<double>::infinity();
 
 struct Case {
   std::string name;
-  std::string what;            ///< one line: what is stressed
+  std::string what;  ///< one line: what is stressed
   ps::Scene scene;
   std::string not_run_reason;  ///< non-empty: listed, not run
   /// Time from which no external work is done (handles at rest) [s]: energy growth is
@@ -76,8 +75,8 @@ struct Outcome {
   double min_face_distance = INF;    ///< [m], non-planar obstacles
   double max_stretch = 1.0;
   int self_intersections = -1;
-  double energy_growth = 0.0;        ///< max_k E_k - E_0 [J]
-  double energy_scale = 0.0;         ///< m |g| (z0 + L) [J]
+  double energy_growth = 0.0;  ///< max_k E_k - E_0 [J]
+  double energy_scale = 0.0;   ///< m |g| (z0 + L) [J]
   double seconds = 0.0;
   int steps = 0;
   // With remeshing:
@@ -205,13 +204,16 @@ std::vector<Case> make_cases(const fs::path& work) {
     const fs::path path = work / "slivers.obj";
     Eigen::MatrixX3d P(X.rows(), 3);
     P << X, Eigen::VectorXd::Constant(X.rows(), 0.01);  // world positions: 1 cm above the ground
-    rm::write_sheet_file(path.string(), slivers, P, Eigen::MatrixX3d::Zero(X.rows(), 3), o.width, o.height);
+    rm::write_sheet_file(path.string(), slivers, P, Eigen::MatrixX3d::Zero(X.rows(), 3), o.width,
+                         o.height);
     ps::Scene s = drop_scene(0.01, 9.8, 0.3, 5e-3);
     s.sheet.mesh_path = path.string();  // starts where the file puts it
-    cases.push_back({"slivers aspect 0.01", "a row of triangles of aspect ratio 0.01, drop 1 cm", s, ""});
+    cases.push_back(
+        {"slivers aspect 0.01", "a row of triangles of aspect ratio 0.01, drop 1 cm", s, ""});
   }
   // 6. Gravity 5000 m/s^2 onto the ground (impact at 10 m/s).
-  cases.push_back({"gravity 5000", "drop 1 cm at 5000 m/s^2", drop_scene(0.01, 5000.0, 0.02, 1e-3), ""});
+  cases.push_back(
+      {"gravity 5000", "drop 1 cm at 5000 m/s^2", drop_scene(0.01, 5000.0, 0.02, 1e-3), ""});
   // 7. A 180 degree fold with self-contact (validation/fold_scene.hpp).
   cases.push_back({"fold 180 deg", "right edge carried over onto the left half, self-contact",
                    papersim::validation::fold_180_scene(), "", 0.5});
@@ -248,7 +250,8 @@ Outcome run_case(const Case& c, const std::string& keep) {
   std::vector<Eigen::Vector3i> faces;
   double mass = c.scene.sheet.material.density * c.scene.sheet.width * c.scene.sheet.height;
   out.energy_scale =
-      mass * c.scene.gravity.norm() * (c.scene.sheet.position.z() + std::max(c.scene.sheet.width, c.scene.sheet.height));
+      mass * c.scene.gravity.norm() *
+      (c.scene.sheet.position.z() + std::max(c.scene.sheet.width, c.scene.sheet.height));
   pc::TriangleSdfParams params;
   params.cutoff = 1e-3;
   params.resolution = 2.5e-4;
@@ -270,14 +273,18 @@ Outcome run_case(const Case& c, const std::string& keep) {
       e_max = std::max(e_max, e);
     }
     out.max_stretch = std::max(out.max_stretch, r.max_stretch);
-    for (double d : r.obstacle_distance) out.min_vertex_distance = std::min(out.min_vertex_distance, d);
+    for (double d : r.obstacle_distance)
+      out.min_vertex_distance = std::min(out.min_vertex_distance, d);
     if (solids.empty() || !s.positions.allFinite()) return;
     faces.clear();  // the mesh of this state (remeshing changes it)
-    for (int f = 0; f < r.mesh->num_faces(); ++f) faces.emplace_back(r.mesh->faces().row(f).transpose());
+    for (int f = 0; f < r.mesh->num_faces(); ++f)
+      faces.emplace_back(r.mesh->faces().row(f).transpose());
     std::vector<Eigen::Vector3d> x(static_cast<size_t>(s.num_vertices()));
-    for (int v = 0; v < s.num_vertices(); ++v) x[static_cast<size_t>(v)] = s.positions.segment<3>(3 * v);
+    for (int v = 0; v < s.num_vertices(); ++v)
+      x[static_cast<size_t>(v)] = s.positions.segment<3>(3 * v);
     for (const auto& solid : solids)
-      for (const auto& hit : pc::mesh_edges_faces_vs_sdf(*solid, x, faces, solid->motion.pose(s.time), params))
+      for (const auto& hit :
+           pc::mesh_edges_faces_vs_sdf(*solid, x, faces, solid->motion.pose(s.time), params))
         out.min_face_distance = std::min(out.min_face_distance, hit.result.distance);
   };
   try {
@@ -292,7 +299,8 @@ Outcome run_case(const Case& c, const std::string& keep) {
       out.max_energy_jump = r.remesh->max_energy_jump;
     }
     if (r.state.positions.allFinite())
-      out.self_intersections = pc::count_self_intersections(r.state.positions_matrix(), r.mesh.faces());
+      out.self_intersections =
+          pc::count_self_intersections(r.state.positions_matrix(), r.mesh.faces());
   } catch (const std::exception& e) {
     out.error = e.what();
   }
@@ -304,9 +312,10 @@ Outcome run_case(const Case& c, const std::string& keep) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"papersim_stress_suite: the stability stress cases of VALIDATION.md section 8; every case "
-               "reports NaN, penetration (vertices and faces), strain, self-intersection and energy growth. "
-               "Exit status 1 when a case fails."};
+  CLI::App app{
+      "papersim_stress_suite: the stability stress cases of VALIDATION.md section 8; every case "
+      "reports NaN, penetration (vertices and faces), strain, self-intersection and energy growth. "
+      "Exit status 1 when a case fails."};
   std::string csv;
   std::vector<std::string> only;
   app.add_option("--csv", csv, "also write the rows as CSV to this file");
@@ -314,14 +323,17 @@ int main(int argc, char** argv) {
   std::string keep;
   app.add_option("--keep", keep, "write each case's outputs (sheet.obj, meta.json) to KEEP/<case>");
   bool remesh = false;
-  app.add_flag("--remesh", remesh,
-               "every case remeshes (remesh.size_min half its edge, size_max four times it); reports the "
-               "vertices, the passes kept and undone and the largest energy jump across a pass");
+  app.add_flag(
+      "--remesh", remesh,
+      "every case remeshes (remesh.size_min half its edge, size_max four times it); reports the "
+      "vertices, the passes kept and undone and the largest energy jump across a pass");
   bool thin = false;
-  app.add_flag("--refuse-thin-splits", thin, "with --remesh: remesh.refuse_thin_splits on in every case")
+  app.add_flag("--refuse-thin-splits", thin,
+               "with --remesh: remesh.refuse_thin_splits on in every case")
       ->needs("--remesh");
   CLI11_PARSE(app, argc, argv);
-  const fs::path work = fs::temp_directory_path() / ("papersim_stress_" + std::to_string(::getpid()));
+  const fs::path work =
+      fs::temp_directory_path() / ("papersim_stress_" + std::to_string(::getpid()));
   fs::create_directories(work);
   std::vector<Case> cases;
   try {
@@ -334,36 +346,45 @@ int main(int argc, char** argv) {
   }
   const auto wanted = [&](const std::string& name) {
     if (only.empty()) return true;
-    return std::any_of(only.begin(), only.end(), [&](const std::string& p) { return name.rfind(p, 0) == 0; });
+    return std::any_of(only.begin(), only.end(),
+                       [&](const std::string& p) { return name.rfind(p, 0) == 0; });
   };
   for (const std::string& p : only)
-    if (std::none_of(cases.begin(), cases.end(), [&](const Case& c) { return c.name.rfind(p, 0) == 0; })) {
+    if (std::none_of(cases.begin(), cases.end(),
+                     [&](const Case& c) { return c.name.rfind(p, 0) == 0; })) {
       std::string names;
       for (const Case& c : cases) names += (names.empty() ? "" : ", ") + c.name;
-      std::fprintf(stderr, "papersim_stress_suite: --only '%s' starts no case's name (the cases: %s)\n", p.c_str(),
-                   names.c_str());
+      std::fprintf(stderr,
+                   "papersim_stress_suite: --only '%s' starts no case's name (the cases: %s)\n",
+                   p.c_str(), names.c_str());
       fs::remove_all(work);
       return 2;
     }
-  std::printf("%-22s %-5s %-6s %-22s %-22s %-18s %-8s %-20s %7s %s\n", "case", "steps", "nan", "vertices min d [m]",
-              "faces min d [m]", "strain max s1", "self", "energy growth/scale", "wall s", "verdict");
+  std::printf("%-22s %-5s %-6s %-22s %-22s %-18s %-8s %-20s %7s %s\n", "case", "steps", "nan",
+              "vertices min d [m]", "faces min d [m]", "strain max s1", "self",
+              "energy growth/scale", "wall s", "verdict");
   if (remesh)
-    std::printf("%-22s remeshed: vertices start / largest / end, passes kept (undone), largest energy jump across "
-                "a pass / scale\n", "");
+    std::printf(
+        "%-22s remeshed: vertices start / largest / end, passes kept (undone), largest energy jump "
+        "across "
+        "a pass / scale\n",
+        "");
   std::unique_ptr<papersim::validation::StudyTable> table;
   try {
     table = std::make_unique<papersim::validation::StudyTable>(
-        csv, std::string("case,what,steps,finite,min_vertex_distance,min_face_distance,max_stretch,"
-                         "self_intersections,energy_growth_ratio,seconds,verdict,failed_checks") +
-                 (remesh ? ",vertices_start,vertices_max,vertices_end,remesh_passes,remesh_rollbacks,"
-                           "max_energy_jump_ratio"
-                         : ""));
+        csv,
+        std::string("case,what,steps,finite,min_vertex_distance,min_face_distance,max_stretch,"
+                    "self_intersections,energy_growth_ratio,seconds,verdict,failed_checks") +
+            (remesh ? ",vertices_start,vertices_max,vertices_end,remesh_passes,remesh_rollbacks,"
+                      "max_energy_jump_ratio"
+                    : ""));
   } catch (const std::exception& e) {
     std::fprintf(stderr, "papersim_stress_suite: %s\n", e.what());
     fs::remove_all(work);
     return 5;
   }
-  const auto add_row = [&](const std::string& row) {  // false (and said) when the CSV cannot be written
+  // false (and said) when the CSV cannot be written
+  const auto add_row = [&](const std::string& row) {
     try {
       table->add(row);
       return true;
@@ -378,7 +399,8 @@ int main(int argc, char** argv) {
     if (!wanted(c.name)) continue;
     if (!c.not_run_reason.empty()) {
       std::printf("%-22s not run: %s\n", c.name.c_str(), c.not_run_reason.c_str());
-      if (!add_row('"' + c.name + "\",\"" + c.what + "\",,,,,,,,,not run,\"" + c.not_run_reason + '"')) {
+      if (!add_row('"' + c.name + "\",\"" + c.what + "\",,,,,,,,,not run,\"" + c.not_run_reason +
+                   '"')) {
         fs::remove_all(work);
         return 5;
       }
@@ -401,25 +423,28 @@ int main(int argc, char** argv) {
     for (const auto& f : failed) reasons += (reasons.empty() ? "" : "; ") + f;
     failures += !failed.empty();
     char faces_text[32];
-    if (std::isinf(o.min_face_distance)) std::snprintf(faces_text, sizeof(faces_text), "-");
-    else std::snprintf(faces_text, sizeof(faces_text), "%.3g", o.min_face_distance);
-    std::printf("%-22s %-5d %-6s %-22.3g %-22s %-18.6f %-8d %-20.2e %7.1f %s%s%s\n", c.name.c_str(), o.steps,
-                o.finite ? "none" : "NaN", o.min_vertex_distance, faces_text, o.max_stretch, o.self_intersections,
-                growth, o.seconds, verdict.c_str(), reasons.empty() ? "" : ": ", reasons.c_str());
+    if (std::isinf(o.min_face_distance))
+      std::snprintf(faces_text, sizeof(faces_text), "-");
+    else
+      std::snprintf(faces_text, sizeof(faces_text), "%.3g", o.min_face_distance);
+    std::printf("%-22s %-5d %-6s %-22.3g %-22s %-18.6f %-8d %-20.2e %7.1f %s%s%s\n", c.name.c_str(),
+                o.steps, o.finite ? "none" : "NaN", o.min_vertex_distance, faces_text,
+                o.max_stretch, o.self_intersections, growth, o.seconds, verdict.c_str(),
+                reasons.empty() ? "" : ": ", reasons.c_str());
     const double jump = o.energy_scale > 0 ? o.max_energy_jump / o.energy_scale : 0.0;
     if (remesh)
-      std::printf("%-22s remeshed: %d / %d / %d vertices, %d passes (%d undone), jump %.2e\n", "", o.vertices_start,
-                  o.vertices_max, o.vertices_end, o.passes, o.rollbacks, jump);
+      std::printf("%-22s remeshed: %d / %d / %d vertices, %d passes (%d undone), jump %.2e\n", "",
+                  o.vertices_start, o.vertices_max, o.vertices_end, o.passes, o.rollbacks, jump);
     std::fflush(stdout);
     if (table->enabled()) {
       std::ostringstream row;
       row << '"' << c.name << "\",\"" << c.what << "\"," << o.steps << ',' << o.finite << ','
           << o.min_vertex_distance << ',' << o.min_face_distance << ',' << o.max_stretch << ','
-          << o.self_intersections << ',' << growth << ',' << o.seconds << ',' << verdict << ",\"" << reasons
-          << '"';
+          << o.self_intersections << ',' << growth << ',' << o.seconds << ',' << verdict << ",\""
+          << reasons << '"';
       if (remesh)
-        row << ',' << o.vertices_start << ',' << o.vertices_max << ',' << o.vertices_end << ',' << o.passes << ','
-            << o.rollbacks << ',' << jump;
+        row << ',' << o.vertices_start << ',' << o.vertices_max << ',' << o.vertices_end << ','
+            << o.passes << ',' << o.rollbacks << ',' << jump;
       if (!add_row(row.str())) {
         fs::remove_all(work);
         return 5;

@@ -1,10 +1,5 @@
 /// Throughput of collider queries (distance + gradient) and level-set build times.
 /// Run: build-collision/collision/collider_bench [--benchmark_filter=...]
-#include "collision/collider_factory.hpp"
-#include "collision/level_set_collider.hpp"
-#include "collision/shapes.hpp"
-#include "collision/triangle_mesh.hpp"
-
 #include <benchmark/benchmark.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -14,13 +9,18 @@
 #include <random>
 #include <vector>
 
+#include "collision/collider_factory.hpp"
+#include "collision/level_set_collider.hpp"
+#include "collision/shapes.hpp"
+#include "collision/triangle_mesh.hpp"
+
 namespace pc = papersim::collision;
 
 namespace {
 
 enum Case { PLANE, ANALYTIC_SPHERE, VDB_SPHERE, ANALYTIC_GABLE, VDB_GABLE, MESH };
-const char* const CASE_NAMES[] = {"plane", "analytic_sphere", "vdb_sphere",
-                                  "analytic_gable", "vdb_gable", "mesh_icosphere"};
+const char* const CASE_NAMES[] = {"plane",          "analytic_sphere", "vdb_sphere",
+                                  "analytic_gable", "vdb_gable",       "mesh_icosphere"};
 
 pc::Shape sphere_shape() {
   pc::Shape s;
@@ -41,13 +41,23 @@ pc::Shape gable_shape() {
 pc::TriangleMesh icosphere(double r, int levels) {
   const double t = (1.0 + std::sqrt(5.0)) / 2.0;
   pc::TriangleMesh m;
-  for (const auto& v : std::vector<Eigen::Vector3d>{
-           {-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
-           {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}})
+  for (const auto& v : std::vector<Eigen::Vector3d>{{-1, t, 0},
+                                                    {1, t, 0},
+                                                    {-1, -t, 0},
+                                                    {1, -t, 0},
+                                                    {0, -1, t},
+                                                    {0, 1, t},
+                                                    {0, -1, -t},
+                                                    {0, 1, -t},
+                                                    {t, 0, -1},
+                                                    {t, 0, 1},
+                                                    {-t, 0, -1},
+                                                    {-t, 0, 1}})
     m.vertices.push_back(v.normalized());
-  m.triangles = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
-                 {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
-                 {3, 8, 9},  {4, 9, 5},  {2, 4, 11},  {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
+  m.triangles = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11},
+                 {1, 5, 9},  {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
+                 {3, 9, 4},  {3, 4, 2},  {3, 2, 6},   {3, 6, 8},  {3, 8, 9},
+                 {4, 9, 5},  {2, 4, 11}, {6, 2, 10},  {8, 6, 7},  {9, 8, 1}};
   for (int l = 0; l < levels; ++l) {
     std::map<std::pair<int, int>, int> mid;
     auto midpoint = [&](int a, int b) {
@@ -70,12 +80,18 @@ pc::TriangleMesh icosphere(double r, int levels) {
 
 std::unique_ptr<pc::Collider> make(Case c) {
   switch (c) {
-    case PLANE: return std::make_unique<pc::PlaneCollider>();
-    case ANALYTIC_SPHERE: return std::make_unique<pc::AnalyticCollider>(sphere_shape());
-    case VDB_SPHERE: return pc::LevelSetCollider::from_shape(sphere_shape());
-    case ANALYTIC_GABLE: return std::make_unique<pc::AnalyticCollider>(gable_shape());
-    case VDB_GABLE: return pc::LevelSetCollider::from_shape(gable_shape());
-    case MESH: return pc::LevelSetCollider::from_mesh(icosphere(0.05, 5));
+    case PLANE:
+      return std::make_unique<pc::PlaneCollider>();
+    case ANALYTIC_SPHERE:
+      return std::make_unique<pc::AnalyticCollider>(sphere_shape());
+    case VDB_SPHERE:
+      return pc::LevelSetCollider::from_shape(sphere_shape());
+    case ANALYTIC_GABLE:
+      return std::make_unique<pc::AnalyticCollider>(gable_shape());
+    case VDB_GABLE:
+      return pc::LevelSetCollider::from_shape(gable_shape());
+    case MESH:
+      return pc::LevelSetCollider::from_mesh(icosphere(0.05, 5));
   }
   return nullptr;
 }
@@ -90,7 +106,8 @@ std::vector<Eigen::Vector3d> query_points(const pc::Collider& c, std::size_t n) 
   std::uniform_real_distribution<double> u(0.0, 1.0);
   std::vector<Eigen::Vector3d> points;
   while (points.size() < n) {
-    const Eigen::Vector3d p = b.lo + (b.hi - b.lo).cwiseProduct(Eigen::Vector3d(u(rng), u(rng), u(rng)));
+    const Eigen::Vector3d p =
+        b.lo + (b.hi - b.lo).cwiseProduct(Eigen::Vector3d(u(rng), u(rng), u(rng)));
     const double d = c.distance(p, 0.0);
     if (std::abs(d) < 3e-3 || points.size() % 5 == 0) points.push_back(p);
   }
@@ -183,8 +200,13 @@ void build_mesh(benchmark::State& state) {
 BENCHMARK(query_single)->DenseRange(PLANE, MESH);
 BENCHMARK(query_single_with_time)->Arg(PLANE)->Arg(VDB_SPHERE);
 BENCHMARK(query_parallel)->DenseRange(PLANE, MESH)->UseRealTime();
-BENCHMARK(build_shape)->Args({0, 10})->Args({0, 5})->Args({1, 10})->Args({1, 5})
-    ->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(build_shape)
+    ->Args({0, 10})
+    ->Args({0, 5})
+    ->Args({1, 10})
+    ->Args({1, 5})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 BENCHMARK(build_mesh)->Arg(3)->Arg(5)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 BENCHMARK_MAIN();

@@ -32,16 +32,20 @@ inline QualitySettings reference_quality() {
 /// One line describing the settings of the lit passes.
 inline std::string describe(const QualitySettings& q) {
   char buf[256];
-  std::snprintf(buf, sizeof buf, "radiosity %s count %d error %.2g, area %dx%d adaptive %d%s, AA %s %.2g depth %d, %d band(s)",
-                q.radiosity ? "on" : "off", q.radiosity_count, q.radiosity_error, q.area_samples, q.area_samples,
-                q.area_adaptive, q.area_jitter ? " jitter" : "", q.antialias ? "on" : "off", q.antialias_threshold, q.antialias_depth, q.bands);
+  std::snprintf(
+      buf, sizeof buf,
+      "radiosity %s count %d error %.2g, area %dx%d adaptive %d%s, AA %s %.2g depth %d, %d band(s)",
+      q.radiosity ? "on" : "off", q.radiosity_count, q.radiosity_error, q.area_samples,
+      q.area_samples, q.area_adaptive, q.area_jitter ? " jitter" : "", q.antialias ? "on" : "off",
+      q.antialias_threshold, q.antialias_depth, q.bands);
   return buf;
 }
 
 /// PSNR [dB] of two images of the same size, values in [0, 1], every channel.
 inline double psnr(const ImageF& a, const ImageF& b) {
   double se = 0;
-  for (std::size_t i = 0; i < a.data.size(); ++i) se += (a.data[i] - b.data[i]) * (a.data[i] - b.data[i]);
+  for (std::size_t i = 0; i < a.data.size(); ++i)
+    se += (a.data[i] - b.data[i]) * (a.data[i] - b.data[i]);
   return 10 * std::log10(1.0 / (se / static_cast<double>(a.data.size())));
 }
 

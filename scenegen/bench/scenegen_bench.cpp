@@ -26,22 +26,21 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
-#include <nlohmann/json.hpp>
-
+#include "bench_args.hpp"
+#include "image_error.hpp"
 #include "scenegen/decode.hpp"
+#include "scenegen/edge_lift.hpp"
 #include "scenegen/example_sheets.hpp"
 #include "scenegen/geometry.hpp"
 #include "scenegen/image_io.hpp"
 #include "scenegen/job.hpp"
 #include "scenegen/meta.hpp"
 #include "scenegen/random.hpp"
-#include "scenegen/edge_lift.hpp"
 #include "scenegen/smooth_surface.hpp"
-#include "bench_args.hpp"
-#include "image_error.hpp"
 
 namespace fs = std::filesystem;
 namespace sg = papersim::scenegen;
@@ -70,10 +69,12 @@ Timing run_command(const std::vector<std::string>& argv) {
   int status = 0;
   rusage ru{};
   if (wait4(pid, &status, 0, &ru) != pid || !WIFEXITED(status) || WEXITSTATUS(status) != 0)
-    throw std::runtime_error("'" + argv[0] + " " + argv[1] + "' failed (status " + std::to_string(status) + ")");
+    throw std::runtime_error("'" + argv[0] + " " + argv[1] + "' failed (status " +
+                             std::to_string(status) + ")");
   Timing t;
   t.wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  t.cpu = ru.ru_utime.tv_sec + ru.ru_stime.tv_sec + 1e-6 * (ru.ru_utime.tv_usec + ru.ru_stime.tv_usec);
+  t.cpu =
+      ru.ru_utime.tv_sec + ru.ru_stime.tv_sec + 1e-6 * (ru.ru_utime.tv_usec + ru.ru_stime.tv_usec);
   return t;
 }
 
@@ -111,7 +112,8 @@ void exactness(const fs::path& dir, const std::string& mesh_path) {
   surface.level = meta["surface"]["level"];
   const auto& st = meta["stage"];
   const sg::SheetMesh mesh =
-      sg::rendered_surface(sg::read_sheet_obj(mesh_path), Eigen::Vector3d(st["origin"][0], st["origin"][1], st["origin"][2]),
+      sg::rendered_surface(sg::read_sheet_obj(mesh_path),
+                           Eigen::Vector3d(st["origin"][0], st["origin"][1], st["origin"][2]),
                            Eigen::Vector3d(st["up"][0], st["up"][1], st["up"][2]), surface,
                            sg::edge_lift_from_json(meta["surface"]))
           .surface;
@@ -127,15 +129,24 @@ void exactness(const fs::path& dir, const std::string& mesh_path) {
   sg::Rng rng(7);
   double mw = 0, mp = 0, ml = 0;
   for (int i = 0; i < 1000; ++i) {
-    const auto [x, y] = px[static_cast<std::size_t>(rng.randint(0, static_cast<int>(px.size()) - 1))];
+    const auto [x, y] =
+        px[static_cast<std::size_t>(rng.randint(0, static_cast<int>(px.size()) - 1))];
     const auto p = loc.world_point({uv.at(x, y, 0), uv.at(x, y, 1)});
-    if (!p) { std::printf("  uv outside the sheet at %d %d\n", x, y); continue; }
-    mw = std::max(mw, (*p - Eigen::Vector3d(xyz.at(x, y, 0), xyz.at(x, y, 1), xyz.at(x, y, 2))).norm());
+    if (!p) {
+      std::printf("  uv outside the sheet at %d %d\n", x, y);
+      continue;
+    }
+    mw = std::max(mw,
+                  (*p - Eigen::Vector3d(xyz.at(x, y, 0), xyz.at(x, y, 1), xyz.at(x, y, 2))).norm());
     mp = std::max(mp, (cam.project(*p) - Eigen::Vector2d(x + 0.5, y + 0.5)).norm());
-    ml = std::max(ml, std::abs(Eigen::Vector3d(nrm.at(x, y, 0), nrm.at(x, y, 1), nrm.at(x, y, 2)).norm() - 1));
+    ml = std::max(
+        ml,
+        std::abs(Eigen::Vector3d(nrm.at(x, y, 0), nrm.at(x, y, 1), nrm.at(x, y, 2)).norm() - 1));
   }
-  std::printf("exactness (1000 random mask pixels of %zu): max |world(uv) - coords| = %.3g m, "
-              "max reprojection = %.3g px, max ||n| - 1| = %.3g\n", px.size(), mw, mp, ml);
+  std::printf(
+      "exactness (1000 random mask pixels of %zu): max |world(uv) - coords| = %.3g m, "
+      "max reprojection = %.3g px, max ||n| - 1| = %.3g\n",
+      px.size(), mw, mp, ml);
   // Backward map on the rendered albedo against the flat page (built-in document).
   const sg::ImageF albedo = sg::read_png((dir / "albedo.png").string());
   const sg::ImageF mask = sg::read_png((dir / "mask.png").string());
@@ -162,8 +173,9 @@ void exactness(const fs::path& dir, const std::string& mesh_path) {
         ++n;
       }
     }
-  std::printf("backward map %dx%d: %ld visible points, PSNR(unwarped albedo, flat page) = %.2f dB\n",
-              back.width, back.height, visible, 10 * std::log10(1.0 / (se / n)));
+  std::printf(
+      "backward map %dx%d: %ld visible points, PSNR(unwarped albedo, flat page) = %.2f dB\n",
+      back.width, back.height, visible, 10 * std::log10(1.0 / (se / n)));
 }
 
 struct Args {
@@ -192,21 +204,38 @@ Args parse(int argc, char** argv) {
   a.scenegen = (fs::absolute(fs::path(argv[0])).parent_path() / "scenegen").string();
   for (int i = 1; i < argc; ++i) {
     const std::string k = argv[i];
-    if (k == "--no-reference") { a.reference = false; continue; }
-    if (k == "--help" || k == "-h") { a.help = true; return a; }
+    if (k == "--no-reference") {
+      a.reference = false;
+      continue;
+    }
+    if (k == "--help" || k == "-h") {
+      a.help = true;
+      return a;
+    }
     if (i + 1 >= argc) throw std::runtime_error("option '" + k + "' needs a value");
     const char* v = argv[++i];
-    if (k == "--size") sg::bench::image_size(k, v, a.width, a.height);
-    else if (k == "--seed") a.seed = sg::bench::whole_number(k, v, 0, 9223372036854775807ULL);
-    else if (k == "--runs") a.runs = static_cast<int>(sg::bench::whole_number(k, v, 1, 1000));
-    else if (k == "--mesh") a.kind = v;
-    else if (k == "--keep") a.keep = v;
-    else if (k == "--baseline") a.baseline = fs::absolute(v).string();
-    else if (k == "--scenegen") a.scenegen = fs::absolute(v).string();
-    else throw std::runtime_error("unknown option '" + k + "'");
+    if (k == "--size")
+      sg::bench::image_size(k, v, a.width, a.height);
+    else if (k == "--seed")
+      a.seed = sg::bench::whole_number(k, v, 0, 9223372036854775807ULL);
+    else if (k == "--runs")
+      a.runs = static_cast<int>(sg::bench::whole_number(k, v, 1, 1000));
+    else if (k == "--mesh")
+      a.kind = v;
+    else if (k == "--keep")
+      a.keep = v;
+    else if (k == "--baseline")
+      a.baseline = fs::absolute(v).string();
+    else if (k == "--scenegen")
+      a.scenegen = fs::absolute(v).string();
+    else
+      throw std::runtime_error("unknown option '" + k + "'");
   }
-  if (a.baseline.empty()) throw std::runtime_error("--baseline EXE is required (a scenegen built from the baseline commit)");
-  for (const auto& [option, exe] : {std::pair<std::string, std::string>{"--baseline", a.baseline}, {"--scenegen", a.scenegen}})
+  if (a.baseline.empty())
+    throw std::runtime_error(
+        "--baseline EXE is required (a scenegen built from the baseline commit)");
+  for (const auto& [option, exe] :
+       {std::pair<std::string, std::string>{"--baseline", a.baseline}, {"--scenegen", a.scenegen}})
     if (!fs::is_regular_file(exe) || ::access(exe.c_str(), X_OK) != 0)
       throw std::runtime_error(option + " '" + exe + "' is not an executable file");
   return a;
@@ -252,14 +281,22 @@ int main(int argc, char** argv) {
     fs::remove_all(dir);
     fs::create_directories(dir);
     const std::string mesh = (dir / "sheet.obj").string();
-    { std::ofstream out(mesh); sg::write_sheet_obj(out, sg::make_example_sheet(a.kind)); }
-    std::printf("scenegen_bench: %s sheet, %dx%d, seed %llu, %d runs per configuration\n  baseline %s\n  new      %s\n",
-                a.kind.c_str(), a.width, a.height, static_cast<unsigned long long>(a.seed), a.runs,
-                a.baseline.c_str(), a.scenegen.c_str());
-    const std::vector<Config> configs = {{"baseline", a.baseline, -1}, {"new, level 2", a.scenegen, 2},
+    {
+      std::ofstream out(mesh);
+      sg::write_sheet_obj(out, sg::make_example_sheet(a.kind));
+    }
+    std::printf(
+        "scenegen_bench: %s sheet, %dx%d, seed %llu, %d runs per configuration\n  baseline %s\n  "
+        "new      %s\n",
+        a.kind.c_str(), a.width, a.height, static_cast<unsigned long long>(a.seed), a.runs,
+        a.baseline.c_str(), a.scenegen.c_str());
+    const std::vector<Config> configs = {{"baseline", a.baseline, -1},
+                                         {"new, level 2", a.scenegen, 2},
                                          {"new, level 0", a.scenegen, 0}};
-    const std::vector<Mode> modes = {{"final", "final", "all"}, {"draft", "draft", "all"},
-                                     {"ground truth", "final", "albedo,uv,coords,normal,mask,backward"}};
+    const std::vector<Mode> modes = {
+        {"final", "final", "all"},
+        {"draft", "draft", "all"},
+        {"ground truth", "final", "albedo,uv,coords,normal,mask,backward"}};
     const std::string size = std::to_string(a.width) + "x" + std::to_string(a.height);
     std::map<std::string, sg::ImageF> photos;  // first final photo of each configuration
     for (const Mode& m : modes) {
@@ -270,35 +307,60 @@ int main(int argc, char** argv) {
         for (std::size_t c = 0; c < configs.size(); ++c) {
           const fs::path out = dir / ("run_" + std::to_string(c));
           fs::remove_all(out);
-          std::vector<std::string> cmd = {configs[c].exe, "render", mesh, "--out", out.string(), "--seed",
-                                          std::to_string(a.seed), "--size", size, "--quality", m.quality,
-                                          "--passes", m.passes, "--quiet"};
-          if (configs[c].level >= 0) { cmd.push_back("--subdivision"); cmd.push_back(std::to_string(configs[c].level)); }
+          std::vector<std::string> cmd = {configs[c].exe,
+                                          "render",
+                                          mesh,
+                                          "--out",
+                                          out.string(),
+                                          "--seed",
+                                          std::to_string(a.seed),
+                                          "--size",
+                                          size,
+                                          "--quality",
+                                          m.quality,
+                                          "--passes",
+                                          m.passes,
+                                          "--quiet"};
+          if (configs[c].level >= 0) {
+            cmd.push_back("--subdivision");
+            cmd.push_back(std::to_string(configs[c].level));
+          }
           t[c].push_back(run_command(cmd));
-          std::printf("  %-12s %-13s run %d: %6.2f s wall, %6.2f CPU-s\n", m.name.c_str(), configs[c].name.c_str(),
-                      r + 1, t[c].back().wall, t[c].back().cpu);
+          std::printf("  %-12s %-13s run %d: %6.2f s wall, %6.2f CPU-s\n", m.name.c_str(),
+                      configs[c].name.c_str(), r + 1, t[c].back().wall, t[c].back().cpu);
           std::fflush(stdout);
           auto bytes = sample_bytes(out);
           if (r == 0) {
             first[c] = std::move(bytes);
-            if (m.name == "final") photos[configs[c].name] = sg::read_png((out / "image.png").string());
+            if (m.name == "final")
+              photos[configs[c].name] = sg::read_png((out / "image.png").string());
             if (m.name == "final" && c == 1) {
               exactness(out, mesh);
-              if (!a.keep.empty()) { fs::remove_all(a.keep); fs::copy(out, a.keep, fs::copy_options::recursive); }
+              if (!a.keep.empty()) {
+                fs::remove_all(a.keep);
+                fs::copy(out, a.keep, fs::copy_options::recursive);
+              }
             }
           } else if (bytes != first[c]) {
             identical[c] = false;
           }
         }
       std::vector<double> w0, c0;
-      for (const Timing& x : t[0]) { w0.push_back(x.wall); c0.push_back(x.cpu); }
+      for (const Timing& x : t[0]) {
+        w0.push_back(x.wall);
+        c0.push_back(x.cpu);
+      }
       std::printf("%s sample, median of %d runs:\n", m.name.c_str(), a.runs);
       for (std::size_t c = 0; c < configs.size(); ++c) {
         std::vector<double> w, cpu;
-        for (const Timing& x : t[c]) { w.push_back(x.wall); cpu.push_back(x.cpu); }
-        std::printf("  %-13s wall %6.2f s (%.2fx baseline)  CPU %6.2f s (%.2fx)  runs identical: %s\n",
-                    configs[c].name.c_str(), median(w), median(w) / median(w0), median(cpu),
-                    median(cpu) / median(c0), a.runs > 1 ? (identical[c] ? "yes" : "NO") : "n/a");
+        for (const Timing& x : t[c]) {
+          w.push_back(x.wall);
+          cpu.push_back(x.cpu);
+        }
+        std::printf(
+            "  %-13s wall %6.2f s (%.2fx baseline)  CPU %6.2f s (%.2fx)  runs identical: %s\n",
+            configs[c].name.c_str(), median(w), median(w) / median(w0), median(cpu),
+            median(cpu) / median(c0), a.runs > 1 ? (identical[c] ? "yes" : "NO") : "n/a");
       }
       std::fflush(stdout);
     }
@@ -306,15 +368,19 @@ int main(int argc, char** argv) {
       // The reference is rendered by this program's own library (the same build as the default
       // --scenegen): the baseline's figure also holds every change of the scene since it
       // (draws, exposure, vignetting), not only its render settings.
-      std::printf("final photo against a converged reference of the same surface (%s), rendered by this build:\n",
-                  sg::bench::describe(sg::bench::reference_quality()).c_str());
-      const sg::ImageF ref2 = reference_photo(a, mesh, 2, dir), ref0 = reference_photo(a, mesh, 0, dir);
+      std::printf(
+          "final photo against a converged reference of the same surface (%s), rendered by this "
+          "build:\n",
+          sg::bench::describe(sg::bench::reference_quality()).c_str());
+      const sg::ImageF ref2 = reference_photo(a, mesh, 2, dir),
+                       ref0 = reference_photo(a, mesh, 0, dir);
       for (const Config& c : configs)
         for (int level : {2, 0}) {
           if (c.level >= 0 && c.level != level) continue;
           const sg::ImageF& ref = level == 2 ? ref2 : ref0;
-          std::printf("  %-13s vs reference level %d: PSNR %.2f dB, SSIM %.4f\n", c.name.c_str(), level,
-                      sg::bench::psnr(photos[c.name], ref), sg::bench::ssim(photos[c.name], ref));
+          std::printf("  %-13s vs reference level %d: PSNR %.2f dB, SSIM %.4f\n", c.name.c_str(),
+                      level, sg::bench::psnr(photos[c.name], ref),
+                      sg::bench::ssim(photos[c.name], ref));
         }
     }
     fs::remove_all(dir);

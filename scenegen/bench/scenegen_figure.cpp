@@ -12,8 +12,8 @@
 #include <string>
 #include <vector>
 
-#include "scenegen/image_io.hpp"
 #include "bench_args.hpp"
+#include "scenegen/image_io.hpp"
 
 namespace fs = std::filesystem;
 namespace sg = papersim::scenegen;
@@ -30,7 +30,8 @@ sg::ImageF shrink(const sg::ImageF& in, int n) {
       for (int c = 0; c < 3; ++c) {
         double s = 0;
         for (int j = 0; j < n; ++j)
-          for (int i = 0; i < n; ++i) s += in.at(x * n + i, y * n + j, std::min(c, in.channels - 1));
+          for (int i = 0; i < n; ++i)
+            s += in.at(x * n + i, y * n + j, std::min(c, in.channels - 1));
         out.at(x, y, c) = static_cast<float>(s / (n * n));
       }
   return out;
@@ -43,7 +44,8 @@ sg::ImageF grid(const std::vector<sg::ImageF>& panels, int columns) {
   sg::ImageF out(columns * w + (columns - 1) * GAP, rows * h + (rows - 1) * GAP, 3);
   std::fill(out.data.begin(), out.data.end(), 1.0f);
   for (std::size_t k = 0; k < panels.size(); ++k) {
-    const int x0 = static_cast<int>(k % columns) * (w + GAP), y0 = static_cast<int>(k / columns) * (h + GAP);
+    const int x0 = static_cast<int>(k % columns) * (w + GAP),
+              y0 = static_cast<int>(k / columns) * (h + GAP);
     for (int y = 0; y < std::min(h, panels[k].height); ++y)
       for (int x = 0; x < std::min(w, panels[k].width); ++x)
         for (int c = 0; c < 3; ++c) out.at(x0 + x, y0 + y, c) = panels[k].at(x, y, c);
@@ -57,22 +59,28 @@ sg::ImageF visualise(const sg::ImageF& v, const sg::ImageF& uv, bool normals) {
   for (int y = 0; y < v.height; ++y)
     for (int x = 0; x < v.width; ++x)
       if (uv.at(x, y, 2) > 0.5f)
-        for (int c = 0; c < 3; ++c) { lo[c] = std::min(lo[c], v.at(x, y, c)); hi[c] = std::max(hi[c], v.at(x, y, c)); }
+        for (int c = 0; c < 3; ++c) {
+          lo[c] = std::min(lo[c], v.at(x, y, c));
+          hi[c] = std::max(hi[c], v.at(x, y, c));
+        }
   sg::ImageF out(v.width, v.height, 3);
   for (int y = 0; y < v.height; ++y)
     for (int x = 0; x < v.width; ++x)
       for (int c = 0; c < 3; ++c) {
         if (uv.at(x, y, 2) <= 0.5f) continue;
         const float a = v.at(x, y, c);
-        out.at(x, y, c) = normals ? 0.5f * (a + 1.0f) : (a - lo[c]) / std::max(hi[c] - lo[c], 1e-9f);
+        out.at(x, y, c) =
+            normals ? 0.5f * (a + 1.0f) : (a - lo[c]) / std::max(hi[c] - lo[c], 1e-9f);
       }
   return out;
 }
 
 std::vector<sg::ImageF> pass_panels(const fs::path& dir) {
   const sg::ImageF uv = sg::read_exr((dir / "uv.exr").string(), {"R", "G", "B"});
-  return {sg::read_png((dir / "image.png").string()), sg::read_png((dir / "albedo.png").string()),
-          sg::read_png((dir / "shading.png").string()), uv,
+  return {sg::read_png((dir / "image.png").string()),
+          sg::read_png((dir / "albedo.png").string()),
+          sg::read_png((dir / "shading.png").string()),
+          uv,
           visualise(sg::read_exr((dir / "normal.exr").string(), {"R", "G", "B"}), uv, true),
           visualise(sg::read_exr((dir / "coords.exr").string(), {"R", "G", "B"}), uv, false)};
 }
@@ -106,10 +114,12 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "scenegen_figure: option '%s' needs a value\n", a.c_str());
       return 2;
     }
-    if (a == "--out") out = argv[++i];
+    if (a == "--out")
+      out = argv[++i];
     else if (a == "--shrink" || a == "--columns") {
       try {
-        (a == "--shrink" ? n : columns) = static_cast<int>(sg::bench::whole_number(a, argv[++i], 1, 1000));
+        (a == "--shrink" ? n : columns) =
+            static_cast<int>(sg::bench::whole_number(a, argv[++i], 1, 1000));
       } catch (const std::exception& e) {
         std::fprintf(stderr, "scenegen_figure: %s\n", e.what());
         return 2;
@@ -117,17 +127,21 @@ int main(int argc, char** argv) {
     } else if (a.rfind("--", 0) == 0) {
       std::fprintf(stderr, "scenegen_figure: unknown option '%s'\n", a.c_str());
       return 2;
-    } else dirs.push_back(a);
+    } else
+      dirs.push_back(a);
   }
   if (out.empty() || dirs.empty() || (passes && dirs.size() != 1)) {
-    std::fprintf(stderr, "scenegen_figure: give --out FILE.png and %s\n", passes ? "one sample folder" : "sample folders");
+    std::fprintf(stderr, "scenegen_figure: give --out FILE.png and %s\n",
+                 passes ? "one sample folder" : "sample folders");
     return 2;
   }
   try {
     std::vector<sg::ImageF> panels;
-    if (passes) panels = pass_panels(dirs[0]);
+    if (passes)
+      panels = pass_panels(dirs[0]);
     else
-      for (const auto& d : dirs) panels.push_back(sg::read_png((fs::path(d) / "image.png").string()));
+      for (const auto& d : dirs)
+        panels.push_back(sg::read_png((fs::path(d) / "image.png").string()));
     for (auto& p : panels) p = shrink(p, n);
     const int cols = columns > 0 ? columns : static_cast<int>(panels.size());
     const std::string tmp = out + ".partial.png";

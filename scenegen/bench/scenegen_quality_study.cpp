@@ -2,7 +2,8 @@
 // (dense radiosity, 5 x 5 area-light samples, fine antialiasing) and candidate presets of one
 // sample; for each: wall time of the photo render (one single-threaded POV-Ray process) and
 // PSNR / SSIM against the reference. Writes a CSV.
-//   scenegen_quality_study [--size WxH] [--seed N] [--mesh fold|cylinder|bump|flat] [--subdivision L]
+//   scenegen_quality_study [--size WxH] [--seed N] [--mesh fold|cylinder|bump|flat] [--subdivision
+//   L]
 //                          [--csv FILE] [--reference FILE.png] [--match TEXT]
 //   scenegen_quality_study --compare REFERENCE.png IMAGE.png
 #include <cmath>
@@ -13,12 +14,12 @@
 #include <string>
 #include <vector>
 
+#include "bench_args.hpp"
+#include "image_error.hpp"
 #include "scenegen/errors.hpp"
 #include "scenegen/example_sheets.hpp"
 #include "scenegen/image_io.hpp"
 #include "scenegen/job.hpp"
-#include "bench_args.hpp"
-#include "image_error.hpp"
 
 namespace fs = std::filesystem;
 namespace sg = papersim::scenegen;
@@ -77,7 +78,8 @@ std::vector<Preset> presets() {
   p.push_back({"final (9b9e633)", final_9b9e633()});
   p.push_back({"final (4731a3c)", final_4731a3c()});
   p.push_back({"final (new)", sg::quality_settings(sg::Quality::final)});
-  // The final preset before its area lights were jittered (commit 4939aeb): 2 x 2 samples on a grid.
+  // The final preset before its area lights were jittered (commit 4939aeb): 2 x 2 samples on a
+  // grid.
   sg::QualitySettings grid = sg::quality_settings(sg::Quality::final);
   grid.area_jitter = false;
   p.push_back({"final (4939aeb)", grid});
@@ -167,7 +169,8 @@ std::vector<Preset> presets() {
 }
 
 /// Render the photo with `q`; returns its wall time [s] and the image.
-double render(sg::SampleOptions o, const sg::QualitySettings& q, const fs::path& out, sg::ImageF& image) {
+double render(sg::SampleOptions o, const sg::QualitySettings& q, const fs::path& out,
+              sg::ImageF& image) {
   o.quality_override = q;
   const sg::RunReport report = sg::render_sample(o, out.string(), sg::RunOptions{});
   image = sg::read_png((out / "image.png").string());
@@ -186,7 +189,8 @@ int main(int argc, char** argv) {
   std::string kind = "fold", csv = "scenegen_quality.csv";
   int level = 2;
   std::string match;          // --match TEXT: only the presets whose name contains TEXT
-  std::string reference_png;  // --reference FILE: read the reference from FILE if it exists, else render and write it there
+  std::string reference_png;  // --reference FILE: read the reference from FILE if it exists, else
+                              // render and write it there
   // --compare REF.png IMAGE.png: PSNR / SSIM of one photo against a reference (e.g. a photo
   // rendered with edited templates, `scenegen render --templates`, against a kept reference).
   if (argc == 4 && !std::strcmp(argv[1], "--compare")) {
@@ -200,14 +204,20 @@ int main(int argc, char** argv) {
     return 0;
   }
   static const char* usage =
-      "usage: scenegen_quality_study [--size WxH] [--seed N] [--mesh fold|cylinder|bump|flat] [--subdivision L]\n"
+      "usage: scenegen_quality_study [--size WxH] [--seed N] [--mesh fold|cylinder|bump|flat] "
+      "[--subdivision L]\n"
       "                              [--csv FILE] [--reference FILE.png] [--match TEXT]\n"
       "       scenegen_quality_study --compare REFERENCE.png IMAGE.png\n"
-      "Renders the photo of one sample (scenegen example MESH, default fold, seed 1, 256x360, level 2) with a\n"
-      "converged reference setting and with candidate presets, and writes each preset's photo render time,\n"
-      "PSNR and SSIM against the reference to the CSV (default scenegen_quality.csv). --reference FILE reads\n"
-      "the reference from FILE if it exists, else renders it and writes it there; --match TEXT renders only\n"
-      "the presets whose name contains TEXT. --compare prints PSNR and SSIM of IMAGE against REFERENCE.\n";
+      "Renders the photo of one sample (scenegen example MESH, default fold, seed 1, 256x360, "
+      "level 2) with a\n"
+      "converged reference setting and with candidate presets, and writes each preset's photo "
+      "render time,\n"
+      "PSNR and SSIM against the reference to the CSV (default scenegen_quality.csv). --reference "
+      "FILE reads\n"
+      "the reference from FILE if it exists, else renders it and writes it there; --match TEXT "
+      "renders only\n"
+      "the presets whose name contains TEXT. --compare prints PSNR and SSIM of IMAGE against "
+      "REFERENCE.\n";
   for (int i = 1; i < argc; ++i)
     if (!std::strcmp(argv[i], "--help") || !std::strcmp(argv[i], "-h")) {
       std::fputs(usage, stdout);
@@ -219,13 +229,20 @@ int main(int argc, char** argv) {
       return 2;
     }
     try {
-      if (!std::strcmp(argv[i], "--size")) sg::bench::image_size("--size", argv[i + 1], width, height);
-      else if (!std::strcmp(argv[i], "--seed")) seed = sg::bench::whole_number("--seed", argv[i + 1], 0, 9223372036854775807ULL);
-      else if (!std::strcmp(argv[i], "--mesh")) kind = argv[i + 1];
-      else if (!std::strcmp(argv[i], "--csv")) csv = argv[i + 1];
-      else if (!std::strcmp(argv[i], "--subdivision")) level = static_cast<int>(sg::bench::whole_number("--subdivision", argv[i + 1], 0, 4));
-      else if (!std::strcmp(argv[i], "--reference")) reference_png = argv[i + 1];
-      else if (!std::strcmp(argv[i], "--match")) match = argv[i + 1];
+      if (!std::strcmp(argv[i], "--size"))
+        sg::bench::image_size("--size", argv[i + 1], width, height);
+      else if (!std::strcmp(argv[i], "--seed"))
+        seed = sg::bench::whole_number("--seed", argv[i + 1], 0, 9223372036854775807ULL);
+      else if (!std::strcmp(argv[i], "--mesh"))
+        kind = argv[i + 1];
+      else if (!std::strcmp(argv[i], "--csv"))
+        csv = argv[i + 1];
+      else if (!std::strcmp(argv[i], "--subdivision"))
+        level = static_cast<int>(sg::bench::whole_number("--subdivision", argv[i + 1], 0, 4));
+      else if (!std::strcmp(argv[i], "--reference"))
+        reference_png = argv[i + 1];
+      else if (!std::strcmp(argv[i], "--match"))
+        match = argv[i + 1];
       else {
         std::fprintf(stderr, "scenegen_quality_study: unknown option '%s'\n%s", argv[i], usage);
         return 2;
@@ -241,7 +258,10 @@ int main(int argc, char** argv) {
     fs::create_directories(dir);
     sg::SampleOptions o;
     o.mesh_path = (dir / "sheet.obj").string();
-    { std::ofstream out(o.mesh_path); sg::write_sheet_obj(out, sg::make_example_sheet(kind)); }
+    {
+      std::ofstream out(o.mesh_path);
+      sg::write_sheet_obj(out, sg::make_example_sheet(kind));
+    }
     o.seed = seed;
     o.width = width;
     o.height = height;
@@ -259,12 +279,16 @@ int main(int argc, char** argv) {
     }
     const std::string tmp = csv + ".partial";
     std::ofstream out(tmp);
-    out << "preset,seconds,psnr_db,ssim,radiosity,radiosity_count,radiosity_error,area_samples,area_adaptive,antialias,antialias_threshold,antialias_depth,bands,dim_light_share,dim_area_samples,antialias_method,radiosity_nearest,radiosity_pretrace_end,area_jitter\n";
-    const auto row = [&](const std::string& name, const sg::QualitySettings& q, double sec, double p, double s) {
-      out << '"' << name << "\"," << sec << ',' << p << ',' << s << ',' << q.radiosity << ',' << q.radiosity_count
-          << ',' << q.radiosity_error << ',' << q.area_samples << ',' << q.area_adaptive << ',' << q.antialias
-          << ',' << q.antialias_threshold << ',' << q.antialias_depth << ',' << q.bands << ',' << q.dim_light_share
-          << ',' << q.dim_area_samples << ',' << q.antialias_method << ',' << q.radiosity_nearest << ','
+    out << "preset,seconds,psnr_db,ssim,radiosity,radiosity_count,radiosity_error,area_samples,"
+           "area_adaptive,antialias,antialias_threshold,antialias_depth,bands,dim_light_share,dim_"
+           "area_samples,antialias_method,radiosity_nearest,radiosity_pretrace_end,area_jitter\n";
+    const auto row = [&](const std::string& name, const sg::QualitySettings& q, double sec,
+                         double p, double s) {
+      out << '"' << name << "\"," << sec << ',' << p << ',' << s << ',' << q.radiosity << ','
+          << q.radiosity_count << ',' << q.radiosity_error << ',' << q.area_samples << ','
+          << q.area_adaptive << ',' << q.antialias << ',' << q.antialias_threshold << ','
+          << q.antialias_depth << ',' << q.bands << ',' << q.dim_light_share << ','
+          << q.dim_area_samples << ',' << q.antialias_method << ',' << q.radiosity_nearest << ','
           << q.radiosity_pretrace_end << ',' << q.area_jitter << '\n';
       std::printf("%-28s %7.2f s  PSNR %6.2f dB  SSIM %.4f\n", name.c_str(), sec, p, s);
     };

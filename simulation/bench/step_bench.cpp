@@ -92,7 +92,8 @@ std::unique_ptr<Setup> make_setup(int target) {
   terms.push_back(std::make_unique<ps::GravityEnergy>(mass, Eigen::Vector3d(0, 0, -9.81)));
   terms.push_back(std::make_unique<ps::MembraneEnergy>(X, F, m));
   terms.push_back(ps::make_bending_energy(mesh, m));
-  terms.push_back(std::make_unique<ps::HandleEnergy>(mesh, x0, std::vector<ps::HandleSpec>{corner}));
+  terms.push_back(
+      std::make_unique<ps::HandleEnergy>(mesh, x0, std::vector<ps::HandleSpec>{corner}));
   auto ground = std::make_shared<papersim::collision::PlaneCollider>();
   ground->friction = 0.3;
   terms.push_back(std::make_unique<ps::ObstacleContactEnergy>(

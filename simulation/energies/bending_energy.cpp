@@ -23,16 +23,22 @@ Eigen::RowVector3d hinge_curvature_row(const Eigen::Vector2d& p0, const Eigen::V
   for (int i = 0; i < 3; ++i)
     for (int j = i + 1; j < 3; ++j) {
       const Eigen::Vector2d d = p[i] - p[j];
-      row += -0.5 * l[i] * l[j] * Eigen::RowVector3d(d.x() * d.x(), d.y() * d.y(), 2 * d.x() * d.y());
+      row +=
+          -0.5 * l[i] * l[j] * Eigen::RowVector3d(d.x() * d.x(), d.y() * d.y(), 2 * d.x() * d.y());
     }
   const Eigen::Vector2d e = (p1 - p0).normalized();
   const Eigen::Vector2d r = pb - p0;
   return row / std::abs(e.x() * r.y() - e.y() * r.x());
 }
 
-CurvatureStencils::CurvatureStencils(const remesh::Hinges& hinges, const Eigen::MatrixX3i& face_hinges,
+CurvatureStencils::CurvatureStencils(const remesh::Hinges& hinges,
+                                     const Eigen::MatrixX3i& face_hinges,
                                      const Eigen::MatrixX3i& faces, const Eigen::MatrixX2d& X)
-    : m_hinges(hinges), m_face_hinges(face_hinges), m_faces(faces), m_X(X), m_vertex_faces(X.rows()) {
+    : m_hinges(hinges),
+      m_face_hinges(face_hinges),
+      m_faces(faces),
+      m_X(X),
+      m_vertex_faces(X.rows()) {
   for (int f = 0; f < faces.rows(); ++f)
     for (int k = 0; k < 3; ++k) m_vertex_faces[faces(f, k)].push_back(f);
 }
@@ -40,7 +46,8 @@ CurvatureStencils::CurvatureStencils(const remesh::Hinges& hinges, const Eigen::
 void CurvatureStencils::add_face_hinges(std::vector<int>& stencil, int g) const {
   for (int k = 0; k < 3; ++k) {
     const int h = m_face_hinges(g, k);
-    if (h >= 0 && std::find(stencil.begin(), stencil.end(), h) == stencil.end()) stencil.push_back(h);
+    if (h >= 0 && std::find(stencil.begin(), stencil.end(), h) == stencil.end())
+      stencil.push_back(h);
   }
 }
 
@@ -74,7 +81,8 @@ bool CurvatureStencils::grow_until_determined(std::vector<int>& stencil, int f) 
     for (int k = 0; k < 3; ++k) verts.push_back(m_faces(f, k));
     // The faces with a corner in verts, in ascending order (the stencil's row order).
     std::vector<int> ring_faces;
-    for (int v : verts) ring_faces.insert(ring_faces.end(), m_vertex_faces[v].begin(), m_vertex_faces[v].end());
+    for (int v : verts)
+      ring_faces.insert(ring_faces.end(), m_vertex_faces[v].begin(), m_vertex_faces[v].end());
     std::sort(ring_faces.begin(), ring_faces.end());
     ring_faces.erase(std::unique(ring_faces.begin(), ring_faces.end()), ring_faces.end());
     for (int g : ring_faces) add_face_hinges(stencil, g);
@@ -141,8 +149,7 @@ Eigen::VectorXd BendingEnergy::hinge_angles(const Eigen::VectorXd& x) const {
 }
 
 std::unique_ptr<BendingEnergy> make_bending_energy(const remesh::SheetMesh& mesh,
-                                                   const Material& material,
-                                                   BendingHessian hessian,
+                                                   const Material& material, BendingHessian hessian,
                                                    const std::vector<int>& clamped_faces) {
   if (material.bending_model == BendingModel::morley)
     return std::make_unique<MorleyBendingEnergy>(mesh, material, hessian, clamped_faces);

@@ -31,7 +31,9 @@ class BendingEnergy : public EnergyTerm {
   /// Curvature tensor of every face at x as the plastic return mapping measures it, #F by 3
   /// [1/m]: a function of the shape alone, never of the plastic state (a measure that moves
   /// with the plastic state lets plastic flow feed on itself). Default: face_curvatures.
-  virtual Eigen::MatrixX3d yield_curvatures(const Eigen::VectorXd& x) const { return face_curvatures(x); }
+  virtual Eigen::MatrixX3d yield_curvatures(const Eigen::VectorXd& x) const {
+    return face_curvatures(x);
+  }
   /// Replace the plastic state (#F by 3 curvature [1/m], #F damage).
   virtual void set_plastic_state(const Eigen::MatrixX3d& plastic_curvature,
                                  const Eigen::VectorXd& damage) = 0;
@@ -53,7 +55,6 @@ class BendingEnergy : public EnergyTerm {
 /// (p0, p1, pa) over its distance from the hinge line. Exact for every constant curvature.
 Eigen::RowVector3d hinge_curvature_row(const Eigen::Vector2d& p0, const Eigen::Vector2d& p1,
                                        const Eigen::Vector2d& pa, const Eigen::Vector2d& pb);
-
 
 /// Stencils of hinges that fit a face's curvature (the fit bending model, the arc membrane):
 /// K = P theta with P the least-squares inverse of the stencil's hinge_curvature_row rows.
@@ -107,9 +108,9 @@ HingeDerivatives hinge_derivatives(const remesh::Hinges& hinges, const Eigen::Ve
 /// The model material.bending_model names. `clamped_faces`: faces a clamp holds, slopes
 /// included (the Morley model keeps their slopes; the fit model has no slope unknowns and
 /// ignores them).
-std::unique_ptr<BendingEnergy> make_bending_energy(const remesh::SheetMesh& mesh,
-                                                   const Material& material,
-                                                   BendingHessian hessian = BendingHessian::gauss_newton,
-                                                   const std::vector<int>& clamped_faces = {});
+std::unique_ptr<BendingEnergy> make_bending_energy(
+    const remesh::SheetMesh& mesh, const Material& material,
+    BendingHessian hessian = BendingHessian::gauss_newton,
+    const std::vector<int>& clamped_faces = {});
 
 }  // namespace papersim::simulation

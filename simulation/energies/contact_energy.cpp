@@ -8,8 +8,8 @@
 #include "collision/barrier.hpp"
 #include "collision/shapes.hpp"
 #include "simulation/energies/psd.hpp"
-#include "simulation/errors.hpp"
 #include "simulation/energies/scoped_timer.hpp"
+#include "simulation/errors.hpp"
 
 namespace papersim::simulation {
 
@@ -20,7 +20,9 @@ using collision::barrier_second_derivative;
 ObstacleContactEnergy::ObstacleContactEnergy(
     Eigen::VectorXd vertex_areas, std::vector<std::shared_ptr<const collision::Collider>> obstacles,
     const ContactParams& params)
-    : m_area(std::move(vertex_areas)), m_obstacles(std::move(obstacles)), m_params(params),
+    : m_area(std::move(vertex_areas)),
+      m_obstacles(std::move(obstacles)),
+      m_params(params),
       m_stiffness(params.stiffness) {
   m_mode.assign(m_obstacles.size(), Mode::vertices);
   m_rigid.assign(m_obstacles.size(), -1);
@@ -36,18 +38,21 @@ void ObstacleContactEnergy::set_faces(const Eigen::MatrixX3i& faces, const Eigen
   const int nf = static_cast<int>(faces.rows());
   m_face_area.resize(nf);
   for (int f = 0; f < nf; ++f) {
-    const Eigen::Vector2d e1 = X.row(faces(f, 1)) - X.row(faces(f, 0)), e2 = X.row(faces(f, 2)) - X.row(faces(f, 0));
+    const Eigen::Vector2d e1 = X.row(faces(f, 1)) - X.row(faces(f, 0)),
+                          e2 = X.row(faces(f, 2)) - X.row(faces(f, 0));
     m_face_area[f] = 0.5 * std::abs(e1.x() * e2.y() - e1.y() * e2.x());
   }
   m_edges = collision::SelfContactMesh::from_faces(faces, static_cast<int>(X.rows())).edges;
   const int ne = static_cast<int>(m_edges.rows());
   m_edge_rest.resize(ne);
-  for (int e = 0; e < ne; ++e) m_edge_rest[e] = (X.row(m_edges(e, 1)) - X.row(m_edges(e, 0))).norm();
+  for (int e = 0; e < ne; ++e)
+    m_edge_rest[e] = (X.row(m_edges(e, 1)) - X.row(m_edges(e, 0))).norm();
   // Edge weight: a third of the area of the faces at the edge.
   m_edge_area = Eigen::VectorXd::Zero(ne);
   for (int f = 0; f < nf; ++f)
     for (int k = 0; k < 3; ++k) {
-      const int a = std::min(faces(f, k), faces(f, (k + 1) % 3)), b = std::max(faces(f, k), faces(f, (k + 1) % 3));
+      const int a = std::min(faces(f, k), faces(f, (k + 1) % 3)),
+                b = std::max(faces(f, k), faces(f, (k + 1) % 3));
       int lo = 0, hi = ne;  // edges are sorted by (a, b)
       while (lo < hi) {
         const int mid = (lo + hi) / 2;
@@ -78,7 +83,8 @@ void ObstacleContactEnergy::set_faces(const Eigen::MatrixX3i& faces, const Eigen
 
 void ObstacleContactEnergy::set_rigid_block(int o, int block) {
   if (m_mode[o] != Mode::vertices)
-    throw SceneError("contact: a coupled lifting obstacle needs vertex contact (contact.faces false)");
+    throw SceneError(
+        "contact: a coupled lifting obstacle needs vertex contact (contact.faces false)");
   m_rigid[o] = block;
 }
 
@@ -152,12 +158,13 @@ std::vector<ObstacleContactEnergy::FeaturePair> ObstacleContactEnergy::feature_p
   return pairs;
 }
 
-collision::PairPoints ObstacleContactEnergy::pair_points(const FeaturePair& p, const Eigen::VectorXd& x,
-                                                         const std::vector<WorldFeatures>& features) const {
+collision::PairPoints ObstacleContactEnergy::pair_points(
+    const FeaturePair& p, const Eigen::VectorXd& x,
+    const std::vector<WorldFeatures>& features) const {
   const WorldFeatures& w = features[p.obstacle];
   if (p.edge_edge)
-    return {x.segment<3>(3 * m_edges(p.a, 0)), x.segment<3>(3 * m_edges(p.a, 1)), w.corners[w.edges[p.b][0]],
-            w.corners[w.edges[p.b][1]]};
+    return {x.segment<3>(3 * m_edges(p.a, 0)), x.segment<3>(3 * m_edges(p.a, 1)),
+            w.corners[w.edges[p.b][0]], w.corners[w.edges[p.b][1]]};
   return {w.corners[p.a], x.segment<3>(3 * m_faces(p.b, 0)), x.segment<3>(3 * m_faces(p.b, 1)),
           x.segment<3>(3 * m_faces(p.b, 2))};
 }
@@ -166,8 +173,10 @@ double ObstacleContactEnergy::pair_weight(const FeaturePair& p) const {
   return p.edge_edge ? m_edge_area[p.a] : m_face_area[p.b] / 3;
 }
 
-double ObstacleContactEnergy::pair_mollifier_eps(const FeaturePair& p, const std::vector<WorldFeatures>& features) const {
-  return p.edge_edge ? collision::edge_edge_mollifier_threshold(m_edge_rest[p.a], features[p.obstacle].edge_length[p.b])
+double ObstacleContactEnergy::pair_mollifier_eps(const FeaturePair& p,
+                                                 const std::vector<WorldFeatures>& features) const {
+  return p.edge_edge ? collision::edge_edge_mollifier_threshold(
+                           m_edge_rest[p.a], features[p.obstacle].edge_length[p.b])
                      : 0.0;
 }
 
@@ -272,7 +281,8 @@ std::vector<double> ObstacleContactEnergy::face_speeds(const Eigen::VectorXd& dx
   return speed;
 }
 
-bool ObstacleContactEnergy::face_near_bounds(int o, const Eigen::VectorXd& x, int f, double margin) const {
+bool ObstacleContactEnergy::face_near_bounds(int o, const Eigen::VectorXd& x, int f,
+                                             double margin) const {
   const auto& b = m_bounds[o];
   Eigen::Vector3d lo = x.segment<3>(3 * m_faces(f, 0)), hi = lo;
   for (int k = 1; k < 3; ++k) {
@@ -282,7 +292,8 @@ bool ObstacleContactEnergy::face_near_bounds(int o, const Eigen::VectorXd& x, in
   return (hi.array() + margin >= b.lo.array()).all() && (lo.array() - margin <= b.hi.array()).all();
 }
 
-Eigen::Vector3d ObstacleContactEnergy::contact_point(const FrictionPoint& fp, const Eigen::VectorXd& x) const {
+Eigen::Vector3d ObstacleContactEnergy::contact_point(const FrictionPoint& fp,
+                                                     const Eigen::VectorXd& x) const {
   Eigen::Vector3d p = Eigen::Vector3d::Zero();
   for (int k = 0; k < fp.count; ++k) p += fp.weights[k] * x.segment<3>(3 * fp.vertices[k]);
   return p;
@@ -295,9 +306,10 @@ namespace {
 /// descent in barycentric coordinates with Barzilai-Borwein steps and backtracking, from the
 /// minimiser found. The field is smooth on smooth obstacles, so this converges to the exact
 /// minimum and the barrier becomes a smooth function of the vertex positions.
-collision::TriangleSdfResult polish_minimum(const collision::Collider& obs, const Eigen::Vector3d& a,
-                                            const Eigen::Vector3d& b, const Eigen::Vector3d& c,
-                                            const Eigen::Affine3d& pose, collision::TriangleSdfResult r) {
+collision::TriangleSdfResult polish_minimum(const collision::Collider& obs,
+                                            const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                                            const Eigen::Vector3d& c, const Eigen::Affine3d& pose,
+                                            collision::TriangleSdfResult r) {
   const Eigen::Vector3d e1 = b - a, e2 = c - a;
   const auto project = [](Eigen::Vector2d w) {  // onto w1, w2 >= 0, w1 + w2 <= 1
     w = w.cwiseMax(0.0);
@@ -309,7 +321,8 @@ collision::TriangleSdfResult polish_minimum(const collision::Collider& obs, cons
   Eigen::Vector3d n;
   double phi = obs.distance_at_pose(a + w[0] * e1 + w[1] * e2, pose, &n);
   Eigen::Vector2d g(n.dot(e1), n.dot(e2));
-  double step = 1.0 / std::max(e1.squaredNorm(), e2.squaredNorm());  // one unit of length per unit slope
+  double step =
+      1.0 / std::max(e1.squaredNorm(), e2.squaredNorm());  // one unit of length per unit slope
   Eigen::Vector2d w_prev = w, g_prev = g;
   for (int it = 0; it < 400; ++it) {
     if (it > 0) {
@@ -345,23 +358,27 @@ collision::TriangleSdfResult polish_minimum(const collision::Collider& obs, cons
 /// Minimum of the field over a triangle: subdivision search, then polish_minimum near contact.
 collision::TriangleSdfResult face_minimum(const collision::Collider& obs, const Eigen::Vector3d& a,
                                           const Eigen::Vector3d& b, const Eigen::Vector3d& c,
-                                          const Eigen::Affine3d& pose, const collision::TriangleSdfParams& params) {
+                                          const Eigen::Affine3d& pose,
+                                          const collision::TriangleSdfParams& params) {
   collision::TriangleSdfResult r = collision::triangle_min_distance(obs, a, b, c, pose, params);
-  if (r.distance < params.cutoff + params.lipschitz * params.resolution) r = polish_minimum(obs, a, b, c, pose, r);
+  if (r.distance < params.cutoff + params.lipschitz * params.resolution)
+    r = polish_minimum(obs, a, b, c, pose, r);
   return r;
 }
 
 }  // namespace
 
-double ObstacleContactEnergy::sphere_face_distance(int o, const Eigen::VectorXd& x, int f, const Eigen::Affine3d& pose,
-                                                   collision::PairPoints& pts, collision::DistanceStencil& s) const {
+double ObstacleContactEnergy::sphere_face_distance(int o, const Eigen::VectorXd& x, int f,
+                                                   const Eigen::Affine3d& pose,
+                                                   collision::PairPoints& pts,
+                                                   collision::DistanceStencil& s) const {
   pts = sphere_points(x, f, pose);
   s = collision::point_triangle_stencil(pts);
   return std::sqrt(collision::distance_squared(s, pts)) - sphere_radius(o, pose);
 }
 
-collision::TriangleSdfResult ObstacleContactEnergy::face_contact(int o, const Eigen::VectorXd& x, int f,
-                                                                 const Eigen::Affine3d& pose) const {
+collision::TriangleSdfResult ObstacleContactEnergy::face_contact(
+    int o, const Eigen::VectorXd& x, int f, const Eigen::Affine3d& pose) const {
   if (!face_near_bounds(o, x, f, 0.0)) return {};  // distance +inf: out of contact
   if (m_mode[o] == Mode::sphere) {
     // Exact: the closest point of the triangle to the centre.
@@ -379,8 +396,9 @@ collision::TriangleSdfResult ObstacleContactEnergy::face_contact(int o, const Ei
     r.evaluations = 1;
     return r;
   }
-  return face_minimum(*m_obstacles[o], x.segment<3>(3 * m_faces(f, 0)), x.segment<3>(3 * m_faces(f, 1)),
-                      x.segment<3>(3 * m_faces(f, 2)), pose, m_triangle);
+  return face_minimum(*m_obstacles[o], x.segment<3>(3 * m_faces(f, 0)),
+                      x.segment<3>(3 * m_faces(f, 1)), x.segment<3>(3 * m_faces(f, 2)), pose,
+                      m_triangle);
 }
 
 bool ObstacleContactEnergy::near_bounds(int o, const Eigen::Vector3d& p) const {
@@ -403,7 +421,8 @@ void ObstacleContactEnergy::update_bounds() {
 // (fp.obstacle set), its normal force lambda [N], the contact point p on the sheet, the unit
 // normal n pointing from the obstacle to the sheet and the gap d of the contact's term [m].
 template <class F>
-void ObstacleContactEnergy::for_each_contact(const Eigen::VectorXd& x, double t, F&& visit, int only) const {
+void ObstacleContactEnergy::for_each_contact(const Eigen::VectorXd& x, double t, F&& visit,
+                                             int only) const {
   const int nv = static_cast<int>(m_area.size());
   const FaceBoxes boxes = face_boxes(x);
   for (int o = 0; o < num_obstacles(); ++o) {
@@ -420,8 +439,8 @@ void ObstacleContactEnergy::for_each_contact(const Eigen::VectorXd& x, double t,
         fp.vertices = {m_faces(f, 0), m_faces(f, 1), m_faces(f, 2)};
         fp.weights = r.barycentric;
         fp.obstacle = o;
-        visit(fp, -face_kappa(f) * barrier_first_derivative(r.distance, m_params.dhat), contact_point(fp, x),
-              r.gradient, r.distance);
+        visit(fp, -face_kappa(f) * barrier_first_derivative(r.distance, m_params.dhat),
+              contact_point(fp, x), r.gradient, r.distance);
       }
     }
     if (!uses_vertices(o)) continue;
@@ -468,7 +487,8 @@ void ObstacleContactEnergy::for_each_contact(const Eigen::VectorXd& x, double t,
     const double kappa_pair = m_stiffness / m_params.dhat * pair_weight(p);
     // n from the obstacle to the sheet in both cases (friction depends only on its plane).
     const Eigen::Vector3d n = p.edge_edge ? r.normalized() : Eigen::Vector3d(-r.normalized());
-    visit(fp, -kappa_pair * m * barrier_first_derivative(d, m_params.dhat), contact_point(fp, x), n, d);
+    visit(fp, -kappa_pair * m * barrier_first_derivative(d, m_params.dhat), contact_point(fp, x), n,
+          d);
   }
 }
 
@@ -498,8 +518,8 @@ void ObstacleContactEnergy::begin_step(const StepContext& ctx, const Eigen::Vect
         approach = std::max(approach, -n.dot(vel));
       }
     }
-    stiffness = std::max(stiffness, m_impact_density * approach * approach /
-                                        (2 * m_params.dhat * std::log(100.0)));
+    stiffness = std::max(
+        stiffness, m_impact_density * approach * approach / (2 * m_params.dhat * std::log(100.0)));
   }
   // Contacts at the step start, their forces at the stiffness that holds them there.
   struct Contact {
@@ -529,7 +549,8 @@ void ObstacleContactEnergy::begin_step(const StepContext& ctx, const Eigen::Vect
     stiffness = std::max(stiffness, target);
   }
   m_stiffness = stiffness;
-  m_params.trace(Trace::contact, "contact t %.6f h %.3e: %zu contacts, gap %.3e, stiffness %.4g -> %.4g Pa",
+  m_params.trace(Trace::contact,
+                 "contact t %.6f h %.3e: %zu contacts, gap %.3e, stiffness %.4g -> %.4g Pa",
                  ctx.time_t0, ctx.h, contacts.size(), gap, carried, stiffness);
   // Lagged friction: normal force and tangent plane at the step start (IPC Sec. 5).
   m_friction.clear();
@@ -540,7 +561,8 @@ void ObstacleContactEnergy::begin_step(const StepContext& ctx, const Eigen::Vect
     const collision::Collider& obs = *m_obstacles[c.fp.obstacle];
     if (obs.friction <= 0) continue;
     c.fp.mu_lambda = obs.friction * lambda;
-    const Eigen::Vector3d a = std::abs(c.n.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+    const Eigen::Vector3d a =
+        std::abs(c.n.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
     c.fp.T.col(0) = c.n.cross(a).normalized();
     c.fp.T.col(1) = c.n.cross(c.fp.T.col(0));
     c.fp.origin = c.p + ctx.h * obs.velocity(c.p, ctx.time_t0);
@@ -550,7 +572,9 @@ void ObstacleContactEnergy::begin_step(const StepContext& ctx, const Eigen::Vect
   m_stats->max_normal_force = std::max(m_stats->max_normal_force, m_normal_force);
 }
 
-void ObstacleContactEnergy::end_step(SheetState& state) const { state.contact_stiffness = m_stiffness; }
+void ObstacleContactEnergy::end_step(SheetState& state) const {
+  state.contact_stiffness = m_stiffness;
+}
 
 Eigen::Vector3d ObstacleContactEnergy::obstacle_load(int o, const Eigen::VectorXd& x) const {
   Eigen::Vector3d load = Eigen::Vector3d::Zero();
@@ -610,8 +634,9 @@ double ObstacleContactEnergy::value(const Eigen::VectorXd& x) const {
     const double d2 = collision::distance_squared(pair_stencil(p.edge_edge, pts), pts);
     if (d2 >= dhat * dhat) continue;
     if (!(d2 > 0)) return INF;
-    const double m =
-        p.edge_edge ? collision::edge_edge_mollifier(pts, pair_mollifier_eps(p, m_features), nullptr, nullptr) : 1.0;
+    const double m = p.edge_edge ? collision::edge_edge_mollifier(
+                                       pts, pair_mollifier_eps(p, m_features), nullptr, nullptr)
+                                 : 1.0;
     e += m_stiffness / dhat * pair_weight(p) * m * barrier(std::sqrt(d2), dhat);
   }
   for (const auto& fp : m_friction) {
@@ -622,7 +647,8 @@ double ObstacleContactEnergy::value(const Eigen::VectorXd& x) const {
 }
 
 void ObstacleContactEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd& g,
-                                            BlockSymmetricMatrix* H, HessianProjection projection) const {
+                                            BlockSymmetricMatrix* H,
+                                            HessianProjection projection) const {
   ScopedTimer timer(m_stats->seconds);
   const bool project = projection == HessianProjection::psd;
   const int nv = static_cast<int>(m_area.size());
@@ -647,9 +673,11 @@ void ObstacleContactEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::Vec
   // sheet vertices `vs` (the other points belong to the obstacle and do not move).
   const auto add_exact = [&](const std::array<int, 3>& vs, int first, int count, double scale,
                              const collision::Vector12d& grad, collision::Matrix12d* hess) {
-    for (int k = 0; k < count; ++k) g.segment<3>(3 * vs[k]) += scale * grad.segment<3>(3 * (first + k));
+    for (int k = 0; k < count; ++k)
+      g.segment<3>(3 * vs[k]) += scale * grad.segment<3>(3 * (first + k));
     if (!H) return;
-    const collision::Matrix12d h = project ? project_psd(scale * *hess) : collision::Matrix12d(scale * *hess);
+    const collision::Matrix12d h =
+        project ? project_psd(scale * *hess) : collision::Matrix12d(scale * *hess);
     if (count == 2)
       H->add_element<2>({vs[0], vs[1]}, h.block<6, 6>(3 * first, 3 * first));
     else
@@ -670,14 +698,16 @@ void ObstacleContactEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::Vec
         if (m_mode[o] == Mode::sphere) {
           const double d = sphere_face_distance(o, x, f, pose, pts, s);
           if (d >= dhat || d <= 0) continue;
-          collision::pair_barrier_derivatives(s, pts, dhat, 0.0, grad, H ? &hess : nullptr, sphere_radius(o, pose));
+          collision::pair_barrier_derivatives(s, pts, dhat, 0.0, grad, H ? &hess : nullptr,
+                                              sphere_radius(o, pose));
           add_exact(vs, 1, 3, k, grad, &hess);
           continue;
         }
         const auto r = face_contact(o, x, f, pose);
         if (r.distance >= dhat || r.distance <= 0) continue;
-        add_weighted(vs, r.barycentric, 3, k * barrier_first_derivative(r.distance, dhat) * r.gradient,
-                     k * barrier_second_derivative(r.distance, dhat) * r.gradient * r.gradient.transpose());
+        add_weighted(
+            vs, r.barycentric, 3, k * barrier_first_derivative(r.distance, dhat) * r.gradient,
+            k * barrier_second_derivative(r.distance, dhat) * r.gradient * r.gradient.transpose());
       }
     }
     if (!uses_vertices(o)) continue;
@@ -719,7 +749,8 @@ void ObstacleContactEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::Vec
     const collision::DistanceStencil s = pair_stencil(p.edge_edge, pts);
     const double d2 = collision::distance_squared(s, pts);
     if (d2 >= dhat * dhat || !(d2 > 0)) continue;
-    collision::pair_barrier_derivatives(s, pts, dhat, pair_mollifier_eps(p, m_features), grad, H ? &hess : nullptr);
+    collision::pair_barrier_derivatives(s, pts, dhat, pair_mollifier_eps(p, m_features), grad,
+                                        H ? &hess : nullptr);
     const double scale = m_stiffness / dhat * pair_weight(p);
     if (p.edge_edge)
       add_exact({m_edges(p.a, 0), m_edges(p.a, 1), -1}, 0, 2, scale, grad, &hess);
@@ -823,8 +854,9 @@ double ObstacleContactEnergy::obstacle_max_step(int o, const Eigen::VectorXd& x,
             collision::PairPoints d;
             d[0].setZero();
             for (int k = 0; k < 3; ++k) d[k + 1] = dx.segment<3>(3 * m_faces(f, k));
-            plane = std::max(plane, collision::point_triangle_ccd(sphere_points(x, f, pose), d, alpha, 0.1,
-                                                                  sphere_radius(o, pose)));
+            plane =
+                std::max(plane, collision::point_triangle_ccd(sphere_points(x, f, pose), d, alpha,
+                                                              0.1, sphere_radius(o, pose)));
           }
           alpha = std::min(alpha, plane);
           continue;
@@ -842,9 +874,12 @@ double ObstacleContactEnergy::obstacle_max_step(int o, const Eigen::VectorXd& x,
     collision::TriangleSdfParams p = m_triangle;
     p.cutoff = std::max(m_params.dhat, alpha * speed);
     const auto lower_bound = [&](double t) {
-      const Eigen::Vector3d a = x.segment<3>(3 * m_faces(f, 0)) + t * dx.segment<3>(3 * m_faces(f, 0));
-      const Eigen::Vector3d b = x.segment<3>(3 * m_faces(f, 1)) + t * dx.segment<3>(3 * m_faces(f, 1));
-      const Eigen::Vector3d c = x.segment<3>(3 * m_faces(f, 2)) + t * dx.segment<3>(3 * m_faces(f, 2));
+      const Eigen::Vector3d a =
+          x.segment<3>(3 * m_faces(f, 0)) + t * dx.segment<3>(3 * m_faces(f, 0));
+      const Eigen::Vector3d b =
+          x.segment<3>(3 * m_faces(f, 1)) + t * dx.segment<3>(3 * m_faces(f, 1));
+      const Eigen::Vector3d c =
+          x.segment<3>(3 * m_faces(f, 2)) + t * dx.segment<3>(3 * m_faces(f, 2));
       p.resolution = m_triangle.resolution;
       auto r = face_minimum(obs, a, b, c, pose, p);
       if (r.distance > 0 && r.distance < 5 * p.resolution) {
@@ -943,13 +978,14 @@ void ObstacleContactEnergy::add_obstacle_motion_gradient(const Eigen::VectorXd& 
       const double change = kappa(v) * barrier_second_derivative(d, dhat) * phi_t * dt;
       g.segment<3>(3 * v) += change * n;
       // A coupled body takes the reaction (dr/dq = -e_z e_z^T, set_rigid_block).
-      if (m_rigid[o] >= 0 && g.size() >= 3 * m_rigid[o] + 3) g[3 * m_rigid[o] + 2] -= change * n.z();
+      if (m_rigid[o] >= 0 && g.size() >= 3 * m_rigid[o] + 3)
+        g[3 * m_rigid[o] + 2] -= change * n.z();
     }
   }
 }
 
-double ObstacleContactEnergy::max_step_with_obstacles(const Eigen::VectorXd& x, const Eigen::VectorXd& dx,
-                                                      double dt) const {
+double ObstacleContactEnergy::max_step_with_obstacles(const Eigen::VectorXd& x,
+                                                      const Eigen::VectorXd& dx, double dt) const {
   ScopedTimer timer(m_stats->seconds);
   double alpha = 1.0;
   const FaceBoxes boxes = face_boxes(x);
@@ -1003,8 +1039,10 @@ double ObstacleContactEnergy::surface_distance(int o, const Eigen::VectorXd& x, 
       }
       collision::TriangleSdfParams p = m_triangle;
       p.cutoff = m;
-      m = std::min(m, face_minimum(obs, x.segment<3>(3 * m_faces(f, 0)), x.segment<3>(3 * m_faces(f, 1)),
-                                   x.segment<3>(3 * m_faces(f, 2)), pose, p).distance);
+      m = std::min(
+          m, face_minimum(obs, x.segment<3>(3 * m_faces(f, 0)), x.segment<3>(3 * m_faces(f, 1)),
+                          x.segment<3>(3 * m_faces(f, 2)), pose, p)
+                 .distance);
     }
     return m;
   }
@@ -1021,7 +1059,7 @@ double ObstacleContactEnergy::surface_distance(int o, const Eigen::VectorXd& x, 
     for (const auto& [i, j] : w.edges) {
       const Eigen::Vector3d &p = w.corners[i], &q = w.corners[j];
       const double sp = n.dot(p - a), sq = n.dot(q - a);
-      if (sp * sq > 0 || sp == sq) continue;  // both ends on one side of the plane
+      if (sp * sq > 0 || sp == sq) continue;                   // both ends on one side of the plane
       const Eigen::Vector3d y = p + sp / (sp - sq) * (q - p);  // where the edge meets the plane
       const bool inside = n.dot((b - a).cross(y - a)) >= 0 && n.dot((c - b).cross(y - b)) >= 0 &&
                           n.dot((a - c).cross(y - c)) >= 0;

@@ -4,17 +4,18 @@
 /// Contact: E = sum_v sum_o kappa A_v b(phi_o(x_v), dhat) with the IPC log barrier b
 /// (Li et al. 2020, eq. 6); kappa = stiffness / dhat, so that the contact pressure at gap d is
 /// stiffness |b'(d)| / dhat: `stiffness` is the pressure at about half the thickness [Pa]. A
-/// sheet resting under its weight rho_A g with stiffness = rho_A g sits at about 0.55 dhat. The Hessian keeps b'' grad phi grad phi^T and drops b' Hess phi (exact for planes; for
-/// curved obstacles the dropped term is the obstacle curvature times the contact force), except
-/// where the collider provides Hess phi (Collider::distance_hessian: the inverted sphere). Inside
-/// a spherical cavity that term is positive semi-definite and must be kept: without it Newton's
-/// model lets a vertex slide tangentially for free, which on a concave wall drives it into the
-/// wall, and continuous collision detection then cuts every step short.
-/// Friction (lagged per time step, IPC eqs. 14-16): normal force magnitudes and tangent bases
-/// are frozen at the step start; the tangential slip u = T^T (x - x_t0 - h v_obstacle) pays
-/// mu lambda f0(|u|), with f0 the C1 smoothing of |u| below eps_v h.
-/// CCD: along the segment x_v -> x_v + a dx_v, a point cannot reach an obstacle before it moved
-/// by its distance phi (phi is 1-Lipschitz); sphere tracing gives a conservative largest a.
+/// sheet resting under its weight rho_A g with stiffness = rho_A g sits at about 0.55 dhat. The
+/// Hessian keeps b'' grad phi grad phi^T and drops b' Hess phi (exact for planes; for curved
+/// obstacles the dropped term is the obstacle curvature times the contact force), except where the
+/// collider provides Hess phi (Collider::distance_hessian: the inverted sphere). Inside a spherical
+/// cavity that term is positive semi-definite and must be kept: without it Newton's model lets a
+/// vertex slide tangentially for free, which on a concave wall drives it into the wall, and
+/// continuous collision detection then cuts every step short. Friction (lagged per time step, IPC
+/// eqs. 14-16): normal force magnitudes and tangent bases are frozen at the step start; the
+/// tangential slip u = T^T (x - x_t0 - h v_obstacle) pays mu lambda f0(|u|), with f0 the C1
+/// smoothing of |u| below eps_v h. CCD: along the segment x_v -> x_v + a dx_v, a point cannot reach
+/// an obstacle before it moved by its distance phi (phi is 1-Lipschitz); sphere tracing gives a
+/// conservative largest a.
 ///
 /// Faces (set_faces): obstacles other than planes touch the sheet's triangles and edges, not only
 /// its vertices, so that a ridge, an edge or a small sphere cannot slip between vertices. How
@@ -88,7 +89,7 @@ struct ContactParams {
   /// halving (docs/crumple.md, "Friction's static zone in split steps"). Obstacle and
   /// self-contact friction alike.
   bool static_whole_step = false;
-  bool hold_load = true;       ///< the load rule (above)
+  bool hold_load = true;  ///< the load rule (above)
   /// Largest factor by which the load rule raises the stiffness at one step start, when the
   /// load has pressed the sheet closer than dhat / 100 (1: it never raises it).
   double load_raise = 2.0;
@@ -105,9 +106,9 @@ struct ContactParams {
 /// Counters of obstacle contact over a run. The run owns them and hands them to every term it
 /// builds, so rebuilding the terms (after remeshing) loses nothing.
 struct ContactStatistics {
-  double seconds = 0.0;          ///< wall time in the term (field queries, barrier, friction, CCD) [s]
-  int max_friction_points = 0;   ///< most friction contacts (vertices, faces, pairs) in one step
-  double max_normal_force = 0.0; ///< largest total normal force at a step start [N]
+  double seconds = 0.0;  ///< wall time in the term (field queries, barrier, friction, CCD) [s]
+  int max_friction_points = 0;    ///< most friction contacts (vertices, faces, pairs) in one step
+  double max_normal_force = 0.0;  ///< largest total normal force at a step start [N]
 };
 
 class ObstacleContactEnergy : public EnergyTerm {
@@ -140,10 +141,12 @@ class ObstacleContactEnergy : public EnergyTerm {
   /// Vertex barriers: d/dt (kappa b'(phi) n) ~ kappa b''(phi) (d phi / dt) n with
   /// d phi / dt = -n . (velocity of the obstacle at the vertex), the change of n dropped as the
   /// Hessian drops b' Hess phi.
-  void add_obstacle_motion_gradient(const Eigen::VectorXd& x, double dt, Eigen::VectorXd& gradient) const override;
+  void add_obstacle_motion_gradient(const Eigen::VectorXd& x, double dt,
+                                    Eigen::VectorXd& gradient) const override;
   /// max_step, with each moving obstacle's vertex CCD done on the joint motion
   /// (collision::Collider::moving_segment_step, exact for the affine motions supported).
-  double max_step_with_obstacles(const Eigen::VectorXd& x, const Eigen::VectorXd& dx, double dt) const override;
+  double max_step_with_obstacles(const Eigen::VectorXd& x, const Eigen::VectorXd& dx,
+                                 double dt) const override;
 
   /// Makes obstacle o a body of the step (collision::LiftSpec::coupled, LiftBodyEnergy): its
   /// vertical displacement q_z is entry 3 block + 2 of x (when x is that long; otherwise 0), the
@@ -181,7 +184,9 @@ class ObstacleContactEnergy : public EnergyTerm {
   /// triangle and edge-edge pairs (polyhedra) too, so a ridge between vertices counts.
   double surface_distance(int o, const Eigen::VectorXd& x, double t) const;
   /// Where the term counts (see ContactStatistics); null: a counter of its own.
-  void set_statistics(ContactStatistics* statistics) { m_stats = statistics ? statistics : &m_own_stats; }
+  void set_statistics(ContactStatistics* statistics) {
+    m_stats = statistics ? statistics : &m_own_stats;
+  }
   const ContactStatistics& statistics() const { return *m_stats; }
 
  private:
@@ -190,9 +195,9 @@ class ObstacleContactEnergy : public EnergyTerm {
     Eigen::Vector3d weights = Eigen::Vector3d(1, 0, 0);
     int count = 1;
     int obstacle = -1;
-    double mu_lambda = 0.0;                                           // mu x normal force [N]
+    double mu_lambda = 0.0;                                               // mu x normal force [N]
     Eigen::Matrix<double, 3, 2> T = Eigen::Matrix<double, 3, 2>::Zero();  // tangent basis
-    Eigen::Vector3d origin = Eigen::Vector3d::Zero();                 // x_t0 + h v_obstacle [m]
+    Eigen::Vector3d origin = Eigen::Vector3d::Zero();                     // x_t0 + h v_obstacle [m]
   };
   /// How an obstacle touches the sheet (see the header comment).
   enum class Mode { vertices, sphere, polytope, search };
@@ -224,7 +229,8 @@ class ObstacleContactEnergy : public EnergyTerm {
   /// its block), zero when o has none or v holds only the sheet.
   Eigen::Vector3d lift_of(int o, const Eigen::VectorXd& v) const {
     const int b = m_rigid[o];
-    return b >= 0 && v.size() >= 3 * b + 3 ? Eigen::Vector3d(0, 0, v[3 * b + 2]) : Eigen::Vector3d::Zero();
+    return b >= 0 && v.size() >= 3 * b + 3 ? Eigen::Vector3d(0, 0, v[3 * b + 2])
+                                           : Eigen::Vector3d::Zero();
   }
   /// Calls visit(FrictionPoint fp, double lambda, Vector3d p, Vector3d n) for every barrier
   /// contact of the sheet at x with the obstacles (only obstacle `only` when >= 0) at time t
@@ -241,13 +247,16 @@ class ObstacleContactEnergy : public EnergyTerm {
   double pairs_max_step(const Eigen::VectorXd& x, const Eigen::VectorXd& dx, double alpha) const;
   bool face_near_bounds(int o, const Eigen::VectorXd& x, int f, double margin) const;
   bool uses_faces(int o) const { return m_mode[o] != Mode::vertices; }
-  bool uses_vertices(int o) const { return m_mode[o] == Mode::vertices || m_mode[o] == Mode::polytope; }
+  bool uses_vertices(int o) const {
+    return m_mode[o] == Mode::vertices || m_mode[o] == Mode::polytope;
+  }
   /// Minimum of obstacle o's field (at `pose`) over face f at x: exact for a sphere, searched
   /// otherwise; +inf distance when the face's box is outside the obstacle's bounds.
   collision::TriangleSdfResult face_contact(int o, const Eigen::VectorXd& x, int f,
                                             const Eigen::Affine3d& pose) const;
   /// Sphere obstacle o (at `pose`) against face f: the four points (centre, face corners).
-  collision::PairPoints sphere_points(const Eigen::VectorXd& x, int f, const Eigen::Affine3d& pose) const;
+  collision::PairPoints sphere_points(const Eigen::VectorXd& x, int f,
+                                      const Eigen::Affine3d& pose) const;
   /// Sphere obstacle o against face f: its surface distance |centre - triangle| - radius [m],
   /// with the points and the closest-feature stencil it was measured on.
   double sphere_face_distance(int o, const Eigen::VectorXd& x, int f, const Eigen::Affine3d& pose,
@@ -261,7 +270,8 @@ class ObstacleContactEnergy : public EnergyTerm {
   WorldFeatures world_features(int o, double t) const;
   /// Pairs of the polyhedral obstacles whose boxes come within `radius` of each other while the
   /// sheet moves from x to x + dx (dx null: at x only), with the features `features`.
-  std::vector<FeaturePair> feature_pairs(const Eigen::VectorXd& x, const Eigen::VectorXd* dx, double radius,
+  std::vector<FeaturePair> feature_pairs(const Eigen::VectorXd& x, const Eigen::VectorXd* dx,
+                                         double radius,
                                          const std::vector<WorldFeatures>& features) const;
   collision::PairPoints pair_points(const FeaturePair& p, const Eigen::VectorXd& x,
                                     const std::vector<WorldFeatures>& features) const;
@@ -282,10 +292,10 @@ class ObstacleContactEnergy : public EnergyTerm {
   std::vector<double> m_sphere_radius;    // per obstacle (sphere mode), at scale 1 [m]
   std::vector<WorldFeatures> m_features;  // per obstacle at the step end (polytope mode)
   Eigen::MatrixX3i m_faces;
-  Eigen::MatrixX2i m_edges;               // sheet edges (polytope mode)
+  Eigen::MatrixX2i m_edges;  // sheet edges (polytope mode)
   Eigen::VectorXd m_face_area, m_edge_area, m_edge_rest;
   collision::TriangleSdfParams m_triangle;
-  double m_time = 0.0;      // time the obstacles are evaluated at: the step's end unless followed
+  double m_time = 0.0;  // time the obstacles are evaluated at: the step's end unless followed
   double m_t0 = 0.0, m_t1 = 0.0;  // the current step [s]
   std::vector<bool> m_moving;     // per obstacle: moves during the current step
   double m_eps = 1e-6, m_normal_force = 0.0;

@@ -23,8 +23,9 @@ struct StepContext {
   double h_whole = 0.0;
   const Eigen::VectorXd* x_t0 = nullptr;  ///< positions at the step start (3N) [m]
   const Eigen::VectorXd* v_t0 = nullptr;  ///< velocities at the step start (3N) [m/s]
-  double contact_stiffness = 0.0;  ///< SheetState::contact_stiffness at the step start [Pa]
-  double self_contact_stiffness = 0.0;  ///< SheetState::self_contact_stiffness at the step start [Pa]
+  double contact_stiffness = 0.0;         ///< SheetState::contact_stiffness at the step start [Pa]
+  /// SheetState::self_contact_stiffness at the step start [Pa]
+  double self_contact_stiffness = 0.0;
   double time_t1() const { return time_t0 + h; }
   double whole_step() const { return h_whole > 0 ? h_whole : h; }
 };
@@ -95,9 +96,9 @@ class EnergyTerm {
   /// Obstacles that move during the step (Integrator: "Following moving obstacles"). A term
   /// evaluates them at the step's end unless set_obstacle_time says otherwise.
   enum class ObstacleMotion {
-    none,       ///< the term does not depend on obstacles that move during the current step
-    follow,     ///< it does, and supports every call below
-    unsupported ///< it does, but cannot be evaluated with them part-way
+    none,        ///< the term does not depend on obstacles that move during the current step
+    follow,      ///< it does, and supports every call below
+    unsupported  ///< it does, but cannot be evaluated with them part-way
   };
   virtual ObstacleMotion obstacle_motion() const { return ObstacleMotion::none; }
   /// True when, from x at the step start, an obstacle closes in on the sheet during the step by

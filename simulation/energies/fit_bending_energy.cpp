@@ -1,10 +1,10 @@
 #include "simulation/energies/fit_bending_energy.hpp"
 
+#include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
-#include <Eigen/SVD>
-#include <Eigen/Cholesky>
 #include <Eigen/QR>
+#include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
 #include <string>
@@ -22,7 +22,7 @@ constexpr double HOURGLASS_WEIGHT = 10.0;
 }  // namespace
 
 FitBendingEnergy::FitBendingEnergy(const remesh::SheetMesh& mesh, const Material& material,
-                             BendingHessian hessian_kind)
+                                   BendingHessian hessian_kind)
     : BendingEnergy(mesh, material, hessian_kind) {
   const Eigen::MatrixX3i faces = mesh.faces();
   const Eigen::MatrixX2d X = mesh.material_coords();
@@ -30,12 +30,13 @@ FitBendingEnergy::FitBendingEnergy(const remesh::SheetMesh& mesh, const Material
   m_faces.resize(faces.rows());
   const CurvatureStencils stencils(m_hinges, fh, faces, X);
   for (int f = 0; f < faces.rows(); ++f) build_stencil(f, stencils, faces, X);
-  for (Face& face : m_faces) face.M = face.P.transpose() * m_Q * face.P + face.R.transpose() * face.R;
+  for (Face& face : m_faces)
+    face.M = face.P.transpose() * m_Q * face.P + face.R.transpose() * face.R;
   set_plastic_state(mesh.plastic_curvature(), mesh.damage());
 }
 
-void FitBendingEnergy::build_stencil(int f, const CurvatureStencils& stencils, const Eigen::MatrixX3i& F,
-                                     const Eigen::MatrixX2d& X) {
+void FitBendingEnergy::build_stencil(int f, const CurvatureStencils& stencils,
+                                     const Eigen::MatrixX3i& F, const Eigen::MatrixX2d& X) {
   Face& face = m_faces[f];
   // Stencil: the face's own hinges and those of its edge neighbours (up to nine), then of
   // faces sharing a vertex while the curvature is not determined (boundary faces).
@@ -108,7 +109,8 @@ Eigen::MatrixX3d FitBendingEnergy::face_curvatures(const Eigen::VectorXd& x) con
 }
 
 void FitBendingEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd& gradient,
-                                    BlockSymmetricMatrix* hessian, HessianProjection /*projection*/) const {
+                                       BlockSymmetricMatrix* hessian,
+                                       HessianProjection /*projection*/) const {
   const bool curvature_term = m_hessian_kind != BendingHessian::gauss_newton && hessian;
   const HingeDerivatives hd = hinge_derivatives(m_hinges, x, curvature_term);
   const Eigen::VectorXd& theta = hd.theta;
@@ -117,7 +119,8 @@ void FitBendingEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd
   Eigen::MatrixXd H, JM;
   if (hessian && m_slots.stale(*hessian)) {
     m_slots.reset(*hessian);
-    for (const Face& face : m_faces) m_slots.add(*hessian, face.vertices.data(), static_cast<int>(face.vertices.size()));
+    for (const Face& face : m_faces)
+      m_slots.add(*hessian, face.vertices.data(), static_cast<int>(face.vertices.size()));
   }
   for (std::size_t fi = 0; fi < m_faces.size(); ++fi) {
     const Face& face = m_faces[fi];
@@ -133,7 +136,8 @@ void FitBendingEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd
     const int nv = static_cast<int>(face.vertices.size());
     Eigen::VectorXd g = Eigen::VectorXd::Zero(3 * nv);
     for (int i = 0; i < ns; ++i)
-      for (int q = 0; q < 4; ++q) g.segment<3>(3 * face.local[i][q]) += c[i] * grads[face.hinges[i]].segment<3>(3 * q);
+      for (int q = 0; q < 4; ++q)
+        g.segment<3>(3 * face.local[i][q]) += c[i] * grads[face.hinges[i]].segment<3>(3 * q);
     for (int a = 0; a < nv; ++a) gradient.segment<3>(3 * face.vertices[a]) += g.segment<3>(3 * a);
     if (!hessian) continue;
     // H = Jt (stiffness M) Jt^T, as JM = Jt M column by column, then H = sum_j JM_j (Jt_j)^T.

@@ -37,7 +37,7 @@ class FitBendingEnergy : public BendingEnergy {
   /// @throw NumericError when a face's stencil cannot determine its curvature (a mesh with
   ///        fewer than three interior edges).
   FitBendingEnergy(const remesh::SheetMesh& mesh, const Material& material,
-                BendingHessian hessian = BendingHessian::gauss_newton);
+                   BendingHessian hessian = BendingHessian::gauss_newton);
 
   void add_pattern(SparsityBuilder& pattern) const override;
   double value(const Eigen::VectorXd& x) const override;
@@ -48,18 +48,19 @@ class FitBendingEnergy : public BendingEnergy {
   Eigen::MatrixX3d face_curvatures(const Eigen::VectorXd& x) const override;
 
   /// Replace the plastic state (#F by 3 curvature [1/m], #F damage).
-  void set_plastic_state(const Eigen::MatrixX3d& plastic_curvature, const Eigen::VectorXd& damage) override;
+  void set_plastic_state(const Eigen::MatrixX3d& plastic_curvature,
+                         const Eigen::VectorXd& damage) override;
 
  private:
   struct Face {
-    std::vector<int> hinges;             // stencil hinges
-    std::vector<int> vertices;           // union of their vertices (local order)
+    std::vector<int> hinges;                // stencil hinges
+    std::vector<int> vertices;              // union of their vertices (local order)
     std::vector<std::array<int, 4>> local;  // per hinge: local index of (v0, v1, a, b)
-    Eigen::MatrixXd P;                   // 3 x |S|: K = P theta (least squares)
-    Eigen::MatrixXd R;                   // |S| x |S|: scaled fit residual (hourglass control)
-    Eigen::MatrixXd M;                   // |S| x |S|: P^T Q P + R^T R, d2E/dtheta2 / stiffness
-    double area = 0;                     // [m^2]
-    double stiffness = 0;                // A D_f [N m^3]
+    Eigen::MatrixXd P;                      // 3 x |S|: K = P theta (least squares)
+    Eigen::MatrixXd R;                      // |S| x |S|: scaled fit residual (hourglass control)
+    Eigen::MatrixXd M;                      // |S| x |S|: P^T Q P + R^T R, d2E/dtheta2 / stiffness
+    double area = 0;                        // [m^2]
+    double stiffness = 0;                   // A D_f [N m^3]
     Eigen::Vector3d plastic = Eigen::Vector3d::Zero();
   };
   void build_stencil(int f, const CurvatureStencils& stencils, const Eigen::MatrixX3i& faces,

@@ -76,7 +76,8 @@ HandleEnergy::HandleEnergy(const remesh::SheetMesh& mesh, const Eigen::VectorXd&
                            const std::vector<HandleSpec>& handles)
     : HandleEnergy(mesh, anchor_handles(mesh, x0, handles)) {}
 
-HandleEnergy::HandleEnergy(const remesh::SheetMesh& mesh, const std::vector<AnchoredHandle>& handles) {
+HandleEnergy::HandleEnergy(const remesh::SheetMesh& mesh,
+                           const std::vector<AnchoredHandle>& handles) {
   const Eigen::MatrixX3i F = mesh.faces();
   m_handles.reserve(handles.size());
   for (const AnchoredHandle& a : handles) {
@@ -94,7 +95,9 @@ void HandleEnergy::add_pattern(SparsityBuilder& pattern) const {
   for (const auto& h : m_handles) pattern.add_clique(h.v.data(), 3);
 }
 
-void HandleEnergy::begin_step(const StepContext& ctx, const Eigen::VectorXd&) { m_t1 = ctx.time_t1(); }
+void HandleEnergy::begin_step(const StepContext& ctx, const Eigen::VectorXd&) {
+  m_t1 = ctx.time_t1();
+}
 
 Eigen::Vector3d HandleEnergy::point(int i, const Eigen::VectorXd& x) const {
   const Bound& b = m_handles[i];
@@ -119,7 +122,8 @@ double HandleEnergy::value(const Eigen::VectorXd& x) const {
 }
 
 void HandleEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd& g,
-                                   BlockSymmetricMatrix* H, HessianProjection /*projection*/) const {
+                                   BlockSymmetricMatrix* H,
+                                   HessianProjection /*projection*/) const {
   for (int i = 0; i < size(); ++i) {
     if (!active(i, m_t1)) continue;
     const Bound& b = m_handles[i];

@@ -12,7 +12,7 @@ namespace papersim::simulation {
 
 /// A keyframe of a handle: displacement from the point's initial world position.
 struct HandleKeyframe {
-  double time = 0.0;                                     ///< [s]
+  double time = 0.0;                                       ///< [s]
   Eigen::Vector3d displacement = Eigen::Vector3d::Zero();  ///< [m]
 };
 
@@ -40,7 +40,8 @@ struct AnchoredHandle {
 /// Anchors handles at the world positions their material points have in (mesh, positions).
 /// @param positions 3N world positions [m]
 /// @throw SceneError when a material point lies outside the sheet.
-std::vector<AnchoredHandle> anchor_handles(const remesh::SheetMesh& mesh, const Eigen::VectorXd& positions,
+std::vector<AnchoredHandle> anchor_handles(const remesh::SheetMesh& mesh,
+                                           const Eigen::VectorXd& positions,
                                            const std::vector<HandleSpec>& handles);
 
 class HandleEnergy : public EnergyTerm {
@@ -73,8 +74,8 @@ class HandleEnergy : public EnergyTerm {
   struct Bound {
     HandleSpec spec;
     std::array<int, 3> v;
-    Eigen::Vector3d w;        // barycentric weights
-    Eigen::Vector3d start;    // initial world position [m]
+    Eigen::Vector3d w;      // barycentric weights
+    Eigen::Vector3d start;  // initial world position [m]
   };
   std::vector<Bound> m_handles;
   double m_t1 = 0.0;

@@ -10,7 +10,8 @@ namespace papersim::simulation {
 
 LiftBodyEnergy::LiftBodyEnergy(int block, double weight, const Eigen::Vector3d& gravity)
     : m_block(block), m_gravity(gravity) {
-  PAPERSIM_ASSERT(weight > 0 && gravity.norm() > 0, "LiftBodyEnergy: weight and gravity must be non-zero");
+  PAPERSIM_ASSERT(weight > 0 && gravity.norm() > 0,
+                  "LiftBodyEnergy: weight and gravity must be non-zero");
   m_mass = weight / gravity.norm();
   m_stop_kappa = weight / -collision::barrier_first_derivative(REST, STOP);
 }
@@ -35,7 +36,8 @@ double LiftBodyEnergy::value(const Eigen::VectorXd& x) const {
 }
 
 void LiftBodyEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd& gradient,
-                                     BlockSymmetricMatrix* hessian, HessianProjection /*projection*/) const {
+                                     BlockSymmetricMatrix* hessian,
+                                     HessianProjection /*projection*/) const {
   const Eigen::Vector3d q = x.segment<3>(3 * m_block);
   const double k = m_mass / (m_h * m_h);
   Eigen::Vector3d grad = k * (q - m_pred) - m_mass * m_gravity;

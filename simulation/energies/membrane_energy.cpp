@@ -1,9 +1,9 @@
 #include "simulation/energies/membrane_energy.hpp"
 
+#include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 #include <Eigen/SVD>
-#include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
 
@@ -45,7 +45,8 @@ CFunction stvk(const Vec3& c, double lambda, double mu) {
 /// stretches): sum_i kappa b(L - lambda_i, dhat) keeps every lambda_i below L (stretch), and
 /// with Lc > 0 sum_i kappa b(lambda_i - Lc, dhat_c) keeps it above Lc (compression). Hessian by
 /// the Daleckii-Krein formula for spectral functions.
-CFunction limit_barrier(const Vec3& c, double L, double dhat, double Lc, double dhat_c, double kappa) {
+CFunction limit_barrier(const Vec3& c, double L, double dhat, double Lc, double dhat_c,
+                        double kappa) {
   CFunction r;
   // Most faces are far from both limits: decide that from the eigenvalues in closed form,
   // mean -+ radius, before any eigenvector is computed.
@@ -121,7 +122,6 @@ Eigen::Matrix<double, 3, 9> c_jacobian(const Eigen::Matrix<double, 3, 2>& F,
   return J;
 }
 
-
 /// The arc model's fade-out: psi = 1 / (1 + (s / S_C)^4) [rad].
 constexpr double S_C = 0.5;
 
@@ -146,7 +146,8 @@ void MembraneEnergy::build_arcs(const remesh::SheetMesh& mesh) {
     CurvatureFit& fit = m_fits[f];
     stencils.add_face_hinges(fit.hinges, f);
     if (!stencils.determined(fit.hinges)) stencils.add_neighbour_hinges(fit.hinges);
-    if (!stencils.grow_until_determined(fit.hinges, f)) {  // too few interior edges (a mesh of one or two faces)
+    if (!stencils.grow_until_determined(
+            fit.hinges, f)) {  // too few interior edges (a mesh of one or two faces)
       fit.hinges.clear();
       fit.P.setZero(3, 0);
       continue;
@@ -190,7 +191,8 @@ void MembraneEnergy::build_arcs(const remesh::SheetMesh& mesh) {
     for (int h : a.hinges) a.local.push_back(local_hinge(m_hinges, h, a.vertices));
     for (int g : a.faces)
       for (int h : m_fits[g].hinges)
-        a.fit_local.push_back(static_cast<int>(std::find(a.hinges.begin(), a.hinges.end(), h) - a.hinges.begin()));
+        a.fit_local.push_back(
+            static_cast<int>(std::find(a.hinges.begin(), a.hinges.end(), h) - a.hinges.begin()));
   }
 }
 
@@ -203,7 +205,8 @@ Eigen::Matrix3Xd MembraneEnergy::face_curvatures(const Eigen::VectorXd& theta) c
   return K;
 }
 
-MembraneEnergy::Delta MembraneEnergy::arc_delta(double L, double size, const Eigen::RowVector3d& qrow,
+MembraneEnergy::Delta MembraneEnergy::arc_delta(double L, double size,
+                                                const Eigen::RowVector3d& qrow,
                                                 const Eigen::Vector3d& K, bool derivatives) {
   // delta = psi(q) u with u = L^4 k^2 / 12, k = qrow K, and psi = 1 / (1 + c q^2),
   // q = h^2 K^T M K = s^2 (M = diag(1, 1, 2): |K|^2 in Voigt), c = 1 / S_C^4: smooth in K.
@@ -260,20 +263,22 @@ MembraneEnergy::MembraneEnergy(const Eigen::MatrixX2d& X, const Eigen::MatrixX3i
 
 void MembraneEnergy::add_pattern(SparsityBuilder& pattern) const {
   if (arc()) {
-    for (const auto& a : m_arcs) pattern.add_clique(a.vertices.data(), static_cast<int>(a.vertices.size()));
+    for (const auto& a : m_arcs)
+      pattern.add_clique(a.vertices.data(), static_cast<int>(a.vertices.size()));
     return;
   }
   for (const auto& t : m_tris) pattern.add_clique(t.v.data(), 3);
 }
 
 double MembraneEnergy::element(int f, const Eigen::Matrix<double, 9, 1>& xs,
-                               Eigen::Matrix<double, 9, 1>* g,
-                               Eigen::Matrix<double, 9, 9>* H, bool project) const {
+                               Eigen::Matrix<double, 9, 1>* g, Eigen::Matrix<double, 9, 9>* H,
+                               bool project) const {
   const Triangle& t = m_tris[f];
   Eigen::Matrix<double, 3, 2> F = Eigen::Matrix<double, 3, 2>::Zero();
   for (int i = 0; i < 3; ++i) F += xs.segment<3>(3 * i) * t.w.row(i);
   const Vec3 c(F.col(0).squaredNorm(), F.col(1).squaredNorm(), F.col(0).dot(F.col(1)));
-  const CFunction W = energy_density(c, m_lambda, m_mu, m_limit, m_dhat, m_limit_low, m_dhat_low, m_kappa);
+  const CFunction W =
+      energy_density(c, m_lambda, m_mu, m_limit, m_dhat, m_limit_low, m_dhat_low, m_kappa);
   if (!std::isfinite(W.value)) return INF;
   if (!g && !H) return t.area * W.value;
   // dc/dx_j: c0 -> 2 w_j0 F0, c1 -> 2 w_j1 F1, c2 -> w_j0 F1 + w_j1 F0.
@@ -296,7 +301,8 @@ double MembraneEnergy::element(int f, const Eigen::Matrix<double, 9, 1>& xs,
   return t.area * W.value;
 }
 
-void MembraneEnergy::arc_deltas(int f, const Eigen::Matrix3Xd& K, bool derivatives, Delta d[3]) const {
+void MembraneEnergy::arc_deltas(int f, const Eigen::Matrix3Xd& K, bool derivatives,
+                                Delta d[3]) const {
   const Arc& a = m_arcs[f];
   for (int j = 0; j < 3; ++j) {
     Eigen::Vector3d Ke = Eigen::Vector3d::Zero();  // the edge's curvature, from its faces'
@@ -347,7 +353,8 @@ double MembraneEnergy::arc_element(int f, const Eigen::VectorXd& x, const Eigen:
     }
   }
   s.Dd.resize(3, n);
-  for (int j = 0; j < 3; ++j) s.Dd.row(j).noalias() = d[j].gradient.transpose() * s.M.middleRows<3>(3 + 3 * j);
+  for (int j = 0; j < 3; ++j)
+    s.Dd.row(j).noalias() = d[j].gradient.transpose() * s.M.middleRows<3>(3 + 3 * j);
   const Eigen::Matrix<double, 3, 9> Jc = c_jacobian(F, t.w);
   // Rows 0-2: dc'/dx = dc/dx (the corners, local 0-2) + G d delta / dx.
   s.M.topRows<3>().noalias() = a.G * s.Dd;
@@ -373,12 +380,13 @@ double MembraneEnergy::arc_element(int f, const Eigen::VectorXd& x, const Eigen:
     }
   } else {
     s.D.topLeftCorner<3, 3>() = t.area * W.hess;
-    for (int j = 0; j < 3; ++j) s.D.block<3, 3>(3 + 3 * j, 3 + 3 * j) = t.area * beta[j] * d[j].hessian;
+    for (int j = 0; j < 3; ++j)
+      s.D.block<3, 3>(3 + 3 * j, 3 + 3 * j) = t.area * beta[j] * d[j].hessian;
   }
   s.DM.resize(12, n);
   for (int j = 0; j < 4; ++j) {
     const Eigen::Matrix3d Dj = project ? Eigen::Matrix3d(s.D.block<3, 3>(3 * j, 3 * j).transpose())
-                                         : Eigen::Matrix3d(s.D.block<3, 3>(3 * j, 3 * j));
+                                       : Eigen::Matrix3d(s.D.block<3, 3>(3 * j, 3 * j));
     s.DM.middleRows<3>(3 * j).noalias() = Dj.lazyProduct(s.M.middleRows<3>(3 * j));
   }
   // Projected: H = (L^T M)^T (L^T M); exact: H = M^T (D M). Lower blocks, then mirrored.
@@ -388,10 +396,13 @@ double MembraneEnergy::arc_element(int f, const Eigen::VectorXd& x, const Eigen:
     const Eigen::Map<const Eigen::Matrix<double, 12, 3>> right(s.DM.data() + 36 * b);
     for (int q = b; q < n / 3; ++q)
       s.H.block<3, 3>(3 * q, 3 * b).noalias() =
-          Eigen::Map<const Eigen::Matrix<double, 12, 3>>(left + 36 * q).transpose().lazyProduct(right);
+          Eigen::Map<const Eigen::Matrix<double, 12, 3>>(left + 36 * q)
+              .transpose()
+              .lazyProduct(right);
   }
   for (int b = 0; b < n / 3; ++b) {  // the upper triangle from the lower, block by block
-    for (int q = b + 1; q < n / 3; ++q) s.H.block<3, 3>(3 * b, 3 * q) = s.H.block<3, 3>(3 * q, 3 * b).transpose();
+    for (int q = b + 1; q < n / 3; ++q)
+      s.H.block<3, 3>(3 * b, 3 * q) = s.H.block<3, 3>(3 * q, 3 * b).transpose();
     s.H(3 * b, 3 * b + 1) = s.H(3 * b + 1, 3 * b);
     s.H(3 * b, 3 * b + 2) = s.H(3 * b + 2, 3 * b);
     s.H(3 * b + 1, 3 * b + 2) = s.H(3 * b + 2, 3 * b + 1);
@@ -432,7 +443,8 @@ double MembraneEnergy::arc_element(int f, const Eigen::VectorXd& x, const Eigen:
     const auto& loc = a.local[l];
     const Eigen::Matrix<double, 12, 12>& Hh = (*hesses)[a.hinges[l]];
     for (int q = 0; q < 4; ++q)
-      for (int r = 0; r < 4; ++r) s.H.block<3, 3>(3 * loc[q], 3 * loc[r]) += w * Hh.block<3, 3>(3 * q, 3 * r);
+      for (int r = 0; r < 4; ++r)
+        s.H.block<3, 3>(3 * loc[q], 3 * loc[r]) += w * Hh.block<3, 3>(3 * q, 3 * r);
   }
   return value;
 }
@@ -463,7 +475,8 @@ double MembraneEnergy::value(const Eigen::VectorXd& x) const {
 }
 
 void MembraneEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd& gradient,
-                                     BlockSymmetricMatrix* hessian, HessianProjection projection) const {
+                                     BlockSymmetricMatrix* hessian,
+                                     HessianProjection projection) const {
   const bool project = projection == HessianProjection::psd;
   if (arc()) {
     const bool exact = hessian && !project;
@@ -472,7 +485,8 @@ void MembraneEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd& 
     ArcWork work;
     if (hessian && m_slots.stale(*hessian)) {
       m_slots.reset(*hessian);
-      for (const Arc& a : m_arcs) m_slots.add(*hessian, a.vertices.data(), static_cast<int>(a.vertices.size()));
+      for (const Arc& a : m_arcs)
+        m_slots.add(*hessian, a.vertices.data(), static_cast<int>(a.vertices.size()));
     }
     for (int f = 0; f < static_cast<int>(m_tris.size()); ++f) {
       const Arc& a = m_arcs[f];
@@ -482,7 +496,8 @@ void MembraneEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd& 
       for (size_t i = 0; i < a.vertices.size(); ++i)
         gradient.segment<3>(3 * a.vertices[i]) += work.g.segment<3>(3 * i);
       if (hessian)
-        hessian->add_element(a.vertices.data(), static_cast<int>(a.vertices.size()), m_slots.slots(f), work.H.data());
+        hessian->add_element(a.vertices.data(), static_cast<int>(a.vertices.size()),
+                             m_slots.slots(f), work.H.data());
     }
     return;
   }

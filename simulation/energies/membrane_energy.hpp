@@ -82,7 +82,8 @@ class MembraneEnergy : public EnergyTerm {
   /// The arc model's correction of an edge's squared length [m^2]: psi(size |K|) L^4 k^2 / 12,
   /// with L its material length, q = (tx^2, ty^2, 2 tx ty) of its material direction, k = q K
   /// the normal curvature along it and `size` the fade's length (sqrt(2 x the faces' mean area)).
-  static double arc_correction(double L, double size, const Eigen::RowVector3d& q, const Eigen::Vector3d& K) {
+  static double arc_correction(double L, double size, const Eigen::RowVector3d& q,
+                               const Eigen::Vector3d& K) {
     return arc_delta(L, size, q, K, false).value;
   }
 
@@ -111,7 +112,8 @@ class MembraneEnergy : public EnergyTerm {
     std::vector<int> hinges;                // the union of the stencils of `faces`
     std::vector<std::array<int, 4>> local;  // per hinge: local index of (v0, v1, a, b)
     std::vector<int> faces;                 // the face, then its edge neighbours
-    std::vector<int> fit_local;  // per face of `faces` in turn, per hinge of its fit: index in `local`
+    std::vector<int>
+        fit_local;  // per face of `faces` in turn, per hinge of its fit: index in `local`
     /// Edge j (opposite corner j): material length, (tx^2, ty^2, 2 tx ty), and the weights of
     /// `faces` in its curvature (1/2 each across an interior edge, 1 on the boundary).
     Eigen::Vector3d length;
@@ -129,16 +131,16 @@ class MembraneEnergy : public EnergyTerm {
   };
   /// An arc element's derivatives and the work matrices behind them, reused from face to face.
   struct ArcWork {
-    Eigen::Matrix<double, 12, Eigen::Dynamic> M;  // 12 x n: dC'/dx, then dK_e/dx of edges 0-2
-    Eigen::Matrix<double, 3, Eigen::Dynamic> Dd;  // 3 x n: d delta_e / dx
-    Eigen::Matrix<double, 12, 12> D;             // the second derivatives M is contracted with
+    Eigen::Matrix<double, 12, Eigen::Dynamic> M;   // 12 x n: dC'/dx, then dK_e/dx of edges 0-2
+    Eigen::Matrix<double, 3, Eigen::Dynamic> Dd;   // 3 x n: d delta_e / dx
+    Eigen::Matrix<double, 12, 12> D;               // the second derivatives M is contracted with
     Eigen::Matrix<double, 12, Eigen::Dynamic> DM;  // D M (or L^T M, D = L L^T)
-    Eigen::VectorXd g;                           // gradient over the local vertices
-    Eigen::VectorXd coefficient;                 // per hinge of the element: its Hessian's weight
-    Eigen::MatrixXd H;                           // Hessian over the local vertices
+    Eigen::VectorXd g;                             // gradient over the local vertices
+    Eigen::VectorXd coefficient;                   // per hinge of the element: its Hessian's weight
+    Eigen::MatrixXd H;                             // Hessian over the local vertices
   };
-  static Delta arc_delta(double L, double size, const Eigen::RowVector3d& q, const Eigen::Vector3d& K,
-                         bool derivatives);
+  static Delta arc_delta(double L, double size, const Eigen::RowVector3d& q,
+                         const Eigen::Vector3d& K, bool derivatives);
   void build_arcs(const remesh::SheetMesh& mesh);
   /// Every face's fitted curvature K (Voigt, 3 x #F) from the hinge angles.
   Eigen::Matrix3Xd face_curvatures(const Eigen::VectorXd& theta) const;
@@ -155,12 +157,12 @@ class MembraneEnergy : public EnergyTerm {
   std::vector<Arc> m_arcs;  // empty under the chord model
   std::vector<CurvatureFit> m_fits;
   remesh::Hinges m_hinges;
-  double m_lambda, m_mu;   // plane-stress Lame parameters x thickness [N/m]
-  double m_limit;          // L = (1 + eps)^2, 0 when disabled
-  double m_dhat;           // barrier activation distance in lambda
-  double m_limit_low = 0;  // Lc = (1 - compression_limit)^2, 0 when disabled
-  double m_dhat_low = 0;   // its activation distance in lambda
-  double m_kappa;          // barrier stiffness [J/m^2]
+  double m_lambda, m_mu;         // plane-stress Lame parameters x thickness [N/m]
+  double m_limit;                // L = (1 + eps)^2, 0 when disabled
+  double m_dhat;                 // barrier activation distance in lambda
+  double m_limit_low = 0;        // Lc = (1 - compression_limit)^2, 0 when disabled
+  double m_dhat_low = 0;         // its activation distance in lambda
+  double m_kappa;                // barrier stiffness [J/m^2]
   mutable ElementSlots m_slots;  // the elements' places in the Hessian (arcs or triangles)
 };
 

@@ -30,15 +30,16 @@ constexpr double BOUNDARY_PENALTY = 1e6;
 }  // namespace
 
 MorleyBendingEnergy::MorleyBendingEnergy(const remesh::SheetMesh& mesh, const Material& material,
-                             BendingHessian hessian_kind, const std::vector<int>& clamped_faces)
-    : BendingEnergy(mesh, material, hessian_kind),
-      m_C(std::make_unique<Factor>()) {
+                                         BendingHessian hessian_kind,
+                                         const std::vector<int>& clamped_faces)
+    : BendingEnergy(mesh, material, hessian_kind), m_C(std::make_unique<Factor>()) {
   const Eigen::MatrixX3i F = mesh.faces();
   const Eigen::MatrixX2d X = mesh.material_coords();
   m_faces.resize(F.rows());
   for (int f : clamped_faces) {
     if (f < 0 || f >= F.rows())
-      throw NumericError("bending: clamped face " + std::to_string(f) + " is not a face of the mesh");
+      throw NumericError("bending: clamped face " + std::to_string(f) +
+                         " is not a face of the mesh");
     m_faces[f].clamped = true;
   }
   // Face geometry: R_f (s = R_f K for quadratics) per local edge k (opposite corner k).
@@ -46,7 +47,8 @@ MorleyBendingEnergy::MorleyBendingEnergy(const remesh::SheetMesh& mesh, const Ma
     Face& face = m_faces[f];
     Eigen::Vector2d p[3];
     for (int k = 0; k < 3; ++k) p[k] = X.row(F(f, k));
-    face.area = 0.5 * std::abs((p[1] - p[0]).x() * (p[2] - p[0]).y() - (p[1] - p[0]).y() * (p[2] - p[0]).x());
+    face.area = 0.5 * std::abs((p[1] - p[0]).x() * (p[2] - p[0]).y() -
+                               (p[1] - p[0]).y() * (p[2] - p[0]).x());
     for (int k = 0; k < 3; ++k) {
       const Eigen::Vector2d pi = p[(k + 1) % 3], pj = p[(k + 2) % 3], pk = p[k];
       const Eigen::Vector2d e = (pj - pi).normalized();
@@ -71,7 +73,8 @@ MorleyBendingEnergy::MorleyBendingEnergy(const remesh::SheetMesh& mesh, const Ma
     const int f0 = m_hinges.faces(h, 0), f1 = m_hinges.faces(h, 1);
     const int k0 = local_edge(f0, v[2]), k1 = local_edge(f1, v[3]);
     // The two faces' slope rows add up to the hinge's angle row (sign t of the convention).
-    const Eigen::RowVector3d row = hinge_curvature_row(X.row(v[0]), X.row(v[1]), X.row(v[2]), X.row(v[3]));
+    const Eigen::RowVector3d row =
+        hinge_curvature_row(X.row(v[0]), X.row(v[1]), X.row(v[2]), X.row(v[3]));
     const Eigen::RowVector3d sum = m_faces[f0].R.row(k0) + m_faces[f1].R.row(k1);
     const double t = sum.dot(row) > 0 ? 1.0 : -1.0;
     if ((sum - t * row).norm() > 1e-8 * row.norm())
@@ -152,7 +155,8 @@ void MorleyBendingEnergy::build_elements() {
   auto to_matrix = [](const std::vector<int>& theta, const std::vector<int>& psi,
                       const std::vector<std::pair<int, Eigen::Vector3d>>& columns) {
     Eigen::MatrixXd L = Eigen::MatrixXd::Zero(3, theta.size() + psi.size());
-    for (const auto& [c, v] : columns) L.col(c >= 0 ? c : static_cast<int>(theta.size()) - 1 - c) += v;
+    for (const auto& [c, v] : columns)
+      L.col(c >= 0 ? c : static_cast<int>(theta.size()) - 1 - c) += v;
     return L;
   };
   // Face element: K_f - Kp_f = L u - Kp_f over the face's own unknowns u.
@@ -226,9 +230,11 @@ void MorleyBendingEnergy::build_elements() {
   }
 }
 
-void MorleyBendingEnergy::set_plastic_state(const Eigen::MatrixX3d& k, const Eigen::VectorXd& damage) {
+void MorleyBendingEnergy::set_plastic_state(const Eigen::MatrixX3d& k,
+                                            const Eigen::VectorXd& damage) {
   const int nf = static_cast<int>(m_faces.size());
-  PAPERSIM_ASSERT(k.rows() == nf && damage.size() == nf, "MorleyBendingEnergy::set_plastic_state: sizes");
+  PAPERSIM_ASSERT(k.rows() == nf && damage.size() == nf,
+                  "MorleyBendingEnergy::set_plastic_state: sizes");
   const bool first = m_stiffness.empty();
   m_plastic.resize(nf);
   m_stiffness.resize(nf, 0.0);
@@ -252,8 +258,8 @@ void MorleyBendingEnergy::update_weights() {
     if (m_face_element[f] >= 0) m_elements[m_face_element[f]].W = m_stiffness[f] * m_Q;
   for (size_t i = 0; i < m_penalties.size(); ++i) {
     const Penalty& pen = m_penalties[i];
-    m_elements[m_num_face_elements + i].W =
-        Eigen::MatrixXd::Constant(1, 1, BOUNDARY_PENALTY * m_stiffness[pen.face] / m_faces[pen.face].area);
+    m_elements[m_num_face_elements + i].W = Eigen::MatrixXd::Constant(
+        1, 1, BOUNDARY_PENALTY * m_stiffness[pen.face] / m_faces[pen.face].area);
   }
   // C = d2E/dpsi2 and A_psi_theta = d2E/dpsi dtheta.
   std::vector<Eigen::Triplet<double>> c_entries, a_entries;
@@ -261,7 +267,8 @@ void MorleyBendingEnergy::update_weights() {
     e.M = e.L.transpose() * e.W * e.L;
     const int nt = static_cast<int>(e.theta.size());
     for (size_t i = 0; i < e.psi.size(); ++i) {
-      for (size_t j = 0; j < e.psi.size(); ++j) c_entries.emplace_back(e.psi[i], e.psi[j], e.M(nt + i, nt + j));
+      for (size_t j = 0; j < e.psi.size(); ++j)
+        c_entries.emplace_back(e.psi[i], e.psi[j], e.M(nt + i, nt + j));
       for (int j = 0; j < nt; ++j) a_entries.emplace_back(e.psi[i], e.theta[j], e.M(nt + i, j));
     }
   }
@@ -289,8 +296,8 @@ void MorleyBendingEnergy::update_offsets() {
     Eigen::Vector3d mean = Eigen::Vector3d::Zero();
     for (int g : pen.neighbours) mean += m_plastic[g];
     mean /= static_cast<double>(pen.neighbours.size());
-    m_elements[m_num_face_elements + i].c =
-        Eigen::VectorXd::Constant(1, m_faces[pen.face].R.row(pen.edge).dot(m_plastic[pen.face] - mean));
+    m_elements[m_num_face_elements + i].c = Eigen::VectorXd::Constant(
+        1, m_faces[pen.face].R.row(pen.edge).dot(m_plastic[pen.face] - mean));
   }
   // b_psi = sum L_psi^T W c: C psi* = b_psi - A_psi_theta theta.
   m_b_psi = Eigen::VectorXd::Zero(m_num_psi);
@@ -317,7 +324,8 @@ void MorleyBendingEnergy::add_pattern(SparsityBuilder& pattern) const {
   }
 }
 
-void MorleyBendingEnergy::unknowns(const Eigen::VectorXd& x, Eigen::VectorXd& theta, Eigen::VectorXd& psi) const {
+void MorleyBendingEnergy::unknowns(const Eigen::VectorXd& x, Eigen::VectorXd& theta,
+                                   Eigen::VectorXd& psi) const {
   if (theta.size() != m_hinges.vertices.rows()) theta = hinge_angles(x);
   psi = m_num_psi > 0 ? Eigen::VectorXd(m_C->ldlt.solve(m_b_psi - m_A_psi_theta * theta))
                       : Eigen::VectorXd();
@@ -379,14 +387,16 @@ Eigen::MatrixX3d MorleyBendingEnergy::face_curvatures(const Eigen::VectorXd& x) 
   Eigen::MatrixX3d K(m_faces.size(), 3);
   for (size_t f = 0; f < m_faces.size(); ++f) {
     const int e = m_face_element[f];
-    K.row(f) = (e < 0 ? m_plastic[f] : Eigen::Vector3d(element_residual(m_elements[e], theta, psi) + m_plastic[f]))
+    K.row(f) = (e < 0 ? m_plastic[f]
+                      : Eigen::Vector3d(element_residual(m_elements[e], theta, psi) + m_plastic[f]))
                    .transpose();
   }
   return K;
 }
 
 void MorleyBendingEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd& gradient,
-                                    BlockSymmetricMatrix* hessian, HessianProjection /*projection*/) const {
+                                          BlockSymmetricMatrix* hessian,
+                                          HessianProjection /*projection*/) const {
   const int nh = static_cast<int>(m_hinges.vertices.rows());
   const bool curvature_term = m_hessian_kind != BendingHessian::gauss_newton && hessian;
   HingeDerivatives hd = hinge_derivatives(m_hinges, x, curvature_term);
@@ -406,7 +416,8 @@ void MorleyBendingEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::Vecto
     for (size_t i = 0; i < e.theta.size(); ++i) dE[e.theta[i]] += g[i], used[e.theta[i]] = 1;
   }
   for (int h = 0; h < nh; ++h)
-    for (int q = 0; q < 4; ++q) gradient.segment<3>(3 * m_hinges.vertices(h, q)) += dE[h] * grads[h].segment<3>(3 * q);
+    for (int q = 0; q < 4; ++q)
+      gradient.segment<3>(3 * m_hinges.vertices(h, q)) += dE[h] * grads[h].segment<3>(3 * q);
   if (!hessian) return;
   if (m_first_block < 0 && m_num_psi > 0)
     throw NumericError("bending: the Hessian needs the integrator's auxiliary blocks");
@@ -437,7 +448,8 @@ void MorleyBendingEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::Vecto
         const int col = slope_column(e, j);
         for (int v : e.vertices) positions.push_back(hessian->position(3 * v, col));
         for (int i = 0; i < np; ++i)
-          if (const int row = slope_column(e, i); row <= col) positions.push_back(hessian->position(row, col));
+          if (const int row = slope_column(e, i); row <= col)
+            positions.push_back(hessian->position(row, col));
       }
       m_slots.add(*hessian, e.vertices.data(), static_cast<int>(e.vertices.size()), positions);
     }

@@ -51,8 +51,8 @@ class MorleyBendingEnergy : public BendingEnergy {
  public:
   /// @param clamped_faces faces held rigidly, slopes included (a clamp's jaws).
   MorleyBendingEnergy(const remesh::SheetMesh& mesh, const Material& material,
-                BendingHessian hessian = BendingHessian::gauss_newton,
-                const std::vector<int>& clamped_faces = {});
+                      BendingHessian hessian = BendingHessian::gauss_newton,
+                      const std::vector<int>& clamped_faces = {});
   ~MorleyBendingEnergy() override;
 
   void add_pattern(SparsityBuilder& pattern) const override;
@@ -79,7 +79,8 @@ class MorleyBendingEnergy : public BendingEnergy {
   /// curvature alone updates the right-hand side of the slope system; a change of damage (so of
   /// stiffness) re-factors it numerically, reusing the symbolic analysis.
   /// @throw NumericError when the slope system cannot be factored
-  void set_plastic_state(const Eigen::MatrixX3d& plastic_curvature, const Eigen::VectorXd& damage) override;
+  void set_plastic_state(const Eigen::MatrixX3d& plastic_curvature,
+                         const Eigen::VectorXd& damage) override;
 
   /// Numeric factorisations of the slope system so far (one at construction) [-].
   long factorizations() const { return m_factorizations; }
@@ -87,19 +88,19 @@ class MorleyBendingEnergy : public BendingEnergy {
  private:
   /// A quadratic element: r = L (theta_ids, psi_ids) - c, energy r^T W r / 2.
   struct Element {
-    std::vector<int> theta;     // hinge indices
-    std::vector<int> psi;       // slope unknowns
-    Eigen::MatrixXd L;          // rows x (|theta| + |psi|)
-    Eigen::VectorXd c;          // offset (plastic curvature)
-    Eigen::MatrixXd W;          // rows x rows
-    std::vector<int> vertices;  // union of the hinges' vertices (local order)
+    std::vector<int> theta;                 // hinge indices
+    std::vector<int> psi;                   // slope unknowns
+    Eigen::MatrixXd L;                      // rows x (|theta| + |psi|)
+    Eigen::VectorXd c;                      // offset (plastic curvature)
+    Eigen::MatrixXd W;                      // rows x rows
+    std::vector<int> vertices;              // union of the hinges' vertices (local order)
     std::vector<std::array<int, 4>> local;  // per hinge: local index of (v0, v1, a, b)
-    std::vector<int> blocks;    // auxiliary blocks of the psi (local order, after the vertices)
+    std::vector<int> blocks;  // auxiliary blocks of the psi (local order, after the vertices)
     std::vector<std::pair<int, int>> psi_at;  // per psi: (local block, component)
-    Eigen::MatrixXd M;          // L^T W L
+    Eigen::MatrixXd M;                        // L^T W L
   };
   struct Face {
-    Eigen::Matrix3d R, Rinv;   // R K = s
+    Eigen::Matrix3d R, Rinv;  // R K = s
     int hinge[3] = {-1, -1, -1};
     double alpha[3] = {0, 0, 0};  // s_k = alpha_k theta + sigma_k psi
     int psi[3] = {-1, -1, -1};
@@ -130,14 +131,14 @@ class MorleyBendingEnergy : public BendingEnergy {
                                  const Eigen::VectorXd& psi) const;
 
   std::vector<Face> m_faces;
-  std::vector<Element> m_elements;  // one per unclamped face, then the boundary penalties
-  std::vector<int> m_face_element;  // face -> its element, -1 for clamped faces
+  std::vector<Element> m_elements;   // one per unclamped face, then the boundary penalties
+  std::vector<int> m_face_element;   // face -> its element, -1 for clamped faces
   std::vector<Penalty> m_penalties;  // element m_num_face_elements + i
   int m_num_face_elements = 0;
   std::vector<Eigen::Vector3d> m_plastic;
-  std::vector<double> m_stiffness;  // A_f D_f
+  std::vector<double> m_stiffness;            // A_f D_f
   Eigen::SparseMatrix<double> m_A_psi_theta;  // d2E / dpsi dtheta
-  Eigen::VectorXd m_b_psi;                     // C psi* = b_psi - A_psi_theta theta
+  Eigen::VectorXd m_b_psi;                    // C psi* = b_psi - A_psi_theta theta
   std::unique_ptr<Factor> m_C;
   std::unique_ptr<BendingEnergy> m_measure;  // the fit model's curvature, for yield_curvatures
   int m_num_psi = 0;

@@ -8,7 +8,8 @@ namespace papersim::simulation {
 template <class Derived>
 typename Derived::PlainObject project_psd(const Eigen::MatrixBase<Derived>& H) {
   Eigen::SelfAdjointEigenSolver<typename Derived::PlainObject> es(H);
-  return es.eigenvectors() * es.eigenvalues().cwiseMax(0.0).asDiagonal() * es.eigenvectors().transpose();
+  return es.eigenvectors() * es.eigenvalues().cwiseMax(0.0).asDiagonal() *
+         es.eigenvectors().transpose();
 }
 
 }  // namespace papersim::simulation

@@ -34,9 +34,11 @@ Eigen::MatrixX3d sheet_positions(const Eigen::VectorXd& x, int nv) {
 
 SelfContactEnergy::SelfContactEnergy(const Eigen::MatrixX2d& X, const Eigen::MatrixX3i& F,
                                      const SelfContactParams& params)
-    : m_mesh(collision::SelfContactMesh::from_faces(F, static_cast<int>(X.rows()))), m_params(params) {
+    : m_mesh(collision::SelfContactMesh::from_faces(F, static_cast<int>(X.rows()))),
+      m_params(params) {
   if (!(params.dhat > 0)) throw std::invalid_argument("self contact: thickness must be positive");
-  if (!(params.stiffness > 0)) throw std::invalid_argument("self contact: stiffness must be positive");
+  if (!(params.stiffness > 0))
+    throw std::invalid_argument("self contact: stiffness must be positive");
   m_stiffness = params.stiffness;
   const Eigen::Index nv = X.rows(), ne = m_mesh.edges.rows();
   m_vertex_area = Eigen::VectorXd::Zero(nv);
@@ -45,7 +47,8 @@ SelfContactEnergy::SelfContactEnergy(const Eigen::MatrixX2d& X, const Eigen::Mat
   for (Eigen::Index e = 0; e < ne; ++e)
     m_edge_rest[e] = (X.row(m_mesh.edges(e, 1)) - X.row(m_mesh.edges(e, 0))).norm();
   for (Eigen::Index f = 0; f < F.rows(); ++f) {
-    const Eigen::Vector2d e1 = X.row(F(f, 1)) - X.row(F(f, 0)), e2 = X.row(F(f, 2)) - X.row(F(f, 0));
+    const Eigen::Vector2d e1 = X.row(F(f, 1)) - X.row(F(f, 0)),
+                          e2 = X.row(F(f, 2)) - X.row(F(f, 0));
     const double a = 0.5 * std::abs(e1.x() * e2.y() - e1.y() * e2.x());
     for (int k = 0; k < 3; ++k) {
       m_vertex_area[F(f, k)] += a / 3;
@@ -54,8 +57,10 @@ SelfContactEnergy::SelfContactEnergy(const Eigen::MatrixX2d& X, const Eigen::Mat
       Eigen::Index lo = 0, hi = ne;
       while (lo < hi) {
         const Eigen::Index mid = (lo + hi) / 2;
-        if (m_mesh.edges(mid, 0) < i || (m_mesh.edges(mid, 0) == i && m_mesh.edges(mid, 1) < j)) lo = mid + 1;
-        else hi = mid;
+        if (m_mesh.edges(mid, 0) < i || (m_mesh.edges(mid, 0) == i && m_mesh.edges(mid, 1) < j))
+          lo = mid + 1;
+        else
+          hi = mid;
       }
       m_edge_area[lo] += a / 3;
     }
@@ -64,7 +69,8 @@ SelfContactEnergy::SelfContactEnergy(const Eigen::MatrixX2d& X, const Eigen::Mat
 
 std::array<int, 4> SelfContactEnergy::vertices(const Pair& p) const {
   if (p.edge_edge)
-    return {{m_mesh.edges(p.a, 0), m_mesh.edges(p.a, 1), m_mesh.edges(p.b, 0), m_mesh.edges(p.b, 1)}};
+    return {
+        {m_mesh.edges(p.a, 0), m_mesh.edges(p.a, 1), m_mesh.edges(p.b, 0), m_mesh.edges(p.b, 1)}};
   return {{p.a, m_mesh.faces(p.b, 0), m_mesh.faces(p.b, 1), m_mesh.faces(p.b, 2)}};
 }
 
@@ -88,7 +94,8 @@ std::uint64_t SelfContactEnergy::key(const Pair& p) {
 }
 
 SelfContactEnergy::Pair SelfContactEnergy::pair_of(std::uint64_t key) {
-  return {(key >> 62) != 0, static_cast<int>((key >> 31) & 0x7fffffff), static_cast<int>(key & 0x7fffffff)};
+  return {(key >> 62) != 0, static_cast<int>((key >> 31) & 0x7fffffff),
+          static_cast<int>(key & 0x7fffffff)};
 }
 
 namespace {
@@ -129,7 +136,8 @@ void SelfContactEnergy::find_candidates(const Eigen::VectorXd& x, const Eigen::V
     // Swept boxes along dx less its mean: pair distances are translation invariant.
     m_segment_dx = *dx;
     const Eigen::Vector3d mean = vertex_mean(*dx);
-    for (Eigen::Index v = 0; v < x.size() / 3; ++v) x1.segment<3>(3 * v) += dx->segment<3>(3 * v) - mean;
+    for (Eigen::Index v = 0; v < x.size() / 3; ++v)
+      x1.segment<3>(3 * v) += dx->segment<3>(3 * v) - mean;
     m_margin = 0;
   } else {
     m_segment_dx.resize(0);
@@ -159,12 +167,14 @@ double SelfContactEnergy::pair_motion(const Pair& p, const Eigen::VectorXd& move
   return moved[v[0]] + std::max({moved[v[1]], moved[v[2]], moved[v[3]]});
 }
 
-void SelfContactEnergy::build_candidates(const Eigen::VectorXd& x, const Eigen::VectorXd& dx) const {
+void SelfContactEnergy::build_candidates(const Eigen::VectorXd& x,
+                                         const Eigen::VectorXd& dx) const {
   // A set at a base with a margin covers the segment when it covers both ends (the relative
   // motion is convex along the segment: a maximum of norms of affine functions).
   if (m_segment_dx.size() == 0 && covered(x) && covered(x + dx)) return;
+  // the margin (2 dhat) covers the whole step
   if (relative_motion(dx) <= m_params.dhat)
-    find_candidates(x, nullptr);  // the margin (2 dhat) covers the whole step
+    find_candidates(x, nullptr);
   else
     find_candidates(x, &dx);
 }
@@ -173,8 +183,9 @@ void SelfContactEnergy::ensure_candidates(const Eigen::VectorXd& x) const {
   if (!covered(x)) find_candidates(x, nullptr);
 }
 
-double SelfContactEnergy::stencil_distance2(std::size_t k, const PairPoints& pts, DistanceStencil& s,
-                                            double reject2, const Eigen::VectorXd& moved) const {
+double SelfContactEnergy::stencil_distance2(std::size_t k, const PairPoints& pts,
+                                            DistanceStencil& s, double reject2,
+                                            const Eigen::VectorXd& moved) const {
   const Pair& p = m_candidates[k];
   // A bound kept from an earlier x first, then one from bounding spheres: most candidates are
   // neighbours in the mesh a whole edge apart, and the closest-feature search costs several
@@ -203,10 +214,13 @@ void SelfContactEnergy::begin_step(const StepContext& ctx, const Eigen::VectorXd
   m_stats->max_stiffness = std::max(m_stats->max_stiffness, m_stiffness);
   const int nv = m_mesh.num_vertices;
   const Eigen::MatrixX3d p = sheet_positions(x_t0, nv);
-  m_floor = nv > 0 ? floor_fraction * (p.colwise().maxCoeff() - p.colwise().minCoeff()).norm() : 0.0;
+  m_floor =
+      nv > 0 ? floor_fraction * (p.colwise().maxCoeff() - p.colwise().minCoeff()).norm() : 0.0;
   if (m_params.trace.on(Trace::intersect))
-    m_params.trace(Trace::intersect, "self t %.6f h %.3e: %d intersecting pairs", ctx.time_t0, ctx.h,
-                   collision::count_self_intersections(sheet_positions(x_t0, m_mesh.num_vertices), m_mesh.faces));
+    m_params.trace(Trace::intersect, "self t %.6f h %.3e: %d intersecting pairs", ctx.time_t0,
+                   ctx.h,
+                   collision::count_self_intersections(sheet_positions(x_t0, m_mesh.num_vertices),
+                                                       m_mesh.faces));
   ensure_candidates(x_t0);
   m_last_below = distance_below(x_t0, m_floor);
   m_friction.clear();
@@ -221,7 +235,8 @@ void SelfContactEnergy::begin_step(const StepContext& ctx, const Eigen::VectorXd
     const double d2 = stencil_distance2(k, pts, s, dhat * dhat, moved);
     if (d2 >= dhat * dhat || d2 <= 0) continue;
     const double d = std::sqrt(d2);
-    const double m = p.edge_edge ? collision::edge_edge_mollifier(pts, mollifier_eps(p), nullptr, nullptr) : 1.0;
+    const double m =
+        p.edge_edge ? collision::edge_edge_mollifier(pts, mollifier_eps(p), nullptr, nullptr) : 1.0;
     const double lambda = -kappa * weight(p) * m * collision::barrier_first_derivative(d, dhat);
     if (!(lambda > 0)) continue;
     FrictionPair fp;
@@ -230,7 +245,8 @@ void SelfContactEnergy::begin_step(const StepContext& ctx, const Eigen::VectorXd
     fp.r_t0 = Eigen::Vector3d::Zero();
     for (int k = 0; k < 4; ++k) fp.r_t0 += fp.weights[k] * pts[k];
     const Eigen::Vector3d n = fp.r_t0.normalized();
-    const Eigen::Vector3d a = std::abs(n.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+    const Eigen::Vector3d a =
+        std::abs(n.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
     fp.T.col(0) = n.cross(a).normalized();
     fp.T.col(1) = n.cross(fp.T.col(0));
     fp.mu_lambda = m_params.friction * lambda;
@@ -240,9 +256,11 @@ void SelfContactEnergy::begin_step(const StepContext& ctx, const Eigen::VectorXd
   std::sort(m_friction_keys.begin(), m_friction_keys.end());
   if (m_params.trace.on(Trace::contact)) {
     double largest = 0, total = 0;
-    for (const FrictionPair& fp : m_friction) largest = std::max(largest, fp.mu_lambda), total += fp.mu_lambda;
+    for (const FrictionPair& fp : m_friction)
+      largest = std::max(largest, fp.mu_lambda), total += fp.mu_lambda;
     m_params.trace(Trace::contact,
-                   "self t %.6f h %.3e: %zu friction pairs, mu lambda largest %.3e N, sum %.3e N, static zone %.3e m",
+                   "self t %.6f h %.3e: %zu friction pairs, mu lambda largest %.3e N, sum %.3e N, "
+                   "static zone %.3e m",
                    ctx.time_t0, ctx.h, m_friction.size(), largest, total, m_eps);
   }
 }
@@ -251,7 +269,8 @@ bool SelfContactEnergy::update_pattern(const Eigen::VectorXd& x) {
   ScopedTimer timer(m_stats->seconds);
   ensure_candidates(x);
   const double dhat2 = m_params.dhat * m_params.dhat, near2 = 4 * dhat2;
-  bool missing = !std::includes(m_pattern.begin(), m_pattern.end(), m_friction_keys.begin(), m_friction_keys.end());
+  bool missing = !std::includes(m_pattern.begin(), m_pattern.end(), m_friction_keys.begin(),
+                                m_friction_keys.end());
   std::vector<Pair> near;
   const Eigen::VectorXd moved = motions(x);
   for (std::size_t k = 0; k < m_candidates.size(); ++k) {
@@ -260,7 +279,8 @@ bool SelfContactEnergy::update_pattern(const Eigen::VectorXd& x) {
     const double d2 = stencil_distance2(k, points(p, x), s, near2, moved);
     if (d2 >= near2) continue;
     near.push_back(p);
-    if (!missing && d2 < dhat2) missing = !std::binary_search(m_pattern.begin(), m_pattern.end(), key(p));
+    if (!missing && d2 < dhat2)
+      missing = !std::binary_search(m_pattern.begin(), m_pattern.end(), key(p));
   }
   // Pairs far apart in the mesh add fill to the factorisation (measured on the strip scene:
   // 1.7x the factor's nonzeros), so a pattern holding far more pairs than are near (a contact
@@ -277,7 +297,8 @@ bool SelfContactEnergy::update_pattern(const Eigen::VectorXd& x) {
   return true;
 }
 
-void SelfContactEnergy::set_pattern(std::vector<Pair> pairs, const std::vector<std::uint64_t>& extra_keys) {
+void SelfContactEnergy::set_pattern(std::vector<Pair> pairs,
+                                    const std::vector<std::uint64_t>& extra_keys) {
   m_pattern.clear();
   for (const Pair& p : pairs) m_pattern.push_back(key(p));
   m_pattern.insert(m_pattern.end(), extra_keys.begin(), extra_keys.end());
@@ -303,8 +324,9 @@ void SelfContactEnergy::restore_pattern(const std::vector<std::array<int, 3>>& p
     const int na = kind == 1 ? static_cast<int>(m_mesh.edges.rows()) : m_mesh.num_vertices;
     const int nb = static_cast<int>(kind == 1 ? m_mesh.edges.rows() : m_mesh.faces.rows());
     if ((kind != 0 && kind != 1) || a < 0 || a >= na || b < 0 || b >= nb)
-      throw std::invalid_argument("self-contact pattern pair (" + std::to_string(kind) + ", " + std::to_string(a) +
-                                  ", " + std::to_string(b) + ") is not a pair of this mesh");
+      throw std::invalid_argument("self-contact pattern pair (" + std::to_string(kind) + ", " +
+                                  std::to_string(a) + ", " + std::to_string(b) +
+                                  ") is not a pair of this mesh");
     restored.push_back({kind == 1, a, b});
   }
   set_pattern(std::move(restored), {});
@@ -331,7 +353,8 @@ double SelfContactEnergy::value(const Eigen::VectorXd& x) const {
     const double d2 = stencil_distance2(k, pts, s, dhat * dhat, moved);
     if (d2 >= dhat * dhat) continue;
     if (!(d2 > 0)) return INF;
-    const double m = p.edge_edge ? collision::edge_edge_mollifier(pts, mollifier_eps(p), nullptr, nullptr) : 1.0;
+    const double m =
+        p.edge_edge ? collision::edge_edge_mollifier(pts, mollifier_eps(p), nullptr, nullptr) : 1.0;
     e += kappa * weight(p) * m * collision::barrier(std::sqrt(d2), dhat);
   }
   for (const FrictionPair& fp : m_friction) {
@@ -347,8 +370,8 @@ void SelfContactEnergy::add_pair(const Pair& p, const PairPoints& pts, const Dis
   const double scale = m_stiffness / m_params.dhat * weight(p);
   Vector12d grad;
   Matrix12d hess;
-  collision::pair_barrier_derivatives(s, pts, m_params.dhat, p.edge_edge ? mollifier_eps(p) : 0.0, grad,
-                                      H ? &hess : nullptr);
+  collision::pair_barrier_derivatives(s, pts, m_params.dhat, p.edge_edge ? mollifier_eps(p) : 0.0,
+                                      grad, H ? &hess : nullptr);
   const std::array<int, 4> v = vertices(p);
   for (int k = 0; k < 4; ++k) g.segment<3>(3 * v[k]) += scale * grad.segment<3>(3 * k);
   if (H) {
@@ -357,7 +380,8 @@ void SelfContactEnergy::add_pair(const Pair& p, const PairPoints& pts, const Dis
   }
 }
 
-void SelfContactEnergy::add_friction(const Eigen::VectorXd& x, Eigen::VectorXd& g, BlockSymmetricMatrix* H) const {
+void SelfContactEnergy::add_friction(const Eigen::VectorXd& x, Eigen::VectorXd& g,
+                                     BlockSymmetricMatrix* H) const {
   for (const FrictionPair& fp : m_friction) {
     Eigen::Vector3d r = -fp.r_t0;
     for (int k = 0; k < 4; ++k) r += fp.weights[k] * x.segment<3>(3 * fp.vertices[k]);
@@ -366,16 +390,19 @@ void SelfContactEnergy::add_friction(const Eigen::VectorXd& x, Eigen::VectorXd& 
     for (int k = 0; k < 4; ++k) g.segment<3>(3 * fp.vertices[k]) += fp.weights[k] * f;
     if (!H) continue;
     // d r / d x_k = w_k I: Hess = (w w^T) kron (T Hf T^T), PSD as Hf is (barrier.hpp).
-    const Eigen::Matrix3d M = fp.mu_lambda * fp.T * collision::friction_hessian(u, m_eps) * fp.T.transpose();
+    const Eigen::Matrix3d M =
+        fp.mu_lambda * fp.T * collision::friction_hessian(u, m_eps) * fp.T.transpose();
     Matrix12d local;
     for (int a = 0; a < 4; ++a)
-      for (int b = 0; b < 4; ++b) local.block<3, 3>(3 * a, 3 * b) = fp.weights[a] * fp.weights[b] * M;
+      for (int b = 0; b < 4; ++b)
+        local.block<3, 3>(3 * a, 3 * b) = fp.weights[a] * fp.weights[b] * M;
     H->add_element<4>(fp.vertices, local);
   }
 }
 
 void SelfContactEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd& g,
-                                        BlockSymmetricMatrix* H, HessianProjection projection) const {
+                                        BlockSymmetricMatrix* H,
+                                        HessianProjection projection) const {
   ScopedTimer timer(m_stats->seconds);
   ensure_candidates(x);
   const double dhat2 = m_params.dhat * m_params.dhat;
@@ -395,14 +422,17 @@ void SelfContactEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::VectorX
   m_stats->max_active_pairs = std::max(m_stats->max_active_pairs, active);
 }
 
-void SelfContactEnergy::report_crossings(const Eigen::VectorXd& x, const Eigen::VectorXd& dx, double alpha) const {
+void SelfContactEnergy::report_crossings(const Eigen::VectorXd& x, const Eigen::VectorXd& dx,
+                                         double alpha) const {
   const int nv = m_mesh.num_vertices;
   const Eigen::VectorXd x1 = x + alpha * dx;
   const int before = collision::count_self_intersections(sheet_positions(x, nv), m_mesh.faces);
-  const collision::SelfIntersections after = collision::find_self_intersections(sheet_positions(x1, nv), m_mesh.faces);
+  const collision::SelfIntersections after =
+      collision::find_self_intersections(sheet_positions(x1, nv), m_mesh.faces);
   if (after.count() <= before) return;
   const Trace& trace = m_params.trace;
-  trace(Trace::intersect, "self-contact CCD: %d -> %d intersecting pairs at step %.3e (%zu candidates)", before,
+  trace(Trace::intersect,
+        "self-contact CCD: %d -> %d intersecting pairs at step %.3e (%zu candidates)", before,
         after.count(), alpha, m_candidates.size());
   for (int k = 0; k < after.count(); ++k) {
     const int fa = after.pairs(k, 0), fb = after.pairs(k, 1);
@@ -413,7 +443,8 @@ void SelfContactEnergy::report_crossings(const Eigen::VectorXd& x, const Eigen::
     for (int e = 0; e < m_mesh.edges.rows(); ++e) {
       const auto holds = [&](int f) {
         int n = 0;
-        for (int i = 0; i < 3; ++i) n += m_mesh.faces(f, i) == m_mesh.edges(e, 0) || m_mesh.faces(f, i) == m_mesh.edges(e, 1);
+        for (int i = 0; i < 3; ++i)
+          n += m_mesh.faces(f, i) == m_mesh.edges(e, 0) || m_mesh.faces(f, i) == m_mesh.edges(e, 1);
         return n == 2;
       };
       if (holds(fa)) edges_a.push_back(e);
@@ -427,24 +458,29 @@ void SelfContactEnergy::report_crossings(const Eigen::VectorXd& x, const Eigen::
       for (int eb : edges_b) pairs.push_back({true, std::min(ea, eb), std::max(ea, eb)});
     for (const Pair& p : pairs) {
       const std::array<int, 4> v = vertices(p);
-      const bool adjacent = p.edge_edge ? (v[0] == v[2] || v[0] == v[3] || v[1] == v[2] || v[1] == v[3])
-                                        : (v[0] == v[1] || v[0] == v[2] || v[0] == v[3]);
+      const bool adjacent = p.edge_edge
+                                ? (v[0] == v[2] || v[0] == v[3] || v[1] == v[2] || v[1] == v[3])
+                                : (v[0] == v[1] || v[0] == v[2] || v[0] == v[3]);
       if (adjacent) continue;  // not an IPC pair
-      const bool candidate = std::any_of(m_candidates.begin(), m_candidates.end(), [&](const Pair& c) {
-        return c.edge_edge == p.edge_edge && c.a == p.a && c.b == p.b;
-      });
+      const bool candidate = std::any_of(
+          m_candidates.begin(), m_candidates.end(),
+          [&](const Pair& c) { return c.edge_edge == p.edge_edge && c.a == p.a && c.b == p.b; });
       const PairPoints p0 = points(p, x), p1 = points(p, x1);
       PairPoints d;
       for (int k2 = 0; k2 < 4; ++k2) d[k2] = dx.segment<3>(3 * v[k2]);
       const auto distance = [&](const PairPoints& pts) {
-        return std::sqrt(collision::distance_squared(
-            p.edge_edge ? collision::edge_edge_stencil(pts) : collision::point_triangle_stencil(pts), pts));
+        return std::sqrt(collision::distance_squared(p.edge_edge
+                                                         ? collision::edge_edge_stencil(pts)
+                                                         : collision::point_triangle_stencil(pts),
+                                                     pts));
       };
-      const double t = p.edge_edge ? collision::edge_edge_ccd(p0, d, 1.0, m_params.ccd_min_separation)
-                                   : collision::point_triangle_ccd(p0, d, 1.0, m_params.ccd_min_separation);
-      trace(Trace::intersect, "    %s (vertices %d %d %d %d): candidate %d, distance %.3e -> %.3e, CCD %.3e",
-            p.edge_edge ? "edge-edge" : "vertex-triangle", v[0], v[1], v[2], v[3], candidate ? 1 : 0, distance(p0),
-            distance(p1), t);
+      const double t = p.edge_edge
+                           ? collision::edge_edge_ccd(p0, d, 1.0, m_params.ccd_min_separation)
+                           : collision::point_triangle_ccd(p0, d, 1.0, m_params.ccd_min_separation);
+      trace(Trace::intersect,
+            "    %s (vertices %d %d %d %d): candidate %d, distance %.3e -> %.3e, CCD %.3e",
+            p.edge_edge ? "edge-edge" : "vertex-triangle", v[0], v[1], v[2], v[3],
+            candidate ? 1 : 0, distance(p0), distance(p1), t);
     }
   }
 }
@@ -459,9 +495,10 @@ double SelfContactEnergy::max_step(const Eigen::VectorXd& x, const Eigen::Vector
     const std::array<int, 4> v = vertices(p);
     PairPoints d;
     for (int k = 0; k < 4; ++k) d[k] = dx.segment<3>(3 * v[k]);
-    alpha = p.edge_edge
-                ? collision::edge_edge_ccd(points(p, x), d, alpha, m_params.ccd_min_separation)
-                : collision::point_triangle_ccd(points(p, x), d, alpha, m_params.ccd_min_separation);
+    alpha =
+        p.edge_edge
+            ? collision::edge_edge_ccd(points(p, x), d, alpha, m_params.ccd_min_separation)
+            : collision::point_triangle_ccd(points(p, x), d, alpha, m_params.ccd_min_separation);
   }
   if (m_params.trace.on(Trace::intersect)) report_crossings(x, dx, alpha);
   return alpha;
@@ -488,7 +525,8 @@ bool SelfContactEnergy::adapt(const Eigen::VectorXd& x) {
   m_stiffness = std::min(2 * m_stiffness, most);
   m_stats->max_stiffness = std::max(m_stats->max_stiffness, m_stiffness);
   ++m_stats->stiffness_doublings;
-  m_params.trace(Trace::contact, "self t %.6f: closest pair %.3e -> %.3e m (floor %.3e): stiffness %.4g Pa", m_t0,
+  m_params.trace(Trace::contact,
+                 "self t %.6f: closest pair %.3e -> %.3e m (floor %.3e): stiffness %.4g Pa", m_t0,
                  before, d, m_floor, m_stiffness);
   return true;
 }

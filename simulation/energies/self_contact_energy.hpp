@@ -61,8 +61,8 @@ struct SelfContactParams {
   double dhat = 0.0;
   /// Barrier pressure scale [Pa]; 0 = the obstacle contact stiffness (automatic: rho_A |g|).
   double stiffness = 0.0;
-  double friction = 0.6;        ///< Coulomb coefficient sheet-sheet [-] (SCENARIOS.md)
-  double eps_velocity = 1e-3;   ///< slip speed below which friction is static-like [m/s]
+  double friction = 0.6;           ///< Coulomb coefficient sheet-sheet [-] (SCENARIOS.md)
+  double eps_velocity = 1e-3;      ///< slip speed below which friction is static-like [m/s]
   bool static_whole_step = false;  ///< as ContactParams::static_whole_step
   /// The line search never closes more than this fraction of a pair's gap in one step.
   double ccd_min_separation = 0.1;
@@ -73,9 +73,9 @@ struct SelfContactParams {
 
 /// Counters of self-contact over a run, owned by the run (as ContactStatistics).
 struct SelfContactStatistics {
-  double seconds = 0.0;     ///< wall time in the term (broad phase, barrier, friction, CCD) [s]
-  int max_active_pairs = 0; ///< most pairs within dhat at one derivative evaluation
-  int pattern_changes = 0;  ///< how often update_pattern() reported a change
+  double seconds = 0.0;         ///< wall time in the term (broad phase, barrier, friction, CCD) [s]
+  int max_active_pairs = 0;     ///< most pairs within dhat at one derivative evaluation
+  int pattern_changes = 0;      ///< how often update_pattern() reported a change
   int stiffness_doublings = 0;  ///< Newton iterations that doubled the stiffness (adapt)
   double max_stiffness = 0;     ///< largest stiffness of a step [Pa]
 };
@@ -119,7 +119,9 @@ class SelfContactEnergy : public EnergyTerm {
   /// Pairs with friction in the current step.
   int active_friction() const { return static_cast<int>(m_friction.size()); }
   /// Where the term counts (see SelfContactStatistics); null: a counter of its own.
-  void set_statistics(SelfContactStatistics* statistics) { m_stats = statistics ? statistics : &m_own_stats; }
+  void set_statistics(SelfContactStatistics* statistics) {
+    m_stats = statistics ? statistics : &m_own_stats;
+  }
   const SelfContactStatistics& statistics() const { return *m_stats; }
   const SelfContactParams& params() const { return m_params; }
 
@@ -173,8 +175,9 @@ class SelfContactEnergy : public EnergyTerm {
   bool covered(const Eigen::VectorXd& x) const;
   /// Squared distance of candidate k and its stencil s; when a lower bound shows the squared
   /// distance is at least `reject2`, that bound instead (s not set). `moved`: motions(x).
-  double stencil_distance2(std::size_t k, const collision::PairPoints& pts, collision::DistanceStencil& s,
-                           double reject2, const Eigen::VectorXd& moved) const;
+  double stencil_distance2(std::size_t k, const collision::PairPoints& pts,
+                           collision::DistanceStencil& s, double reject2,
+                           const Eigen::VectorXd& moved) const;
   /// Per vertex, how far it is from m_base after removing the mean displacement [m]: a pair's
   /// distance differs from its distance at m_base by at most the largest of its first
   /// primitive's plus the largest of its second's.
@@ -182,8 +185,9 @@ class SelfContactEnergy : public EnergyTerm {
   double pair_motion(const Pair& p, const Eigen::VectorXd& moved) const;
   /// Adds one pair's barrier derivatives (gradient, Hessian projected to PSD when `project`) at
   /// distance stencil s.
-  void add_pair(const Pair& p, const collision::PairPoints& pts, const collision::DistanceStencil& s,
-                Eigen::VectorXd& g, BlockSymmetricMatrix* H, bool project) const;
+  void add_pair(const Pair& p, const collision::PairPoints& pts,
+                const collision::DistanceStencil& s, Eigen::VectorXd& g, BlockSymmetricMatrix* H,
+                bool project) const;
   void add_friction(const Eigen::VectorXd& x, Eigen::VectorXd& g, BlockSymmetricMatrix* H) const;
   /// Trace topic `intersect`: when the step x -> x + alpha dx that max_step allows makes
   /// triangles intersect, prints each new pair's IPC pairs (candidate or not, distances, CCD).
@@ -194,11 +198,11 @@ class SelfContactEnergy : public EnergyTerm {
   collision::SelfContactMesh m_mesh;
   SelfContactParams m_params;
   Eigen::VectorXd m_vertex_area, m_edge_area, m_edge_rest;
-  double m_eps = 1e-6;  // friction smoothing: eps_velocity h (or h_whole) [m]
-  double m_stiffness = 0;           // current stiffness [Pa] (Adaptive stiffness)
-  double m_floor = 0;               // floor of the step [m]
-  double m_t0 = 0;                  // start of the step [s] (debug output)
-  double m_last_below = 0;          // distance_below at the last iterate [m]
+  double m_eps = 1e-6;      // friction smoothing: eps_velocity h (or h_whole) [m]
+  double m_stiffness = 0;   // current stiffness [Pa] (Adaptive stiffness)
+  double m_floor = 0;       // floor of the step [m]
+  double m_t0 = 0;          // start of the step [s] (debug output)
+  double m_last_below = 0;  // distance_below at the last iterate [m]
 
   // Candidates, found at the base positions m_base, either (a) every pair within 1.5 dhat +
   // m_margin there, or (b) every pair that comes within 1.5 dhat along the segment m_base ->

@@ -4,7 +4,8 @@
 
 namespace papersim::simulation {
 
-Eigen::VectorXd lumped_masses(const Eigen::MatrixX2d& X, const Eigen::MatrixX3i& F, double density) {
+Eigen::VectorXd lumped_masses(const Eigen::MatrixX2d& X, const Eigen::MatrixX3i& F,
+                              double density) {
   Eigen::VectorXd m = Eigen::VectorXd::Zero(X.rows());
   for (int f = 0; f < F.rows(); ++f) {
     const Eigen::Vector2d e1 = X.row(F(f, 1)) - X.row(F(f, 0));
@@ -28,7 +29,8 @@ double InertiaEnergy::value(const Eigen::VectorXd& x) const {
 }
 
 void InertiaEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd& g,
-                                    BlockSymmetricMatrix* H, HessianProjection /*projection*/) const {
+                                    BlockSymmetricMatrix* H,
+                                    HessianProjection /*projection*/) const {
   Eigen::VectorXd d(3 * m_mass.size());  // the sheet's entries (x may hold rigid blocks after them)
   for (int v = 0; v < m_mass.size(); ++v) {
     const double k = m_mass[v] / (m_h * m_h);
@@ -51,7 +53,8 @@ double DampingEnergy::value(const Eigen::VectorXd& x) const {
 }
 
 void DampingEnergy::add_derivatives(const Eigen::VectorXd& x, Eigen::VectorXd& g,
-                                    BlockSymmetricMatrix* H, HessianProjection /*projection*/) const {
+                                    BlockSymmetricMatrix* H,
+                                    HessianProjection /*projection*/) const {
   Eigen::VectorXd d(3 * m_mass.size());  // the sheet's entries (x may hold rigid blocks after them)
   for (int v = 0; v < m_mass.size(); ++v) {
     const double k = m_c * m_mass[v] / m_h;

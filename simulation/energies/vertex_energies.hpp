@@ -8,8 +8,8 @@
 namespace papersim::simulation {
 
 /// Lumped vertex masses [kg]: a third of each incident face's material area times rho_A.
-Eigen::VectorXd lumped_masses(const Eigen::MatrixX2d& material_coords, const Eigen::MatrixX3i& faces,
-                              double density);
+Eigen::VectorXd lumped_masses(const Eigen::MatrixX2d& material_coords,
+                              const Eigen::MatrixX3i& faces, double density);
 
 class InertiaEnergy : public EnergyTerm {
  public:

@@ -2,8 +2,8 @@
 // killed at about half (SIGKILL or SIGINT) and run again ends with the same dataset as one that
 // was never interrupted; a sample that cannot finish is recorded and the rest finish; two
 // batches on one dataset run each sample once; bad options are named.
-#include <gtest/gtest.h>
 #include <fcntl.h>
+#include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/file.h>
 #include <sys/wait.h>
@@ -51,10 +51,13 @@ fs::path work_dir() {
 fs::path tiny_mix() { return TINY_MIX; }
 
 std::vector<std::string> batch_argv(const fs::path& out) {
-  return {PAPERSIM, "batch", "--out", out.string(), "--mix", tiny_mix().string(), "--seeds", SEEDS, "--jobs", "2"};
+  return {PAPERSIM,  "batch", "--out",  out.string(), "--mix", tiny_mix().string(),
+          "--seeds", SEEDS,   "--jobs", "2"};
 }
 
-int run(const std::vector<std::string>& argv, const fs::path& log) { return pt::wait_status(pt::start(argv, log)); }
+int run(const std::vector<std::string>& argv, const fs::path& log) {
+  return pt::wait_status(pt::start(argv, log));
+}
 
 /// The uninterrupted batch every resume is compared with: made by the ctest fixture
 /// PapersimBatch.ReferenceDataset, or here (under a lock) when the tests run on their own.
@@ -77,8 +80,9 @@ const fs::path& reference() {
 
 /// Start a batch, send `signal` once the manifest holds half the samples, wait for it.
 /// Returns the batch's exit status and the rows it had at the signal.
-std::pair<int, std::size_t> interrupt_at_half(const std::vector<std::string>& argv, const fs::path& manifest,
-                                              std::size_t total, int signal, const fs::path& log) {
+std::pair<int, std::size_t> interrupt_at_half(const std::vector<std::string>& argv,
+                                              const fs::path& manifest, std::size_t total,
+                                              int signal, const fs::path& log) {
   const pid_t pid = pt::start(argv, log);
   std::size_t rows = 0;
   int status = 0;
@@ -103,10 +107,12 @@ std::string joined(const std::vector<std::string>& lines) {
 
 TEST(PapersimBatch, ResumedAfterSigkillEqualsAnUninterruptedBatch) {
   const fs::path d = work_dir() / "sigkill";
-  const auto [status, rows] = interrupt_at_half(batch_argv(d), d / "manifest.jsonl", SAMPLES, SIGKILL, work_dir() / "sigkill.log");
+  const auto [status, rows] = interrupt_at_half(batch_argv(d), d / "manifest.jsonl", SAMPLES,
+                                                SIGKILL, work_dir() / "sigkill.log");
   EXPECT_EQ(status, 128 + SIGKILL);
   EXPECT_LT(rows, SAMPLES) << "the batch ended before it was killed";
-  ASSERT_EQ(run(batch_argv(d), work_dir() / "sigkill_resume.log"), 0) << pt::read_text(work_dir() / "sigkill_resume.log");
+  ASSERT_EQ(run(batch_argv(d), work_dir() / "sigkill_resume.log"), 0)
+      << pt::read_text(work_dir() / "sigkill_resume.log");
   EXPECT_EQ(pt::line_count(d / "manifest.jsonl"), SAMPLES);
   EXPECT_FALSE(fs::exists(d / "failures.jsonl"));
   const auto diffs = pt::dataset_differences(reference(), d, "meshes", "manifest.jsonl");
@@ -115,13 +121,15 @@ TEST(PapersimBatch, ResumedAfterSigkillEqualsAnUninterruptedBatch) {
 
 TEST(PapersimBatch, ResumedAfterSigintEqualsAnUninterruptedBatch) {
   const fs::path d = work_dir() / "sigint";
-  const auto [status, rows] = interrupt_at_half(batch_argv(d), d / "manifest.jsonl", SAMPLES, SIGINT, work_dir() / "sigint.log");
+  const auto [status, rows] = interrupt_at_half(batch_argv(d), d / "manifest.jsonl", SAMPLES,
+                                                SIGINT, work_dir() / "sigint.log");
   EXPECT_EQ(status, 130) << pt::read_text(work_dir() / "sigint.log");
   EXPECT_LT(rows, SAMPLES);
   EXPECT_NE(pt::read_text(work_dir() / "sigint.log").find("interrupted"), std::string::npos);
   EXPECT_TRUE(fs::is_empty(d / ".staging")) << "an interrupted batch left a half-written sample";
   EXPECT_FALSE(fs::exists(d / "failures.jsonl")) << "an interrupted sample was recorded as failed";
-  ASSERT_EQ(run(batch_argv(d), work_dir() / "sigint_resume.log"), 0) << pt::read_text(work_dir() / "sigint_resume.log");
+  ASSERT_EQ(run(batch_argv(d), work_dir() / "sigint_resume.log"), 0)
+      << pt::read_text(work_dir() / "sigint_resume.log");
   const auto diffs = pt::dataset_differences(reference(), d, "meshes", "manifest.jsonl");
   EXPECT_TRUE(diffs.empty()) << joined(diffs);
 }
@@ -140,7 +148,8 @@ TEST(PapersimBatch, ASampleOverTheTimeLimitIsRecordedAndTheOthersFinish) {
   // fall-sphere made long (10,000 steps of 0.1 ms: minutes on any machine) against a 10 s limit;
   // tiny pulls.
   const fs::path d = work_dir() / "isolation", mix = work_dir() / "isolation_mix.json";
-  std::ofstream(mix) << R"({"scenarios": {"pull": {"weight": 3, "set": {"duration": 0.05, "time_step": 0.01,
+  std::ofstream(mix)
+      << R"({"scenarios": {"pull": {"weight": 3, "set": {"duration": 0.05, "time_step": 0.01,
                             "sheet.edge_length": 0.04}}, "fall-sphere": {"weight": 1, "set": {"duration": 1.0,
                             "time_step": 0.0001}}}})";
   const papersim::simulation::Mix m = papersim::simulation::load_mix(mix.string());
@@ -148,8 +157,9 @@ TEST(PapersimBatch, ASampleOverTheTimeLimitIsRecordedAndTheOthersFinish) {
   for (std::uint64_t seed = 1; seed <= 8; ++seed)
     if (m.scenarios[papersim::simulation::mix_pick(m, seed)] == "fall-sphere") slow.insert(seed);
   ASSERT_FALSE(slow.empty());
-  const int status = run({PAPERSIM, "batch", "--out", d.string(), "--mix", mix.string(), "--seeds", "1-8",
-                          "--jobs", "2", "--time-limit", "10"}, work_dir() / "isolation.log");
+  const int status = run({PAPERSIM, "batch", "--out", d.string(), "--mix", mix.string(), "--seeds",
+                          "1-8", "--jobs", "2", "--time-limit", "10"},
+                         work_dir() / "isolation.log");
   EXPECT_EQ(status, 1) << pt::read_text(work_dir() / "isolation.log");
   std::set<std::uint64_t> failed, done;
   for (const auto& r : papersim::batch::read_json_lines(d / "failures.jsonl")) {
@@ -158,12 +168,16 @@ TEST(PapersimBatch, ASampleOverTheTimeLimitIsRecordedAndTheOthersFinish) {
     EXPECT_EQ(r["scenario"], "fall-sphere");
     EXPECT_GE(r["wall_seconds"].get<double>(), 10.0);
   }
-  for (const auto& r : papersim::batch::read_json_lines(d / "manifest.jsonl")) done.insert(r["seed"].get<std::uint64_t>());
+  for (const auto& r : papersim::batch::read_json_lines(d / "manifest.jsonl"))
+    done.insert(r["seed"].get<std::uint64_t>());
   EXPECT_EQ(failed, slow);
   EXPECT_EQ(done.size() + slow.size(), 8u);
-  for (std::uint64_t s : slow) EXPECT_FALSE(fs::exists(d / "meshes" / "fall-sphere" / "0" / std::to_string(s)));
+  for (std::uint64_t s : slow)
+    EXPECT_FALSE(fs::exists(d / "meshes" / "fall-sphere" / "0" / std::to_string(s)));
   // dataset-stats reads it back: 1 failure reason, counts per scenario, plots.
-  ASSERT_EQ(run({PAPERSIM, "dataset-stats", d.string(), "--plots", (d / "plots").string()}, work_dir() / "stats.log"), 0)
+  ASSERT_EQ(run({PAPERSIM, "dataset-stats", d.string(), "--plots", (d / "plots").string()},
+                work_dir() / "stats.log"),
+            0)
       << pt::read_text(work_dir() / "stats.log");
   const std::string stats = pt::read_text(work_dir() / "stats.log");
   EXPECT_NE(stats.find("time limit"), std::string::npos) << stats;
@@ -274,7 +288,8 @@ TEST(PapersimBatch, BadOptionsAreNamedAndNothingRuns) {
   const fs::path d = work_dir() / "bad";
   const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
       {{"--scenarios", "pull", "--seeds", "5-1"}, "--seeds"},
-      {{"--scenarios", "pull", "--seeds", "1-2", "--set", "sheet.edge_lenght=0.02"}, "sheet.edge_lenght"},
+      {{"--scenarios", "pull", "--seeds", "1-2", "--set", "sheet.edge_lenght=0.02"},
+       "sheet.edge_lenght"},
       {{"--scenarios", "pull", "--seeds", "1-2", "--set", "duration=-1"}, "duration"},
       {{"--scenarios", "pull,pulll", "--seeds", "1-2"}, "pulll"},
       {{"--mix", (work_dir() / "missing.json").string(), "--seeds", "1-2"}, "--mix"},
@@ -305,7 +320,8 @@ TEST(PapersimBatch, SlurmWritesAJobArrayAndRunsNothing) {
   EXPECT_NE(script.find("#SBATCH --time=00:10:00\n"), std::string::npos) << script;
   EXPECT_NE(script.find("--shard \"${SLURM_ARRAY_TASK_ID}/3\""), std::string::npos) << script;
   EXPECT_NE(script.find("'--checkpoint-every' '25'"), std::string::npos) << script;
-  EXPECT_NE(pt::read_text(work_dir() / "slurm.log").find("sbatch " + (fs::absolute(d) / "slurm" / "papersim-batch.sbatch").string()),
+  EXPECT_NE(pt::read_text(work_dir() / "slurm.log")
+                .find("sbatch " + (fs::absolute(d) / "slurm" / "papersim-batch.sbatch").string()),
             std::string::npos);
   EXPECT_FALSE(fs::exists(d / "meshes"));
 }
@@ -320,8 +336,9 @@ TEST(ScenegenBatch, ResumedAfterSigkillEqualsAnUninterruptedBatch) {
       fs::copy(reference() / m, d / m, fs::copy_options::recursive);
     }
   const auto argv = [](const fs::path& d) {
-    return std::vector<std::string>{SCENEGEN_EXE, "batch", d.string(), "--views", "2", "--flip", "--size", "48x64",
-                                    "--quality", "draft", "--passes", "image,uv,mask", "--dpi", "30", "--jobs", "2"};
+    return std::vector<std::string>{
+        SCENEGEN_EXE, "batch", d.string(), "--views",       "2",     "--flip", "--size", "48x64",
+        "--quality",  "draft", "--passes", "image,uv,mask", "--dpi", "30",     "--jobs", "2"};
   };
   // Keep it small: the first three meshes of the copy (by seed) stay.
   for (const fs::path& d : {a, b}) {
@@ -331,13 +348,16 @@ TEST(ScenegenBatch, ResumedAfterSigkillEqualsAnUninterruptedBatch) {
     std::sort(all.begin(), all.end());
     for (std::size_t i = 3; i < all.size(); ++i) fs::remove_all(all[i]);
   }
-  ASSERT_EQ(run(argv(a), work_dir() / "render_ref.log"), 0) << pt::read_text(work_dir() / "render_ref.log");
+  ASSERT_EQ(run(argv(a), work_dir() / "render_ref.log"), 0)
+      << pt::read_text(work_dir() / "render_ref.log");
   const std::size_t views = pt::line_count(a / "renders.jsonl");
   EXPECT_EQ(views, 6u);
-  const auto [status, rows] = interrupt_at_half(argv(b), b / "renders.jsonl", views, SIGKILL, work_dir() / "render_kill.log");
+  const auto [status, rows] = interrupt_at_half(argv(b), b / "renders.jsonl", views, SIGKILL,
+                                                work_dir() / "render_kill.log");
   EXPECT_EQ(status, 128 + SIGKILL);
   EXPECT_LT(rows, views);
-  ASSERT_EQ(run(argv(b), work_dir() / "render_resume.log"), 0) << pt::read_text(work_dir() / "render_resume.log");
+  ASSERT_EQ(run(argv(b), work_dir() / "render_resume.log"), 0)
+      << pt::read_text(work_dir() / "render_resume.log");
   const auto diffs = pt::dataset_differences(a, b, "renders", "renders.jsonl");
   EXPECT_TRUE(diffs.empty()) << joined(diffs);
 }
@@ -355,33 +375,40 @@ TEST(ScenegenBatch, SlurmWritesAMeshListAndTheTasksRenderItAlone) {
   const fs::path later = d / "later";
   fs::rename(all[2], later);
   for (std::size_t i = 3; i < all.size(); ++i) fs::remove_all(all[i]);
-  const std::vector<std::string> options{"--views", "1", "--size", "48x64", "--quality", "draft",
-                                         "--passes", "image,mask", "--dpi", "30"};
+  const std::vector<std::string> options{"--views", "1",        "--size",     "48x64", "--quality",
+                                         "draft",   "--passes", "image,mask", "--dpi", "30"};
   std::vector<std::string> slurm{SCENEGEN_EXE, "batch", d.string(), "--slurm", "2"};
   slurm.insert(slurm.end(), options.begin(), options.end());
-  ASSERT_EQ(run(slurm, work_dir() / "render_list.log"), 0) << pt::read_text(work_dir() / "render_list.log");
+  ASSERT_EQ(run(slurm, work_dir() / "render_list.log"), 0)
+      << pt::read_text(work_dir() / "render_list.log");
   const fs::path list = d / "slurm" / "scenegen-batch.meshes";
   EXPECT_EQ(pt::line_count(list), 3u);  // the head and two meshes
   const std::string script = pt::read_text(d / "slurm" / "scenegen-batch.sbatch");
-  EXPECT_NE(script.find("'--mesh-list' '" + fs::absolute(list).string() + "'"), std::string::npos) << script;
+  EXPECT_NE(script.find("'--mesh-list' '" + fs::absolute(list).string() + "'"), std::string::npos)
+      << script;
   EXPECT_NE(pt::read_text(work_dir() / "render_list.log").find("(2 meshes)"), std::string::npos)
       << pt::read_text(work_dir() / "render_list.log");
   EXPECT_FALSE(fs::exists(d / "renders.jsonl"));
   fs::rename(later, all[2]);
   for (const char* shard : {"0/2", "1/2"}) {
-    std::vector<std::string> task{SCENEGEN_EXE, "batch", d.string(), "--mesh-list", list.string(), "--shard", shard};
+    std::vector<std::string> task{SCENEGEN_EXE,  "batch",   d.string(), "--mesh-list",
+                                  list.string(), "--shard", shard};
     task.insert(task.end(), options.begin(), options.end());
-    ASSERT_EQ(run(task, work_dir() / "render_list_task.log"), 0) << pt::read_text(work_dir() / "render_list_task.log");
+    ASSERT_EQ(run(task, work_dir() / "render_list_task.log"), 0)
+        << pt::read_text(work_dir() / "render_list_task.log");
   }
   EXPECT_EQ(pt::line_count(d / "renders.jsonl"), 2u);
-  const fs::path rendered = fs::path("renders") / "pull" / all[2].parent_path().filename() / all[2].filename();
+  const fs::path rendered =
+      fs::path("renders") / "pull" / all[2].parent_path().filename() / all[2].filename();
   EXPECT_FALSE(fs::exists(d / rendered)) << rendered;
   // A missing or malformed list is refused before anything runs, naming it.
   std::ofstream(d / "bad.meshes") << "# scenegen batch mesh list: 1 meshes\nmeshes/pull/x\n";
   for (const auto& [file, named] : std::vector<std::pair<std::string, std::string>>{
-           {(d / "none.meshes").string(), "--mesh-list '" + (d / "none.meshes").string() + "' is not a file"},
+           {(d / "none.meshes").string(),
+            "--mesh-list '" + (d / "none.meshes").string() + "' is not a file"},
            {(d / "bad.meshes").string(), "line 2: 'meshes/pull/x' is not"}}) {
-    std::vector<std::string> task{SCENEGEN_EXE, "batch", d.string(), "--mesh-list", file, "--shard", "0/2"};
+    std::vector<std::string> task{SCENEGEN_EXE, "batch",   d.string(), "--mesh-list",
+                                  file,         "--shard", "0/2"};
     task.insert(task.end(), options.begin(), options.end());
     EXPECT_EQ(run(task, work_dir() / "render_list_bad.log"), 2) << named;
     EXPECT_NE(pt::read_text(work_dir() / "render_list_bad.log").find(named), std::string::npos)

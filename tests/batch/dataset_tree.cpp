@@ -58,8 +58,8 @@ std::string read_text(const fs::path& file) {
   return s.str();
 }
 
-std::vector<std::string> dataset_differences(const fs::path& a, const fs::path& b, const std::string& part,
-                                             const std::string& manifest) {
+std::vector<std::string> dataset_differences(const fs::path& a, const fs::path& b,
+                                             const std::string& part, const std::string& manifest) {
   std::vector<std::string> diffs;
   const auto fa = files_under(a / part), fb = files_under(b / part);
   if (fa.empty()) diffs.push_back("no files under " + (a / part).string());
@@ -78,7 +78,9 @@ std::vector<std::string> dataset_differences(const fs::path& a, const fs::path& 
     }
   }
   const auto ma = manifest_rows(a / manifest), mb = manifest_rows(b / manifest);
-  if (ma != mb) diffs.push_back("manifests differ (" + std::to_string(ma.size()) + " and " + std::to_string(mb.size()) + " rows)");
+  if (ma != mb)
+    diffs.push_back("manifests differ (" + std::to_string(ma.size()) + " and " +
+                    std::to_string(mb.size()) + " rows)");
   if (line_count(a / manifest) != ma.size() || line_count(b / manifest) != mb.size())
     diffs.push_back("a manifest has duplicate rows");
   for (const fs::path& root : {a, b})

@@ -13,7 +13,8 @@ namespace papersim::test {
 /// compared as JSON without its wall times ("wall_seconds", "seconds", "seconds_*": they measure
 /// this run, not the sample); the manifest as a set of rows by key, without wall_seconds,
 /// sim_wall_seconds and cpu_seconds. Also reports staging leftovers.
-std::vector<std::string> dataset_differences(const std::filesystem::path& a, const std::filesystem::path& b,
+std::vector<std::string> dataset_differences(const std::filesystem::path& a,
+                                             const std::filesystem::path& b,
                                              const std::string& part, const std::string& manifest);
 
 /// Start `argv` with stdout and stderr into `log`; returns its process id.

@@ -36,26 +36,35 @@ std::string scene_error(F f) {
 
 TEST(Overrides, SetDottedKeysAndRefuseUnknownOnesByName) {
   const ps::Scene base = ps::make_scenario("pull", 3);
-  const ps::Scene s = ps::apply_overrides(base, ps::parse_overrides({"duration=0.2", "sheet.edge_length=0.02"}), "--set");
+  const ps::Scene s = ps::apply_overrides(
+      base, ps::parse_overrides({"duration=0.2", "sheet.edge_length=0.02"}), "--set");
   EXPECT_EQ(s.duration, 0.2);
   EXPECT_EQ(s.sheet.edge_length, 0.02);
   EXPECT_EQ(s.time_step, base.time_step);
-  EXPECT_NE(scene_error([&] { ps::apply_overrides(base, ps::parse_overrides({"sheet.edge_lenght=0.02"}), "--set"); })
-                .find("sheet.edge_lenght"), std::string::npos);
-  EXPECT_NE(scene_error([&] { ps::apply_overrides(base, ps::parse_overrides({"duration=-1"}), "--set"); })
-                .find("duration"), std::string::npos);
-  EXPECT_NE(scene_error([] { ps::parse_overrides({"duration"}); }).find("KEY=VALUE"), std::string::npos);
+  EXPECT_NE(scene_error([&] {
+              ps::apply_overrides(base, ps::parse_overrides({"sheet.edge_lenght=0.02"}), "--set");
+            }).find("sheet.edge_lenght"),
+            std::string::npos);
+  EXPECT_NE(scene_error([&] {
+              ps::apply_overrides(base, ps::parse_overrides({"duration=-1"}), "--set");
+            }).find("duration"),
+            std::string::npos);
+  EXPECT_NE(scene_error([] { ps::parse_overrides({"duration"}); }).find("KEY=VALUE"),
+            std::string::npos);
   // A key written to scene files only when not at its default can be set too.
   EXPECT_EQ(base.sheet.material.membrane_model, ps::MembraneModel::chord);
-  EXPECT_EQ(ps::apply_overrides(base, ps::parse_overrides({"sheet.material.membrane_model=arc"}), "--set")
-                .sheet.material.membrane_model,
-            ps::MembraneModel::arc);
+  EXPECT_EQ(
+      ps::apply_overrides(base, ps::parse_overrides({"sheet.material.membrane_model=arc"}), "--set")
+          .sheet.material.membrane_model,
+      ps::MembraneModel::arc);
 }
 
 TEST(Mix, ParsesWeightsAndOverridesAndRefusesBadKeys) {
   const ps::Mix m = ps::mix_from_json(
-      json::parse(R"({"scenarios": {"pull": 3, "fall-sphere": {"weight": 1, "set": {"duration": 0.5}}},
-                      "set": {"sheet.edge_length": 0.01}})"), "mix.json");
+      json::parse(
+          R"({"scenarios": {"pull": 3, "fall-sphere": {"weight": 1, "set": {"duration": 0.5}}},
+                      "set": {"sheet.edge_length": 0.01}})"),
+      "mix.json");
   ASSERT_EQ(m.scenarios.size(), 2u);
   const std::size_t pull = m.scenarios[0] == "pull" ? 0 : 1;
   EXPECT_EQ(m.scenarios[1 - pull], "fall-sphere");
@@ -63,11 +72,17 @@ TEST(Mix, ParsesWeightsAndOverridesAndRefusesBadKeys) {
   EXPECT_EQ(m.overrides[pull], json::object());
   EXPECT_EQ(m.overrides[1 - pull]["duration"], 0.5);
   EXPECT_EQ(m.common["sheet.edge_length"], 0.01);
-  EXPECT_NE(scene_error([] { ps::mix_from_json(json::parse(R"({"scenarios": {"pul": 1}})"), "m.json"); }).find("pul"),
+  EXPECT_NE(scene_error([] {
+              ps::mix_from_json(json::parse(R"({"scenarios": {"pul": 1}})"), "m.json");
+            }).find("pul"),
             std::string::npos);
-  EXPECT_NE(scene_error([] { ps::mix_from_json(json::parse(R"({"scenarios": {"pull": 0}})"), "m.json"); }).find("weight"),
+  EXPECT_NE(scene_error([] {
+              ps::mix_from_json(json::parse(R"({"scenarios": {"pull": 0}})"), "m.json");
+            }).find("weight"),
             std::string::npos);
-  EXPECT_NE(scene_error([] { ps::mix_from_json(json::parse(R"({"scenario": {"pull": 1}})"), "m.json"); }).find("scenario"),
+  EXPECT_NE(scene_error([] {
+              ps::mix_from_json(json::parse(R"({"scenario": {"pull": 1}})"), "m.json");
+            }).find("scenario"),
             std::string::npos);
 }
 
@@ -78,7 +93,8 @@ TEST(Mix, DrawsScenariosInProportionToTheirWeights) {
   m.overrides = {json::object(), json::object()};
   int pulls = 0;
   const int n = 20000;
-  for (int seed = 0; seed < n; ++seed) pulls += ps::mix_pick(m, static_cast<std::uint64_t>(seed)) == 0;
+  for (int seed = 0; seed < n; ++seed)
+    pulls += ps::mix_pick(m, static_cast<std::uint64_t>(seed)) == 0;
   // Binomial(20000, 0.75): standard deviation 61; 5 sigma.
   EXPECT_NEAR(pulls, 0.75 * n, 5 * 61.2);
   EXPECT_EQ(ps::mix_pick(m, 12345), ps::mix_pick(m, 12345));
@@ -96,7 +112,8 @@ TEST(Selection, ProductOfScenariosAndSeedsWithFoldersPerSeed) {
   EXPECT_EQ(tasks[0].final_dir, fs::path("meshes/pull/0/998"));
   EXPECT_EQ(tasks[7].final_dir, fs::path("meshes/fall-gable/1/1001"));
   for (const char* bad : {"5-1", "a-3", "-3", "1-", ""})
-    EXPECT_NE(scene_error([&] { ps::parse_seed_range(bad); }).find("--seeds"), std::string::npos) << bad;
+    EXPECT_NE(scene_error([&] { ps::parse_seed_range(bad); }).find("--seeds"), std::string::npos)
+        << bad;
 }
 
 TEST(Selection, SeedListsDrawTheirSeedsInOrderAndRefuseOverlaps) {
@@ -157,7 +174,8 @@ TEST(Selection, MoreSamplesThanOneCommandDrawsAreRefusedBeforeAnyIsDrawn) {
   const std::uint64_t max = ps::MAX_BATCH_SAMPLES;
   const std::uint64_t top = std::numeric_limits<std::uint64_t>::max();
   for (const auto& [scenarios, seeds] :
-       std::vector<std::pair<std::vector<std::string>, std::vector<std::pair<std::uint64_t, std::uint64_t>>>>{
+       std::vector<std::pair<std::vector<std::string>,
+                             std::vector<std::pair<std::uint64_t, std::uint64_t>>>>{
            {{"pull"}, {{0, 9999999999u}}},
            {{"pull"}, {{0, top}}},
            {{"pull"}, {{0, max / 2 - 1}, {max, max + max / 2}}},
@@ -204,12 +222,22 @@ TEST(DatasetStats, CountsLatestStatePerSampleAndQuantiles) {
   fs::remove_all(root);
   fs::create_directories(root);
   for (int i = 0; i < 5; ++i)
-    papersim::batch::append_line(root / "manifest.jsonl",
-                                 json{{"key", "p" + std::to_string(i)}, {"scenario", "pull"}, {"wall_seconds", i + 1.0}}.dump());
-  papersim::batch::append_line(root / "manifest.jsonl", json{{"key", "p0"}, {"scenario", "pull"}, {"wall_seconds", 99.0}}.dump());
-  papersim::batch::append_line(root / "failures.jsonl", json{{"key", "p1"}, {"scenario", "pull"}, {"reason", "time limit"}}.dump());
-  papersim::batch::append_line(root / "failures.jsonl", json{{"key", "f0"}, {"scenario", "fall-sphere"}, {"reason", "time limit"}}.dump());
-  papersim::batch::append_line(root / "failures.jsonl", json{{"key", "f1"}, {"scenario", "fall-sphere"}, {"reason", "simulation failed"}}.dump());
+    papersim::batch::append_line(
+        root / "manifest.jsonl",
+        json{{"key", "p" + std::to_string(i)}, {"scenario", "pull"}, {"wall_seconds", i + 1.0}}
+            .dump());
+  papersim::batch::append_line(
+      root / "manifest.jsonl",
+      json{{"key", "p0"}, {"scenario", "pull"}, {"wall_seconds", 99.0}}.dump());
+  papersim::batch::append_line(
+      root / "failures.jsonl",
+      json{{"key", "p1"}, {"scenario", "pull"}, {"reason", "time limit"}}.dump());
+  papersim::batch::append_line(
+      root / "failures.jsonl",
+      json{{"key", "f0"}, {"scenario", "fall-sphere"}, {"reason", "time limit"}}.dump());
+  papersim::batch::append_line(
+      root / "failures.jsonl",
+      json{{"key", "f1"}, {"scenario", "fall-sphere"}, {"reason", "simulation failed"}}.dump());
   const auto parts = papersim::batch::read_dataset(root);
   ASSERT_EQ(parts.size(), 1u);
   const auto& p = parts[0];
@@ -230,12 +258,15 @@ TEST(DatasetStats, CountsLatestStatePerSampleAndQuantiles) {
 // are in the folder and no staging folder is left; with no gnuplot on the PATH the call fails
 // and the folder holds only what it held before.
 TEST(DatasetStats, PlotsAppearWholeOrNotAtAll) {
-  const fs::path root = fs::temp_directory_path() / ("papersim_stats_plots_" + std::to_string(getpid()));
+  const fs::path root =
+      fs::temp_directory_path() / ("papersim_stats_plots_" + std::to_string(getpid()));
   fs::remove_all(root);
   fs::create_directories(root);
   for (int i = 0; i < 5; ++i)
-    papersim::batch::append_line(root / "manifest.jsonl",
-                                 json{{"key", "p" + std::to_string(i)}, {"scenario", "pull"}, {"wall_seconds", i + 1.0}}.dump());
+    papersim::batch::append_line(
+        root / "manifest.jsonl",
+        json{{"key", "p" + std::to_string(i)}, {"scenario", "pull"}, {"wall_seconds", i + 1.0}}
+            .dump());
   const auto parts = papersim::batch::read_dataset(root);
   const auto names = [](const fs::path& dir) {
     std::set<std::string> n;
@@ -257,13 +288,15 @@ TEST(DatasetStats, PlotsAppearWholeOrNotAtAll) {
   const fs::path plots = root / "plots";
   const auto written = papersim::batch::write_dataset_plots(plots, parts);
   ASSERT_EQ(written.size(), 1u);
-  EXPECT_EQ(names(plots), (std::set<std::string>{"meshes_wall_seconds.dat", "meshes_wall_seconds.svg", "stats.gp"}));
+  EXPECT_EQ(names(plots), (std::set<std::string>{"meshes_wall_seconds.dat",
+                                                 "meshes_wall_seconds.svg", "stats.gp"}));
   std::ifstream svg(written[0]);
   std::stringstream text;
   text << svg.rdbuf();
   EXPECT_NE(text.str().find("</svg>"), std::string::npos);
   // A file where the folder should be: an output error naming it, and the file left alone.
-  EXPECT_THROW(papersim::batch::write_dataset_plots(root / "manifest.jsonl", parts), papersim::batch::PlotsOutputError);
+  EXPECT_THROW(papersim::batch::write_dataset_plots(root / "manifest.jsonl", parts),
+               papersim::batch::PlotsOutputError);
   EXPECT_EQ(papersim::batch::read_dataset(root).at(0).done.at("pull"), 5);
   fs::remove_all(root);
 }
@@ -272,14 +305,17 @@ TEST(DatasetStats, PlotsAppearWholeOrNotAtAll) {
 // hand edit) are left out and counted, never a crash; a dataset path that is not a folder is a
 // DatasetError.
 TEST(DatasetStats, LeavesOutAndCountsMalformedLines) {
-  const fs::path root = fs::temp_directory_path() / ("papersim_stats_bad_" + std::to_string(getpid()));
+  const fs::path root =
+      fs::temp_directory_path() / ("papersim_stats_bad_" + std::to_string(getpid()));
   fs::remove_all(root);
   fs::create_directories(root);
-  std::ofstream(root / "manifest.jsonl") << "{\"key\": \"a\", \"scenario\": \"pull\", \"wall_seconds\": 1}\n"
-                                         << "{\"key\": 5, \"scenario\": \"pull\"}\n"
-                                         << "{\"key\": \"b\", \"scenario\": 7}\n"
-                                         << "[1, 2]\n\n{\"key\": \"c\", \"scen";
-  std::ofstream(root / "failures.jsonl") << "{\"key\": \"d\", \"scenario\": \"pull\", \"reason\": 3}\n";
+  std::ofstream(root / "manifest.jsonl")
+      << "{\"key\": \"a\", \"scenario\": \"pull\", \"wall_seconds\": 1}\n"
+      << "{\"key\": 5, \"scenario\": \"pull\"}\n"
+      << "{\"key\": \"b\", \"scenario\": 7}\n"
+      << "[1, 2]\n\n{\"key\": \"c\", \"scen";
+  std::ofstream(root / "failures.jsonl")
+      << "{\"key\": \"d\", \"scenario\": \"pull\", \"reason\": 3}\n";
   const auto parts = papersim::batch::read_dataset(root);
   ASSERT_EQ(parts.size(), 1u);
   EXPECT_EQ(parts[0].done.at("pull"), 1);
@@ -288,7 +324,8 @@ TEST(DatasetStats, LeavesOutAndCountsMalformedLines) {
   std::ostringstream report;
   papersim::batch::write_dataset_report(report, parts);
   EXPECT_NE(report.str().find("5 lines left out"), std::string::npos) << report.str();
-  EXPECT_THROW(papersim::batch::read_dataset(root / "manifest.jsonl"), papersim::batch::DatasetError);
+  EXPECT_THROW(papersim::batch::read_dataset(root / "manifest.jsonl"),
+               papersim::batch::DatasetError);
   fs::remove_all(root);
 }
 
@@ -300,14 +337,15 @@ TEST(DatasetStats, LeavesOutAndCountsMalformedLines) {
 // line with trailing text, a top-level array or string, or a line cut short is left out and
 // counted.
 TEST(DatasetStats, StreamedRowsGiveWhatParsingEveryRowGives) {
-  const fs::path root = fs::temp_directory_path() / ("papersim_stats_stream_" + std::to_string(getpid()));
+  const fs::path root =
+      fs::temp_directory_path() / ("papersim_stats_stream_" + std::to_string(getpid()));
   fs::remove_all(root);
   fs::create_directories(root);
   const std::vector<std::string> manifest = {
       R"({"key": "a", "scenario": "pull", "wall_seconds": 1, "vertices": 100})",
-      R"({"key": "a", "scenario": "pull", "wall_seconds": 50})",                     // a duplicate
-      R"({"key": 5, "key": "b", "scenario": "fold", "wall_seconds": 2})",            // last "key" wins
-      R"({"key": "c", "key": 5, "scenario": "fold", "wall_seconds": 3})",            // last is a number
+      R"({"key": "a", "scenario": "pull", "wall_seconds": 50})",           // a duplicate
+      R"({"key": 5, "key": "b", "scenario": "fold", "wall_seconds": 2})",  // last "key" wins
+      R"({"key": "c", "key": 5, "scenario": "fold", "wall_seconds": 3})",  // last is a number
       R"({"meta": {"key": "d", "scenario": "x"}, "key": "e", "scenario": "fold"})",  // nested names
       R"({"meta": {"key": "f"}, "scenario": "fold"})",                               // only nested
       R"({"key": "g\/h\u0041", "scenario": "fo\"ld", "wall_seconds": 4.5e0})",       // escapes
@@ -316,28 +354,30 @@ TEST(DatasetStats, StreamedRowsGiveWhatParsingEveryRowGives) {
       R"({"key": "k", "scenario": "pull", "wall_seconds": 8, "wall_seconds": "x", "cpu_seconds": "x", "cpu_seconds": -3})",
       R"({"key": "l", "scenario": null})",
       R"({"key": "m", "scenario": ["pull"]})",
-      R"({"key": "n"})",                                                             // no scenario
+      R"({"key": "n"})",  // no scenario
       R"({"key": "o", "scenario": "pull"} trailing)",
       R"(["key", "p"])",
       R"("key")",
-      "{\"key\": \"q\", \"scenario\": \"pull\", \"newton_iterations\": 12}\r",        // CRLF
+      "{\"key\": \"q\", \"scenario\": \"pull\", \"newton_iterations\": 12}\r",  // CRLF
       "   ",
       R"({"key": "r", "scenario": "pull", "wall_sec)"};
   const std::vector<std::string> failures = {
-      R"({"key": "b", "scenario": "fold", "reason": "time limit"})",    // done later
+      R"({"key": "b", "scenario": "fold", "reason": "time limit"})",  // done later
       R"({"key": "s", "scenario": "fold", "reason": "time limit"})",
       R"({"key": "s", "scenario": "fold", "reason": "simulation failed"})",  // the latest counts
-      R"({"key": "t", "scenario": "fold"})",                              // no reason
+      R"({"key": "t", "scenario": "fold"})",                                 // no reason
       R"({"key": "u", "scenario": "fold", "reason": {"r": "x"}})",
       R"({"reason": "x", "nested": {"key": "v"}})"};
-  for (const auto& [name, lines] : {std::pair{"manifest.jsonl", manifest}, std::pair{"failures.jsonl", failures}}) {
+  for (const auto& [name, lines] :
+       {std::pair{"manifest.jsonl", manifest}, std::pair{"failures.jsonl", failures}}) {
     std::ofstream out(root / name);
     for (const auto& l : lines) out << l << "\n";
   }
 
   // What parsing every row into a JSON object gives.
   papersim::batch::PartStats want;
-  const std::vector<std::string> figures = {"wall_seconds", "cpu_seconds", "vertices", "newton_iterations"};
+  const std::vector<std::string> figures = {"wall_seconds", "cpu_seconds", "vertices",
+                                            "newton_iterations"};
   const auto well_formed = [](const json& j) {
     if (!j.is_object() || !j.contains("key") || !j["key"].is_string()) return false;
     for (const char* k : {"scenario", "reason"})
@@ -374,7 +414,8 @@ TEST(DatasetStats, StreamedRowsGiveWhatParsingEveryRowGives) {
       ++want.reasons[j.value("reason", std::string("?"))];
     }
 
-  const auto got = papersim::batch::read_part("meshes", root / "manifest.jsonl", root / "failures.jsonl", figures);
+  const auto got = papersim::batch::read_part("meshes", root / "manifest.jsonl",
+                                              root / "failures.jsonl", figures);
   EXPECT_EQ(got.done, want.done);
   EXPECT_EQ(got.failed, want.failed);
   EXPECT_EQ(got.reasons, want.reasons);
@@ -382,14 +423,17 @@ TEST(DatasetStats, StreamedRowsGiveWhatParsingEveryRowGives) {
   EXPECT_EQ(got.skipped_lines, want.skipped_lines);
   EXPECT_EQ(got.values, want.values);
   // And the figures themselves, so that the oracle above cannot hide a shared mistake.
-  EXPECT_EQ(got.done, (std::map<std::string, long long>{{"pull", 5}, {"fold", 2}, {"fo\"ld", 1}, {"?", 1}}));
+  EXPECT_EQ(got.done,
+            (std::map<std::string, long long>{{"pull", 5}, {"fold", 2}, {"fo\"ld", 1}, {"?", 1}}));
   EXPECT_EQ(got.skipped_lines, 10);  // 8 in the manifest, 2 in the failures
-  EXPECT_EQ(got.values.at("wall_seconds"),
-            (std::map<std::string, std::vector<double>>{{"pull", {1}}, {"fold", {2}}, {"fo\"ld", {4.5}}}));
-  EXPECT_EQ(got.values.at("cpu_seconds"), (std::map<std::string, std::vector<double>>{{"pull", {-3}}}));
+  EXPECT_EQ(got.values.at("wall_seconds"), (std::map<std::string, std::vector<double>>{
+                                               {"pull", {1}}, {"fold", {2}}, {"fo\"ld", {4.5}}}));
+  EXPECT_EQ(got.values.at("cpu_seconds"),
+            (std::map<std::string, std::vector<double>>{{"pull", {-3}}}));
   EXPECT_EQ(got.values.at("vertices"),
             (std::map<std::string, std::vector<double>>{{"pull", {100, 18446744073709551615.0}}}));
-  EXPECT_EQ(got.values.at("newton_iterations"), (std::map<std::string, std::vector<double>>{{"pull", {12}}}));
+  EXPECT_EQ(got.values.at("newton_iterations"),
+            (std::map<std::string, std::vector<double>>{{"pull", {12}}}));
   EXPECT_EQ(got.failed, (std::map<std::string, long long>{{"fold", 2}}));
   EXPECT_EQ(got.reasons, (std::map<std::string, long long>{{"simulation failed", 1}, {"?", 1}}));
   EXPECT_EQ(got.failed_attempts, 4);
@@ -399,7 +443,8 @@ TEST(DatasetStats, StreamedRowsGiveWhatParsingEveryRowGives) {
 // The progress of a long read: told every 4,096 lines the bytes read so far (exactly those of the
 // lines before) of the total size of the dataset's files.
 TEST(DatasetStats, ReadingTellsItsProgressInBytes) {
-  const fs::path root = fs::temp_directory_path() / ("papersim_stats_progress_" + std::to_string(getpid()));
+  const fs::path root =
+      fs::temp_directory_path() / ("papersim_stats_progress_" + std::to_string(getpid()));
   fs::remove_all(root);
   fs::create_directories(root);
   std::vector<std::uintmax_t> ends;  // byte offset after each line
@@ -413,7 +458,8 @@ TEST(DatasetStats, ReadingTellsItsProgressInBytes) {
     }
   }
   std::ofstream(root / "renders.jsonl") << R"({"key": "r", "scenario": "pull"})" << '\n';
-  const std::uintmax_t total = fs::file_size(root / "manifest.jsonl") + fs::file_size(root / "renders.jsonl");
+  const std::uintmax_t total =
+      fs::file_size(root / "manifest.jsonl") + fs::file_size(root / "renders.jsonl");
   std::vector<std::pair<std::uintmax_t, std::uintmax_t>> told;
   const auto parts = papersim::batch::read_dataset(
       root, [&](std::uintmax_t read, std::uintmax_t of) { told.emplace_back(read, of); });

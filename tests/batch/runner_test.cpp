@@ -20,15 +20,16 @@
 #include "common/errors.hpp"
 
 namespace fs = std::filesystem;
+using nlohmann::json;
 using papersim::batch::BatchSpec;
 using papersim::batch::Command;
 using papersim::batch::Task;
-using nlohmann::json;
 
 namespace {
 
 fs::path fresh_dir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("papersim_runner_" + name + "_" + std::to_string(getpid()));
+  const fs::path d =
+      fs::temp_directory_path() / ("papersim_runner_" + name + "_" + std::to_string(getpid()));
   fs::remove_all(d);
   return d;
 }
@@ -48,8 +49,11 @@ BatchSpec shell_spec(const fs::path& root, const std::string& script) {
   spec.jobs = 2;
   spec.commands = [root, script](const Task& t, const fs::path& stage) {
     const std::string index = std::to_string(t.info.at("index").get<int>());
-    return std::vector<Command>{{{"/bin/sh", "-c", "echo " + index + " >> '" + (root / "runs.txt").string() +
-                                  "'; mkdir -p \"$1\" && " + script, "sh", (stage / "out").string(), index}, {}}};
+    return std::vector<Command>{{{"/bin/sh", "-c",
+                                  "echo " + index + " >> '" + (root / "runs.txt").string() +
+                                      "'; mkdir -p \"$1\" && " + script,
+                                  "sh", (stage / "out").string(), index},
+                                 {}}};
   };
   spec.finalize = [](const Task&, const papersim::batch::Attempt& a) { return a.stage / "out"; };
   spec.manifest_row = [](const Task&, const fs::path& dir, double) {
@@ -92,16 +96,20 @@ TEST(Runner, RunsEveryTaskOnceAndNeverRedoesAFinishedOne) {
 TEST(Runner, FailuresAreRecordedWithTheirReasonAndTheRestFinishes) {
   const fs::path root = fresh_dir("fail");
   const auto tasks = numbered_tasks(6);
-  auto spec = shell_spec(root, "if [ $2 = 2 ]; then echo 'diverged at step 3' >&2; exit 3; fi; "
-                               "if [ $2 = 4 ]; then sleep 30; fi; echo ok > \"$1/value\"");
+  auto spec = shell_spec(root,
+                         "if [ $2 = 2 ]; then echo 'diverged at step 3' >&2; exit 3; fi; "
+                         "if [ $2 = 4 ]; then sleep 30; fi; echo ok > \"$1/value\"");
   spec.time_limit = 1.0;
-  spec.failure_reason = [](int code, const std::string&) { return code == 3 ? std::string("simulation failed") : std::string(); };
+  spec.failure_reason = [](int code, const std::string&) {
+    return code == 3 ? std::string("simulation failed") : std::string();
+  };
   const auto s = papersim::batch::run_batch(tasks, spec);
   EXPECT_EQ(s.done, 4);
   EXPECT_EQ(s.failed, 2);
   EXPECT_LT(s.elapsed, 20.0) << "the time limit did not stop the sleeping task";
   std::map<int, json> failures;
-  for (const auto& r : papersim::batch::read_json_lines(root / "failures.jsonl")) failures[r["index"].get<int>()] = r;
+  for (const auto& r : papersim::batch::read_json_lines(root / "failures.jsonl"))
+    failures[r["index"].get<int>()] = r;
   ASSERT_EQ(failures.size(), 2u);
   EXPECT_EQ(failures[2]["reason"], "simulation failed");
   EXPECT_EQ(failures[2]["detail"], "diverged at step 3");
@@ -201,7 +209,8 @@ TEST(Runner, RestoresTheManifestRowOfATaskFinishedBeforeACrash) {
   EXPECT_EQ(s.repaired, 2);
   EXPECT_EQ(s.done_now, 0);
   std::set<std::string> keys;
-  for (const auto& r : papersim::batch::read_json_lines(root / "manifest.jsonl")) keys.insert(r["key"]);
+  for (const auto& r : papersim::batch::read_json_lines(root / "manifest.jsonl"))
+    keys.insert(r["key"]);
   EXPECT_EQ(keys.size(), 4u);
   EXPECT_EQ(lines(root / "manifest.jsonl").size(), 4u);
   fs::remove_all(root);
@@ -216,11 +225,13 @@ TEST(Runner, ManifestKeysAreFoundByTheRowsOwnKeyOnly) {
   std::ofstream(file) << R"({"key":"m/0","seed":0})" << '\n'
                       << R"({"key":"m/1","set":{"key":"m/2"}})" << '\n'  // m/2 only nested
                       << R"({"a":1, "key" : "m/3"})" << '\n'             // spaces around the colon
-                      << R"({"key":"m\/4","note":"\"key\":\"m/5\""})" << '\n'  // escapes: m/4, not m/5
-                      << R"({"key":"m/6","not":"a row")" << '\n'         // cut short: not a row
-                      << R"(["key","m/7"])" << '\n'                      // not an object
-                      << R"({"key":"m/8"})";                              // a last line without newline
-  const std::unordered_set<std::string> wanted{"m/0", "m/2", "m/3", "m/4", "m/5", "m/6", "m/7", "m/8", "m/9"};
+                      << R"({"key":"m\/4","note":"\"key\":\"m/5\""})"
+                      << '\n'                                     // escapes: m/4, not m/5
+                      << R"({"key":"m/6","not":"a row")" << '\n'  // cut short: not a row
+                      << R"(["key","m/7"])" << '\n'               // not an object
+                      << R"({"key":"m/8"})";                      // a last line without newline
+  const std::unordered_set<std::string> wanted{"m/0", "m/2", "m/3", "m/4", "m/5",
+                                               "m/6", "m/7", "m/8", "m/9"};
   const auto found = papersim::batch::keys_in_json_lines(file, wanted);
   EXPECT_EQ(found, (std::unordered_set<std::string>{"m/0", "m/3", "m/4", "m/8"}));
   // m/1 is a row but not wanted; nothing is found in a missing file or for no wanted key.
@@ -230,7 +241,8 @@ TEST(Runner, ManifestKeysAreFoundByTheRowsOwnKeyOnly) {
   // The same answer as reading every row.
   std::unordered_set<std::string> all;
   for (const auto& r : papersim::batch::read_json_lines(file))
-    if (r.contains("key") && r["key"].is_string() && wanted.count(r["key"].get<std::string>())) all.insert(r["key"]);
+    if (r.contains("key") && r["key"].is_string() && wanted.count(r["key"].get<std::string>()))
+      all.insert(r["key"]);
   EXPECT_EQ(found, all);
   fs::remove_all(root);
 }
@@ -258,9 +270,12 @@ TEST(Runner, AChildThatCannotWriteStopsTheBatchAndRecordsNoFailure) {
   const fs::path root = fresh_dir("nospace");
   const auto tasks = numbered_tasks(6);
   const fs::path full = root / "full";  // the disk is full while this file exists
-  const auto spec = shell_spec(root, "if [ -e '" + full.string() + "' ]; then if [ $2 = 1 ]; then "
-                                     "echo 'cannot write output: No space left on device' >&2; exit 5; fi; sleep 30; fi; "
-                                     "echo ok > \"$1/value\"");
+  const auto spec = shell_spec(
+      root,
+      "if [ -e '" + full.string() +
+          "' ]; then if [ $2 = 1 ]; then "
+          "echo 'cannot write output: No space left on device' >&2; exit 5; fi; sleep 30; fi; "
+          "echo ok > \"$1/value\"");
   fs::create_directories(root);
   std::ofstream(full) << "";
   const auto start = std::chrono::steady_clock::now();
@@ -268,7 +283,8 @@ TEST(Runner, AChildThatCannotWriteStopsTheBatchAndRecordsNoFailure) {
     papersim::batch::run_batch(tasks, spec);
     ADD_FAILURE() << "the batch went on after a child could not write";
   } catch (const papersim::common::OutputError& e) {
-    EXPECT_NE(std::string(e.what()).find("t/1: cannot write output: No space left on device"), std::string::npos)
+    EXPECT_NE(std::string(e.what()).find("t/1: cannot write output: No space left on device"),
+              std::string::npos)
         << e.what();
   }
   EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 10.0)
@@ -276,7 +292,8 @@ TEST(Runner, AChildThatCannotWriteStopsTheBatchAndRecordsNoFailure) {
   EXPECT_TRUE(papersim::batch::read_json_lines(root / "failures.jsonl").empty());
   EXPECT_TRUE(papersim::batch::read_json_lines(root / "manifest.jsonl").empty());
   EXPECT_TRUE(fs::is_empty(root / ".staging"));
-  EXPECT_EQ(lines(root / "runs.txt").size(), 2u) << "a task started after the batch should have stopped";
+  EXPECT_EQ(lines(root / "runs.txt").size(), 2u)
+      << "a task started after the batch should have stopped";
   fs::remove(full);
   const auto again = papersim::batch::run_batch(tasks, spec);
   EXPECT_EQ(again.done_now, 6);
@@ -343,7 +360,8 @@ TEST(Runner, ConcurrentAppendsNeverInterleave) {
   for (int w = 0; w < 4; ++w) {
     const pid_t pid = fork();
     if (pid == 0) {
-      for (int i = 0; i < 100; ++i) papersim::batch::append_line(file, json{{"w", w}, {"i", i}, {"pad", pad}}.dump());
+      for (int i = 0; i < 100; ++i)
+        papersim::batch::append_line(file, json{{"w", w}, {"i", i}, {"pad", pad}}.dump());
       _exit(0);
     }
     kids.push_back(pid);
@@ -362,11 +380,13 @@ TEST(Slurm, ScriptMapsTheArrayIndexToTheShard) {
   o.mem = "8G";
   o.time = "02:00:00";
   o.partition = "cpu";
-  const std::string s = papersim::batch::slurm_script({"/opt/papersim", "batch", "--out", "/data/it's"}, o, "/data/slurm");
-  for (const char* line : {"#SBATCH --array=0-7\n", "#SBATCH --cpus-per-task=4\n", "#SBATCH --mem=8G\n",
-                           "#SBATCH --time=02:00:00\n", "#SBATCH --partition=cpu\n",
-                           "#SBATCH --output=/data/slurm/%A_%a.out\n",
-                           "exec '/opt/papersim' 'batch' '--out' '/data/it'\\''s' --shard \"${SLURM_ARRAY_TASK_ID}/8\""})
+  const std::string s = papersim::batch::slurm_script(
+      {"/opt/papersim", "batch", "--out", "/data/it's"}, o, "/data/slurm");
+  for (const char* line : {"#SBATCH --array=0-7\n", "#SBATCH --cpus-per-task=4\n",
+                           "#SBATCH --mem=8G\n", "#SBATCH --time=02:00:00\n",
+                           "#SBATCH --partition=cpu\n", "#SBATCH --output=/data/slurm/%A_%a.out\n",
+                           "exec '/opt/papersim' 'batch' '--out' '/data/it'\\''s' --shard "
+                           "\"${SLURM_ARRAY_TASK_ID}/8\""})
     EXPECT_NE(s.find(line), std::string::npos) << line << "\nin\n" << s;
   o.shards = 0;
   EXPECT_THROW(papersim::batch::slurm_script({"x"}, o, "/tmp"), std::invalid_argument);

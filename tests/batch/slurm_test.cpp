@@ -38,7 +38,8 @@ std::string shell(const std::string& command) {
 bool wait_until(const std::function<bool()>& done, double seconds) {
   const auto t0 = std::chrono::steady_clock::now();
   while (!done()) {
-    if (std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() > seconds) return false;
+    if (std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() > seconds)
+      return false;
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
   }
   return true;
@@ -53,10 +54,13 @@ bool wait_for_job(const std::string& id) {
 class Cluster {
  public:
   explicit Cluster(const fs::path& dir) : m_dir(dir) {
-    m_started = std::system(("bash '" + CLUSTER_SCRIPT + "' start '" + dir.string() + "'").c_str()) == 0;
+    m_started =
+        std::system(("bash '" + CLUSTER_SCRIPT + "' start '" + dir.string() + "'").c_str()) == 0;
     setenv("SLURM_CONF", (dir / "slurm.conf").c_str(), 1);
   }
-  ~Cluster() { std::system(("bash '" + CLUSTER_SCRIPT + "' stop '" + m_dir.string() + "'").c_str()); }
+  ~Cluster() {
+    std::system(("bash '" + CLUSTER_SCRIPT + "' stop '" + m_dir.string() + "'").c_str());
+  }
   Cluster(const Cluster&) = delete;
   Cluster& operator=(const Cluster&) = delete;
   bool started() const { return m_started; }
@@ -68,12 +72,13 @@ class Cluster {
 
 std::vector<std::string> mesh_args(const fs::path& out) {
   // 0.3 s of simulated time (30 steps) so a task is still at work when it is cancelled.
-  return {PAPERSIM, "batch", "--out", out.string(), "--mix", TINY_MIX, "--seeds", "1-8", "--set", "duration=0.3"};
+  return {PAPERSIM, "batch",   "--out", out.string(), "--mix",
+          TINY_MIX, "--seeds", "1-8",   "--set",      "duration=0.3"};
 }
 
 std::vector<std::string> render_args(const fs::path& out) {
-  return {SCENEGEN, "batch", out.string(), "--views", "1", "--size", "48x64", "--quality", "draft",
-          "--passes", "image,uv,mask", "--dpi", "30"};
+  return {SCENEGEN,    "batch", out.string(), "--views",       "1",     "--size", "48x64",
+          "--quality", "draft", "--passes",   "image,uv,mask", "--dpi", "30"};
 }
 
 std::vector<std::string> with(std::vector<std::string> a, const std::vector<std::string>& more) {
@@ -89,7 +94,9 @@ std::set<std::string> failures(const fs::path& file) {
   return out;
 }
 
-int run(const std::vector<std::string>& argv, const fs::path& log) { return pt::wait_status(pt::start(argv, log)); }
+int run(const std::vector<std::string>& argv, const fs::path& log) {
+  return pt::wait_status(pt::start(argv, log));
+}
 
 std::string joined(const std::vector<std::string>& lines) {
   std::string s;
@@ -106,15 +113,19 @@ TEST(Slurm, OneNodeClusterRunsTheArraysAResubmittedTaskResumesAndTheDatasetEqual
   Cluster cluster(work / "cluster");
   ASSERT_TRUE(cluster.started()) << "see " << (work / "cluster" / "log").string();
   const fs::path ds = work / "dataset", local = work / "local";
-  const std::vector<std::string> slurm = {"--slurm", "4", "--slurm-mem", "300M", "--slurm-time", "00:05:00"};
+  const std::vector<std::string> slurm = {"--slurm",      "4",       "--slurm-mem", "300M",
+                                          "--slurm-time", "00:05:00"};
 
-  ASSERT_EQ(run(with(mesh_args(ds), slurm), work / "write_meshes.log"), 0) << pt::read_text(work / "write_meshes.log");
+  ASSERT_EQ(run(with(mesh_args(ds), slurm), work / "write_meshes.log"), 0)
+      << pt::read_text(work / "write_meshes.log");
   const std::string script = (ds / "slurm" / "papersim-batch.sbatch").string();
   const std::string job = shell("sbatch --parsable '" + script + "'");
   ASSERT_FALSE(job.empty());
   // Cancel array task 0 once it is running and has a sample in progress.
-  ASSERT_TRUE(wait_until([&] { return shell("squeue -h -j " + job + "_0 -o %T") == "RUNNING"; }, 120));
-  ASSERT_TRUE(wait_until([&] { return fs::exists(ds / ".staging") && !fs::is_empty(ds / ".staging"); }, 60));
+  ASSERT_TRUE(
+      wait_until([&] { return shell("squeue -h -j " + job + "_0 -o %T") == "RUNNING"; }, 120));
+  ASSERT_TRUE(wait_until(
+      [&] { return fs::exists(ds / ".staging") && !fs::is_empty(ds / ".staging"); }, 60));
   shell("scancel " + job + "_0");
   ASSERT_TRUE(wait_for_job(job));
   EXPECT_NE(shell("scontrol show job " + job + "_0").find("JobState=CANCELLED"), std::string::npos)
@@ -127,18 +138,22 @@ TEST(Slurm, OneNodeClusterRunsTheArraysAResubmittedTaskResumesAndTheDatasetEqual
   ASSERT_TRUE(wait_for_job(again));
   EXPECT_EQ(pt::line_count(ds / "manifest.jsonl"), 8u);
 
-  ASSERT_EQ(run(with(render_args(ds), slurm), work / "write_renders.log"), 0) << pt::read_text(work / "write_renders.log");
-  const std::string renders = shell("sbatch --parsable '" + (ds / "slurm" / "scenegen-batch.sbatch").string() + "'");
+  ASSERT_EQ(run(with(render_args(ds), slurm), work / "write_renders.log"), 0)
+      << pt::read_text(work / "write_renders.log");
+  const std::string renders =
+      shell("sbatch --parsable '" + (ds / "slurm" / "scenegen-batch.sbatch").string() + "'");
   ASSERT_FALSE(renders.empty());
   ASSERT_TRUE(wait_for_job(renders));
   // Every view is rendered or recorded as failed (a draw with no valid camera is a recorded
   // failure, not a crash).
-  EXPECT_EQ(pt::line_count(ds / "renders.jsonl") + failures(ds / "renders_failures.jsonl").size(), 8u)
+  EXPECT_EQ(pt::line_count(ds / "renders.jsonl") + failures(ds / "renders_failures.jsonl").size(),
+            8u)
       << shell("cat '" + (ds / "slurm").string() + "'/*.err");
 
   // The same seeds locally.
   ASSERT_EQ(run(with(mesh_args(local), {"--jobs", "2"}), work / "local_meshes.log"), 0);
-  const int local_renders = run(with(render_args(local), {"--jobs", "2"}), work / "local_renders.log");
+  const int local_renders =
+      run(with(render_args(local), {"--jobs", "2"}), work / "local_renders.log");
   EXPECT_EQ(local_renders, failures(local / "renders_failures.jsonl").empty() ? 0 : 1);
   auto diffs = pt::dataset_differences(local, ds, "meshes", "manifest.jsonl");
   EXPECT_TRUE(diffs.empty()) << joined(diffs);

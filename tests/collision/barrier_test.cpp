@@ -1,8 +1,8 @@
 #include "collision/barrier.hpp"
 
-#include <Eigen/Eigenvalues>
 #include <gtest/gtest.h>
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 
@@ -36,8 +36,8 @@ TEST(Barrier, DerivativesMatchFiniteDifferences) {
   for (double d : {1e-6, 1e-5, 1e-4, 3e-4, 5e-4, 9e-4, 0.999e-3}) {
     const double h = 1e-4 * std::min(d, dhat - d);
     const double fd1 = central_difference([&](double x) { return pc::barrier(x, dhat); }, d, h);
-    const double fd2 = central_difference(
-        [&](double x) { return pc::barrier_first_derivative(x, dhat); }, d, h);
+    const double fd2 =
+        central_difference([&](double x) { return pc::barrier_first_derivative(x, dhat); }, d, h);
     const double a1 = pc::barrier_first_derivative(d, dhat);
     const double a2 = pc::barrier_second_derivative(d, dhat);
     EXPECT_NEAR(a1, fd1, 1e-6 * std::abs(a1) + 1e-12) << "d = " << d;
@@ -71,8 +71,8 @@ TEST(Friction, F0IsIntegralOfF1) {
   EXPECT_DOUBLE_EQ(pc::friction_f0(eps, eps), eps);
   EXPECT_DOUBLE_EQ(pc::friction_f0(5 * eps, eps), 5 * eps);
   for (double y : {1e-6, 3e-5, 0.7e-4, 1.5e-4}) {
-    const double fd = central_difference([&](double x) { return pc::friction_f0(x, eps); }, y,
-                                         1e-4 * y);
+    const double fd =
+        central_difference([&](double x) { return pc::friction_f0(x, eps); }, y, 1e-4 * y);
     EXPECT_NEAR(fd, pc::friction_f1(y, eps), 1e-7) << "y = " << y;
   }
 }
@@ -80,8 +80,8 @@ TEST(Friction, F0IsIntegralOfF1) {
 TEST(Friction, F2TermMatchesDerivativeOfF1OverY) {
   const double eps = 1e-4;
   for (double y : {1e-6, 3e-5, 0.7e-4, 1.5e-4, 1e-3}) {
-    const double fd = central_difference(
-        [&](double x) { return pc::friction_f1_over_y(x, eps); }, y, 1e-5 * y);
+    const double fd =
+        central_difference([&](double x) { return pc::friction_f1_over_y(x, eps); }, y, 1e-5 * y);
     const double expected = fd / y;
     EXPECT_NEAR(pc::friction_f2_term(y, eps), expected, 1e-6 * std::abs(expected)) << y;
   }
@@ -91,8 +91,8 @@ TEST(Friction, F2TermMatchesDerivativeOfF1OverY) {
 TEST(Friction, GradientAndHessianMatchFiniteDifferences) {
   const double eps = 1e-4;
   const auto f0 = [&](const Eigen::Vector2d& u) { return pc::friction_f0(u.norm(), eps); };
-  for (const Eigen::Vector2d& u : {Eigen::Vector2d(3e-5, -2e-5), Eigen::Vector2d(2e-4, 1e-4),
-                                  Eigen::Vector2d(1e-7, 0.0)}) {
+  for (const Eigen::Vector2d& u :
+       {Eigen::Vector2d(3e-5, -2e-5), Eigen::Vector2d(2e-4, 1e-4), Eigen::Vector2d(1e-7, 0.0)}) {
     const double h = 1e-8;
     const Eigen::Vector2d g = pc::friction_gradient(u, eps);
     const Eigen::Matrix2d H = pc::friction_hessian(u, eps);

@@ -53,8 +53,8 @@ TEST(Plane, TiltedPlaneRotatesGradient) {
   // Plane tilted about x by 30 deg and lifted by 1 m: normal (0, -sin, cos).
   const double a = M_PI / 6;
   pc::PlaneCollider plane;
-  plane.motion = pc::RigidMotion(
-      {keyframe(0.0, {0, 0, 1}, Eigen::Quaterniond(Eigen::AngleAxisd(a, Eigen::Vector3d::UnitX())))});
+  plane.motion = pc::RigidMotion({keyframe(
+      0.0, {0, 0, 1}, Eigen::Quaterniond(Eigen::AngleAxisd(a, Eigen::Vector3d::UnitX())))});
   const Eigen::Vector3d n(0, -std::sin(a), std::cos(a));
   Eigen::Vector3d g;
   const Eigen::Vector3d p(0.2, 0.4, 1.3);
@@ -64,9 +64,9 @@ TEST(Plane, TiltedPlaneRotatesGradient) {
 }
 
 TEST(RigidMotion, RejectsNonIncreasingTimes) {
-  EXPECT_THROW(pc::RigidMotion({keyframe(1.0, {0, 0, 0}, rot_z(0)),
-                                keyframe(1.0, {1, 0, 0}, rot_z(0))}),
-               std::invalid_argument);
+  EXPECT_THROW(
+      pc::RigidMotion({keyframe(1.0, {0, 0, 0}, rot_z(0)), keyframe(1.0, {1, 0, 0}, rot_z(0))}),
+      std::invalid_argument);
 }
 
 TEST(RigidMotion, InterpolatesTranslationAndSlerp) {
@@ -93,18 +93,23 @@ TEST(RigidMotion, InterpolatesTranslationAndSlerp) {
 // linear part of it in between; the rest of the motion keeps its placement; inserted keyframes
 // take rotation and scale from the motion given, so rebuilding from their times is exact.
 TEST(RigidMotion, TranslateFromMovesThePlacementFromATimeOn) {
-  const pc::RigidMotion before({keyframe(1.0, {0, 0, 0}, rot_z(0.0)), keyframe(3.0, {2, 4, 0}, rot_z(M_PI / 2))});
+  const pc::RigidMotion before(
+      {keyframe(1.0, {0, 0, 0}, rot_z(0.0)), keyframe(3.0, {2, 4, 0}, rot_z(M_PI / 2))});
   pc::RigidMotion m = before;
   const Eigen::Vector3d delta(0, 0, 0.5);
   m.translate_from(1.5, 2.0, delta, before);
   EXPECT_EQ(m.keyframes().size(), 4u);
-  for (double t : {0.0, 1.0, 1.2, 1.5}) EXPECT_NEAR((m.pose(t).matrix() - before.pose(t).matrix()).norm(), 0.0, 1e-14) << t;
+  for (double t : {0.0, 1.0, 1.2, 1.5})
+    EXPECT_NEAR((m.pose(t).matrix() - before.pose(t).matrix()).norm(), 0.0, 1e-14) << t;
   for (double t : {2.0, 2.5, 3.0, 7.0}) {
-    EXPECT_NEAR((m.pose(t).translation() - before.pose(t).translation() - delta).norm(), 0.0, 1e-14) << t;
+    EXPECT_NEAR((m.pose(t).translation() - before.pose(t).translation() - delta).norm(), 0.0, 1e-14)
+        << t;
     EXPECT_NEAR((m.pose(t).linear() - before.pose(t).linear()).norm(), 0.0, 1e-14) << t;
   }
-  EXPECT_NEAR((m.pose(1.75).translation() - before.pose(1.75).translation() - 0.5 * delta).norm(), 0.0, 1e-14);
-  EXPECT_NEAR((m.linear_velocity(1.75) - before.linear_velocity(1.75) - delta / 0.5).norm(), 0.0, 1e-13);
+  EXPECT_NEAR((m.pose(1.75).translation() - before.pose(1.75).translation() - 0.5 * delta).norm(),
+              0.0, 1e-14);
+  EXPECT_NEAR((m.linear_velocity(1.75) - before.linear_velocity(1.75) - delta / 0.5).norm(), 0.0,
+              1e-13);
   EXPECT_NEAR((m.angular_velocity(1.75) - before.angular_velocity(1.75)).norm(), 0.0, 1e-13);
   // A second change from the keyframe at 2.0 (within 1e-9 s: no new keyframe there), and one
   // beyond the last keyframe, where the motion was held.
@@ -117,12 +122,13 @@ TEST(RigidMotion, TranslateFromMovesThePlacementFromATimeOn) {
   EXPECT_NEAR((m.pose(8.0).translation() - Eigen::Vector3d(2, 4, 0.5)).norm(), 0.0, 1e-14);
   // Rebuilt from the keyframe times and translations alone: the same keyframes to the bit.
   pc::RigidMotion rebuilt = before;
-  for (const pc::Keyframe& k : m.keyframes()) rebuilt.set_translation_at(k.time, k.translation, before);
+  for (const pc::Keyframe& k : m.keyframes())
+    rebuilt.set_translation_at(k.time, k.translation, before);
   ASSERT_EQ(rebuilt.keyframes().size(), m.keyframes().size());
   for (size_t i = 0; i < m.keyframes().size(); ++i) {
     const pc::Keyframe &a = rebuilt.keyframes()[i], &b = m.keyframes()[i];
-    EXPECT_TRUE(a.time == b.time && a.translation == b.translation && a.rotation.coeffs() == b.rotation.coeffs() &&
-                a.scale == b.scale)
+    EXPECT_TRUE(a.time == b.time && a.translation == b.translation &&
+                a.rotation.coeffs() == b.rotation.coeffs() && a.scale == b.scale)
         << i;
   }
   EXPECT_THROW(m.translate_from(2.0, 2.0, delta, before), std::invalid_argument);
@@ -156,7 +162,8 @@ TEST(Collider, KeyframedPlaneRotatesGradientAndMatchesVelocity) {
   // Material point at p: its local coordinates are fixed, so it moves as pose(t) * X.
   const Eigen::Vector3d X = x.inverse() * p;
   const double h = 1e-6;
-  const Eigen::Vector3d fd = (plane.motion.pose(t + h) * X - plane.motion.pose(t - h) * X) / (2 * h);
+  const Eigen::Vector3d fd =
+      (plane.motion.pose(t + h) * X - plane.motion.pose(t - h) * X) / (2 * h);
   EXPECT_NEAR((plane.velocity(p, t) - fd).norm(), 0.0, 1e-8);
   // Same answer through the precomputed-pose entry point.
   Eigen::Vector3d g2;
@@ -167,8 +174,8 @@ TEST(Collider, KeyframedPlaneRotatesGradientAndMatchesVelocity) {
 TEST(Collider, BoundsFollowPose) {
   pc::PlaneCollider plane;
   plane.half_size = 1.0;
-  plane.motion = pc::RigidMotion({keyframe(0.0, {0, 0, 0}, rot_z(0.0)),
-                                  keyframe(1.0, {0, 0, 2}, rot_z(M_PI / 4))});
+  plane.motion = pc::RigidMotion(
+      {keyframe(0.0, {0, 0, 0}, rot_z(0.0)), keyframe(1.0, {0, 0, 2}, rot_z(M_PI / 4))});
   const pc::Aabb b = plane.bounds(1.0);
   EXPECT_NEAR(b.hi.x(), std::sqrt(2.0), 1e-12);
   EXPECT_NEAR(b.lo.z(), 2.0, 1e-12);

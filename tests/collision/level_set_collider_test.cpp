@@ -1,7 +1,4 @@
-#include "collision/collider_factory.hpp"
-#include "collision/errors.hpp"
 #include "collision/level_set_collider.hpp"
-#include "collision/shapes.hpp"
 
 #include <gtest/gtest.h>
 
@@ -11,14 +8,18 @@
 #include <random>
 #include <thread>
 
+#include "collision/collider_factory.hpp"
+#include "collision/errors.hpp"
+#include "collision/shapes.hpp"
+
 namespace pc = papersim::collision;
 
 namespace {
 
 struct FieldError {
-  double max_error = 0.0;           ///< max |phi_grid - phi_exact| [m]
-  double max_over_outside = 0.0;    ///< max (phi_grid - phi_exact) outside: non-conservative part [m]
-  double min_gradient_dot = 1.0;    ///< min g_grid . g_exact where the exact field is smooth
+  double max_error = 0.0;         ///< max |phi_grid - phi_exact| [m]
+  double max_over_outside = 0.0;  ///< max (phi_grid - phi_exact) outside: non-conservative part [m]
+  double min_gradient_dot = 1.0;  ///< min g_grid . g_exact where the exact field is smooth
   double mean_gradient_dot = 0.0;
   double max_gradient_norm_error = 0.0;
   int samples = 0;
@@ -33,7 +34,8 @@ FieldError compare(const pc::Collider& grid, const pc::Shape& s, double exact_ra
   FieldError e;
   int smooth = 0;
   while (e.samples < 20000) {
-    const Eigen::Vector3d p = b.lo + (b.hi - b.lo).cwiseProduct(Eigen::Vector3d(u(rng), u(rng), u(rng)));
+    const Eigen::Vector3d p =
+        b.lo + (b.hi - b.lo).cwiseProduct(Eigen::Vector3d(u(rng), u(rng), u(rng)));
     Eigen::Vector3d g_exact, g;
     const double d_exact = pc::shape_distance(s, p, &g_exact);
     if (std::abs(d_exact) >= exact_range) continue;
@@ -66,11 +68,13 @@ void check_primitive(const pc::Shape& s, const char* name) {
   const auto grid = pc::LevelSetCollider::from_shape(s);
   const double h = grid->voxel_size();
   const FieldError e = compare(*grid, s, grid->exact_range(), h);
-  std::printf("[ figures  ] %-9s h = %.3g mm, band = %.3g mm, %zu voxels, max |error| = %.3g mm"
-              " = %.3f h, outside overestimate <= %.3f h, gradient: | |g|-1 | <= %.1e, min dot = %.4f, mean dot = %.6f\n",
-              name, h * 1e3, grid->band_width() * 1e3, grid->active_voxel_count(),
-              e.max_error * 1e3, e.max_error / h, e.max_over_outside / h, e.max_gradient_norm_error, e.min_gradient_dot,
-              e.mean_gradient_dot);
+  std::printf(
+      "[ figures  ] %-9s h = %.3g mm, band = %.3g mm, %zu voxels, max |error| = %.3g mm"
+      " = %.3f h, outside overestimate <= %.3f h, gradient: | |g|-1 | <= %.1e, min dot = %.4f, "
+      "mean dot = %.6f\n",
+      name, h * 1e3, grid->band_width() * 1e3, grid->active_voxel_count(), e.max_error * 1e3,
+      e.max_error / h, e.max_over_outside / h, e.max_gradient_norm_error, e.min_gradient_dot,
+      e.mean_gradient_dot);
   EXPECT_LT(e.max_error, 0.5 * h) << name;
   EXPECT_LT(e.max_gradient_norm_error, 1e-9) << name;
   EXPECT_GT(e.min_gradient_dot, 0.95) << name;

@@ -1,8 +1,3 @@
-#include "collision/collider_factory.hpp"
-#include "collision/errors.hpp"
-#include "collision/level_set_collider.hpp"
-#include "collision/triangle_mesh.hpp"
-
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -10,6 +5,11 @@
 #include <fstream>
 #include <random>
 #include <string>
+
+#include "collision/collider_factory.hpp"
+#include "collision/errors.hpp"
+#include "collision/level_set_collider.hpp"
+#include "collision/triangle_mesh.hpp"
 
 namespace pc = papersim::collision;
 
@@ -24,8 +24,8 @@ std::string write_box_obj(const std::string& name, const Eigen::Vector3d& e, boo
     out << "v " << ((k & 1) ? e.x() : -e.x()) << ' ' << ((k & 2) ? e.y() : -e.y()) << ' '
         << ((k & 4) ? e.z() : -e.z()) << '\n';
   out << "vt 0 0\nvn 0 0 1\n";
-  out << "f 1/1/1 3/1/1 4/1/1 2/1/1\n";  // z-
-  if (!drop_face) out << "f 5 6 8 7\n";  // z+
+  out << "f 1/1/1 3/1/1 4/1/1 2/1/1\n";                       // z-
+  if (!drop_face) out << "f 5 6 8 7\n";                       // z+
   out << "f 1 2 6 5\nf 3 7 8 4\nf 1 5 7 3\nf -7 -5 -1 -3\n";  // y-, y+, x-, x+ (relative)
   return path;
 }
@@ -56,8 +56,9 @@ TEST(MeshCollider, ReadsObjAndMatchesBoxDistance) {
   double max_error = 0.0;
   int samples = 0;
   while (samples < 20000) {
-    const Eigen::Vector3d p = (e.array() + grid.exact_range()).matrix().cwiseProduct(
-        Eigen::Vector3d(u(rng), u(rng), u(rng)));
+    const Eigen::Vector3d p = (e.array() + grid.exact_range())
+                                  .matrix()
+                                  .cwiseProduct(Eigen::Vector3d(u(rng), u(rng), u(rng)));
     const double exact = pc::shape_distance(box, p, nullptr);
     if (std::abs(exact) >= grid.exact_range()) continue;
     ++samples;
@@ -94,9 +95,9 @@ TEST(MeshCollider, ErrorsNameTheFile) {
 }
 
 TEST(Factory, BuildsEveryKind) {
-  for (pc::ColliderKind kind : {pc::ColliderKind::plane, pc::ColliderKind::sphere,
-                                pc::ColliderKind::cylinder, pc::ColliderKind::capsule,
-                                pc::ColliderKind::box, pc::ColliderKind::gable}) {
+  for (pc::ColliderKind kind :
+       {pc::ColliderKind::plane, pc::ColliderKind::sphere, pc::ColliderKind::cylinder,
+        pc::ColliderKind::capsule, pc::ColliderKind::box, pc::ColliderKind::gable}) {
     pc::ColliderSpec spec;
     spec.kind = kind;
     spec.radius = 0.01;

@@ -1,13 +1,13 @@
 // Continuous collision detection of a point against an obstacle that moves during the step
 // (Collider::moving_segment_step): the joint motion p + a d, t + a dt, for the motions the
 // solver follows (a cylinder rolling along, a shrinking cavity, a plate pressing down).
-#include "collision/collider_factory.hpp"
-#include "collision/shapes.hpp"
-
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <random>
+
+#include "collision/collider_factory.hpp"
+#include "collision/shapes.hpp"
 
 namespace pc = papersim::collision;
 
@@ -22,7 +22,8 @@ std::unique_ptr<pc::Collider> roller() {
   spec.radius = 0.05;
   spec.length = 0.5;
   const Eigen::Vector3d axis = Eigen::Vector3d::UnitY();
-  const Eigen::Quaterniond base = Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitX(), axis);
+  const Eigen::Quaterniond base =
+      Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitX(), axis);
   pc::Keyframe k;
   k.translation = Eigen::Vector3d(0, 0, 0.057);
   k.rotation = base;
@@ -70,8 +71,9 @@ std::unique_ptr<pc::Collider> plate() {
 
 /// The smallest of phi along the joint motion over [0, a], sampled at `samples` points, over
 /// phi at the start.
-double smallest_relative_gap(const pc::Collider& c, const Eigen::Vector3d& p, const Eigen::Vector3d& d,
-                             double t, double dt, double a, int samples = 400) {
+double smallest_relative_gap(const pc::Collider& c, const Eigen::Vector3d& p,
+                             const Eigen::Vector3d& d, double t, double dt, double a,
+                             int samples = 400) {
   const double phi0 = c.distance(p, t);
   double m = INFINITY;
   for (int k = 0; k <= samples; ++k) {
@@ -124,8 +126,9 @@ TEST(MovingCcd, RollingCylinderKeepsEveryPointOutsideAndLetsACarriedPointGo) {
     const Eigen::Vector3d centre = c->motion.pose(t).translation();
     const double angle = 2 * M_PI * u(rng);
     const double gap = std::pow(10.0, -7 + 5 * u(rng));
-    const Eigen::Vector3d p = centre + Eigen::Vector3d((0.05 + gap) * std::cos(angle), 0.4 * (u(rng) - 0.5),
-                                                      (0.05 + gap) * std::sin(angle));
+    const Eigen::Vector3d p =
+        centre + Eigen::Vector3d((0.05 + gap) * std::cos(angle), 0.4 * (u(rng) - 0.5),
+                                 (0.05 + gap) * std::sin(angle));
     const Eigen::Vector3d d = 0.01 * Eigen::Vector3d(n(rng), n(rng), n(rng));
     const double a = c->moving_segment_step(p, d, t, dt, 1.0, 0.1);
     ASSERT_GE(a, 0.0);
@@ -133,7 +136,8 @@ TEST(MovingCcd, RollingCylinderKeepsEveryPointOutsideAndLetsACarriedPointGo) {
     EXPECT_GE(smallest_relative_gap(*c, p, d, t, dt, a), 0.1 * (1 - 1e-9)) << "point " << i;
     // Carried with the roller's translation over the step: the whole step is allowed.
     const Eigen::Vector3d with = dt * c->motion.linear_velocity(t);
-    EXPECT_GE(c->moving_segment_step(p, with, t, dt, 1.0, 0.1), std::min(1.0, (c->motion.next_keyframe_time(t) - t) / dt) * (1 - 1e-12));
+    EXPECT_GE(c->moving_segment_step(p, with, t, dt, 1.0, 0.1),
+              std::min(1.0, (c->motion.next_keyframe_time(t) - t) / dt) * (1 - 1e-12));
   }
   EXPECT_GT(limited, 200);  // the test does exercise the bound
 }
@@ -159,7 +163,8 @@ TEST(MovingCcd, ShrinkingCavityBoundIsExact) {
     EXPECT_GE(smallest_relative_gap(*c, p, d, t, dt, a), 0.1 * (1 - 1e-6)) << "point " << i;
     if (a < 1.0 && t + dt < 5.0) {
       ++exact;
-      EXPECT_NEAR(c->distance(p + a * d, t + a * dt) / c->distance(p, t), 0.1, 1e-6) << "point " << i;
+      EXPECT_NEAR(c->distance(p + a * d, t + a * dt) / c->distance(p, t), 0.1, 1e-6)
+          << "point " << i;
     }
   }
   EXPECT_GT(exact, 200);
@@ -187,7 +192,8 @@ TEST(MovingCcd, PressingPlateBoundIsExactAndATiltingPlateIsNotFollowed) {
     EXPECT_GE(smallest_relative_gap(*c, p, d, t, dt, a), 0.1 * (1 - 1e-6)) << "point " << i;
     if (a < 1.0) {
       ++exact;
-      EXPECT_NEAR(c->distance(p + a * d, t + a * dt) / c->distance(p, t), 0.1, 1e-6) << "point " << i;
+      EXPECT_NEAR(c->distance(p + a * d, t + a * dt) / c->distance(p, t), 0.1, 1e-6)
+          << "point " << i;
     }
     // Carried down with the plate within its keyframe piece: the whole piece is allowed.
     const Eigen::Vector3d with = dt * c->motion.linear_velocity(t);
@@ -198,7 +204,8 @@ TEST(MovingCcd, PressingPlateBoundIsExactAndATiltingPlateIsNotFollowed) {
   // A point at rest under the plate coming down at 0.035 m/s stops at 10% of its gap.
   const Eigen::Vector3d rest(0, 0, 0.02);
   const double phi0 = c->distance(rest, 1.0);
-  EXPECT_NEAR(c->moving_segment_step(rest, Eigen::Vector3d::Zero(), 1.0, 1.0, 1.0, 0.1), 0.9 * phi0 / 0.035, 1e-12);
+  EXPECT_NEAR(c->moving_segment_step(rest, Eigen::Vector3d::Zero(), 1.0, 1.0, 1.0, 0.1),
+              0.9 * phi0 / 0.035, 1e-12);
 
   // Turning about its normal leaves the plane where it is (followed); tilting does not.
   pc::ColliderSpec spec;
@@ -211,5 +218,7 @@ TEST(MovingCcd, PressingPlateBoundIsExactAndATiltingPlateIsNotFollowed) {
   b.rotation = Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitX()));
   spec.keyframes = {a, b};
   EXPECT_FALSE(pc::make_collider(spec)->moves_affinely(0.1, 0.2));
-  EXPECT_LT(pc::make_collider(spec)->moving_segment_step(rest, Eigen::Vector3d::Zero(), 0.1, 0.1, 1.0, 0.1), 0.0);
+  EXPECT_LT(pc::make_collider(spec)->moving_segment_step(rest, Eigen::Vector3d::Zero(), 0.1, 0.1,
+                                                         1.0, 0.1),
+            0.0);
 }

@@ -1,14 +1,14 @@
 // Obstacles whose size follows keyframes (uniform scale about the local origin) and the
 // inverted sphere (a spherical cavity): fields, gradients, surface velocity, bounds and CCD.
-#include "collision/collider_factory.hpp"
-#include "collision/errors.hpp"
-#include "collision/shapes.hpp"
-
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <limits>
 #include <random>
+
+#include "collision/collider_factory.hpp"
+#include "collision/errors.hpp"
+#include "collision/shapes.hpp"
 
 namespace pc = papersim::collision;
 
@@ -61,7 +61,8 @@ TEST(ScaledMotion, RejectsScalesThatAreNotPositiveAndFinite) {
     SCOPED_TRACE(bad);
     EXPECT_THROW(pc::RigidMotion({keyframe(0, {0, 0, 0}, 0, 1.0), keyframe(1, {0, 0, 0}, 0, bad)}),
                  std::invalid_argument);
-    pc::ColliderSpec spec = sphere_spec(pc::ColliderKind::sphere, 0.1, {keyframe(0, {0, 0, 0}, 0, bad)});
+    pc::ColliderSpec spec =
+        sphere_spec(pc::ColliderKind::sphere, 0.1, {keyframe(0, {0, 0, 0}, 0, bad)});
     try {
       pc::make_collider(spec);
       ADD_FAILURE() << "no error";
@@ -98,10 +99,12 @@ TEST(ScaledCollider, FieldIsTheFieldOfTheScaledShape) {
 // where the field is smooth), and unit length (the scaled field stays 1-Lipschitz).
 TEST(ScaledCollider, GradientMatchesFiniteDifferencesInSpace) {
   const auto box = morphing_box();
-  pc::ColliderSpec sphere_s = sphere_spec(pc::ColliderKind::sphere, 0.05,
-                                          {keyframe(0, {0, 0, 0}, 0, 1.0), keyframe(1, {0.01, 0, 0}, 0.3, 0.3)});
-  pc::ColliderSpec cavity_s = sphere_spec(pc::ColliderKind::inverted_sphere, 0.2,
-                                          {keyframe(0, {0, 0, 0}, 0, 1.0), keyframe(1, {0, 0.02, 0}, 0, 0.25)});
+  pc::ColliderSpec sphere_s =
+      sphere_spec(pc::ColliderKind::sphere, 0.05,
+                  {keyframe(0, {0, 0, 0}, 0, 1.0), keyframe(1, {0.01, 0, 0}, 0.3, 0.3)});
+  pc::ColliderSpec cavity_s =
+      sphere_spec(pc::ColliderKind::inverted_sphere, 0.2,
+                  {keyframe(0, {0, 0, 0}, 0, 1.0), keyframe(1, {0, 0.02, 0}, 0, 0.25)});
   const auto sphere = pc::make_collider(sphere_s), cavity = pc::make_collider(cavity_s);
   std::mt19937 rng(5);
   std::uniform_real_distribution<double> u(-0.12, 0.12), tu(0.0, 1.2);
@@ -139,14 +142,16 @@ TEST(ScaledCollider, VelocityIsTheTimeDerivativeOfTheSurfacePoint) {
     if (std::abs(t - 2.0) < 2 * h) continue;  // a keyframe: the velocity jumps there
     const Eigen::Vector3d p(u(rng), u(rng), u(rng));
     const Eigen::Vector3d X = box->motion.pose(t).inverse() * p;
-    const Eigen::Vector3d fd = (box->motion.pose(t + h) * X - box->motion.pose(t - h) * X) / (2 * h);
+    const Eigen::Vector3d fd =
+        (box->motion.pose(t + h) * X - box->motion.pose(t - h) * X) / (2 * h);
     EXPECT_NEAR((box->velocity(p, t) - fd).norm(), 0.0, 1e-8 * (1 + fd.norm()));
   }
   // Spheres and cavities, growing and shrinking: at surface points.
   for (pc::ColliderKind kind : {pc::ColliderKind::sphere, pc::ColliderKind::inverted_sphere}) {
     for (double end_scale : {0.25, 3.0}) {
-      const auto c = pc::make_collider(
-          sphere_spec(kind, 0.1, {keyframe(0, {0, 0, 0}, 0, 1.0), keyframe(2, {0.05, 0.02, -0.03}, 0.5, end_scale)}));
+      const auto c = pc::make_collider(sphere_spec(
+          kind, 0.1,
+          {keyframe(0, {0, 0, 0}, 0, 1.0), keyframe(2, {0.05, 0.02, -0.03}, 0.5, end_scale)}));
       for (int i = 0; i < 50; ++i) {
         const double t = tu(rng) * 0.6;
         Eigen::Vector3d dir(u(rng), u(rng), u(rng));
@@ -172,16 +177,18 @@ TEST(ScaledCollider, SweptBoundsHoldTheSurfaceAtEveryTime) {
     const double t = 0.5 + 2.2 * k / 400;
     const Eigen::Affine3d x = box->motion.pose(t);
     for (int c = 0; c < 8; ++c) {
-      const Eigen::Vector3d q =
-          x * Eigen::Vector3d((c & 1) ? 0.05 : -0.05, (c & 2) ? 0.03 : -0.03, (c & 4) ? 0.02 : -0.02);
-      EXPECT_TRUE((q.array() >= s.lo.array() - 1e-12).all() && (q.array() <= s.hi.array() + 1e-12).all());
+      const Eigen::Vector3d q = x * Eigen::Vector3d((c & 1) ? 0.05 : -0.05, (c & 2) ? 0.03 : -0.03,
+                                                    (c & 4) ? 0.02 : -0.02);
+      EXPECT_TRUE((q.array() >= s.lo.array() - 1e-12).all() &&
+                  (q.array() <= s.hi.array() + 1e-12).all());
     }
   }
 }
 
 TEST(InvertedSphere, FieldIsRadiusMinusDistanceWithInwardNormal) {
-  const auto c = pc::make_collider(sphere_spec(pc::ColliderKind::inverted_sphere, 0.2,
-                                               {keyframe(0, {0.1, 0, 0}, 0, 1.0), keyframe(1, {0.1, 0, 0}, 0, 0.5)}));
+  const auto c = pc::make_collider(
+      sphere_spec(pc::ColliderKind::inverted_sphere, 0.2,
+                  {keyframe(0, {0.1, 0, 0}, 0, 1.0), keyframe(1, {0.1, 0, 0}, 0, 0.5)}));
   EXPECT_FALSE(c->is_convex());
   Eigen::Vector3d g;
   EXPECT_NEAR(c->distance({0.1, 0, 0.05}, 0.0, &g), 0.15, 1e-15);
@@ -226,8 +233,9 @@ TEST(InvertedSphere, MinimumOverATriangleIsAtAVertex) {
 // is the largest such step (the point at the returned step sits on the inner sphere when
 // the step is below the limit).
 TEST(InvertedSphere, SegmentStepNeverTunnelsAndIsTight) {
-  const auto c = pc::make_collider(sphere_spec(pc::ColliderKind::inverted_sphere, 0.2,
-                                               {keyframe(0, {0.01, 0.02, 0}, 0, 1.0), keyframe(1, {0, 0, 0}, 0, 0.3)}));
+  const auto c = pc::make_collider(
+      sphere_spec(pc::ColliderKind::inverted_sphere, 0.2,
+                  {keyframe(0, {0.01, 0.02, 0}, 0, 1.0), keyframe(1, {0, 0, 0}, 0, 0.3)}));
   std::mt19937 rng(13);
   std::normal_distribution<double> n(0.0, 1.0);
   std::uniform_real_distribution<double> r(0.0, 1.0), tu(0.0, 1.2);
@@ -236,13 +244,15 @@ TEST(InvertedSphere, SegmentStepNeverTunnelsAndIsTight) {
     const double t = tu(rng);
     const double radius = 0.2 * c->motion.scale(t);
     const Eigen::Vector3d centre = c->motion.pose(t).translation();
-    const Eigen::Vector3d p = centre + Eigen::Vector3d(n(rng), n(rng), n(rng)).normalized() * radius * r(rng);
+    const Eigen::Vector3d p =
+        centre + Eigen::Vector3d(n(rng), n(rng), n(rng)).normalized() * radius * r(rng);
     const Eigen::Vector3d d = Eigen::Vector3d(n(rng), n(rng), n(rng)) * radius * 3 * r(rng);
     const double keep = 0.1, phi0 = c->distance(p, t);
     const double a = c->segment_step(p, d, t, 1.0, keep);
     ASSERT_GE(a, 0.0);
     ASSERT_LE(a, 1.0);
-    for (int k = 0; k <= 200; ++k) EXPECT_GE(c->distance(p + a * k / 200.0 * d, t), keep * phi0 - 1e-12);
+    for (int k = 0; k <= 200; ++k)
+      EXPECT_GE(c->distance(p + a * k / 200.0 * d, t), keep * phi0 - 1e-12);
     if (a < 1.0) {
       EXPECT_NEAR(c->distance(p + a * d, t), keep * phi0, 1e-12);
       ++tight;

@@ -1,16 +1,15 @@
 // Self-contact geometry: exact distances against brute-force sampling, their derivatives
 // against finite differences, the broad phase against brute force, and Additive CCD.
+#include "collision/self_contact.hpp"
+
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <random>
-#include <algorithm>
 #include <set>
-
-#include <Eigen/Geometry>
-
-#include "collision/self_contact.hpp"
 
 using namespace papersim::collision;
 
@@ -83,7 +82,8 @@ TEST(SelfContactDistance, PointTriangleMatchesSampling) {
   const int n = 300;
   std::map<DistanceType, int> seen;
   for (int k = 0; k < 300; ++k) {
-    PairPoints x = {random_point(rng, 1.5), random_point(rng, 1), random_point(rng, 1), random_point(rng, 1)};
+    PairPoints x = {random_point(rng, 1.5), random_point(rng, 1), random_point(rng, 1),
+                    random_point(rng, 1)};
     const double exact = std::sqrt(point_triangle_distance_squared(x));
     const double sampled = sampled_point_triangle(x, n);
     EXPECT_LE(exact, sampled + 1e-12);
@@ -100,7 +100,8 @@ TEST(SelfContactDistance, EdgeEdgeMatchesSampling) {
   const int n = 400;
   std::map<DistanceType, int> seen;
   for (int k = 0; k < 300; ++k) {
-    PairPoints x = {random_point(rng, 1), random_point(rng, 1), random_point(rng, 1), random_point(rng, 1)};
+    PairPoints x = {random_point(rng, 1), random_point(rng, 1), random_point(rng, 1),
+                    random_point(rng, 1)};
     const double exact = std::sqrt(edge_edge_distance_squared(x));
     const double sampled = sampled_edge_edge(x, n);
     EXPECT_LE(exact, sampled + 1e-12);
@@ -139,10 +140,11 @@ TEST(SelfContactDistance, ParallelAndDegenerateEdges) {
     wrong += std::abs(std::sqrt(edge_edge_distance_squared(c)) - 0.0075) > 1e-9;
   }
   EXPECT_EQ(wrong, 0);
-  const PairPoints found = {Eigen::Vector3d(0.15834328594928068, 0.002893168993161133, 0.20453000012211286),
-                            Eigen::Vector3d(0.16577024128655374, 0.0039373597683123752, 0.20453000000392274),
-                            Eigen::Vector3d(0.17319719662630398, 0.004981550544265907, 0.20452999996880733),
-                            Eigen::Vector3d(0.18062415196645487, 0.0060257413224608447, 0.20452999998376886)};
+  const PairPoints found = {
+      Eigen::Vector3d(0.15834328594928068, 0.002893168993161133, 0.20453000012211286),
+      Eigen::Vector3d(0.16577024128655374, 0.0039373597683123752, 0.20453000000392274),
+      Eigen::Vector3d(0.17319719662630398, 0.004981550544265907, 0.20452999996880733),
+      Eigen::Vector3d(0.18062415196645487, 0.0060257413224608447, 0.20452999998376886)};
   EXPECT_NEAR(std::sqrt(edge_edge_distance_squared(found)), 0.0075, 1e-9);
   // A degenerate (zero-length) edge is a point.
   x = {a0, a1, Eigen::Vector3d(0.3, 0.2, 0.1), Eigen::Vector3d(0.3, 0.2, 0.1)};
@@ -157,7 +159,7 @@ TEST(SelfContactDistance, DerivativesOfEveryTypeMatchFiniteDifferences) {
   std::map<DistanceType, int> checked;
   // Point-triangle pairs: above the face, beside an edge, beyond a corner.
   for (const Eigen::Vector3d& p : {Eigen::Vector3d(0.3, 0.3, 0.4), Eigen::Vector3d(0.5, -0.4, 0.2),
-                                  Eigen::Vector3d(-0.3, -0.2, 0.3)}) {
+                                   Eigen::Vector3d(-0.3, -0.2, 0.3)}) {
     const PairPoints x = {p, t0, t1, t2};
     const DistanceStencil s = point_triangle_stencil(x);
     check_stencil_derivatives(s, x);
@@ -184,7 +186,8 @@ TEST(SelfContactDistance, DerivativesOfEveryTypeMatchFiniteDifferences) {
 TEST(SelfContactDistance, ClosestPointWeightsGiveTheDistanceVector) {
   std::mt19937 rng(8);
   for (int k = 0; k < 100; ++k) {
-    PairPoints x = {random_point(rng, 1), random_point(rng, 1), random_point(rng, 1), random_point(rng, 1)};
+    PairPoints x = {random_point(rng, 1), random_point(rng, 1), random_point(rng, 1),
+                    random_point(rng, 1)};
     for (bool ee : {false, true}) {
       const DistanceStencil s = ee ? edge_edge_stencil(x) : point_triangle_stencil(x);
       const Eigen::Vector4d w = closest_point_weights(s, x);
@@ -212,7 +215,8 @@ TEST(SelfContactDistance, MollifierDerivatives) {
     xp[i / 3][i % 3] += h;
     xm[i / 3][i % 3] -= h;
     Vector12d gp, gm;
-    const double fp = edge_edge_mollifier(xp, eps, &gp, nullptr), fm = edge_edge_mollifier(xm, eps, &gm, nullptr);
+    const double fp = edge_edge_mollifier(xp, eps, &gp, nullptr),
+                 fm = edge_edge_mollifier(xm, eps, &gm, nullptr);
     EXPECT_NEAR((fp - fm) / (2 * h), g[i], 1e-6 * g.norm());
     EXPECT_LT(((gp - gm) / (2 * h) - H.col(i)).norm(), 1e-5 * H.norm());
   }
@@ -228,7 +232,8 @@ namespace {
 /// Checks find_self_contact_candidates on (F, x0, x1, radius) against every pair's swept boxes:
 /// each pair whose boxes come within `radius` in every axis is reported once and no other; every
 /// pair closer than `radius` at x0 is among them. Returns the number of point-triangle pairs.
-std::size_t check_broad_phase_against_brute_force(const Eigen::MatrixX3i& F, const Eigen::VectorXd& x0,
+std::size_t check_broad_phase_against_brute_force(const Eigen::MatrixX3i& F,
+                                                  const Eigen::VectorXd& x0,
                                                   const Eigen::VectorXd& x1, double radius) {
   const int nv = static_cast<int>(x0.size() / 3);
   const SelfContactMesh mesh = SelfContactMesh::from_faces(F, nv);
@@ -258,14 +263,16 @@ std::size_t check_broad_phase_against_brute_force(const Eigen::MatrixX3i& F, con
       const bool boxes = overlap(box({v}), box({F(k, 0), F(k, 1), F(k, 2)}));
       expected_pt += boxes;
       EXPECT_EQ(boxes, pt.count({{v, k}}) == 1) << v << " " << k;
-      const double d = std::sqrt(point_triangle_distance_squared({p0(v), p0(F(k, 0)), p0(F(k, 1)), p0(F(k, 2))}));
+      const double d = std::sqrt(
+          point_triangle_distance_squared({p0(v), p0(F(k, 0)), p0(F(k, 1)), p0(F(k, 2))}));
       if (d < radius) {
         EXPECT_EQ(pt.count({{v, k}}), 1u) << "a close pair is missing";
       }
     }
   for (int a = 0; a < mesh.edges.rows(); ++a)
     for (int b = a + 1; b < mesh.edges.rows(); ++b) {
-      const int a0 = mesh.edges(a, 0), a1 = mesh.edges(a, 1), b0 = mesh.edges(b, 0), b1 = mesh.edges(b, 1);
+      const int a0 = mesh.edges(a, 0), a1 = mesh.edges(a, 1), b0 = mesh.edges(b, 0),
+                b1 = mesh.edges(b, 1);
       if (a0 == b0 || a0 == b1 || a1 == b0 || a1 == b1) continue;
       const bool boxes = overlap(box({a0, a1}), box({b0, b1}));
       expected_ee += boxes;
@@ -295,15 +302,18 @@ TEST(SelfContactBroadPhase, MatchesBruteForceBoxesAndHoldsEveryClosePair) {
   // A crumpled random sheet: a 12 x 12 grid with random heights folded over itself.
   const int n = 12;
   const Eigen::MatrixX3i F = grid_faces(n, n);
-  EXPECT_EQ(SelfContactMesh::from_faces(F, n * n).edges.rows(), 3 * (n - 1) * (n - 1) + 2 * (n - 1));
+  EXPECT_EQ(SelfContactMesh::from_faces(F, n * n).edges.rows(),
+            3 * (n - 1) * (n - 1) + 2 * (n - 1));
   std::mt19937 rng(2);
   std::uniform_real_distribution<double> u(-0.3, 0.3);
   Eigen::VectorXd x0(3 * n * n), x1(3 * n * n);
   for (int i = 0; i < n; ++i)
     for (int j = 0; j < n; ++j) {
       const double s = double(j) / (n - 1), a = 3.0 * s;  // folded like a spiral
-      x0.segment<3>(3 * (i * n + j)) << std::cos(a) * (1 - 0.5 * s), double(i) / (n - 1), std::sin(a) * (1 - 0.5 * s) + 0.05 * u(rng);
-      x1.segment<3>(3 * (i * n + j)) = x0.segment<3>(3 * (i * n + j)) + 0.1 * Eigen::Vector3d(u(rng), u(rng), u(rng));
+      x0.segment<3>(3 * (i * n + j)) << std::cos(a) * (1 - 0.5 * s), double(i) / (n - 1),
+          std::sin(a) * (1 - 0.5 * s) + 0.05 * u(rng);
+      x1.segment<3>(3 * (i * n + j)) =
+          x0.segment<3>(3 * (i * n + j)) + 0.1 * Eigen::Vector3d(u(rng), u(rng), u(rng));
     }
   EXPECT_GT(check_broad_phase_against_brute_force(F, x0, x1, 0.15), 100u)
       << "the test sheet really comes close to itself";
@@ -324,15 +334,18 @@ TEST(SelfContactBroadPhase, PairsComeInOneOrderWhereverTheSetWasFound) {
   for (int i = 0; i < n; ++i)
     for (int j = 0; j < n; ++j) {
       const double s = double(j) / (n - 1), a = 3.0 * s;
-      x0.segment<3>(3 * (i * n + j)) << std::cos(a) * (1 - 0.5 * s), double(i) / (n - 1), std::sin(a) * (1 - 0.5 * s) + 0.05 * u(rng);
-      x1.segment<3>(3 * (i * n + j)) = x0.segment<3>(3 * (i * n + j)) + 0.2 * Eigen::Vector3d(u(rng), u(rng), u(rng));
+      x0.segment<3>(3 * (i * n + j)) << std::cos(a) * (1 - 0.5 * s), double(i) / (n - 1),
+          std::sin(a) * (1 - 0.5 * s) + 0.05 * u(rng);
+      x1.segment<3>(3 * (i * n + j)) =
+          x0.segment<3>(3 * (i * n + j)) + 0.2 * Eigen::Vector3d(u(rng), u(rng), u(rng));
     }
   const SelfContactCandidates still = find_self_contact_candidates(mesh, x0, x0, 0.15);
   const SelfContactCandidates swept = find_self_contact_candidates(mesh, x0, x1, 0.15);
   ASSERT_GT(still.point_triangle.size(), 100u);
   ASSERT_GT(swept.point_triangle.size(), still.point_triangle.size()) << "another set";
   // The pairs of the smaller set, in the order the larger one lists them.
-  const auto shared_in_order = [](const std::vector<std::array<int, 2>>& of, const std::vector<std::array<int, 2>>& in) {
+  const auto shared_in_order = [](const std::vector<std::array<int, 2>>& of,
+                                  const std::vector<std::array<int, 2>>& in) {
     const std::set<std::array<int, 2>> keep(of.begin(), of.end());
     std::vector<std::array<int, 2>> out;
     for (const auto& p : in)
@@ -349,12 +362,13 @@ TEST(SelfContactBroadPhase, AStripAlongTheDiagonalOfAHugeBoxMatchesBruteForce) {
   // A 2 x 300 strip of 1 mm faces along the diagonal of a 1 m cube, bent back on itself in
   // the middle so that its two halves lie 0.5 mm apart, and a lone face at the far corner: the
   // grid's cells are about a face's box (3-4 mm), so its extent holds 1.5e7-3e7 of them
-  // against a few thousand entries (measured), and the cells' lists are kept sorted rather than dense (BoxGrid); the
-  // pairs must be the same.
+  // against a few thousand entries (measured), and the cells' lists are kept sorted rather than
+  // dense (BoxGrid); the pairs must be the same.
   const int m = 300, nv = 2 * m + 3;
   Eigen::MatrixX3i F(2 * (m - 1) + 1, 3);
   F << grid_faces(2, m), Eigen::RowVector3i(2 * m, 2 * m + 1, 2 * m + 2);
-  const Eigen::Vector3d along = Eigen::Vector3d(1, 1, 1).normalized(), across(1 / std::sqrt(2.0), -1 / std::sqrt(2.0), 0);
+  const Eigen::Vector3d along = Eigen::Vector3d(1, 1, 1).normalized(),
+                        across(1 / std::sqrt(2.0), -1 / std::sqrt(2.0), 0);
   const Eigen::Vector3d normal = along.cross(across);
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> u(-1e-4, 1e-4);
@@ -369,16 +383,19 @@ TEST(SelfContactBroadPhase, AStripAlongTheDiagonalOfAHugeBoxMatchesBruteForce) {
   x0.segment<3>(3 * 2 * m) << 0, 0, 0;
   x0.segment<3>(3 * (2 * m + 1)) << 1e-3, 0, 0;
   x0.segment<3>(3 * (2 * m + 2)) << 0, 1e-3, 0;
-  for (int v = 0; v < nv; ++v) x1.segment<3>(3 * v) = x0.segment<3>(3 * v) + Eigen::Vector3d(u(rng), u(rng), u(rng));
-  EXPECT_GT(check_broad_phase_against_brute_force(F, x0, x1, 1e-3), 500u) << "the halves face each other";
+  for (int v = 0; v < nv; ++v)
+    x1.segment<3>(3 * v) = x0.segment<3>(3 * v) + Eigen::Vector3d(u(rng), u(rng), u(rng));
+  EXPECT_GT(check_broad_phase_against_brute_force(F, x0, x1, 1e-3), 500u)
+      << "the halves face each other";
 }
 
 TEST(SelfContactCcd, HeadOnPointStopsBeforeTheFace) {
   // A point 1 above a triangle moving down by 2: contact at t = 0.5. Additive CCD stops where
   // 10% of the gap is left (exact relative speed here): t = 0.45.
-  const PairPoints x = {Eigen::Vector3d(0.2, 0.2, 1), Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1, 0, 0),
-                        Eigen::Vector3d(0, 1, 0)};
-  PairPoints dx = {Eigen::Vector3d(0, 0, -2), Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()};
+  const PairPoints x = {Eigen::Vector3d(0.2, 0.2, 1), Eigen::Vector3d(0, 0, 0),
+                        Eigen::Vector3d(1, 0, 0), Eigen::Vector3d(0, 1, 0)};
+  PairPoints dx = {Eigen::Vector3d(0, 0, -2), Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(),
+                   Eigen::Vector3d::Zero()};
   const double t = point_triangle_ccd(x, dx, 1.0);
   EXPECT_NEAR(t, 0.45, 1e-12);
   // Moving away or sideways at constant height: no impact.
@@ -397,19 +414,19 @@ TEST(SelfContactCcd, HeadOnPointStopsBeforeTheFace) {
 
 TEST(SelfContactCcd, ParallelEdgesAndDegenerateTriangle) {
   // Parallel edges 1 apart closing at relative speed 2: contact at 0.5.
-  const PairPoints x = {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1, 0, 0), Eigen::Vector3d(0.2, 0, 1),
-                        Eigen::Vector3d(1.2, 0, 1)};
-  const PairPoints dx = {Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), Eigen::Vector3d(0, 0, -2),
-                         Eigen::Vector3d(0, 0, -2)};
+  const PairPoints x = {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1, 0, 0),
+                        Eigen::Vector3d(0.2, 0, 1), Eigen::Vector3d(1.2, 0, 1)};
+  const PairPoints dx = {Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(),
+                         Eigen::Vector3d(0, 0, -2), Eigen::Vector3d(0, 0, -2)};
   const double t = edge_edge_ccd(x, dx, 1.0);
   EXPECT_LE(t, 0.5);
   EXPECT_GE(t, 0.4);
   EXPECT_GT(edge_edge_distance_squared({x[0], x[1], x[2] + t * dx[2], x[3] + t * dx[3]}), 0.0);
   // A point moving onto a zero-area (collinear) triangle stops short of its segment.
-  const PairPoints sliver = {Eigen::Vector3d(0.5, 0, 1), Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(0.5, 0, 0),
-                             Eigen::Vector3d(1, 0, 0)};
-  const PairPoints down = {Eigen::Vector3d(0, 0, -3), Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(),
-                           Eigen::Vector3d::Zero()};
+  const PairPoints sliver = {Eigen::Vector3d(0.5, 0, 1), Eigen::Vector3d(0, 0, 0),
+                             Eigen::Vector3d(0.5, 0, 0), Eigen::Vector3d(1, 0, 0)};
+  const PairPoints down = {Eigen::Vector3d(0, 0, -3), Eigen::Vector3d::Zero(),
+                           Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()};
   const double ts = point_triangle_ccd(sliver, down, 1.0);
   EXPECT_LE(ts, 1.0 / 3.0);
   EXPECT_GT(ts, 0.25);
@@ -437,23 +454,27 @@ TEST(SelfContactCcd, ApproachingTrianglesNeverPassContact) {
       double d2 = INFINITY;
       for (int a = 0; a < 2; ++a) {
         const int o = 3 * a, q = 3 * (1 - a);
-        for (int k = 0; k < 3; ++k) d2 = std::min(d2, point_triangle_distance_squared({y[o + k], y[q], y[q + 1], y[q + 2]}));
+        for (int k = 0; k < 3; ++k)
+          d2 = std::min(d2, point_triangle_distance_squared({y[o + k], y[q], y[q + 1], y[q + 2]}));
       }
       for (int i = 0; i < 3; ++i)
         for (int j = 0; j < 3; ++j)
-          d2 = std::min(d2, edge_edge_distance_squared({y[i], y[(i + 1) % 3], y[3 + j], y[3 + (j + 1) % 3]}));
+          d2 = std::min(
+              d2, edge_edge_distance_squared({y[i], y[(i + 1) % 3], y[3 + j], y[3 + (j + 1) % 3]}));
       return std::sqrt(d2);
     };
     double toi = 1.0;
     for (int a = 0; a < 2; ++a) {
       const int o = 3 * a, q = 3 * (1 - a);
       for (int k = 0; k < 3; ++k)
-        toi = point_triangle_ccd({x[o + k], x[q], x[q + 1], x[q + 2]}, {dx[o + k], dx[q], dx[q + 1], dx[q + 2]}, toi);
+        toi = point_triangle_ccd({x[o + k], x[q], x[q + 1], x[q + 2]},
+                                 {dx[o + k], dx[q], dx[q + 1], dx[q + 2]}, toi);
     }
     for (int i = 0; i < 3; ++i)
       for (int j = 0; j < 3; ++j) {
         const int i1 = (i + 1) % 3, j1 = 3 + (j + 1) % 3;
-        toi = edge_edge_ccd({x[i], x[i1], x[3 + j], x[j1]}, {dx[i], dx[i1], dx[3 + j], dx[j1]}, toi);
+        toi =
+            edge_edge_ccd({x[i], x[i1], x[3 + j], x[j1]}, {dx[i], dx[i1], dx[3 + j], dx[j1]}, toi);
       }
     double first_contact = 1.0;
     for (int s = 0; s <= 2000; ++s)
@@ -461,7 +482,8 @@ TEST(SelfContactCcd, ApproachingTrianglesNeverPassContact) {
         first_contact = s / 2000.0;
         break;
       }
-    for (int s = 0; s <= 2000; ++s) EXPECT_GT(pairs_min(toi * s / 2000.0), 0.0) << "trial " << trial;
+    for (int s = 0; s <= 2000; ++s)
+      EXPECT_GT(pairs_min(toi * s / 2000.0), 0.0) << "trial " << trial;
     if (first_contact < 1.0) {
       EXPECT_LE(toi, first_contact) << "trial " << trial;
       ++stopped;

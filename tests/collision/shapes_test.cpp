@@ -1,6 +1,4 @@
-#include "collision/errors.hpp"
 #include "collision/shapes.hpp"
-#include "validation/compare.hpp"
 
 #include <gtest/gtest.h>
 
@@ -9,6 +7,9 @@
 #include <cmath>
 #include <random>
 #include <vector>
+
+#include "collision/errors.hpp"
+#include "validation/compare.hpp"
 
 namespace pc = papersim::collision;
 namespace pv = papersim::validation;
@@ -58,7 +59,8 @@ void check_polyhedron(const pc::Shape& s, const std::vector<Triangle>& tris) {
   b.inflate(0.02);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   for (int i = 0; i < 2000; ++i) {
-    const Eigen::Vector3d p = b.lo + (b.hi - b.lo).cwiseProduct(Eigen::Vector3d(u(rng), u(rng), u(rng)));
+    const Eigen::Vector3d p =
+        b.lo + (b.hi - b.lo).cwiseProduct(Eigen::Vector3d(u(rng), u(rng), u(rng)));
     Eigen::Vector3d g;
     const double d = pc::shape_distance(s, p, &g);
     ASSERT_NEAR(std::abs(d), unsigned_distance(p, tris), 1e-12) << p.transpose();
@@ -67,7 +69,8 @@ void check_polyhedron(const pc::Shape& s, const std::vector<Triangle>& tris) {
     Eigen::Vector3d fd;
     for (int k = 0; k < 3; ++k) {
       const Eigen::Vector3d e = Eigen::Vector3d::Unit(k) * h;
-      fd[k] = (pc::shape_distance(s, p + e, nullptr) - pc::shape_distance(s, p - e, nullptr)) / (2 * h);
+      fd[k] =
+          (pc::shape_distance(s, p + e, nullptr) - pc::shape_distance(s, p - e, nullptr)) / (2 * h);
     }
     // The field is smooth except on the medial axis: count disagreements, allow a few.
     if ((fd - g).norm() > 1e-5) {
@@ -108,13 +111,13 @@ TEST(Shapes, RoundShapes) {
   EXPECT_NEAR((g - Eigen::Vector3d(0.03, 0.04, 0.12) / 0.13).norm(), 0.0, 1e-15);
   s.kind = pc::ShapeKind::cylinder;
   s.length = 0.2;
-  EXPECT_NEAR(pc::shape_distance(s, {0.05, 0.0, 0.08}, &g), 0.03, 1e-15);   // side
-  EXPECT_NEAR(pc::shape_distance(s, {0.13, 0.0, 0.01}, &g), 0.03, 1e-15);   // cap
+  EXPECT_NEAR(pc::shape_distance(s, {0.05, 0.0, 0.08}, &g), 0.03, 1e-15);  // side
+  EXPECT_NEAR(pc::shape_distance(s, {0.13, 0.0, 0.01}, &g), 0.03, 1e-15);  // cap
   EXPECT_NEAR((g - Eigen::Vector3d::UnitX()).norm(), 0.0, 1e-15);
-  EXPECT_NEAR(pc::shape_distance(s, {0.13, 0.0, 0.09}, &g), 0.05, 1e-15);   // rim: 3-4-5
+  EXPECT_NEAR(pc::shape_distance(s, {0.13, 0.0, 0.09}, &g), 0.05, 1e-15);  // rim: 3-4-5
   EXPECT_NEAR(pc::shape_distance(s, {0.0, 0.0, 0.0}, &g), -0.05, 1e-15);
   s.kind = pc::ShapeKind::capsule;
-  EXPECT_NEAR(pc::shape_distance(s, {0.13, 0.0, 0.0}, &g), 0.03, 1e-15);    // tip at x = 0.1
+  EXPECT_NEAR(pc::shape_distance(s, {0.13, 0.0, 0.0}, &g), 0.03, 1e-15);  // tip at x = 0.1
   EXPECT_NEAR(pc::shape_distance(s, {0.0, 0.06, 0.0}, &g), 0.01, 1e-15);
   EXPECT_NEAR((g - Eigen::Vector3d::UnitY()).norm(), 0.0, 1e-15);
 }
@@ -156,7 +159,8 @@ TEST(Shapes, PolytopeFeaturesAreTheCornersAndEdges) {
     for (const auto& [a, b] : f.edges) {
       ++degree[a];
       ++degree[b];
-      EXPECT_NEAR(pc::shape_distance(shape, 0.5 * (f.corners[a] + f.corners[b]), nullptr), 0.0, 1e-15);
+      EXPECT_NEAR(pc::shape_distance(shape, 0.5 * (f.corners[a] + f.corners[b]), nullptr), 0.0,
+                  1e-15);
     }
     for (int d : degree) EXPECT_EQ(d, 3);
   }

@@ -1,11 +1,12 @@
-#include "collision/level_set_collider.hpp"
-#include "collision/shapes.hpp"
 #include "collision/triangle_sdf.hpp"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstdio>
+
+#include "collision/level_set_collider.hpp"
+#include "collision/shapes.hpp"
 
 namespace pc = papersim::collision;
 
@@ -49,8 +50,9 @@ TEST(TriangleSdf, FindsGableRidgeBetweenVertices) {
   EXPECT_NEAR(r.point.y(), 0.0, 1e-3);
   EXPECT_NEAR(r.barycentric.sum(), 1.0, 1e-12);
   EXPECT_GE(r.barycentric.minCoeff(), 0.0);
-  EXPECT_NEAR((r.point - (r.barycentric[0] * a + r.barycentric[1] * b + r.barycentric[2] * c)).norm(),
-              0.0, 1e-15);
+  EXPECT_NEAR(
+      (r.point - (r.barycentric[0] * a + r.barycentric[1] * b + r.barycentric[2] * c)).norm(), 0.0,
+      1e-15);
   EXPECT_LT(r.evaluations, 2048);
 }
 
@@ -62,17 +64,18 @@ TEST(TriangleSdf, FindsSmallSphereUnderLargeTriangle) {
   const pc::AnalyticCollider exact(s);
   const double z = 0.005 + 3e-4;
   const Eigen::Vector3d a(-0.03, -0.02, z), b(0.04, -0.01, z), c(0.0, 0.04, z);
-  for (const pc::Collider* collider : {static_cast<const pc::Collider*>(&exact),
-                                       static_cast<const pc::Collider*>(grid.get())}) {
+  for (const pc::Collider* collider :
+       {static_cast<const pc::Collider*>(&exact), static_cast<const pc::Collider*>(grid.get())}) {
     pc::TriangleSdfParams params;
     params.lipschitz = collider == grid.get() ? 1.05 : 1.0;
     const pc::TriangleSdfResult r =
         pc::triangle_min_distance(*collider, a, b, c, Eigen::Isometry3d::Identity(), params);
     const double reference = dense_min(*collider, a, b, c, 400);
-    std::printf("[ figures  ] 5 mm sphere (%s): min %.4g mm, dense-grid min %.4g mm, lower "
-                "bound %.4g mm, %d queries\n",
-                collider == grid.get() ? "grid" : "exact", r.distance * 1e3, reference * 1e3,
-                r.lower_bound * 1e3, r.evaluations);
+    std::printf(
+        "[ figures  ] 5 mm sphere (%s): min %.4g mm, dense-grid min %.4g mm, lower "
+        "bound %.4g mm, %d queries\n",
+        collider == grid.get() ? "grid" : "exact", r.distance * 1e3, reference * 1e3,
+        r.lower_bound * 1e3, r.evaluations);
     EXPECT_LE(r.distance, reference + 1e-6);
     EXPECT_LE(r.lower_bound, reference);
     EXPECT_NEAR(r.point.head<2>().norm(), 0.0, 1e-3);

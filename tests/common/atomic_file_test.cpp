@@ -1,3 +1,5 @@
+#include "common/atomic_file.hpp"
+
 #include <gtest/gtest.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
@@ -8,7 +10,6 @@
 #include <fstream>
 #include <sstream>
 
-#include "common/atomic_file.hpp"
 #include "common/format.hpp"
 
 namespace papersim::common {
@@ -17,7 +18,8 @@ namespace {
 namespace fs = std::filesystem;
 
 fs::path scratch(const std::string& tag) {
-  const fs::path p = fs::temp_directory_path() / ("papersim-atomic-" + tag + "-" + std::to_string(getpid()));
+  const fs::path p =
+      fs::temp_directory_path() / ("papersim-atomic-" + tag + "-" + std::to_string(getpid()));
   fs::remove_all(p);
   fs::create_directories(p);
   return p;

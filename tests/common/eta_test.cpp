@@ -1,7 +1,7 @@
 // common::RecentRateEta: the rest of a job at the rate of its last tenth.
-#include <gtest/gtest.h>
-
 #include "common/eta.hpp"
+
+#include <gtest/gtest.h>
 
 using papersim::common::RecentRateEta;
 

@@ -50,11 +50,13 @@ std::vector<std::string> violations(const fs::path& root) {
       std::string line;
       for (int n = 1; std::getline(in, line); ++n) {
         std::smatch m;
-        if (std::regex_search(line, m, project_include) && !may.count(m[1]) && !PROGRAMS.count(rel) &&
-            fs::is_directory(root / m[1].str()))
-          found.push_back(rel + ":" + std::to_string(n) + ": " + folder + " includes " + m[1].str() + "/");
+        if (std::regex_search(line, m, project_include) && !may.count(m[1]) &&
+            !PROGRAMS.count(rel) && fs::is_directory(root / m[1].str()))
+          found.push_back(rel + ":" + std::to_string(n) + ": " + folder + " includes " +
+                          m[1].str() + "/");
         if (ext == ".hpp" && std::regex_search(line, m, heavy_include))
-          found.push_back(rel + ":" + std::to_string(n) + ": a header includes " + m[1].str() + "/");
+          found.push_back(rel + ":" + std::to_string(n) + ": a header includes " + m[1].str() +
+                          "/");
       }
     }
   }
@@ -68,7 +70,8 @@ TEST(Layering, EveryIncludeFollowsTheFoldersDependencies) {
   ASSERT_TRUE(fs::is_directory(root / "simulation")) << root;
   std::size_t files = 0;
   for (const auto& [folder, may] : allowed())
-    for (const auto& e : fs::recursive_directory_iterator(root / folder)) files += e.is_regular_file();
+    for (const auto& e : fs::recursive_directory_iterator(root / folder))
+      files += e.is_regular_file();
   EXPECT_GT(files, 100u) << "the source tree was not found whole";
   const auto found = violations(root);
   for (const auto& v : found) ADD_FAILURE() << v;
@@ -79,12 +82,16 @@ TEST(Layering, EveryIncludeFollowsTheFoldersDependencies) {
 // including OpenVDB and scenegen including simulation are reported with their lines; the allowed
 // includes, a system header and a program's main are not.
 TEST(Layering, TheCheckReportsABadIncludeWithItsLine) {
-  const fs::path root = fs::temp_directory_path() / ("papersim_layering_" + std::to_string(::getpid()));
+  const fs::path root =
+      fs::temp_directory_path() / ("papersim_layering_" + std::to_string(::getpid()));
   fs::remove_all(root);
-  for (const char* d : {"common", "remesh", "collision", "simulation", "scenegen"}) fs::create_directories(root / d);
-  std::ofstream(root / "remesh/a.cpp") << "#include \"remesh/a.hpp\"\n#include <vector>\n#include \"collision/b.hpp\"\n";
+  for (const char* d : {"common", "remesh", "collision", "simulation", "scenegen"})
+    fs::create_directories(root / d);
+  std::ofstream(root / "remesh/a.cpp")
+      << "#include \"remesh/a.hpp\"\n#include <vector>\n#include \"collision/b.hpp\"\n";
   std::ofstream(root / "collision/b.hpp") << "#pragma once\n#include <openvdb/openvdb.h>\n";
-  std::ofstream(root / "collision/b.cpp") << "#include <openvdb/openvdb.h>\n#include \"common/x.hpp\"\n";
+  std::ofstream(root / "collision/b.cpp")
+      << "#include <openvdb/openvdb.h>\n#include \"common/x.hpp\"\n";
   std::ofstream(root / "scenegen/c.cpp") << "// x\n\n  #  include \"simulation/run.hpp\"\n";
   std::ofstream(root / "simulation/papersim_main.cpp") << "#include \"scenegen/c.hpp\"\n";
   const auto found = violations(root);

@@ -14,9 +14,8 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
-#include <string>
-
 #include <nlohmann/json.hpp>
+#include <string>
 
 #include "remesh/errors.hpp"
 #include "simulation/errors.hpp"
@@ -50,15 +49,18 @@ const Valid& valid() {
     fs::remove_all(v.dir);
     // A 4 x 4 cm sheet in free fall: every step converges within two iterations on the exact
     // Hessian, so the checkpoint after step 6 carries the factorisation for step 7.
-    const nlohmann::json scene = {{"sheet", {{"width", 0.04}, {"height", 0.04}, {"edge_length", 0.01},
-                                             {"position", {0, 0, 0.2}}}},
-                                  {"duration", 0.01}, {"time_step", 0.001},
-                                  {"solver", {{"max_factor_reuse", 4}}}};
+    const nlohmann::json scene = {
+        {"sheet",
+         {{"width", 0.04}, {"height", 0.04}, {"edge_length", 0.01}, {"position", {0, 0, 0.2}}}},
+        {"duration", 0.01},
+        {"time_step", 0.001},
+        {"solver", {{"max_factor_reuse", 4}}}};
     ps::RunOptions o;
     o.checkpoint_dir = (v.dir / "saved").string();
     o.checkpoint_every = 6;
     ps::run_scene(ps::scene_from_json(scene, "fuzz_scene.json"), o);
-    const nlohmann::json j = nlohmann::json::parse(std::ifstream(v.dir / "saved" / "checkpoint.json"));
+    const nlohmann::json j =
+        nlohmann::json::parse(std::ifstream(v.dir / "saved" / "checkpoint.json"));
     if (!j.contains("reusable_factor")) {
       std::fprintf(stderr, "fuzz_checkpoint: the valid checkpoint carries no factorisation\n");
       std::abort();
@@ -82,12 +84,14 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const fs::path dir = v.dir / "input";
   for (int k = 0; k < 3; ++k)
     write_file(dir / v.names[k],
-               k == replaced ? std::string(reinterpret_cast<const char*>(data) + 1, size - 1) : v.contents[k]);
+               k == replaced ? std::string(reinterpret_cast<const char*>(data) + 1, size - 1)
+                             : v.contents[k]);
   try {
     const ps::Checkpoint c = ps::load_checkpoint(dir.string());
     const ps::Scene saved = ps::scene_from_json(c.scene, "checkpoint.json");
     ps::Run run(saved);
-    run.resume(c.mesh, c.state, c.step, &saved, c.tally ? &*c.tally : nullptr, &c.self_contact_pattern);
+    run.resume(c.mesh, c.state, c.step, &saved, c.tally ? &*c.tally : nullptr,
+               &c.self_contact_pattern);
     if (c.factor) run.adopt_factor(*c.factor);
   } catch (const ps::SceneError&) {
   } catch (const papersim::remesh::IoError&) {

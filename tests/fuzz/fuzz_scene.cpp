@@ -2,10 +2,9 @@
 // any other exception, a crash or a sanitizer report is a finding.
 #include <cstddef>
 #include <cstdint>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
-
-#include <nlohmann/json.hpp>
 
 #include "simulation/errors.hpp"
 #include "simulation/scene.hpp"

@@ -76,8 +76,9 @@ class FullDiskTest : public ::testing::Test {
 
 TEST_F(FullDiskTest, PapersimRunFailsWithStatus5AndWritesNothing) {
   const std::string scene = write_scene(inputs, "s.json", small_scene(inputs));
-  const Outcome r = run({PAPERSIM, "run", scene, "--out", (disk.path() / "out").string(), "--quiet"},
-                        disk.fsize_limit());
+  const Outcome r =
+      run({PAPERSIM, "run", scene, "--out", (disk.path() / "out").string(), "--quiet"},
+          disk.fsize_limit());
   EXPECT_EQ(r.status, 5) << disk.method() << ": " << r.err;
   EXPECT_TRUE(r.err.find("cannot write") != std::string::npos) << r.err;
   EXPECT_EQ(left_behind(disk.path()), std::vector<std::string>{}) << disk.method();
@@ -99,7 +100,8 @@ TEST_F(FullDiskTest, PapersimMetricsCsvAndPlotsFailWithStatus5) {
   Outcome r = run({PAPERSIM, "metrics", mesh, "--csv", csv}, disk.fsize_limit());
   EXPECT_EQ(r.status, 5) << disk.method() << ": " << r.err;
   EXPECT_FALSE(fs::exists(csv));
-  r = run({PAPERSIM, "metrics", mesh, "--plots", (disk.path() / "plots").string()}, disk.fsize_limit());
+  r = run({PAPERSIM, "metrics", mesh, "--plots", (disk.path() / "plots").string()},
+          disk.fsize_limit());
   EXPECT_EQ(r.status, 5) << disk.method() << ": " << r.err;
   EXPECT_EQ(r.err.find("wrote"), std::string::npos) << r.err;
   for (const std::string& name : left_behind(disk.path()))
@@ -112,7 +114,8 @@ TEST_F(FullDiskTest, ScenegenRenderAndExampleFailWithStatus5AndWriteNothing) {
                    "32x48", "--quality", "draft", "--quiet"},
                   disk.fsize_limit());
   EXPECT_EQ(r.status, 5) << disk.method() << ": " << r.err;
-  r = run({SCENEGEN, "example", "flat", "--out", (disk.path() / "flat.obj").string()}, disk.fsize_limit());
+  r = run({SCENEGEN, "example", "flat", "--out", (disk.path() / "flat.obj").string()},
+          disk.fsize_limit());
   EXPECT_EQ(r.status, 5) << disk.method() << ": " << r.err;
   EXPECT_EQ(left_behind(disk.path()), std::vector<std::string>{}) << disk.method();
 }
@@ -122,9 +125,10 @@ TEST_F(FullDiskTest, ScenegenRenderAndExampleFailWithStatus5AndWriteNothing) {
 // sample once there is room. It leaves no sample folder, no row and no staging folder.
 TEST_F(FullDiskTest, PapersimBatchStopsWithStatus5AndRecordsNoFailure) {
   const fs::path ds = disk.path() / "ds";
-  const Outcome r = run({PAPERSIM, "batch", "--out", ds.string(), "--scenarios", "pull", "--seeds", "0-3", "--set",
-                         "duration=0.05", "--set", "sheet.edge_length=0.02", "--quiet"},
-                        disk.fsize_limit());
+  const Outcome r =
+      run({PAPERSIM, "batch", "--out", ds.string(), "--scenarios", "pull", "--seeds", "0-3",
+           "--set", "duration=0.05", "--set", "sheet.edge_length=0.02", "--quiet"},
+          disk.fsize_limit());
   EXPECT_EQ(r.status, 5) << disk.method() << ": " << r.err;
   EXPECT_NE(r.err.find("cannot"), std::string::npos) << r.err;
   EXPECT_EQ(r.err.find("internal error"), std::string::npos) << r.err;

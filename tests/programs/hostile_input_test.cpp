@@ -70,7 +70,8 @@ TEST(HostileInput, PapersimRunWithoutPlyRemovesTheOldPlyAndFrames) {
   json scene = small_scene(dir);
   const std::string out = dir.str("out");
   scene["output"]["ply"] = true;
-  Outcome r = run({PAPERSIM, "run", write_scene(dir, "a.json", scene), "--out", out, "--frames", "5", "--quiet"});
+  Outcome r = run({PAPERSIM, "run", write_scene(dir, "a.json", scene), "--out", out, "--frames",
+                   "5", "--quiet"});
   ASSERT_EQ(r.status, 0) << r.err;
   ASSERT_TRUE(fs::exists(out + "/sheet.ply"));
   ASSERT_TRUE(fs::exists(out + "/frames"));
@@ -85,7 +86,8 @@ TEST(HostileInput, ScenarioDrawOnlyRemovesTheOutputsOfAnEarlierRun) {
   Scratch dir("drawonly");
   const std::string out = dir.str("out");
   fs::create_directories(out + "/frames");
-  for (const char* f : {"sheet.obj", "sheet.ply", "meta.json", "notes.txt"}) std::ofstream(out + "/" + f) << "old\n";
+  for (const char* f : {"sheet.obj", "sheet.ply", "meta.json", "notes.txt"})
+    std::ofstream(out + "/" + f) << "old\n";
   const Outcome r = run({PAPERSIM, "scenario", "pull", "--seed", "2", "--draw-only", "--out", out});
   ASSERT_EQ(r.status, 0) << r.err;
   // The user's own file stays; every papersim output of the earlier run goes.
@@ -111,7 +113,8 @@ TEST(HostileInput, ScenegenNoValidCameraOverAGoodSampleLeavesOnlyTheFailedMeta) 
   const Outcome r = run({SCENEGEN, "render", mesh, "--out", out, "--size", "64x90", "--quiet"});
   EXPECT_EQ(r.status, 3) << r.err;
   EXPECT_EQ(listing(out), std::vector<std::string>{"meta.json"});
-  EXPECT_TRUE(contains(read_text(out + "/meta.json"), "\"failed\"")) << read_text(out + "/meta.json");
+  EXPECT_TRUE(contains(read_text(out + "/meta.json"), "\"failed\""))
+      << read_text(out + "/meta.json");
 }
 
 // --- 5: accepted without a word ---------------------------------------------------------
@@ -120,7 +123,8 @@ TEST(HostileInput, NullForASceneKeyIsAnError) {
   Scratch dir("null");
   json scene = small_scene(dir);
   scene["sheet"]["material"]["poisson"] = nullptr;
-  const Outcome r = run({PAPERSIM, "run", write_scene(dir, "s.json", scene), "--out", dir.str("out"), "--quiet"});
+  const Outcome r =
+      run({PAPERSIM, "run", write_scene(dir, "s.json", scene), "--out", dir.str("out"), "--quiet"});
   EXPECT_EQ(r.status, 2);
   EXPECT_TRUE(contains(r.err, "s.json: key 'sheet.material.poisson': null")) << r.err;
   EXPECT_FALSE(fs::exists(dir.str("out")));
@@ -138,17 +142,21 @@ TEST(HostileInput, DuplicateSceneKeyIsAnError) {
 
 TEST(HostileInput, ScenarioSeedBeyondTheSceneRangeIsRefused) {
   Scratch dir("seed");
-  const Outcome r = run({PAPERSIM, "scenario", "pull", "--seed", "2147483648", "--draw-only", "--out", dir.str("out")});
+  const Outcome r = run({PAPERSIM, "scenario", "pull", "--seed", "2147483648", "--draw-only",
+                         "--out", dir.str("out")});
   EXPECT_EQ(r.status, 2);
   EXPECT_TRUE(contains(r.err, "--seed")) << r.err;
   EXPECT_FALSE(fs::exists(dir.str("out")));
-  const Outcome ok = run({PAPERSIM, "scenario", "pull", "--seed", "2147483647", "--draw-only", "--out", dir.str("out")});
+  const Outcome ok = run({PAPERSIM, "scenario", "pull", "--seed", "2147483647", "--draw-only",
+                          "--out", dir.str("out")});
   ASSERT_EQ(ok.status, 0) << ok.err;
   json scene = json::parse(read_text(dir.str("out/scene.json")));
   scene["duration"] = 0.02;
   scene["sheet"]["edge_length"] = 0.03;
-  const Outcome again = run({PAPERSIM, "run", write_scene(dir, "s.json", scene), "--out", dir.str("run"), "--quiet"});
-  EXPECT_EQ(again.status, 0) << "the largest seed papersim draws must be one papersim runs: " << again.err;
+  const Outcome again =
+      run({PAPERSIM, "run", write_scene(dir, "s.json", scene), "--out", dir.str("run"), "--quiet"});
+  EXPECT_EQ(again.status, 0) << "the largest seed papersim draws must be one papersim runs: "
+                             << again.err;
 }
 
 TEST(HostileInput, EmptyOutIsAUsageError) {
@@ -173,12 +181,17 @@ TEST(HostileInput, EmptyOutIsAUsageError) {
 TEST(HostileInput, ScenegenRefusesMalformedNumbers) {
   Scratch dir("numbers");
   const std::string mesh = example_sheet(dir, "flat", "flat.obj");
-  const std::vector<std::vector<std::string>> bad = {
-      {"--size", "128x180junk"}, {"--size", "128x"}, {"--size", "-8x8"},
-      {"--seed", "-1"}, {"--seed", "1.5"}, {"--threads", "-1"}, {"--dpi", "0"},
-      {"--backward-grid", "12x3y"}};
+  const std::vector<std::vector<std::string>> bad = {{"--size", "128x180junk"},
+                                                     {"--size", "128x"},
+                                                     {"--size", "-8x8"},
+                                                     {"--seed", "-1"},
+                                                     {"--seed", "1.5"},
+                                                     {"--threads", "-1"},
+                                                     {"--dpi", "0"},
+                                                     {"--backward-grid", "12x3y"}};
   for (const auto& option : bad) {
-    const Outcome r = run({SCENEGEN, "prepare", mesh, "--out", dir.str("job"), option[0], option[1]});
+    const Outcome r =
+        run({SCENEGEN, "prepare", mesh, "--out", dir.str("job"), option[0], option[1]});
     EXPECT_EQ(r.status, 2) << option[0] << " " << option[1] << ": " << r.err;
     EXPECT_TRUE(contains(r.err, option[0]) || contains(r.err, option[1])) << r.err;
     EXPECT_FALSE(fs::exists(dir.str("job")));
@@ -206,7 +219,8 @@ TEST(HostileInput, TruncatedObjIsRefused) {
 TEST(HostileInput, HugeImageSizeIsRefusedUpFront) {
   Scratch dir("hugesize");
   const std::string mesh = example_sheet(dir, "flat", "flat.obj");
-  const Outcome r = run({SCENEGEN, "render", mesh, "--out", dir.str("out"), "--size", "100000x100000"});
+  const Outcome r =
+      run({SCENEGEN, "render", mesh, "--out", dir.str("out"), "--size", "100000x100000"});
   EXPECT_EQ(r.status, 2);
   EXPECT_TRUE(contains(r.err, "limit of 8192")) << r.err;
   EXPECT_LT(r.seconds, 5.0);
@@ -233,7 +247,8 @@ TEST(HostileInput, TinyEdgeLengthIsRefusedWithTheVertexLimit) {
   Scratch dir("tinyedge");
   json scene = small_scene(dir);
   scene["sheet"]["edge_length"] = 1e-4;
-  const Outcome r = run({PAPERSIM, "run", write_scene(dir, "s.json", scene), "--out", dir.str("out")});
+  const Outcome r =
+      run({PAPERSIM, "run", write_scene(dir, "s.json", scene), "--out", dir.str("out")});
   EXPECT_EQ(r.status, 2);
   EXPECT_TRUE(contains(r.err, "key 'sheet.edge_length'")) << r.err;
 }
@@ -248,7 +263,8 @@ TEST(HostileInput, BadFaceIndexNamesFileAndLine) {
   const Outcome r = run({PAPERSIM, "metrics", mesh});
   EXPECT_EQ(r.status, 2);
   EXPECT_FALSE(contains(r.err, "stoi")) << r.err;
-  EXPECT_TRUE(contains(r.err, mesh + ":" + std::to_string(lines) + ": bad face index 'x'")) << r.err;
+  EXPECT_TRUE(contains(r.err, mesh + ":" + std::to_string(lines) + ": bad face index 'x'"))
+      << r.err;
 }
 
 TEST(HostileInput, SheetMeshErrorsNameSceneFileAndKey) {
@@ -275,7 +291,8 @@ TEST(HostileInput, FarAwaySheetIsOutOfRangeNotSelfIntersecting) {
   Scratch dir("far");
   json scene = small_scene(dir);
   scene["sheet"]["position"] = {1e300, 0, 0};
-  const Outcome r = run({PAPERSIM, "run", write_scene(dir, "s.json", scene), "--out", dir.str("out")});
+  const Outcome r =
+      run({PAPERSIM, "run", write_scene(dir, "s.json", scene), "--out", dir.str("out")});
   EXPECT_EQ(r.status, 2);
   EXPECT_TRUE(contains(r.err, "key 'sheet.position'")) << r.err;
   EXPECT_FALSE(contains(r.err, "intersecting")) << r.err;
@@ -285,22 +302,26 @@ TEST(HostileInput, RangeErrorsPrintShortNumbers) {
   Scratch dir("range");
   json scene = small_scene(dir);
   scene["duration"] = 1e300;
-  const Outcome r = run({PAPERSIM, "run", write_scene(dir, "s.json", scene), "--out", dir.str("out")});
+  const Outcome r =
+      run({PAPERSIM, "run", write_scene(dir, "s.json", scene), "--out", dir.str("out")});
   EXPECT_EQ(r.status, 2);
   EXPECT_TRUE(contains(r.err, "value 1e+300 out of range")) << r.err;
   EXPECT_LT(r.err.size(), 200u) << r.err;
   // CLI11's NonNegativeNumber printed the largest double in full (309 digits).
-  const Outcome frames = run({PAPERSIM, "run", write_scene(dir, "t.json", small_scene(dir)), "--out",
-                              dir.str("out"), "--frames", "-1"});
+  const Outcome frames = run({PAPERSIM, "run", write_scene(dir, "t.json", small_scene(dir)),
+                              "--out", dir.str("out"), "--frames", "-1"});
   EXPECT_EQ(frames.status, 2);
   EXPECT_LT(frames.err.size(), 200u) << frames.err;
   // The batch runners' counts: the bad value named, nothing started.
   for (const auto& [args, message] : std::vector<std::pair<std::vector<std::string>, std::string>>{
-           {{PAPERSIM, "batch", "--out", dir.str("ds"), "--scenarios", "pull", "--seeds", "0-1", "--jobs", "-2"},
+           {{PAPERSIM, "batch", "--out", dir.str("ds"), "--scenarios", "pull", "--seeds", "0-1",
+             "--jobs", "-2"},
             "--jobs: Value -2 not in range 0 to 1024"},
-           {{PAPERSIM, "batch", "--out", dir.str("ds"), "--scenarios", "pull", "--seeds", "0-1", "--time-limit", "nan"},
+           {{PAPERSIM, "batch", "--out", dir.str("ds"), "--scenarios", "pull", "--seeds", "0-1",
+             "--time-limit", "nan"},
             "--time-limit: 'nan' is not a number"},
-           {{SCENEGEN, "batch", dir.str("ds"), "--views", "0"}, "--views: Value 0 not in range 1 to 1000"}}) {
+           {{SCENEGEN, "batch", dir.str("ds"), "--views", "0"},
+            "--views: Value 0 not in range 1 to 1000"}}) {
     const Outcome b = run(args);
     EXPECT_EQ(b.status, 2) << b.err;
     EXPECT_TRUE(contains(b.err, message)) << b.err;

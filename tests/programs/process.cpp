@@ -99,8 +99,8 @@ std::string read_text(const fs::path& path) {
 std::vector<std::string> listing(const fs::path& dir) {
   std::vector<std::string> names;
   std::error_code ec;
-  for (auto it = fs::recursive_directory_iterator(dir, ec); !ec && it != fs::recursive_directory_iterator();
-       it.increment(ec))
+  for (auto it = fs::recursive_directory_iterator(dir, ec);
+       !ec && it != fs::recursive_directory_iterator(); it.increment(ec))
     names.push_back(fs::relative(it->path(), dir).string());
   std::sort(names.begin(), names.end());
   return names;
@@ -108,8 +108,8 @@ std::vector<std::string> listing(const fs::path& dir) {
 
 Scratch::Scratch(const std::string& tag) {
   std::random_device rd;
-  m_path = fs::temp_directory_path() /
-           ("papersim-programs-" + tag + "-" + std::to_string(getpid()) + "-" + std::to_string(rd()));
+  m_path = fs::temp_directory_path() / ("papersim-programs-" + tag + "-" +
+                                        std::to_string(getpid()) + "-" + std::to_string(rd()));
   fs::create_directories(m_path);
 }
 

@@ -10,10 +10,10 @@ namespace papersim::test {
 
 /// What a finished program reported.
 struct Outcome {
-  int status = -1;      ///< exit status, or 128 + signal when a signal ended it
+  int status = -1;  ///< exit status, or 128 + signal when a signal ended it
   bool signalled = false;
   std::string out, err;
-  double seconds = 0;   ///< wall time [s]
+  double seconds = 0;  ///< wall time [s]
 };
 
 /// Start `argv` with stdout / stderr to files in `log_dir`; with file_size_limit >= 0 the

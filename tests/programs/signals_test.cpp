@@ -27,7 +27,8 @@ std::string long_scene(const Scratch& dir) {
 bool appears(const fs::path& path, double timeout) {
   const auto t0 = std::chrono::steady_clock::now();
   while (!fs::exists(path)) {
-    if (std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() > timeout) return false;
+    if (std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() > timeout)
+      return false;
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
   return true;
@@ -39,7 +40,8 @@ std::vector<pid_t> wait_for_children(pid_t pid, double timeout) {
   for (;;) {
     const auto kids = children_of(pid);
     if (!kids.empty()) return kids;
-    if (std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() > timeout) return {};
+    if (std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() > timeout)
+      return {};
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
 }
@@ -50,7 +52,8 @@ bool all_gone(const std::vector<pid_t>& pids, double timeout) {
     bool any = false;
     for (pid_t p : pids) any = any || alive(p);
     if (!any) return true;
-    if (std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() > timeout) return false;
+    if (std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() > timeout)
+      return false;
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
 }
@@ -59,11 +62,13 @@ TEST(Signals, PapersimStopsWithinASecondAndLeavesNothing) {
   for (const int sig : {SIGINT, SIGTERM}) {
     Scratch dir("sig-papersim");
     const std::string out = dir.str("out");
-    const pid_t pid = start({PAPERSIM, "run", long_scene(dir), "--out", out, "--frames", "1"}, dir.path() / "logs");
+    const pid_t pid = start({PAPERSIM, "run", long_scene(dir), "--out", out, "--frames", "1"},
+                            dir.path() / "logs");
     ASSERT_TRUE(appears(fs::path(out) / ".papersim-partial" / "frames" / "frame_000002.obj", 60.0));
     kill(pid, sig);
     Outcome r;
-    ASSERT_TRUE(wait_for(pid, dir.path() / "logs", 5.0, r)) << "still running 5 s after signal " << sig;
+    ASSERT_TRUE(wait_for(pid, dir.path() / "logs", 5.0, r))
+        << "still running 5 s after signal " << sig;
     EXPECT_LT(r.seconds, 1.0) << "signal " << sig;
     EXPECT_EQ(r.status, 128 + sig) << r.err;
     EXPECT_FALSE(r.signalled) << "ended by the signal instead of handling it";
@@ -74,9 +79,13 @@ TEST(Signals, PapersimStopsWithinASecondAndLeavesNothing) {
 TEST(Signals, PapersimKeepsAnEarlierRunWhenInterrupted) {
   Scratch dir("sig-keep");
   const std::string out = dir.str("out");
-  ASSERT_EQ(run({PAPERSIM, "run", write_scene(dir, "s.json", small_scene(dir)), "--out", out, "--quiet"}).status, 0);
+  ASSERT_EQ(
+      run({PAPERSIM, "run", write_scene(dir, "s.json", small_scene(dir)), "--out", out, "--quiet"})
+          .status,
+      0);
   const std::string meta = read_text(out + "/meta.json");
-  const pid_t pid = start({PAPERSIM, "run", long_scene(dir), "--out", out, "--frames", "1"}, dir.path() / "logs");
+  const pid_t pid =
+      start({PAPERSIM, "run", long_scene(dir), "--out", out, "--frames", "1"}, dir.path() / "logs");
   ASSERT_TRUE(appears(fs::path(out) / ".papersim-partial" / "frames" / "frame_000002.obj", 60.0));
   kill(pid, SIGINT);
   Outcome r;
@@ -89,7 +98,8 @@ TEST(Signals, PapersimKeepsAnEarlierRunWhenInterrupted) {
 TEST(Signals, WhatSigkillLeavesIsRemovedByTheNextRun) {
   Scratch dir("sig-kill");
   const std::string out = dir.str("out");
-  const pid_t pid = start({PAPERSIM, "run", long_scene(dir), "--out", out, "--frames", "1"}, dir.path() / "logs");
+  const pid_t pid =
+      start({PAPERSIM, "run", long_scene(dir), "--out", out, "--frames", "1"}, dir.path() / "logs");
   ASSERT_TRUE(appears(fs::path(out) / ".papersim-partial" / "frames" / "frame_000002.obj", 60.0));
   kill(pid, SIGKILL);
   Outcome r;
@@ -107,13 +117,15 @@ TEST(Signals, ScenegenStopsWithinASecondKillsPovrayAndLeavesNothing) {
     Scratch dir("sig-scenegen");
     const std::string mesh = example_sheet(dir, "cylinder", "c.obj");
     const std::string out = dir.str("sample");
-    const pid_t pid = start({SCENEGEN, "render", mesh, "--out", out, "--size", "256x360", "--parallel", "2"},
-                            dir.path() / "logs");
+    const pid_t pid =
+        start({SCENEGEN, "render", mesh, "--out", out, "--size", "256x360", "--parallel", "2"},
+              dir.path() / "logs");
     const std::vector<pid_t> povray = wait_for_children(pid, 60.0);
     ASSERT_FALSE(povray.empty()) << "POV-Ray never started";
     kill(pid, sig);
     Outcome r;
-    ASSERT_TRUE(wait_for(pid, dir.path() / "logs", 5.0, r)) << "still running 5 s after signal " << sig;
+    ASSERT_TRUE(wait_for(pid, dir.path() / "logs", 5.0, r))
+        << "still running 5 s after signal " << sig;
     EXPECT_LT(r.seconds, 1.0);
     EXPECT_EQ(r.status, 128 + sig) << r.err;
     EXPECT_TRUE(all_gone(povray, 1.0)) << "POV-Ray outlived scenegen";
@@ -125,8 +137,9 @@ TEST(Signals, ScenegenKilledTakesPovrayWithItAndTheNextRunCleansUp) {
   Scratch dir("sig-scenegen-kill");
   const std::string mesh = example_sheet(dir, "cylinder", "c.obj");
   const std::string out = dir.str("sample");
-  const pid_t pid = start({SCENEGEN, "render", mesh, "--out", out, "--size", "256x360", "--parallel", "2"},
-                          dir.path() / "logs");
+  const pid_t pid =
+      start({SCENEGEN, "render", mesh, "--out", out, "--size", "256x360", "--parallel", "2"},
+            dir.path() / "logs");
   const std::vector<pid_t> povray = wait_for_children(pid, 60.0);
   ASSERT_FALSE(povray.empty());
   kill(pid, SIGKILL);
@@ -137,7 +150,10 @@ TEST(Signals, ScenegenKilledTakesPovrayWithItAndTheNextRunCleansUp) {
   EXPECT_TRUE(all_gone(povray, 3.0)) << "POV-Ray outlived a killed scenegen";
   ASSERT_TRUE(fs::exists(fs::path(out) / ".scenegen-job"));
   // The next render into the same output fails (POV-Ray cannot run) and removes the leftover.
-  EXPECT_EQ(run({SCENEGEN, "render", mesh, "--out", out, "--povray", "/bin/false", "--size", "32x48"}).status, 6);
+  EXPECT_EQ(
+      run({SCENEGEN, "render", mesh, "--out", out, "--povray", "/bin/false", "--size", "32x48"})
+          .status,
+      6);
   EXPECT_FALSE(fs::exists(fs::path(out) / ".scenegen-job"));
 }
 

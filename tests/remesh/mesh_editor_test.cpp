@@ -1,10 +1,11 @@
+#include "remesh/mesh_editor.hpp"
+
 #include <gtest/gtest.h>
 
 #include <random>
 #include <stdexcept>
 #include <string>
 
-#include "remesh/mesh_editor.hpp"
 #include "remesh_test_support.hpp"
 
 using namespace papersim::remesh;
@@ -34,7 +35,8 @@ struct Fixture {
   /// Area integrals equal to rounding: each edit moves a handful of products by an ulp or so.
   void expect_conserved() const {
     const Eigen::Vector4d now = integrals(mesh);
-    for (int i = 0; i < 4; ++i) EXPECT_NEAR(now(i), integral(i), 1e-13 * scale(i)) << "component " << i;
+    for (int i = 0; i < 4; ++i)
+      EXPECT_NEAR(now(i), integral(i), 1e-13 * scale(i)) << "component " << i;
   }
   void expect_valid() const {
     EXPECT_GT(min_aspect(mesh), 0.0) << "a face is inverted or degenerate";
@@ -63,9 +65,12 @@ HalfedgeHandle halfedge(const MeshEditor& ed, int from, int to) {
 
 TEST(MeshEditor, SplitInteriorEdgeIsExactAndConservative) {
   Fixture fx;
-  const Eigen::Vector2d xa = fx.mesh.material_coord(vid(1, 1)), xb = fx.mesh.material_coord(vid(2, 1));
-  const Eigen::Vector3d pa = fx.state.positions.row(vid(1, 1)), pb = fx.state.positions.row(vid(2, 1));
-  const Eigen::Vector3d va = fx.state.velocities.row(vid(1, 1)), vb = fx.state.velocities.row(vid(2, 1));
+  const Eigen::Vector2d xa = fx.mesh.material_coord(vid(1, 1)),
+                        xb = fx.mesh.material_coord(vid(2, 1));
+  const Eigen::Vector3d pa = fx.state.positions.row(vid(1, 1)),
+                        pb = fx.state.positions.row(vid(2, 1));
+  const Eigen::Vector3d va = fx.state.velocities.row(vid(1, 1)),
+                        vb = fx.state.velocities.row(vid(2, 1));
   int new_index = -1;
   {
     MeshEditor ed(fx.mesh, fx.state);
@@ -110,7 +115,8 @@ TEST(MeshEditor, FlipTransfersByAreaAndRefusesBoundaryAndNonConvex) {
     EXPECT_EQ(ed.stats().refusals.at("boundary"), 1);
     EXPECT_EQ(ed.stats().flips, 1);
   }
-  EXPECT_TRUE(fx.mesh.mesh().find_halfedge(VertexHandle(vid(2, 1)), VertexHandle(vid(1, 2))).is_valid());
+  EXPECT_TRUE(
+      fx.mesh.mesh().find_halfedge(VertexHandle(vid(2, 1)), VertexHandle(vid(1, 2))).is_valid());
   fx.expect_conserved();
   fx.expect_valid();
   // Flipping the side of a cell whose quad (two triangles) is not convex would invert a face.
@@ -195,9 +201,10 @@ TEST(MeshEditor, VetoSeesTheProposalAndIsHonoured) {
     const Eigen::Vector3d mid_world =
         0.5 * (fx.state.positions.row(vid(1, 1)) + fx.state.positions.row(vid(2, 1))).transpose();
     for (size_t f = 0; f < seen.vertices.size(); ++f) {
-      EXPECT_GT(signed_area2(seen.material[f].row(0).transpose(), seen.material[f].row(1).transpose(),
-                             seen.material[f].row(2).transpose()),
-                0.0);
+      EXPECT_GT(
+          signed_area2(seen.material[f].row(0).transpose(), seen.material[f].row(1).transpose(),
+                       seen.material[f].row(2).transpose()),
+          0.0);
       for (int k = 0; k < 3; ++k)
         if (seen.vertices[f][k] < 0) {
           EXPECT_TRUE(seen.world[f].row(k).transpose().isApprox(mid_world));
@@ -208,7 +215,7 @@ TEST(MeshEditor, VetoSeesTheProposalAndIsHonoured) {
     EXPECT_FALSE(ed.collapse(halfedge(ed, vid(1, 1), vid(2, 1))));
     EXPECT_EQ(seen.kind, EditKind::collapse);
     EXPECT_EQ(seen.removed_faces.size(), 8u);  // vertex (1, 1) has valence 8
-    EXPECT_EQ(seen.vertices.size(), 6u);  // the two faces on the edge vanish
+    EXPECT_EQ(seen.vertices.size(), 6u);       // the two faces on the edge vanish
     EXPECT_EQ(ed.stats().refusals.at("veto: no"), 3);
     EXPECT_EQ(ed.stats().splits + ed.stats().flips + ed.stats().collapses, 0);
   }
@@ -240,9 +247,15 @@ TEST(MeshEditor, RandomEditSequenceKeepsEveryInvariant) {
         std::vector<EdgeHandle> edges(m.edges().begin(), m.edges().end());
         const EdgeHandle e = edges[rng() % edges.size()];
         switch (rng() % 3) {
-          case 0: applied += ed.split(e).is_valid(); break;
-          case 1: applied += ed.flip(e); break;
-          default: applied += ed.collapse(m.halfedge_handle(e, rng() % 2)); break;
+          case 0:
+            applied += ed.split(e).is_valid();
+            break;
+          case 1:
+            applied += ed.flip(e);
+            break;
+          default:
+            applied += ed.collapse(m.halfedge_handle(e, rng() % 2));
+            break;
         }
         for (auto f : m.faces()) {
           Eigen::Vector2d x[3];

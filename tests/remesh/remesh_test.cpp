@@ -1,11 +1,10 @@
 #include <gtest/gtest.h>
 
+#include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
 #include <random>
 #include <set>
-
-#include <Eigen/LU>
 
 #include "remesh_test_support.hpp"
 
@@ -139,14 +138,14 @@ TEST(Remesh, FoldRefinesToSizeMinAlongTheFoldOnly) {
     ASSERT_FALSE(near_across.empty());
     // An edge is split while l^2 > 1 under the mean of its ends' metrics; with one end at
     // 1 / size_min^2 the other end's metric is at least 0, so l <= sqrt(2) size_min.
-    EXPECT_LE(*std::max_element(near_across.begin(), near_across.end()), std::sqrt(2.0) * p.size_min);
+    EXPECT_LE(*std::max_element(near_across.begin(), near_across.end()),
+              std::sqrt(2.0) * p.size_min);
     EXPECT_LE(median(near_across), p.size_min);
     // Away from the fold the sheet is flat: edges 0.45-0.9 of size_max as for the flat sheet.
     EXPECT_GE(median(far), 0.45 * p.size_max);
     // The fold itself is still a line of vertices: the world shape of the crease is kept.
     int on_fold = 0;
-    for (int v = 0; v < mesh.num_vertices(); ++v)
-      on_fold += mesh.material_coord(v).y() == y0;
+    for (int v = 0; v < mesh.num_vertices(); ++v) on_fold += mesh.material_coord(v).y() == y0;
     EXPECT_GE(on_fold, static_cast<int>(A4_WIDTH / (p.size_min / p.aspect_min)));
     expect_quality(mesh, state, bounds, p);
   }
@@ -185,7 +184,8 @@ TEST(Remesh, PlasticCreasePressedFlatKeepsSizeMinAlongTheCreaseOnly) {
     }
     ASSERT_FALSE(near_across.empty());
     // As for a fold in the world shape: l <= sqrt(2) size_min across the crease.
-    EXPECT_LE(*std::max_element(near_across.begin(), near_across.end()), std::sqrt(2.0) * p.size_min);
+    EXPECT_LE(*std::max_element(near_across.begin(), near_across.end()),
+              std::sqrt(2.0) * p.size_min);
     EXPECT_LE(median(near_across), p.size_min * (1 + 1e-9));
     // Away from it the flat sheet coarsens (edges of a few centimetres on a 10 cm sheet).
     EXPECT_GE(median(far), 0.02);
@@ -232,9 +232,8 @@ TEST(Remesh, RefuseAllVetoLeavesTheMeshBitwiseUnchanged) {
   randomize_attributes(mesh, state, 9);
   const SheetMesh before = mesh;
   const RemeshState state_before = state;
-  const RemeshStats stats = remesh(mesh, state, RemeshParams(), [](const EditProposal&) {
-    return std::string("contact");
-  });
+  const RemeshStats stats = remesh(mesh, state, RemeshParams(),
+                                   [](const EditProposal&) { return std::string("contact"); });
   EXPECT_EQ(stats.splits + stats.flips + stats.collapses, 0);
   ASSERT_TRUE(stats.refusals.count("veto: contact"));
   EXPECT_GT(stats.refusals.at("veto: contact"), 0);
@@ -284,7 +283,8 @@ double delaunay_margin(const SheetMesh& mesh, OpenMesh::EdgeHandle e, const Eige
   double s = 0, c = 0, s2 = 0, c2 = 0;
   for (int k = 0; k < 2; ++k) {
     const auto h = k == 0 ? h0 : h1;
-    const Eigen::Vector2d apex = mesh.material_coord(t.to_vertex_handle(t.next_halfedge_handle(h)).idx());
+    const Eigen::Vector2d apex =
+        mesh.material_coord(t.to_vertex_handle(t.next_halfedge_handle(h)).idx());
     const Eigen::Vector2d u = a - apex, v = b - apex;
     const double n = std::sqrt(u.dot(m * u) * v.dot(m * v));
     (k == 0 ? s : s2) = std::sqrt(m.determinant()) * std::abs(u.x() * v.y() - u.y() * v.x()) / n;
@@ -369,8 +369,7 @@ TEST(Remesh, SplitsLongestFirst) {
     // New faces (a, -1, c) and (-1, b, c): the split edge is a-b.
     const auto ab = std::minmax(prop.vertices[0][0], prop.vertices[1][1]);
     first_sweep = input_edges.count(ab) > 0;
-    if (first_sweep)
-      sweep.push_back((prop.material[1].row(1) - prop.material[0].row(0)).norm());
+    if (first_sweep) sweep.push_back((prop.material[1].row(1) - prop.material[0].row(0)).norm());
     return std::string();
   });
   ASSERT_GT(sweep.size(), 10u);

@@ -1,9 +1,8 @@
 #pragma once
 /// Sheets, world shapes and mesh checks shared by the remeshing tests.
+#include <Eigen/Core>
 #include <cmath>
 #include <random>
-
-#include <Eigen/Core>
 
 #include "remesh/errors.hpp"
 #include "remesh/mesh_editor.hpp"

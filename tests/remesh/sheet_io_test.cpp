@@ -1,3 +1,5 @@
+#include "remesh/sheet_io.hpp"
+
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -7,7 +9,6 @@
 #include "common/errors.hpp"
 #include "remesh/errors.hpp"
 #include "remesh/sheet_generator.hpp"
-#include "remesh/sheet_io.hpp"
 
 using namespace papersim::remesh;
 namespace fs = std::filesystem;
@@ -98,7 +99,8 @@ TEST(SheetIo, ReportsBadFiles) {
   std::ofstream(nan) << "v 0 0 nan\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nf 1/1 2/2 3/3\n";
   EXPECT_THROW(read_sheet(nan), MeshError);
   const std::string degenerate = (dir.path / "deg.obj").string();
-  std::ofstream(degenerate) << "v 0 0 0\nv 1 0 0\nv 2 0 0\nvt 0 0\nvt 0.5 0\nvt 1 0\nf 1/1 2/2 3/3\n";
+  std::ofstream(degenerate)
+      << "v 0 0 0\nv 1 0 0\nv 2 0 0\nvt 0 0\nvt 0.5 0\nvt 1 0\nf 1/1 2/2 3/3\n";
   EXPECT_THROW(read_sheet(degenerate), MeshError);
   try {
     read_sheet(degenerate);
@@ -123,8 +125,10 @@ TEST(SheetIo, BadObjInputNamesFileLineAndLimit) {
             "m.obj:7: bad face index '99999999999999999999'");
   EXPECT_EQ(error_of(head + "f 1/1 0/2 3/3\n"), "m.obj:7: face index 0 out of range");
   // Half the faces cut off: a vertex is then used by none.
-  EXPECT_EQ(error_of("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nvt 1 1\nf 1/1 2/2 3/3\n"),
-            "m.obj: vertex 4 is used by no face (a truncated file?)");
+  EXPECT_EQ(
+      error_of(
+          "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nvt 1 1\nf 1/1 2/2 3/3\n"),
+      "m.obj: vertex 4 is used by no face (a truncated file?)");
   EXPECT_EQ(error_of("v 1e200 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nf 1/1 2/2 3/3\n"),
             "m.obj: a vertex coordinate exceeds the limit of 1e6 m");
   EXPECT_EQ(error_of("# papersim sheet 1e300 1\n" + head + "f 1/1 2/2 3/3\n"),
@@ -149,10 +153,11 @@ TEST(SheetIo, BadPlyHeadersAreErrorsNotAllocations) {
             "m.ply: element vertex has 99999999999 entries, more than the limit of 500000");
   EXPECT_EQ(error_of("ply\nformat ascii 1.0\nelement vertex 3\n"),
             "m.ply: no end_header (not a PLY file or truncated)");
-  EXPECT_EQ(error_of("ply\nformat ascii 1.0\nelement vertex 1\nproperty double x\nproperty double y\n"
-                     "property double z\nproperty double mx\nproperty double my\nelement face 1\n"
-                     "property list uchar int vertex_indices\nend_header\n0 0 0 0 0\n3 0 -1 7\n"),
-            "m.ply: bad vertex index in element face");
+  EXPECT_EQ(
+      error_of("ply\nformat ascii 1.0\nelement vertex 1\nproperty double x\nproperty double y\n"
+               "property double z\nproperty double mx\nproperty double my\nelement face 1\n"
+               "property list uchar int vertex_indices\nend_header\n0 0 0 0 0\n3 0 -1 7\n"),
+      "m.ply: bad vertex index in element face");
 }
 
 TEST(SheetIo, WriteSheetFileIsAtomic) {

@@ -1,10 +1,11 @@
+#include "remesh/sheet_mesh.hpp"
+
 #include <gtest/gtest.h>
 
 #include <iostream>
 
 #include "remesh/errors.hpp"
 #include "remesh/sheet_generator.hpp"
-#include "remesh/sheet_mesh.hpp"
 
 using namespace papersim::remesh;
 
@@ -175,7 +176,8 @@ TEST(SheetGenerator, RotatedLatticeAtAnAspectHasFacesLongAcrossTheGrain) {
     double along_lo = 1, along_hi = -1, across_lo = 1, across_hi = -1;
     for (const auto& q : p) {
       along_lo = std::min(along_lo, q.dot(grain)), along_hi = std::max(along_hi, q.dot(grain));
-      across_lo = std::min(across_lo, q.dot(across)), across_hi = std::max(across_hi, q.dot(across));
+      across_lo = std::min(across_lo, q.dot(across)),
+      across_hi = std::max(across_hi, q.dot(across));
     }
     EXPECT_NEAR(along_hi - along_lo, o.edge_length, 1e-9) << "face " << f;
     EXPECT_NEAR(across_hi - across_lo, o.edge_length / o.aspect, 1e-9) << "face " << f;

@@ -1,9 +1,10 @@
+#include "remesh/sizing.hpp"
+
 #include <gtest/gtest.h>
 
 #include <Eigen/Eigenvalues>
 #include <random>
 
-#include "remesh/sizing.hpp"
 #include "remesh_test_support.hpp"
 
 using namespace papersim::remesh;
@@ -42,7 +43,8 @@ TEST(TensorMax, DominatesEveryTensorAndIsTight) {
     EXPECT_LE(m.trace(), sum.trace() * (1 + 1e-12));
   }
   // Two orthogonal rank-one tensors: the maximum is their sum, diag(a, b).
-  const Eigen::Matrix2d m = tensor_max({Eigen::Vector2d(4, 0).asDiagonal(), Eigen::Vector2d(0, 9).asDiagonal()});
+  const Eigen::Matrix2d m =
+      tensor_max({Eigen::Vector2d(4, 0).asDiagonal(), Eigen::Vector2d(0, 9).asDiagonal()});
   EXPECT_TRUE(m.isApprox(Eigen::Matrix2d(Eigen::Vector2d(4, 9).asDiagonal()), 1e-12)) << m;
   // A tensor that dominates the others is the maximum.
   const Eigen::Matrix2d big = Eigen::Vector2d(10, 10).asDiagonal();
@@ -63,11 +65,14 @@ TEST(ClampMetric, BoundsSizesAndAspect) {
 TEST(CompressionMetric, AsksForBucklesOfTheGivenAmplitude) {
   // Compressed along x by Green strain e (no curvature): l^2 |e| = c^2 along x, nothing along y.
   const double c = 1e-4, e = -4e-4;
-  const Eigen::Matrix2d m = compression_metric(Eigen::Vector2d(e, 0).asDiagonal(), Eigen::Matrix2d::Zero(), c);
+  const Eigen::Matrix2d m =
+      compression_metric(Eigen::Vector2d(e, 0).asDiagonal(), Eigen::Matrix2d::Zero(), c);
   EXPECT_NEAR(m(0, 0), -e / (c * c), 1e-9 * (-e / (c * c)));
   EXPECT_NEAR(m(1, 1), 0.0, 1e-9 * (-e / (c * c)));
   // Stretching asks for nothing.
-  EXPECT_LT(compression_metric(Eigen::Vector2d(1e-3, 1e-3).asDiagonal(), Eigen::Matrix2d::Zero(), c).norm(), 1e-6);
+  EXPECT_LT(compression_metric(Eigen::Vector2d(1e-3, 1e-3).asDiagonal(), Eigen::Matrix2d::Zero(), c)
+                .norm(),
+            1e-6);
 }
 
 namespace {
@@ -99,8 +104,8 @@ TEST(CompressionMetric, FaceThatCanBuckleIsNotRefined) {
   RemeshParams p;
   p.size_min = 1e-3;
   p.size_max = 0.1;
-  const Eigen::Matrix2d arcsim =
-      compression_metric(Eigen::Vector2d(g, 0).asDiagonal(), Eigen::Matrix2d::Zero(), p.refine_compression);
+  const Eigen::Matrix2d arcsim = compression_metric(Eigen::Vector2d(g, 0).asDiagonal(),
+                                                    Eigen::Matrix2d::Zero(), p.refine_compression);
   EXPECT_NEAR(1 / std::sqrt(arcsim(0, 0)), p.refine_compression / std::sqrt(-g), 1e-9);
   EXPECT_LT(1 / std::sqrt(arcsim(0, 0)), h);
   for (const SizingTerms& t : sizing_terms(mesh, s, p)) {
@@ -126,7 +131,8 @@ TEST(CompressionMetric, CompressedCoarseFaceRefinesByTheBuckleItNeedsNotToSizeMi
   RemeshParams p;
   p.size_min = 1e-3;
   const std::vector<Eigen::Matrix2d> m = sizing(mesh, s, p);
-  for (double l : wanted_along_x(m)) EXPECT_NEAR(l, p.refine_angle * h / (2 * M_PI * std::sqrt(-g)), 1e-6);
+  for (double l : wanted_along_x(m))
+    EXPECT_NEAR(l, p.refine_angle * h / (2 * M_PI * std::sqrt(-g)), 1e-6);
   // A face finer than 2 pi c / refine_angle (3.1 mm) gets ArcSim's metric unchanged.
   SheetMesh fine = grid(0.02, 0.02, 11, 11);  // 2 mm
   const std::vector<Eigen::Matrix2d> mf = sizing(fine, compressed_state(fine, -4e-3), p);
@@ -151,7 +157,8 @@ TEST(CompressionMetric, AGivenMembraneStrainReplacesTheChords) {
   ASSERT_EQ(given.size(), from_chords.size());
   for (size_t f = 0; f < given.size(); ++f) {
     EXPECT_GT(from_chords[f].compression(0, 0), 0.0);
-    EXPECT_NEAR(given[f].compression(0, 0), from_chords[f].compression(0, 0), 1e-9 * from_chords[f].compression(0, 0));
+    EXPECT_NEAR(given[f].compression(0, 0), from_chords[f].compression(0, 0),
+                1e-9 * from_chords[f].compression(0, 0));
   }
   remesh(mesh, s, p);
   EXPECT_EQ(s.membrane_strain.rows(), 0);
@@ -201,7 +208,8 @@ TEST(Sizing, DegenerateInputDoesNotBreakIt) {
   for (const auto& mf : m) {
     ASSERT_TRUE(mf.allFinite());
     // Crushed to a point: maximal compression, so the finest size.
-    EXPECT_NEAR(eigenvalues(mf).maxCoeff(), 1 / (p.size_min * p.size_min), 1e-6 / (p.size_min * p.size_min));
+    EXPECT_NEAR(eigenvalues(mf).maxCoeff(), 1 / (p.size_min * p.size_min),
+                1e-6 / (p.size_min * p.size_min));
   }
   const RemeshStats stats = remesh(mesh, s, p);
   EXPECT_GT(stats.splits, 0);
@@ -253,13 +261,15 @@ TEST(Sizing, ErrorsNameTheParameterOrArray) {
     EXPECT_NE(std::string(e.what()).find("state.obstacle_distance"), std::string::npos) << e.what();
   }
   s = flat_state(mesh);
-  s.membrane_strain = Eigen::MatrixX3d::Zero(mesh.num_vertices(), 3);  // one row per vertex, not face
+  s.membrane_strain =
+      Eigen::MatrixX3d::Zero(mesh.num_vertices(), 3);  // one row per vertex, not face
   try {
     remesh(mesh, s, p);
     FAIL() << "expected MeshError";
   } catch (const MeshError& e) {
-    EXPECT_NE(std::string(e.what()).find("state.membrane_strain has 30 rows, the mesh has 40 faces"),
-              std::string::npos)
+    EXPECT_NE(
+        std::string(e.what()).find("state.membrane_strain has 30 rows, the mesh has 40 faces"),
+        std::string::npos)
         << e.what();
   }
   s.membrane_strain = Eigen::MatrixX3d::Zero(mesh.num_faces(), 3);
@@ -268,7 +278,8 @@ TEST(Sizing, ErrorsNameTheParameterOrArray) {
     sizing(mesh, s, p);
     FAIL() << "expected MeshError";
   } catch (const MeshError& e) {
-    EXPECT_NE(std::string(e.what()).find("state.membrane_strain of face 7"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("state.membrane_strain of face 7"), std::string::npos)
+        << e.what();
   }
   s = flat_state(mesh);
   s.positions(2, 1) = std::nan("");

@@ -44,10 +44,11 @@ double edge_distance_px(const SheetMesh& mesh, const UvLocator& loc, const Image
   face = hit->face;
   Eigen::Vector2d t[3];
   for (int k = 0; k < 3; ++k) t[k] = mesh.uv.row(mesh.faces(hit->face, k));
-  const double area2 = (t[1] - t[0]).x() * (t[2] - t[0]).y() - (t[1] - t[0]).y() * (t[2] - t[0]).x();
+  const double area2 =
+      (t[1] - t[0]).x() * (t[2] - t[0]).y() - (t[1] - t[0]).y() * (t[2] - t[0]).x();
   double best = 1e9;
   for (int k = 0; k < 3; ++k) {
-    const Eigen::Vector2d e = t[(k + 2) % 3] - t[(k + 1) % 3];  // edge opposite corner k
+    const Eigen::Vector2d e = t[(k + 2) % 3] - t[(k + 1) % 3];     // edge opposite corner k
     const Eigen::Vector2d grad_uv(-e.y() / area2, e.x() / area2);  // gradient of weight k in UV
     const double g = (jac.transpose() * grad_uv).norm();
     if (g > 0) best = std::min(best, std::max(0.0, hit->barycentric[k]) / g);
@@ -72,7 +73,10 @@ double gradient(const ImageF& shading, int x, int y) {
 EdgeGradient edge_gradient(const SheetMesh& mesh, const ImageF& uv, const ImageF& shading,
                            double s_lo, double s_hi) {
   const UvLocator loc(mesh);
-  struct Sums { double edge = 0, beside = 0; long n_edge = 0, n_beside = 0; };
+  struct Sums {
+    double edge = 0, beside = 0;
+    long n_edge = 0, n_beside = 0;
+  };
   std::vector<Sums> faces(static_cast<std::size_t>(mesh.num_faces()));
   for (int y = 2; y + 2 < uv.height; ++y)
     for (int x = 2; x + 2 < uv.width; ++x) {
@@ -126,7 +130,8 @@ SheetMesh diagonal_ridge(const ExampleSheetParams& p) {
 
 /// The folded sheet of the test: a 60 degree ridge with a 2 cm crease (about three mesh rows
 /// across it) at 30 degrees to the mesh rows, 6 mm edges, one point light grazing the crease.
-EdgeGradient render_fold(int level, double shadow_offset, test::TempDir& dir, ExampleSheetParams& p) {
+EdgeGradient render_fold(int level, double shadow_offset, test::TempDir& dir,
+                         ExampleSheetParams& p) {
   p.fold_angle_deg = 60.0;
   p.fold_radius = 0.02;
   p.fold_x = 0.0;
@@ -151,24 +156,27 @@ EdgeGradient render_fold(int level, double shadow_offset, test::TempDir& dir, Ex
   const Stage stage = find_resting_pose(read_sheet_obj(o.mesh_path));
   const double az = M_PI / 2, el = 10.0 * M_PI / 180;  // along the stage's y axis, 10 deg high
   l.position = stage.centre_of_mass +
-               2.0 * (std::cos(el) * (std::cos(az) * stage.ex + std::sin(az) * stage.ey) + std::sin(el) * stage.up);
+               2.0 * (std::cos(el) * (std::cos(az) * stage.ex + std::sin(az) * stage.ey) +
+                      std::sin(el) * stage.up);
   l.size = 0.0;
   l.fade_distance = 2.0;
   l.intensity = 1.0;
   o.lights = {l};
-  const std::string out = dir.str("sample" + std::to_string(level) + "_" + std::to_string(shadow_offset));
+  const std::string out =
+      dir.str("sample" + std::to_string(level) + "_" + std::to_string(shadow_offset));
   render_sample(o, out, RunOptions{});
   const ImageF uv = read_exr(out + "/uv.exr", {"R", "G", "B"});
   const ImageF shading = read_png(out + "/shading.png");
   const SheetMesh mesh = read_sheet_obj(o.mesh_path);
   const double arc = p.fold_radius * p.fold_angle_deg * M_PI / 180;
-  return edge_gradient(mesh, uv, shading, p.fold_x - 0.02, p.fold_x + arc + 0.02);  // crease +- 2 cm
+  return edge_gradient(mesh, uv, shading, p.fold_x - 0.02,
+                       p.fold_x + arc + 0.02);  // crease +- 2 cm
 }
 
 void print(const char* what, const EdgeGradient& g) {
-  std::cout << "[artefact] " << what << ": face-averaged |grad shading| on edge pixels " << g.on_edges
-            << ", beside " << g.beside << " (" << g.edge_pixels << " / " << g.beside_pixels
-            << " pixels), ratio " << g.ratio() << "\n";
+  std::cout << "[artefact] " << what << ": face-averaged |grad shading| on edge pixels "
+            << g.on_edges << ", beside " << g.beside << " (" << g.edge_pixels << " / "
+            << g.beside_pixels << " pixels), ratio " << g.ratio() << "\n";
 }
 
 TEST(Artefact, ShadingHasNoStepsAlongMeshEdgesOnAFoldLitAtAGrazingAngle) {

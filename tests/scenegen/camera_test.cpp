@@ -1,8 +1,9 @@
+#include "scenegen/camera.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 
-#include "scenegen/camera.hpp"
 #include "scenegen/decode.hpp"
 #include "scenegen/example_sheets.hpp"
 #include "scenegen/resting_pose.hpp"

@@ -1,9 +1,10 @@
+#include "scenegen/geometry.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 
 #include "scenegen/example_sheets.hpp"
-#include "scenegen/geometry.hpp"
 #include "scenegen/random.hpp"
 #include "scenegen/resting_pose.hpp"
 

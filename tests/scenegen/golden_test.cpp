@@ -93,7 +93,8 @@ TEST(Quality, BestIsFinalWithThreeByThreeAreaLightsAndNamesRoundTrip) {
   EXPECT_EQ(rest.radiosity_nearest, f.radiosity_nearest);
   EXPECT_EQ(rest.bands, f.bands);
   EXPECT_EQ(rest.ambient, f.ambient);
-  for (Quality q : {Quality::draft, Quality::final, Quality::best}) EXPECT_EQ(parse_quality(quality_name(q)), q);
+  for (Quality q : {Quality::draft, Quality::final, Quality::best})
+    EXPECT_EQ(parse_quality(quality_name(q)), q);
   try {
     parse_quality("fine");
     FAIL() << "no error";
@@ -112,7 +113,8 @@ TEST(Golden, PassInis) {
   std::ostringstream out;
   write_pass_ini(out, RawPass::uv, 1024, 1440, quality_settings(Quality::final), 2);
   write_pass_ini(out, RawPass::image, 1024, 1440, quality_settings(Quality::final), 0);
-  write_pass_ini(out, RawPass::image, 1024, 1440, quality_settings(Quality::final), 1, RowBand{1, 3});
+  write_pass_ini(out, RawPass::image, 1024, 1440, quality_settings(Quality::final), 1,
+                 RowBand{1, 3});
   write_pass_ini(out, RawPass::shading, 1024, 1440, quality_settings(Quality::draft), 0);
   write_document_ini(out, 1240, 1754, 0);
   expect_golden("passes.ini", out.str());

@@ -6,7 +6,6 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
-
 #include <nlohmann/json.hpp>
 
 #include "scenegen/errors.hpp"
@@ -26,7 +25,8 @@ struct Npy {
 Npy read_npy(const fs::path& path) {
   const std::string bytes = test::file_bytes(path);
   EXPECT_EQ(bytes.substr(0, 6), "\x93NUMPY");
-  const std::size_t len = static_cast<unsigned char>(bytes[8]) | (static_cast<unsigned char>(bytes[9]) << 8);
+  const std::size_t len =
+      static_cast<unsigned char>(bytes[8]) | (static_cast<unsigned char>(bytes[9]) << 8);
   Npy n;
   n.header = bytes.substr(10, len);
   EXPECT_EQ((10 + len) % 64, 0u) << "numpy aligns the data to 64 bytes";
@@ -84,7 +84,9 @@ TEST(Layout, SyntheticDocFilesReadBackWithTheReferenceConventions) {
   EXPECT_LT(worst, 1e-6);
   // Orientation: the page's top-left corner (row 0, column 0) lies left of and above its
   // bottom-right corner in the image (the page is upright, roll at most 8 degrees).
-  const auto g = [&](int r, int c, int k) { return npy.data[(static_cast<std::size_t>(r) * 121 + c) * 2 + k]; };
+  const auto g = [&](int r, int c, int k) {
+    return npy.data[(static_cast<std::size_t>(r) * 121 + c) * 2 + k];
+  };
   EXPECT_LT(g(0, 0, 0), g(176, 120, 0));
   EXPECT_LT(g(0, 0, 1), g(176, 120, 1));
   std::ifstream in(ref / "metadata.json");

@@ -12,7 +12,8 @@ namespace {
 
 TEST(SheetObj, ParsesHeaderUvAndFaces) {
   std::istringstream in(
-      "# papersim sheet 0.2 0.3\nv 0 0 0\nv 0.2 0 0\nv 0 0.3 0\nvt 0 0\nvt 1 0\nvt 0 1\nf 1/1 2/2 3/3\n");
+      "# papersim sheet 0.2 0.3\nv 0 0 0\nv 0.2 0 0\nv 0 0.3 0\nvt 0 0\nvt 1 0\nvt 0 1\nf 1/1 2/2 "
+      "3/3\n");
   const SheetMesh m = parse_sheet_obj(in, "test");
   EXPECT_EQ(m.num_vertices(), 3);
   EXPECT_EQ(m.num_faces(), 1);
@@ -43,12 +44,14 @@ TEST(SheetObj, RejectsMeshWithoutVt) {
 }
 
 TEST(SheetObj, RejectsTwoUvsOnOneVertexAndBadIndices) {
-  std::istringstream seam("v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nvt 0.5 0.5\n"
-                          "f 1/1 2/2 3/3\nf 1/4 2/2 3/3\n");
+  std::istringstream seam(
+      "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nvt 0.5 0.5\n"
+      "f 1/1 2/2 3/3\nf 1/4 2/2 3/3\n");
   EXPECT_THROW(parse_sheet_obj(seam, "seam"), InputError);
   std::istringstream bad("v 0 0 0\nvt 0 0\nf 1/1 2/1 3/1\n");
   EXPECT_THROW(parse_sheet_obj(bad, "bad"), InputError);
-  std::istringstream outside("v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1.5 0\nvt 0 1\nf 1/1 2/2 3/3\n");
+  std::istringstream outside(
+      "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1.5 0\nvt 0 1\nf 1/1 2/2 3/3\n");
   EXPECT_THROW(parse_sheet_obj(outside, "outside"), InputError);
 }
 
@@ -84,7 +87,8 @@ TEST(SheetObj, RejectsTruncatedFilesAndInputBeyondTheLimits) {
   EXPECT_EQ(error_of("# papersim sheet 0.2 0.3\nv 1e200 0 0\nv 0.2 0 0\nv 0 0.3 0\n"
                      "vt 0 0\nvt 1 0\nvt 0 1\nf 1/1 2/2 3/3\n"),
             "m.obj: a vertex coordinate exceeds the limit of 1000 m");
-  EXPECT_EQ(error_of("# papersim sheet 1e5 0.3\nv 0 0 0\n"), "m.obj:1: sheet size outside the limits [1e-4, 1000] m");
+  EXPECT_EQ(error_of("# papersim sheet 1e5 0.3\nv 0 0 0\n"),
+            "m.obj:1: sheet size outside the limits [1e-4, 1000] m");
   std::string many = "# papersim sheet 0.2 0.3\n";
   for (long i = 0; i <= MAX_MESH_VERTICES; ++i) many += "v 0 0 0\n";
   EXPECT_EQ(error_of(many), "m.obj:250002: more than 250000 vertices (the limit)");

@@ -1,21 +1,21 @@
 // Ground truth by ray casting: the pixel rays hit the triangles where geometry says they do,
 // the result does not depend on the thread count, and the ray-cast mask, UV, coords and normals
 // agree with POV-Ray's exact emissive renders of the same scene.
+#include "scenegen/raycast.hpp"
+
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
-
-#include <Eigen/Geometry>
 #include <nlohmann/json.hpp>
 
 #include "scenegen/errors.hpp"
 #include "scenegen/image_io.hpp"
 #include "scenegen/job.hpp"
 #include "scenegen/meta.hpp"
-#include "scenegen/raycast.hpp"
 #include "test_support.hpp"
 
 namespace papersim::scenegen {
@@ -74,7 +74,10 @@ TEST(Raycast, HitsThePlaneWhereGeometrySaysWithTheSameResultOnAnyThreadCount) {
       const Eigen::Vector3d p = cam.position - cam.position.z() / d.z() * d;
       const double u = p.x() / sheet.width, v = p.y() / sheet.height;
       const double margin = std::min({u, v, 1.0 - u, 1.0 - v});
-      if (std::abs(margin) < 1e-9) { ++boundary; continue; }  // on the outline: either answer
+      if (std::abs(margin) < 1e-9) {
+        ++boundary;
+        continue;
+      }  // on the outline: either answer
       ASSERT_EQ(uv.at(x, y, 2) > 0.5f, margin > 0.0) << "pixel " << x << "," << y;
       if (margin < 0.0) continue;
       ++inside;
@@ -119,8 +122,10 @@ TEST(Raycast, NearestFaceWinsAndNormalsTurnToTheCamera) {
       if (hits.face[px] < 0) continue;
       EXPECT_FLOAT_EQ(n.at(x, y, 2), 1.0f);
       const Eigen::Vector3d d = cam.ray(x + 0.5, y + 0.5);
-      const Eigen::Vector3d p = cam.position - (cam.position.z() - 0.01) / d.z() * d;  // on the upper sheet
-      const bool on_upper = p.x() > 1e-9 && p.y() > 1e-9 && p.x() < 0.2 - 1e-9 && p.y() < 0.2 - 1e-9;
+      const Eigen::Vector3d p =
+          cam.position - (cam.position.z() - 0.01) / d.z() * d;  // on the upper sheet
+      const bool on_upper =
+          p.x() > 1e-9 && p.y() > 1e-9 && p.x() < 0.2 - 1e-9 && p.y() < 0.2 - 1e-9;
       if (!on_upper) continue;
       ++both;
       EXPECT_GE(hits.face[px], nf) << "pixel " << x << "," << y << " sees the lower sheet";
@@ -140,7 +145,8 @@ TEST(Raycast, VertexNormalsReadBackExactlyAndBadFilesNameTheProblem) {
     read_vertex_normals(dir.str("n.txt"), 4);
     FAIL() << "a file with 3 normals read as 4";
   } catch (const IoError& e) {
-    EXPECT_NE(std::string(e.what()).find("holds 3 normals, expected 4"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("holds 3 normals, expected 4"), std::string::npos)
+        << e.what();
   }
   std::ofstream(dir.str("bad.txt")) << "# header\n0 0 1\n0 nan 1\n";
   try {
@@ -160,7 +166,8 @@ TEST(Raycast, GroundTruthNamesParseAndABadOneNamesTheOption) {
     parse_ground_truth("blender");
     FAIL() << "an unknown ground truth was accepted";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("--ground-truth 'blender'"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("--ground-truth 'blender'"), std::string::npos)
+        << e.what();
   }
   // The POV-Ray renders of the exact passes are asked for only with povray ground truth.
   const auto raw = raw_passes_for(all_passes(), true, GroundTruth::raycast);
@@ -177,7 +184,8 @@ std::vector<bool> silhouette(const ImageF& mask) {
       bool on = false, off = false;
       for (int dy = -1; dy <= 1; ++dy)
         for (int dx = -1; dx <= 1; ++dx) {
-          const int xx = std::clamp(x + dx, 0, mask.width - 1), yy = std::clamp(y + dy, 0, mask.height - 1);
+          const int xx = std::clamp(x + dx, 0, mask.width - 1),
+                    yy = std::clamp(y + dy, 0, mask.height - 1);
           (mask.at(xx, yy, 0) > 0.5f ? on : off) = true;
         }
       s[std::size_t(y) * mask.width + x] = on && off;
@@ -204,9 +212,11 @@ TEST(Render, RayCastGroundTruthAgreesWithPovRayRendersOfTheSameScene) {
   // is the carried normals interpolated (docs/scenegen.md), so those pixels are compared apart.
   const fs::path job = dir.path() / "raycast" / "job";
   const SheetMesh surface = read_sheet_obj((job / "sheet.obj").string());
-  Eigen::MatrixX3d normals = read_vertex_normals((job / "sheet_normals.txt").string(), surface.num_vertices());
+  Eigen::MatrixX3d normals =
+      read_vertex_normals((job / "sheet_normals.txt").string(), surface.num_vertices());
   const SheetMesh rendered = povray_precision(surface, normals);
-  const Camera cam = camera_from_json(nlohmann::json::parse(std::ifstream(dir.path() / "raycast" / "meta.json"))["camera"]);
+  const Camera cam = camera_from_json(
+      nlohmann::json::parse(std::ifstream(dir.path() / "raycast" / "meta.json"))["camera"]);
   const PixelHits hits = cast_pixel_rays(rendered, cam);
   const auto flat_face = [&](int f) {
     return normals.row(rendered.faces(f, 0)) == normals.row(rendered.faces(f, 1)) &&
@@ -245,9 +255,9 @@ TEST(Render, RayCastGroundTruthAgreesWithPovRayRendersOfTheSameScene) {
     }
   std::cout << "[raycast] " << o.width << " x " << o.height << ": masks differ on " << differ
             << " of " << edge_pixels << " silhouette pixels and on " << differ_inside
-            << " others; off the silhouette (" << sheet << " pixels) max |uv| difference "
-            << max_uv << ", max |coords| difference " << max_xyz << " m, max |normal| difference "
-            << max_n << " (" << flat << " pixels on faces with three equal normals: " << max_n_flat << ")\n";
+            << " others; off the silhouette (" << sheet << " pixels) max |uv| difference " << max_uv
+            << ", max |coords| difference " << max_xyz << " m, max |normal| difference " << max_n
+            << " (" << flat << " pixels on faces with three equal normals: " << max_n_flat << ")\n";
   EXPECT_EQ(differ_inside, 0);
   EXPECT_GT(sheet, o.width * o.height / 5);
   // POV-Ray's float32-exact passes (fine renders: 2^-24 of the encoding span) and its slope

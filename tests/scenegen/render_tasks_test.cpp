@@ -9,8 +9,8 @@
 #include <fstream>
 #include <set>
 
-#include "scenegen/batch.hpp"
 #include "common/errors.hpp"
+#include "scenegen/batch.hpp"
 #include "scenegen/errors.hpp"
 
 namespace fs = std::filesystem;
@@ -19,23 +19,31 @@ namespace sg = papersim::scenegen;
 namespace {
 
 void add_mesh(const fs::path& root, const std::string& scenario, int seed) {
-  const fs::path d = root / "meshes" / scenario / std::to_string(seed / 1000) / std::to_string(seed);
+  const fs::path d =
+      root / "meshes" / scenario / std::to_string(seed / 1000) / std::to_string(seed);
   fs::create_directories(d);
   std::ofstream(d / "sheet.obj") << "";
 }
 
 /// A dataset of 7 finished meshes of two scenarios (sheet.obj present) and one unfinished (none).
 fs::path small_dataset(const std::string& name) {
-  const fs::path root = fs::temp_directory_path() / ("papersim_" + name + "_" + std::to_string(getpid()));
+  const fs::path root =
+      fs::temp_directory_path() / ("papersim_" + name + "_" + std::to_string(getpid()));
   fs::remove_all(root);
-  for (const auto& [scenario, seed] : std::vector<std::pair<std::string, int>>{
-           {"pull", 0}, {"pull", 1}, {"pull", 1005}, {"fold", 2}, {"fold", 3}, {"fold", 999}, {"fold", 4000}})
+  for (const auto& [scenario, seed] : std::vector<std::pair<std::string, int>>{{"pull", 0},
+                                                                               {"pull", 1},
+                                                                               {"pull", 1005},
+                                                                               {"fold", 2},
+                                                                               {"fold", 3},
+                                                                               {"fold", 999},
+                                                                               {"fold", 4000}})
     add_mesh(root, scenario, seed);
   fs::create_directories(root / "meshes" / "pull" / "0" / "7");
   return root;
 }
 
-void expect_same_tasks(const std::vector<papersim::batch::Task>& a, const std::vector<papersim::batch::Task>& b) {
+void expect_same_tasks(const std::vector<papersim::batch::Task>& a,
+                       const std::vector<papersim::batch::Task>& b) {
   ASSERT_EQ(a.size(), b.size());
   for (std::size_t i = 0; i < a.size(); ++i) {
     EXPECT_EQ(a[i].key, b[i].key);
@@ -73,9 +81,10 @@ TEST(RenderTasks, AMeshListGivesTheWalksTasksAndLooksAtNoFolder) {
   // The walk reports after each bucket folder: pull/0 (with the unfinished mesh), pull/1,
   // fold/0 and fold/4.
   std::vector<std::array<std::size_t, 3>> heard;
-  ASSERT_EQ(sg::write_mesh_list(root, list, [&](std::size_t done, std::size_t buckets, std::size_t meshes) {
-              heard.push_back({done, buckets, meshes});
-            }),
+  ASSERT_EQ(sg::write_mesh_list(root, list,
+                                [&](std::size_t done, std::size_t buckets, std::size_t meshes) {
+                                  heard.push_back({done, buckets, meshes});
+                                }),
             7u);
   ASSERT_EQ(heard.size(), 4u);
   for (std::size_t i = 0; i < heard.size(); ++i) {
@@ -131,14 +140,16 @@ TEST(RenderTasks, AMalformedMeshListIsRefusedNamingItsLine) {
   const std::string head = "# scenegen batch mesh list: 2 meshes\n";
   const std::vector<std::pair<std::string, std::string>> cases{
       {"meshes/pull/0/0\nmeshes/pull/0/1\n", "line 1 is not"},
-      {"# scenegen batch mesh list: two meshes\nmeshes/pull/0/0\nmeshes/pull/0/1\n", "line 1 is not"},
+      {"# scenegen batch mesh list: two meshes\nmeshes/pull/0/0\nmeshes/pull/0/1\n",
+       "line 1 is not"},
       {head + "meshes/pull/0/0\nmeshes/pull/0\n", "line 3: 'meshes/pull/0' is not"},
       {head + "meshes/pull/0/0\nmeshes/pull/../1\n", "line 3: 'meshes/pull/../1' is not"},
       {head + "meshes/pull/0/x1\nmeshes/pull/0/1\n", "line 2: 'meshes/pull/0/x1' is not"},
       {head + "renders/pull/0/0\nmeshes/pull/0/1\n", "line 2: 'renders/pull/0/0' is not"},
       {head + "meshes/pull/0/1\nmeshes/pull/0/0\n", "line 3: 'meshes/pull/0/0' is out of order"},
       {head + "meshes/pull/0/1\nmeshes/pull/1/1\n", "line 3: 'meshes/pull/1/1' is out of order"},
-      {head + "meshes/pull/0/0\nmeshes/pull/0/1\nmeshes/pull/0/7\n", "announces 2 meshes but holds 3"},
+      {head + "meshes/pull/0/0\nmeshes/pull/0/1\nmeshes/pull/0/7\n",
+       "announces 2 meshes but holds 3"},
       {head + "meshes/pull/0/0\n", "announces 2 meshes but holds 1"},
   };
   sg::RenderBatchOptions o;
@@ -165,7 +176,9 @@ TEST(RenderTasks, AMalformedMeshListIsRefusedNamingItsLine) {
     sg::write_mesh_list(root, list);
     ADD_FAILURE() << "a seed in two folders was listed";
   } catch (const sg::InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("seed 1 of scenario 'pull' is in two folders"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("seed 1 of scenario 'pull' is in two folders"),
+              std::string::npos)
+        << e.what();
   }
   fs::remove_all(root);
 }

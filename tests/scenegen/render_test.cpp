@@ -4,14 +4,13 @@
 
 #include <algorithm>
 #include <cctype>
-#include <cstdio>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <memory>
-
 #include <nlohmann/json.hpp>
 
 #include "scenegen/decode.hpp"
@@ -66,9 +65,9 @@ std::unique_ptr<test::TempDir> RenderedSample::s_dir;
 std::string RenderedSample::s_error;
 
 TEST_F(RenderedSample, WritesEveryFile) {
-  for (const char* f : {"image.png", "shading.png", "albedo.png", "uv.exr", "coords.exr",
-                        "normal.exr", "mask.png", "backward.exr", "backward.npy", "meta.json",
-                        "document.png"})
+  for (const char* f :
+       {"image.png", "shading.png", "albedo.png", "uv.exr", "coords.exr", "normal.exr", "mask.png",
+        "backward.exr", "backward.npy", "meta.json", "document.png"})
     EXPECT_TRUE(fs::exists(sample() / f)) << f;
   EXPECT_FALSE(fs::exists(sample() / ".scenegen-job"));
 }
@@ -83,9 +82,10 @@ TEST_F(RenderedSample, UvCoordsAndNormalsAreExact) {
   surface.level = meta["surface"]["level"];
   const SheetMesh raw = read_sheet_obj(s_dir->str("cylinder.obj"));
   const json& st = meta["stage"];
-  const RenderedSurface rendered = rendered_surface(raw, Eigen::Vector3d(st["origin"][0], st["origin"][1], st["origin"][2]),
-                                                    Eigen::Vector3d(st["up"][0], st["up"][1], st["up"][2]), surface,
-                                                    edge_lift_from_json(meta["surface"]));
+  const RenderedSurface rendered =
+      rendered_surface(raw, Eigen::Vector3d(st["origin"][0], st["origin"][1], st["origin"][2]),
+                       Eigen::Vector3d(st["up"][0], st["up"][1], st["up"][2]), surface,
+                       edge_lift_from_json(meta["surface"]));
   const SheetMesh& mesh = rendered.surface;
   ASSERT_EQ(mesh.num_faces(), meta["surface"]["faces"].get<int>());
   const UvLocator locator(mesh);
@@ -102,7 +102,8 @@ TEST_F(RenderedSample, UvCoordsAndNormalsAreExact) {
   Rng rng(2024);
   double max_world = 0, max_px = 0, max_len = 0, max_dir = 0;
   for (int i = 0; i < 1000; ++i) {
-    const auto [x, y] = mask_pixels[static_cast<std::size_t>(rng.randint(0, static_cast<int>(mask_pixels.size()) - 1))];
+    const auto [x, y] = mask_pixels[static_cast<std::size_t>(
+        rng.randint(0, static_cast<int>(mask_pixels.size()) - 1))];
     const Eigen::Vector2d t(uv.at(x, y, 0), uv.at(x, y, 1));
     const auto hit = locator.locate(t, 1e-6);
     ASSERT_TRUE(hit) << "uv outside the sheet at " << x << "," << y;
@@ -191,15 +192,17 @@ TEST_F(RenderedSample, MetaRecordsEveryDraw) {
   const json m = read_json(sample() / "meta.json");
   EXPECT_EQ(m["status"], "ok");
   EXPECT_EQ(m["seed"], 4);
-  for (const char* k : {"inclination_deg", "azimuth_deg", "roll_deg", "position", "forward", "up", "focal_px"})
+  for (const char* k :
+       {"inclination_deg", "azimuth_deg", "roll_deg", "position", "forward", "up", "focal_px"})
     EXPECT_TRUE(m["camera"].contains(k)) << k;
   EXPECT_EQ(m["camera"]["candidates"].size(), 26u);
   for (const char* k : {"rig", "rotation_deg", "temperature", "colour", "exposure", "lights"})
     EXPECT_TRUE(m["lighting"].contains(k)) << k;
-  for (const char* k : {"kind", "colour_a", "scale", "rotation_deg", "offset_m", "roughness", "noise_seed"})
+  for (const char* k :
+       {"kind", "colour_a", "scale", "rotation_deg", "offset_m", "roughness", "noise_seed"})
     EXPECT_TRUE(m["background"].contains(k)) << k;
-  for (const char* k : {"colour", "wave_seed", "grain_seed", "crease_seed", "crease_strength", "crease_scale",
-                        "roughness_ink", "roughness_paper"})
+  for (const char* k : {"colour", "wave_seed", "grain_seed", "crease_seed", "crease_strength",
+                        "crease_scale", "roughness_ink", "roughness_paper"})
     EXPECT_TRUE(m["paper"].contains(k)) << k;
   EXPECT_EQ(m["document"]["source"], "file");
   EXPECT_TRUE(m["stage"]["stable"].get<bool>());
@@ -227,7 +230,8 @@ TEST(Render, SameSeedIdenticalFilesDifferentSeedDifferentDraws) {
   ASSERT_EQ(files, sample_files(dir.path() / "b"));
   ASSERT_GE(files.size(), 11u);
   for (const auto& f : files)
-    EXPECT_TRUE(test::file_bytes(dir.path() / "a" / f) == test::file_bytes(dir.path() / "b" / f)) << f;
+    EXPECT_TRUE(test::file_bytes(dir.path() / "a" / f) == test::file_bytes(dir.path() / "b" / f))
+        << f;
   o.seed = 10;
   prepare_job(o, dir.str("job10"));
   const json a = read_json(dir.path() / "a" / "meta.json");
@@ -259,7 +263,8 @@ TEST(Render, JitteredAreaLightsSampleTheDrawnLightDisc) {
     std::ofstream pov(dir.path() / "penumbra.pov");
     pov << "#version 3.7;\nglobal_settings { assumed_gamma 1.0 }\n"
            "#declare SG_Light_Colour = <1, 1, 1>;\n#include \"lights.inc\"\n"
-           "camera { orthographic location <0, 0, 2> direction <0, 0, -1> right <0.3, 0, 0> up <0, 0.15, 0> }\n"
+           "camera { orthographic location <0, 0, 2> direction <0, 0, -1> right <0.3, 0, 0> up <0, "
+           "0.15, 0> }\n"
            "SG_Light(<0, 0, 1>, 0.2, 0.5, 1)\n"
            "plane { z, 0 pigment { rgb 1 } finish { diffuse 1 ambient 0 emission 0 } }\n"
            "#if (Blocker) box { <-1, -1, 0.5>, <0, 1, 0.501> pigment { rgb 0 } no_image } #end\n";
@@ -267,10 +272,12 @@ TEST(Render, JitteredAreaLightsSampleTheDrawnLightDisc) {
   const int w = 150, h = 300;
   const auto render = [&](int samples, int adaptive, int blocker) {
     const std::string out = "p" + std::to_string(samples) + "_" + std::to_string(blocker) + ".png";
-    const std::string cmd = "cd '" + dir.str() + "' && povray +Ipenumbra.pov +O" + out + " +W" + std::to_string(w) +
-                            " +H" + std::to_string(h) + " -D -V -GA +FN16 File_Gamma=1.0 -A +WT1 Declare=SG_Area_Jitter=1" +
-                            " Declare=SG_Area_Samples=" + std::to_string(samples) + " Declare=SG_Area_Adaptive=" +
-                            std::to_string(adaptive) + " Declare=Blocker=" + std::to_string(blocker) + " > /dev/null 2>&1";
+    const std::string cmd = "cd '" + dir.str() + "' && povray +Ipenumbra.pov +O" + out + " +W" +
+                            std::to_string(w) + " +H" + std::to_string(h) +
+                            " -D -V -GA +FN16 File_Gamma=1.0 -A +WT1 Declare=SG_Area_Jitter=1" +
+                            " Declare=SG_Area_Samples=" + std::to_string(samples) +
+                            " Declare=SG_Area_Adaptive=" + std::to_string(adaptive) +
+                            " Declare=Blocker=" + std::to_string(blocker) + " > /dev/null 2>&1";
     EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
     return read_png((dir.path() / out).string());
   };
@@ -287,8 +294,8 @@ TEST(Render, JitteredAreaLightsSampleTheDrawnLightDisc) {
       sum_error += std::abs(fraction - expected);
       max_error = std::max(max_error, std::abs(fraction - expected));
     }
-    std::cout << samples << " x " << samples << " jittered: mean |lit fraction - disc segment| " << sum_error / w
-              << ", largest " << max_error << "\n";
+    std::cout << samples << " x " << samples << " jittered: mean |lit fraction - disc segment| "
+              << sum_error / w << ", largest " << max_error << "\n";
     EXPECT_LT(sum_error / w, 0.03) << samples << " x " << samples;
     EXPECT_LT(max_error, 0.1) << samples << " x " << samples;
   }
@@ -313,10 +320,14 @@ TEST(Render, BestQualityJittersItsAreaLightsReproduciblyAndChangesOnlyTheLitPass
   o.quality = Quality::final;
   render_sample(o, dir.str("final"), RunOptions{});
   for (const char* f : {"image.png", "shading.png"}) {
-    EXPECT_TRUE(test::file_bytes(dir.path() / "a" / f) == test::file_bytes(dir.path() / "b" / f)) << f;
-    EXPECT_FALSE(test::file_bytes(dir.path() / "a" / f) == test::file_bytes(dir.path() / "final" / f)) << f;
+    EXPECT_TRUE(test::file_bytes(dir.path() / "a" / f) == test::file_bytes(dir.path() / "b" / f))
+        << f;
+    EXPECT_FALSE(test::file_bytes(dir.path() / "a" / f) ==
+                 test::file_bytes(dir.path() / "final" / f))
+        << f;
   }
-  EXPECT_TRUE(test::file_bytes(dir.path() / "a" / "uv.exr") == test::file_bytes(dir.path() / "final" / "uv.exr"));
+  EXPECT_TRUE(test::file_bytes(dir.path() / "a" / "uv.exr") ==
+              test::file_bytes(dir.path() / "final" / "uv.exr"));
   const json meta = read_json(dir.path() / "a" / "meta.json");
   EXPECT_EQ(meta["quality"], "best");
   EXPECT_EQ(meta["quality_settings"]["area_samples"], 3);
@@ -349,7 +360,8 @@ TEST(Render, LitRendersInRowBandsAssembleToTheWholeImage) {
   render_sample(o, dir.str("bands"), RunOptions{}, true);
   EXPECT_TRUE(fs::exists(dir.path() / "bands" / "job" / "raw_image_b2.png"));
   for (const char* f : {"image.png", "shading.png"}) {
-    const ImageF a = read_png((dir.path() / "whole" / f).string()), b = read_png((dir.path() / "bands" / f).string());
+    const ImageF a = read_png((dir.path() / "whole" / f).string()),
+                 b = read_png((dir.path() / "bands" / f).string());
     ASSERT_EQ(a.data.size(), b.data.size()) << f;
     std::size_t differ = 0;
     for (std::size_t i = 0; i < a.data.size(); ++i) differ += a.data[i] != b.data[i];
@@ -358,7 +370,8 @@ TEST(Render, LitRendersInRowBandsAssembleToTheWholeImage) {
 }
 
 template <class Error>
-void expect_failure_leaves_nothing(SampleOptions o, const test::TempDir& dir, const std::string& needle) {
+void expect_failure_leaves_nothing(SampleOptions o, const test::TempDir& dir,
+                                   const std::string& needle) {
   const std::string out = dir.str("out");
   try {
     render_sample(o, out, RunOptions{});
@@ -453,19 +466,21 @@ TEST(Render, APovrayStartupTimeoutIsStartedAgain) {
   o.height = 90;
   RunOptions run;
   // The first start of each render times out, the second renders.
-  run.povray = fake_povray(dir, "[ $(wc -l < \"$PWD/$1.starts\") -ge 2 ] || { " + timeout + "}\nexec " + real + " \"$@\"\n");
+  run.povray = fake_povray(dir, "[ $(wc -l < \"$PWD/$1.starts\") -ge 2 ] || { " + timeout +
+                                    "}\nexec " + real + " \"$@\"\n");
   prepare_job(o, dir.str("job"));
   const RunReport report = run_job(dir.str("job"), run);
   const std::vector<std::string> inis = job_inis(dir.path() / "job");
   ASSERT_GE(inis.size(), 3u);
   EXPECT_EQ(report.seconds.size(), inis.size());
-  for (const std::string& ini : inis) EXPECT_EQ(count_lines(dir.path() / "job" / (ini + ".starts")), 2) << ini;
+  for (const std::string& ini : inis)
+    EXPECT_EQ(count_lines(dir.path() / "job" / (ini + ".starts")), 2) << ini;
   finish_job(dir.str("job"), dir.str("out"));
   EXPECT_TRUE(fs::exists(dir.path() / "out" / "image.png"));
   // The same through run.sh, with the fake first on PATH.
   prepare_job(o, dir.str("job_sh"));
-  const std::string sh = "PATH=\"" + dir.str("bin") + ":$PATH\" sh " + dir.str("job_sh") + "/run.sh > " +
-                         dir.str("run_sh.log") + " 2>&1";
+  const std::string sh = "PATH=\"" + dir.str("bin") + ":$PATH\" sh " + dir.str("job_sh") +
+                         "/run.sh > " + dir.str("run_sh.log") + " 2>&1";
   EXPECT_EQ(std::system(sh.c_str()), 0);
   for (const std::string& ini : job_inis(dir.path() / "job_sh"))
     EXPECT_EQ(count_lines(dir.path() / "job_sh" / (ini + ".starts")), 2) << ini;
@@ -478,7 +493,9 @@ TEST(Render, APovrayStartupTimeoutIsStartedAgain) {
     run_job(dir.str("job_fail"), run);
     ADD_FAILURE() << "no RenderError";
   } catch (const RenderError& e) {
-    EXPECT_NE(std::string(e.what()).find("Timed out waiting for worker thread startup"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("Timed out waiting for worker thread startup"),
+              std::string::npos)
+        << e.what();
   }
   int failed_starts = 0;  // one render at a time: the first fails the job
   for (const std::string& ini : job_inis(dir.path() / "job_fail"))
@@ -492,7 +509,10 @@ TEST(Render, APovrayStartupTimeoutIsStartedAgain) {
   for (const std::string& ini : job_inis(dir.path() / "job_other"))
     starts += count_lines(dir.path() / "job_other" / (ini + ".starts"));
   EXPECT_EQ(starts, 1);
-  EXPECT_NE(std::system(("PATH=\"" + dir.str("bin") + ":$PATH\" sh " + dir.str("job_other") + "/run.sh > /dev/null 2>&1").c_str()), 0);
+  EXPECT_NE(std::system(("PATH=\"" + dir.str("bin") + ":$PATH\" sh " + dir.str("job_other") +
+                         "/run.sh > /dev/null 2>&1")
+                            .c_str()),
+            0);
 }
 
 TEST(Render, NoValidCameraIsRecordedInMetaAndNothingElse) {

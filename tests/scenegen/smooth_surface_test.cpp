@@ -1,17 +1,17 @@
 // The smooth render surface: interpolation of the simulated vertices, exact material
 // coordinates, planar sheets kept planar, curved sheets approached better than by the mesh.
+#include "scenegen/smooth_surface.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <fstream>
 #include <iostream>
-
 #include <nlohmann/json.hpp>
 
 #include "scenegen/errors.hpp"
 #include "scenegen/example_sheets.hpp"
 #include "scenegen/job.hpp"
-#include "scenegen/smooth_surface.hpp"
 #include "test_support.hpp"
 
 namespace papersim::scenegen {
@@ -39,7 +39,8 @@ TEST(SmoothSurface, KeepsVerticesAndSplitsEveryFaceInFourPerLevel) {
 TEST(SmoothSurface, UvIsLinearAndFacesKeepPositiveUvArea) {
   const SheetMesh r = refine_surface(make_example_sheet("fold", coarse()), SurfaceParams{2});
   for (int f = 0; f < r.num_faces(); ++f) {
-    const Eigen::Vector2d a = r.uv.row(r.faces(f, 0)), b = r.uv.row(r.faces(f, 1)), c = r.uv.row(r.faces(f, 2));
+    const Eigen::Vector2d a = r.uv.row(r.faces(f, 0)), b = r.uv.row(r.faces(f, 1)),
+                          c = r.uv.row(r.faces(f, 2));
     EXPECT_GT((b - a).x() * (c - a).y() - (b - a).y() * (c - a).x(), 0.0) << f;
   }
   // A regular grid's UV midpoints: every refined UV is on the 4x finer grid (to rounding).
@@ -74,12 +75,14 @@ TEST(SmoothSurface, NewVerticesLieCloserToTheCylinderThanTheMesh) {
   const SheetMesh r = refine_surface(m, SurfaceParams{1});
   for (int f = 0; f < m.num_faces(); ++f)
     for (int k = 0; k < 3; ++k) {
-      const Eigen::Vector3d a = m.positions.row(m.faces(f, k)), b = m.positions.row(m.faces(f, (k + 1) % 3));
+      const Eigen::Vector3d a = m.positions.row(m.faces(f, k)),
+                            b = m.positions.row(m.faces(f, (k + 1) % 3));
       linear += off(0.5 * (a + b));
       ++n_linear;
     }
   for (int i = m.num_vertices(); i < r.num_vertices(); ++i) {
-    const bool side = r.uv(i, 0) < 1e-12 || r.uv(i, 0) > 1 - 1e-12 || r.uv(i, 1) < 1e-12 || r.uv(i, 1) > 1 - 1e-12;
+    const bool side = r.uv(i, 0) < 1e-12 || r.uv(i, 0) > 1 - 1e-12 || r.uv(i, 1) < 1e-12 ||
+                      r.uv(i, 1) > 1 - 1e-12;
     if (side) continue;
     smooth += off(r.positions.row(i).transpose());
     ++n_smooth;
@@ -99,7 +102,8 @@ TEST(SmoothSurface, FlipMirrorsAndKeepsThePrintedSideOrientation) {
     EXPECT_EQ(f.uv(i, 0), 1.0 - m.uv(i, 0));
   }
   for (int k = 0; k < f.num_faces(); ++k) {
-    const Eigen::Vector2d a = f.uv.row(f.faces(k, 0)), b = f.uv.row(f.faces(k, 1)), c = f.uv.row(f.faces(k, 2));
+    const Eigen::Vector2d a = f.uv.row(f.faces(k, 0)), b = f.uv.row(f.faces(k, 1)),
+                          c = f.uv.row(f.faces(k, 2));
     EXPECT_GT((b - a).x() * (c - a).y() - (b - a).y() * (c - a).x(), 0.0);
   }
 }
@@ -135,8 +139,8 @@ TEST(SmoothSurface, RenderedSurfaceNeverSinksIntoTheTable) {
   }
   const SheetMesh lifted = lift_above_plane(raw, origin, up);
   EXPECT_EQ((lifted.positions - rendered.positions).cwiseAbs().maxCoeff(), 0.0);  // 17 digits
-  std::cout << "[surface] fold, level " << o.surface.level << ": lowest refined point " << lowest_raw
-            << " m below the table before lifting, " << lowest << " m after\n";
+  std::cout << "[surface] fold, level " << o.surface.level << ": lowest refined point "
+            << lowest_raw << " m below the table before lifting, " << lowest << " m after\n";
   EXPECT_LT(lowest_raw, -1e-5);  // the overshoot this guards against is there
   EXPECT_GT(lowest, -1e-12);
 }

@@ -14,8 +14,8 @@ namespace fs = std::filesystem;
 
 TempDir::TempDir(const std::string& tag) {
   static int counter = 0;
-  m_path = fs::temp_directory_path() /
-           ("scenegen_test_" + tag + "_" + std::to_string(getpid()) + "_" + std::to_string(counter++));
+  m_path = fs::temp_directory_path() / ("scenegen_test_" + tag + "_" + std::to_string(getpid()) +
+                                        "_" + std::to_string(counter++));
   fs::remove_all(m_path);
   fs::create_directories(m_path);
 }

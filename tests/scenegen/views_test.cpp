@@ -6,15 +6,14 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
-
 #include <nlohmann/json.hpp>
 
+#include "scenegen/edge_lift.hpp"
 #include "scenegen/geometry.hpp"
 #include "scenegen/image_io.hpp"
 #include "scenegen/job.hpp"
-#include "scenegen/random.hpp"
-#include "scenegen/edge_lift.hpp"
 #include "scenegen/meta.hpp"
+#include "scenegen/random.hpp"
 #include "scenegen/smooth_surface.hpp"
 #include "test_support.hpp"
 
@@ -48,8 +47,9 @@ TEST(Views, FlippedUvIsTheMirrorAtTheSameMaterialPoint) {
   const json& st = meta["stage"];
   const Eigen::Vector3d origin(-st["origin"][0].get<double>(), st["origin"][1], st["origin"][2]);
   const Eigen::Vector3d up(-st["up"][0].get<double>(), st["up"][1], st["up"][2]);
-  const SheetMesh original =
-      rendered_surface(read_sheet_obj(o.mesh_path), origin, up, sp, edge_lift_from_json(meta["surface"])).surface;
+  const SheetMesh original = rendered_surface(read_sheet_obj(o.mesh_path), origin, up, sp,
+                                              edge_lift_from_json(meta["surface"]))
+                                 .surface;
   const UvLocator loc(original);
   const ImageF uv = read_exr((dir.path() / "flipped" / "uv.exr").string(), {"R", "G", "B"});
   const ImageF xyz = read_exr((dir.path() / "flipped" / "coords.exr").string(), {"R", "G", "B"});
@@ -61,13 +61,15 @@ TEST(Views, FlippedUvIsTheMirrorAtTheSameMaterialPoint) {
   Rng rng(11);
   double worst = 0;
   for (int i = 0; i < 500; ++i) {
-    const auto [x, y] = px[static_cast<std::size_t>(rng.randint(0, static_cast<int>(px.size()) - 1))];
+    const auto [x, y] =
+        px[static_cast<std::size_t>(rng.randint(0, static_cast<int>(px.size()) - 1))];
     const auto p = loc.world_point({1.0 - uv.at(x, y, 0), uv.at(x, y, 1)});
     ASSERT_TRUE(p);
     const Eigen::Vector3d mirrored(-xyz.at(x, y, 0), xyz.at(x, y, 1), xyz.at(x, y, 2));
     worst = std::max(worst, (*p - mirrored).norm());
   }
-  std::cout << "[flip] 500 mask pixels: max |mirror(coords) - original(1 - u, v)| = " << worst << " m\n";
+  std::cout << "[flip] 500 mask pixels: max |mirror(coords) - original(1 - u, v)| = " << worst
+            << " m\n";
   EXPECT_LT(worst, 1e-4);
 }
 

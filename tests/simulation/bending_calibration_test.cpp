@@ -63,7 +63,8 @@ TEST_P(CylinderWrap, EnergyMatchesThePlateForEveryOrientation) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Triangulations, CylinderWrap,
-                         ::testing::Combine(::testing::Values(BendingModel::fit, BendingModel::morley),
+                         ::testing::Combine(::testing::Values(BendingModel::fit,
+                                                              BendingModel::morley),
                                             ::testing::Values(remesh::Triangulation::regular,
                                                               remesh::Triangulation::alternating,
                                                               remesh::Triangulation::random)));

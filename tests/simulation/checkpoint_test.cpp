@@ -107,7 +107,8 @@ TEST(Checkpoint, ResumedRunEndsInTheSameStateToTheBit) {
   j.erase("run");
   std::ofstream(dir / "checkpoint.json") << j.dump(1);
   const RunResult counted_from_there = run_scene(scene, resuming_from(dir));
-  EXPECT_EQ((counted_from_there.state.positions - whole.state.positions).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_EQ((counted_from_there.state.positions - whole.state.positions).cwiseAbs().maxCoeff(),
+            0.0);
   EXPECT_EQ(counted_from_there.totals.substeps, 10);
   EXPECT_EQ(counted_from_there.totals.newton_iterations + c.tally->totals.newton_iterations,
             whole.totals.newton_iterations);
@@ -185,7 +186,8 @@ TEST(Checkpoint, SelfContactRunResumesToTheBit) {
     }
     return std::string("(accepted)");
   };
-  EXPECT_NE(refused({{0, 5, 100000}}).find("self-contact pattern pair (0, 5, 100000)"), std::string::npos);
+  EXPECT_NE(refused({{0, 5, 100000}}).find("self-contact pattern pair (0, 5, 100000)"),
+            std::string::npos);
   EXPECT_NE(refused({{2, 5, 6}}).find("self-contact pattern pair (2, 5, 6)"), std::string::npos);
   EXPECT_NE(refused({{1, 2}}).find("key 'self_contact_pattern'"), std::string::npos);
   fs::remove_all(dir);
@@ -229,7 +231,9 @@ TEST(Checkpoint, FactorReuseRunResumesToTheBit) {
 
   // The checkpoint without it (as written before it was saved) continues with a fresh
   // factorisation: fewer reuses and another end state.
-  const auto write = [&](const nlohmann::json& k) { std::ofstream(dir / "checkpoint.json") << k.dump(1); };
+  const auto write = [&](const nlohmann::json& k) {
+    std::ofstream(dir / "checkpoint.json") << k.dump(1);
+  };
   nlohmann::json without = j;
   without.erase("reusable_factor");
   write(without);
@@ -257,7 +261,8 @@ TEST(Checkpoint, FactorReuseRunResumesToTheBit) {
   nlohmann::json elsewhere = j;
   elsewhere["reusable_factor"]["file"] = "../x.factor";
   EXPECT_NE(refused(elsewhere).find("key 'reusable_factor': 'file'"), std::string::npos);
-  fs::resize_file(dir / "checkpoint_00000150.factor", fs::file_size(dir / "checkpoint_00000150.factor") - 8);
+  fs::resize_file(dir / "checkpoint_00000150.factor",
+                  fs::file_size(dir / "checkpoint_00000150.factor") - 8);
   EXPECT_NE(refused(j).find("entries long"), std::string::npos);
   {  // a count no file holds is refused before anything is allocated for it
     const std::uint64_t huge = std::uint64_t(1) << 60;
@@ -268,11 +273,14 @@ TEST(Checkpoint, FactorReuseRunResumesToTheBit) {
   nlohmann::json too_many = j;
   too_many["reusable_factor"]["file"] = "huge.factor";
   too_many["reusable_factor"]["entries"] = std::uint64_t(1) << 60;
-  EXPECT_NE(refused(too_many).find("huge.factor is not 1152921504606846976 entries long"), std::string::npos);
+  EXPECT_NE(refused(too_many).find("huge.factor is not 1152921504606846976 entries long"),
+            std::string::npos);
   Checkpoint small = c;
   small.factor->values.resize(9);
-  save_checkpoint(dir.string(), scene, small.step, small.mesh, small.state, nullptr, nullptr, &*small.factor);
-  EXPECT_NE(refused(nlohmann::json::parse(std::ifstream(dir / "checkpoint.json"))).find("matrix has 9 entries"),
+  save_checkpoint(dir.string(), scene, small.step, small.mesh, small.state, nullptr, nullptr,
+                  &*small.factor);
+  EXPECT_NE(refused(nlohmann::json::parse(std::ifstream(dir / "checkpoint.json")))
+                .find("matrix has 9 entries"),
             std::string::npos);
   fs::remove_all(dir);
 }
@@ -292,15 +300,19 @@ TEST(Checkpoint, ASheetThatCannotBeSimulatedIsRefusedByName) {
   const std::string sheet = finding.substr(1);  // the first byte chose the file it replaces
   // The fuzz target's scene: a 4 x 4 cm sheet with 1 cm edges in free fall.
   const Scene scene = scene_from_json(
-      {{"sheet", {{"width", 0.04}, {"height", 0.04}, {"edge_length", 0.01}, {"position", {0, 0, 0.2}}}},
-       {"duration", 0.01}, {"time_step", 0.001}, {"solver", {{"max_factor_reuse", 4}}}},
+      {{"sheet",
+        {{"width", 0.04}, {"height", 0.04}, {"edge_length", 0.01}, {"position", {0, 0, 0.2}}}},
+       {"duration", 0.01},
+       {"time_step", 0.001},
+       {"solver", {{"max_factor_reuse", 4}}}},
       "fuzz_scene.json");
   const fs::path dir = fresh_dir("unusable_sheet");
   RunOptions save = saving_to(dir);
   save.checkpoint_every = 6;
   run_scene(scene, save);
   const nlohmann::json j = nlohmann::json::parse(std::ifstream(dir / "checkpoint.json"));
-  std::ofstream(dir / j.at("sheet").get<std::string>(), std::ios::binary | std::ios::trunc) << sheet;
+  std::ofstream(dir / j.at("sheet").get<std::string>(), std::ios::binary | std::ios::trunc)
+      << sheet;
   const auto refusal = [](const std::function<void()>& f) {
     try {
       f();
@@ -310,13 +322,16 @@ TEST(Checkpoint, ASheetThatCannotBeSimulatedIsRefusedByName) {
     return std::string("(accepted)");
   };
   const std::string resumed = refusal([&] { run_scene(scene, resuming_from(dir)); });
-  EXPECT_NE(resumed.find("resume: the saved sheet cannot be simulated: bending:"), std::string::npos) << resumed;
+  EXPECT_NE(resumed.find("resume: the saved sheet cannot be simulated: bending:"),
+            std::string::npos)
+      << resumed;
   EXPECT_NE(resumed.find("face 1, of aspect ratio 1.59e-08"), std::string::npos) << resumed;
   Scene from_file = scene;
   from_file.sheet.mesh_path = (dir / "sheet.ply").string();
   std::ofstream(from_file.sheet.mesh_path, std::ios::binary | std::ios::trunc) << sheet;
   const std::string started = refusal([&] { papersim::simulation::Run run(from_file); });
-  EXPECT_NE(started.find("key 'sheet.mesh': " + from_file.sheet.mesh_path + " cannot be simulated"), std::string::npos)
+  EXPECT_NE(started.find("key 'sheet.mesh': " + from_file.sheet.mesh_path + " cannot be simulated"),
+            std::string::npos)
       << started;
   fs::remove_all(dir);
 }
@@ -417,7 +432,9 @@ TEST(Checkpoint, ResumesAtAnotherTimeStepThatDividesItsTime) {
   EXPECT_NEAR(continued.state.time, 0.06, 1e-12);
   EXPECT_EQ(continued.totals.substeps, 20 + 20);  // the checkpoint's 20 of 2 ms, then 20 of 1 ms
   const double moved = (continued.state.positions - whole.state.positions).cwiseAbs().maxCoeff();
-  std::printf("1 ms from the 2 ms run's checkpoint at 0.04 s: end state %.3g m from the 2 ms run's\n", moved);
+  std::printf(
+      "1 ms from the 2 ms run's checkpoint at 0.04 s: end state %.3g m from the 2 ms run's\n",
+      moved);
   EXPECT_GT(moved, 0.0);
   EXPECT_LT(moved, 1e-3);
   fs::remove_all(dir);

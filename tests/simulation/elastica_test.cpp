@@ -109,14 +109,18 @@ TEST_P(HeavyElastica, StripAlongTheGrid) {
   const remesh::SheetMesh mesh = remesh::make_rectangle(o);
   for (const Case& k : CASES) {
     const ElasticaResult r = run_elastica(mesh, L, c, k.G, GetParam());
-    std::printf("heavy elastica along the grid: G = %g tip drop / L = %.5f (expected %.5f, ratio %.4f)\n",
-                k.G, r.tip_drop, k.tip_drop, r.tip_drop / k.tip_drop);
+    std::printf(
+        "heavy elastica along the grid: G = %g tip drop / L = %.5f (expected %.5f, ratio %.4f)\n",
+        k.G, r.tip_drop, k.tip_drop, r.tip_drop / k.tip_drop);
     EXPECT_NEAR(r.tip_drop / k.tip_drop, 1.0, 0.02) << "G = " << k.G << " drop " << r.tip_drop;
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(Models, HeavyElastica, ::testing::Values(BendingModel::fit, BendingModel::morley),
-                         [](const auto& info) { return info.param == BendingModel::fit ? "fit" : "morley"; });
+INSTANTIATE_TEST_SUITE_P(Models, HeavyElastica,
+                         ::testing::Values(BendingModel::fit, BendingModel::morley),
+                         [](const auto& info) {
+                           return info.param == BendingModel::fit ? "fit" : "morley";
+                         });
 
 // The strip at 30 degrees to the mesh grain (remesh::make_rotated_lattice). The fit model
 // converges slowly there (papersim_known_answers --bending fit, sections 1 and 1b): for G = 1
@@ -127,8 +131,10 @@ TEST(HeavyElasticaMorley, StripAtThirtyDegreesToTheGrain) {
   const remesh::SheetMesh mesh = lattice_strip(L, 0.01, h, c, 30);
   for (const Case& k : CASES) {
     const ElasticaResult r = run_elastica(mesh, L, c, k.G, BendingModel::morley);
-    std::printf("heavy elastica at 30 degrees (Morley): G = %g tip drop / L = %.5f (expected %.5f, ratio %.4f)\n",
-                k.G, r.tip_drop, k.tip_drop, r.tip_drop / k.tip_drop);
+    std::printf(
+        "heavy elastica at 30 degrees (Morley): G = %g tip drop / L = %.5f (expected %.5f, ratio "
+        "%.4f)\n",
+        k.G, r.tip_drop, k.tip_drop, r.tip_drop / k.tip_drop);
     EXPECT_NEAR(r.tip_drop / k.tip_drop, 1.0, 0.02) << "G = " << k.G << " drop " << r.tip_drop;
   }
 }
@@ -144,11 +150,16 @@ TEST(HeavyElasticaArcMembrane, FiveMillimetreCellsAtFortyFiveDegreesDoNotLock) {
   const double L = 0.1, h = 5e-3, c = 2 * h;
   const remesh::SheetMesh mesh = lattice_strip(L, 0.05, h, c, 45);
   const Case k = CASES[1];  // G = 8
-  const ElasticaResult chord = run_elastica(mesh, L, c, k.G, BendingModel::morley, MembraneModel::chord);
-  const ElasticaResult arc = run_elastica(mesh, L, c, k.G, BendingModel::morley, MembraneModel::arc);
-  std::printf("heavy elastica, 5 mm cells at 45 degrees, G = 8: tip drop / L chord %.5f (ratio %.4f), arc %.5f "
-              "(ratio %.4f), expected %.5f\n",
-              chord.tip_drop, chord.tip_drop / k.tip_drop, arc.tip_drop, arc.tip_drop / k.tip_drop, k.tip_drop);
+  const ElasticaResult chord =
+      run_elastica(mesh, L, c, k.G, BendingModel::morley, MembraneModel::chord);
+  const ElasticaResult arc =
+      run_elastica(mesh, L, c, k.G, BendingModel::morley, MembraneModel::arc);
+  std::printf(
+      "heavy elastica, 5 mm cells at 45 degrees, G = 8: tip drop / L chord %.5f (ratio %.4f), arc "
+      "%.5f "
+      "(ratio %.4f), expected %.5f\n",
+      chord.tip_drop, chord.tip_drop / k.tip_drop, arc.tip_drop, arc.tip_drop / k.tip_drop,
+      k.tip_drop);
   EXPECT_NEAR(arc.tip_drop / k.tip_drop, 1.0, 0.01);
   EXPECT_LT(chord.tip_drop / k.tip_drop, 0.96);
 }

@@ -72,9 +72,8 @@ Eigen::MatrixXd dense(const BlockSymmetricMatrix& A) {
 /// the tolerances for positions of order 0.1 m. Terms with a log barrier near its singularity
 /// have large third derivatives and take a smaller step. The Hessian checked is the exact one
 /// (HessianProjection::none): a projected one matches only where projecting changes nothing.
-void check_derivatives(EnergyTerm& term, int nv, const Eigen::VectorXd& x,
-                       double tol_grad = 1e-6, double tol_hess = 1e-5, bool check_hessian = true,
-                       double step = 1e-7) {
+void check_derivatives(EnergyTerm& term, int nv, const Eigen::VectorXd& x, double tol_grad = 1e-6,
+                       double tol_hess = 1e-5, bool check_hessian = true, double step = 1e-7) {
   // Auxiliary unknowns (the bending energy's edge slopes) follow the vertex blocks; the
   // condensed Hessian is the Schur complement of their block.
   term.set_auxiliary_offset(nv);
@@ -165,7 +164,8 @@ RolledSheet rolled_sheet(double width, double height, double angle, double R) {
   s.rolled.resize(3 * X.rows());
   for (int v = 0; v < X.rows(); ++v) {
     s.flat.segment<3>(3 * v) << X(v, 0), X(v, 1), 0;
-    s.rolled.segment<3>(3 * v) << R * std::sin(X(v, 0) / R), X(v, 1), R * (1 - std::cos(X(v, 0) / R));
+    s.rolled.segment<3>(3 * v) << R * std::sin(X(v, 0) / R), X(v, 1),
+        R * (1 - std::cos(X(v, 0) / R));
   }
   return s;
 }
@@ -181,14 +181,17 @@ TEST(MembraneArc, MeasuresASheetRolledOnACylinderAsUnstretched) {
   const RolledSheet s = rolled_sheet(width, height, M_PI / 4, R);
   const Eigen::VectorXd &flat = s.flat, &rolled = s.rolled;
   Material chord_material, arc_material;
-  chord_material.strain_limit = arc_material.strain_limit = 0;  // the rolled chords are not stretched anyway
+  // the rolled chords are not stretched anyway
+  chord_material.strain_limit = arc_material.strain_limit = 0;
   arc_material.membrane_model = MembraneModel::arc;
   const MembraneEnergy chord(s.mesh, chord_material), arc(s.mesh, arc_material);
-  EXPECT_EQ(arc.value(flat), chord.value(flat)) << "flat: no curvature, no correction (both at round-off)";
+  EXPECT_EQ(arc.value(flat), chord.value(flat))
+      << "flat: no curvature, no correction (both at round-off)";
   const double e_chord = chord.value(rolled), e_arc = arc.value(rolled);
   // The chord model's energy is the locking strain's: about Eh/2 (k^2 l^2 / 24)^2 per area.
   const double strain = std::pow(5e-3 / R, 2) / 24;
-  EXPECT_GT(e_chord, 0.1 * 0.5 * chord_material.stretch_stiffness * strain * strain * width * height);
+  EXPECT_GT(e_chord,
+            0.1 * 0.5 * chord_material.stretch_stiffness * strain * strain * width * height);
   EXPECT_LT(e_arc, 1e-3 * e_chord) << "chord " << e_chord << " J, arc " << e_arc << " J";
 }
 
@@ -203,13 +206,15 @@ TEST(MembraneArc, GreenStrainsAreWhatEachModelMeasuresAndTheSizingSeesThem) {
   Material chord_material, arc_material;
   arc_material.membrane_model = MembraneModel::arc;
   const MembraneEnergy chord(s.mesh, chord_material), arc(s.mesh, arc_material);
-  const Eigen::MatrixX3d e_chord = chord.green_strains(s.rolled), e_arc = arc.green_strains(s.rolled);
+  const Eigen::MatrixX3d e_chord = chord.green_strains(s.rolled),
+                         e_arc = arc.green_strains(s.rolled);
   const Eigen::MatrixX2d stretch = chord.principal_stretches(s.rolled);
   ASSERT_EQ(e_chord.rows(), s.mesh.num_faces());
   double most_chord = 0, most_arc = 0;
   for (int f = 0; f < e_chord.rows(); ++f) {
     const auto eig = [](const Eigen::RowVector3d& e) {
-      return Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>((Eigen::Matrix2d() << e[0], e[2], e[2], e[1]).finished())
+      return Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(
+                 (Eigen::Matrix2d() << e[0], e[2], e[2], e[1]).finished())
           .eigenvalues();
     };
     const Eigen::Vector2d lc = eig(e_chord.row(f)), la = eig(e_arc.row(f));
@@ -228,13 +233,15 @@ TEST(MembraneArc, GreenStrainsAreWhatEachModelMeasuresAndTheSizingSeesThem) {
   p.refine_compression = 2e-5;
   p.refine_angle = 0.05;
   remesh::RemeshState rs;
-  rs.positions = Eigen::Map<const Eigen::MatrixXd>(s.rolled.data(), 3, s.mesh.num_vertices()).transpose();
+  rs.positions =
+      Eigen::Map<const Eigen::MatrixXd>(s.rolled.data(), 3, s.mesh.num_vertices()).transpose();
   rs.velocities = Eigen::MatrixX3d::Zero(s.mesh.num_vertices(), 3);
   // A face is refined when the criterion asks for edges shorter than the 5 mm cells.
   const auto refined = [&](const remesh::RemeshState& state) {
     int n = 0;
     for (const remesh::SizingTerms& t : remesh::sizing_terms(s.mesh, state, p))
-      n += Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(t.compression).eigenvalues()[1] > 1 / (5e-3 * 5e-3);
+      n += Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(t.compression).eigenvalues()[1] >
+           1 / (5e-3 * 5e-3);
     return n;
   };
   const int refined_by_chords = refined(rs);
@@ -245,7 +252,8 @@ TEST(MembraneArc, GreenStrainsAreWhatEachModelMeasuresAndTheSizingSeesThem) {
 }
 
 /// The Hessian term adds at x, dense.
-Eigen::MatrixXd dense_hessian(EnergyTerm& term, int nv, const Eigen::VectorXd& x, HessianProjection projection) {
+Eigen::MatrixXd dense_hessian(EnergyTerm& term, int nv, const Eigen::VectorXd& x,
+                              HessianProjection projection) {
   SparsityBuilder pattern(nv, nv);
   term.add_pattern(pattern);
   BlockSymmetricMatrix H(pattern.finish());
@@ -281,12 +289,14 @@ TEST(MembraneArc, ProjectedHessianIsExactWhereNothingIsProjectedAndPsdElsewhere)
     for (int v = 0; v < nv; ++v) strained[3 * v + 1] *= scale;
     const Eigen::MatrixXd H = dense_hessian(e, nv, strained, HessianProjection::psd);
     EXPECT_LT((H - H.transpose()).norm(), 1e-12 * H.norm()) << "scale " << scale;
-    const Eigen::VectorXd eigenvalues = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(H).eigenvalues();
+    const Eigen::VectorXd eigenvalues =
+        Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(H).eigenvalues();
     EXPECT_GT(eigenvalues.minCoeff(), -1e-10 * eigenvalues.maxCoeff()) << "scale " << scale;
     for (int axis = 0; axis < 3; ++axis) {
       Eigen::VectorXd t = Eigen::VectorXd::Zero(3 * nv);
       for (int v = 0; v < nv; ++v) t[3 * v + axis] = 1;
-      EXPECT_LT((H * t).norm(), 1e-9 * H.norm() * t.norm()) << "scale " << scale << ", axis " << axis;
+      EXPECT_LT((H * t).norm(), 1e-9 * H.norm() * t.norm())
+          << "scale " << scale << ", axis " << axis;
     }
   }
 }
@@ -323,7 +333,8 @@ TEST(EnergyDerivatives, MembraneRejectsStatesPastTheCompressionLimit) {
   m.compression_limit = 0.05;
   EXPECT_EQ(MembraneEnergy(f.mesh.material_coords(), f.mesh.faces(), m).value(f.x), INF);
   m.compression_limit = 0;  // off: a finite StVK energy
-  EXPECT_TRUE(std::isfinite(MembraneEnergy(f.mesh.material_coords(), f.mesh.faces(), m).value(f.x)));
+  EXPECT_TRUE(
+      std::isfinite(MembraneEnergy(f.mesh.material_coords(), f.mesh.faces(), m).value(f.x)));
 }
 
 class BendingDerivatives : public ::testing::TestWithParam<BendingModel> {};
@@ -368,7 +379,8 @@ TEST_P(BendingDerivatives, GaussNewtonIsTheExactHessianAtRest) {
   Fixture f = make_fixture(1.0, 1e-9);
   Material m;
   m.bending_model = GetParam();
-  const std::unique_ptr<BendingEnergy> e = make_bending_energy(f.mesh, m, BendingHessian::gauss_newton);
+  const std::unique_ptr<BendingEnergy> e =
+      make_bending_energy(f.mesh, m, BendingHessian::gauss_newton);
   check_derivatives(*e, f.mesh.num_vertices(), f.x0, 1.0, 1e-5);
 }
 
@@ -379,13 +391,16 @@ TEST(EnergyDerivatives, MorleyWithClampedFaces) {
   m.bending_model = BendingModel::morley;
   const std::vector<int> clamped = remesh::faces_inside(f.mesh, Eigen::Vector4d(0, 0, 0.03, 0.12));
   ASSERT_GT(clamped.size(), 2u);
-  const std::unique_ptr<BendingEnergy> e = make_bending_energy(f.mesh, m, BendingHessian::exact, clamped);
+  const std::unique_ptr<BendingEnergy> e =
+      make_bending_energy(f.mesh, m, BendingHessian::exact, clamped);
   check_derivatives(*e, f.mesh.num_vertices(), f.x);
 }
 
 INSTANTIATE_TEST_SUITE_P(Models, BendingDerivatives,
                          ::testing::Values(BendingModel::fit, BendingModel::morley),
-                         [](const auto& info) { return info.param == BendingModel::fit ? "fit" : "morley"; });
+                         [](const auto& info) {
+                           return info.param == BendingModel::fit ? "fit" : "morley";
+                         });
 
 TEST(EnergyDerivatives, VertexTerms) {
   Fixture f = make_fixture();
@@ -459,7 +474,8 @@ TEST(EnergyDerivatives, GroundContactAndFriction) {
   for (int k = 0; k < f.mesh.num_vertices(); ++k) dx[3 * k + 2] = -0.01;
   const double alpha = e.max_step(x, dx);
   EXPECT_GT(alpha, 0.0);
-  for (int k = 0; k < f.mesh.num_vertices(); ++k) EXPECT_GT(x[3 * k + 2] + alpha * dx[3 * k + 2], 0.0);
+  for (int k = 0; k < f.mesh.num_vertices(); ++k)
+    EXPECT_GT(x[3 * k + 2] + alpha * dx[3 * k + 2], 0.0);
 }
 
 // Vertices inside a spherical cavity of radius 2 cm that is shrinking, each within the barrier
@@ -496,7 +512,8 @@ TEST(EnergyDerivatives, ContactInsideAShrinkingCavity) {
     x0.segment<3>(3 * v) = centre + (radius - params.dhat * u(rng)) * dir;
     Eigen::Vector3d slide = Eigen::Vector3d(n(rng), n(rng), n(rng)) * 3e-4;
     slide -= slide.dot(dir) * dir;
-    x.segment<3>(3 * v) = centre + (radius - params.dhat * u(rng)) * (dir + slide / radius).normalized();
+    x.segment<3>(3 * v) =
+        centre + (radius - params.dhat * u(rng)) * (dir + slide / radius).normalized();
   }
   const Eigen::VectorXd vel = Eigen::VectorXd::Zero(3 * nv);
   ctx.x_t0 = &x0;
@@ -508,10 +525,13 @@ TEST(EnergyDerivatives, ContactInsideAShrinkingCavity) {
   check_derivatives(e, nv, x, 1e-6, 1e-5, true, 1e-9);
   // CCD: every vertex pushed outwards by 5 mm stops inside the cavity.
   Eigen::VectorXd dx(3 * nv);
-  for (int v = 0; v < nv; ++v) dx.segment<3>(3 * v) = 5e-3 * (x.segment<3>(3 * v) - centre).normalized();
+  for (int v = 0; v < nv; ++v)
+    dx.segment<3>(3 * v) = 5e-3 * (x.segment<3>(3 * v) - centre).normalized();
   const double alpha = e.max_step(x, dx);
   EXPECT_GT(alpha, 0.0);
-  for (int v = 0; v < nv; ++v) EXPECT_GT(cavity->distance(x.segment<3>(3 * v) + alpha * dx.segment<3>(3 * v), ctx.time_t1()), 0.0);
+  for (int v = 0; v < nv; ++v)
+    EXPECT_GT(cavity->distance(x.segment<3>(3 * v) + alpha * dx.segment<3>(3 * v), ctx.time_t1()),
+              0.0);
 }
 
 // Following moving obstacles: how the contact gradient changes when the obstacles move on by dt
@@ -537,9 +557,10 @@ TEST(EnergyDerivatives, ContactGradientFollowsAMovingSphere) {
   const double t = 0.405;
   const Eigen::Vector3d centre = sphere->motion.pose(t).translation();
   Eigen::VectorXd x(9);
-  x.segment<3>(0) = centre + (0.02 + 4e-4) * u;                                        // on the line
-  x.segment<3>(3) = centre + (0.02 + 6e-4) * Eigen::Vector3d(0, 1, 0);                 // off the line
-  x.segment<3>(6) = centre + (0.02 + 2e-4) * Eigen::Vector3d(1, -1, 0.5).normalized();  // off the line
+  x.segment<3>(0) = centre + (0.02 + 4e-4) * u;                         // on the line
+  x.segment<3>(3) = centre + (0.02 + 6e-4) * Eigen::Vector3d(0, 1, 0);  // off the line
+  x.segment<3>(6) =
+      centre + (0.02 + 2e-4) * Eigen::Vector3d(1, -1, 0.5).normalized();  // off the line
   const Eigen::VectorXd v = Eigen::VectorXd::Zero(9);
   ctx.x_t0 = &x;
   ctx.v_t0 = &v;
@@ -561,7 +582,8 @@ TEST(EnergyDerivatives, ContactGradientFollowsAMovingSphere) {
   EXPECT_LT((model.segment<3>(0) - fd.segment<3>(0)).norm(), 1e-6 * fd.segment<3>(0).norm());
   for (int i = 1; i < 3; ++i) {
     const Eigen::Vector3d n = (x.segment<3>(3 * i) - centre).normalized();
-    EXPECT_NEAR(n.dot(model.segment<3>(3 * i)), n.dot(fd.segment<3>(3 * i)), 1e-6 * fd.segment<3>(3 * i).norm());
+    EXPECT_NEAR(n.dot(model.segment<3>(3 * i)), n.dot(fd.segment<3>(3 * i)),
+                1e-6 * fd.segment<3>(3 * i).norm());
   }
 }
 
@@ -582,15 +604,18 @@ FaceContactCase face_contact_case(std::shared_ptr<collision::Collider> obstacle)
   std::uniform_real_distribution<double> u(-1, 1);
   for (int v = 0; v < c.f.mesh.num_vertices(); ++v) c.x_start[3 * v + 2] += 5e-5 * u(rng);
   c.x = c.x_start;
-  for (int v = 0; v < c.f.mesh.num_vertices(); ++v) c.x.segment<3>(3 * v) += 3e-4 * Eigen::Vector3d(u(rng), u(rng), 0.1 * u(rng));
+  for (int v = 0; v < c.f.mesh.num_vertices(); ++v)
+    c.x.segment<3>(3 * v) += 3e-4 * Eigen::Vector3d(u(rng), u(rng), 0.1 * u(rng));
   obstacle->friction = 0.5;
   ContactParams params;
   params.dhat = 1e-3;
   params.eps_velocity = 1.0;
   const Eigen::VectorXd areas = Eigen::VectorXd::Constant(c.f.mesh.num_vertices(), 4e-4);
-  c.faces = std::make_unique<ObstacleContactEnergy>(areas, std::vector<std::shared_ptr<const collision::Collider>>{obstacle}, params);
+  c.faces = std::make_unique<ObstacleContactEnergy>(
+      areas, std::vector<std::shared_ptr<const collision::Collider>>{obstacle}, params);
   c.faces->set_faces(c.f.mesh.faces(), c.f.mesh.material_coords());
-  c.vertices_only = std::make_unique<ObstacleContactEnergy>(areas, std::vector<std::shared_ptr<const collision::Collider>>{obstacle}, params);
+  c.vertices_only = std::make_unique<ObstacleContactEnergy>(
+      areas, std::vector<std::shared_ptr<const collision::Collider>>{obstacle}, params);
   StepContext ctx;
   ctx.h = 1e-3;
   ctx.x_t0 = &c.x_start;
@@ -709,11 +734,15 @@ TEST(EnergyDerivatives, SelfContactPointTriangleTypes) {
   const double dhat = self_params().dhat;
   // Vertex 0 of A above B's face, beside B's edge x = 0, and beyond B's corner.
   const std::array<std::array<Eigen::Vector3d, 3>, 3> configs = {{
-      {{Eigen::Vector3d(0.002, 0.002, 5e-4), Eigen::Vector3d(0.004, 0.003, 0.008), Eigen::Vector3d(0.001, 0.004, 0.009)}},
-      {{Eigen::Vector3d(-3e-4, 0.004, 4e-4), Eigen::Vector3d(-0.002, 0.005, 0.008), Eigen::Vector3d(-0.004, 0.003, 0.008)}},
-      {{Eigen::Vector3d(-3e-4, -3e-4, 3e-4), Eigen::Vector3d(-0.003, -0.002, 0.008), Eigen::Vector3d(-0.001, -0.004, 0.008)}},
+      {{Eigen::Vector3d(0.002, 0.002, 5e-4), Eigen::Vector3d(0.004, 0.003, 0.008),
+        Eigen::Vector3d(0.001, 0.004, 0.009)}},
+      {{Eigen::Vector3d(-3e-4, 0.004, 4e-4), Eigen::Vector3d(-0.002, 0.005, 0.008),
+        Eigen::Vector3d(-0.004, 0.003, 0.008)}},
+      {{Eigen::Vector3d(-3e-4, -3e-4, 3e-4), Eigen::Vector3d(-0.003, -0.002, 0.008),
+        Eigen::Vector3d(-0.001, -0.004, 0.008)}},
   }};
-  const DistanceType expected[3] = {DistanceType::point_triangle, DistanceType::point_edge, DistanceType::point_point};
+  const DistanceType expected[3] = {DistanceType::point_triangle, DistanceType::point_edge,
+                                    DistanceType::point_point};
   for (int c = 0; c < 3; ++c) {
     const TwoTriangles t = two_triangles(configs[c]);
     const collision::PairPoints p = pair_points(t.x, {{0, 3, 4, 5}});
@@ -728,15 +757,19 @@ TEST(EnergyDerivatives, SelfContactEdgeEdgeCrossingAndNearlyParallel) {
   // A's edge (0, 1) crosses above B's edge (3, 4) along x: at a right angle, then nearly
   // parallel (sin^2 of the angle 1e-4 of the rest-length product: the mollifier is at 0.1).
   const std::array<std::array<Eigen::Vector3d, 3>, 2> configs = {{
-      {{Eigen::Vector3d(0.005, -0.003, 5e-4), Eigen::Vector3d(0.005, 0.003, 6e-4), Eigen::Vector3d(0.005, 0, 0.008)}},
-      {{Eigen::Vector3d(0.002, -5e-5, 4e-4), Eigen::Vector3d(0.008, 5e-5, 4e-4), Eigen::Vector3d(0.005, -0.004, 0.006)}},
+      {{Eigen::Vector3d(0.005, -0.003, 5e-4), Eigen::Vector3d(0.005, 0.003, 6e-4),
+        Eigen::Vector3d(0.005, 0, 0.008)}},
+      {{Eigen::Vector3d(0.002, -5e-5, 4e-4), Eigen::Vector3d(0.008, 5e-5, 4e-4),
+        Eigen::Vector3d(0.005, -0.004, 0.006)}},
   }};
   for (int c = 0; c < 2; ++c) {
     const TwoTriangles t = two_triangles(configs[c]);
     const collision::PairPoints p = pair_points(t.x, {{0, 1, 3, 4}});
-    EXPECT_EQ(collision::edge_edge_stencil(p).type, collision::DistanceType::edge_edge) << "config " << c;
+    EXPECT_EQ(collision::edge_edge_stencil(p).type, collision::DistanceType::edge_edge)
+        << "config " << c;
     EXPECT_LT(collision::edge_edge_distance_squared(p), dhat * dhat);
-    const double m = collision::edge_edge_mollifier(p, collision::edge_edge_mollifier_threshold(0.01, 0.01), nullptr, nullptr);
+    const double m = collision::edge_edge_mollifier(
+        p, collision::edge_edge_mollifier_threshold(0.01, 0.01), nullptr, nullptr);
     if (c == 0) {
       EXPECT_EQ(m, 1.0);
     } else {
@@ -748,8 +781,9 @@ TEST(EnergyDerivatives, SelfContactEdgeEdgeCrossingAndNearlyParallel) {
 }
 
 TEST(EnergyDerivatives, SelfContactFrictionAndCcd) {
-  const TwoTriangles t = two_triangles({{Eigen::Vector3d(0.002, 0.002, 5e-4), Eigen::Vector3d(0.004, 0.003, 0.008),
-                                         Eigen::Vector3d(0.001, 0.004, 0.009)}});
+  const TwoTriangles t =
+      two_triangles({{Eigen::Vector3d(0.002, 0.002, 5e-4), Eigen::Vector3d(0.004, 0.003, 0.008),
+                      Eigen::Vector3d(0.001, 0.004, 0.009)}});
   SelfContactEnergy e(t.X, t.F, self_params());
   const Eigen::VectorXd v = Eigen::VectorXd::Zero(18);
   StepContext ctx;
@@ -790,8 +824,9 @@ TEST(EnergyDerivatives, FrictionKeepsTheWholeStepsStaticZoneInASplitStep) {
   ctx.h = 1e-3 / 8;
   ctx.h_whole = 1e-3;
   ctx.v_t0 = &v0;
-  const TwoTriangles t = two_triangles({{Eigen::Vector3d(0.002, 0.002, 5e-4), Eigen::Vector3d(0.004, 0.003, 0.008),
-                                         Eigen::Vector3d(0.001, 0.004, 0.009)}});
+  const TwoTriangles t =
+      two_triangles({{Eigen::Vector3d(0.002, 0.002, 5e-4), Eigen::Vector3d(0.004, 0.003, 0.008),
+                      Eigen::Vector3d(0.001, 0.004, 0.009)}});
   Eigen::VectorXd x = t.x;
   x[0] += 5e-4;
   ctx.x_t0 = &t.x;
@@ -850,17 +885,20 @@ TEST(SelfContactStiffness, DoublesOnlyWhileAPairBelowTheFloorKeepsClosing) {
   // the bounding-box diagonal at the step start.
   auto at_gap = [](double g) {
     return two_triangles({{Eigen::Vector3d(0.002, 0.002, g), Eigen::Vector3d(0.004, 0.003, 0.008),
-                           Eigen::Vector3d(0.001, 0.004, 0.009)}}).x;
+                           Eigen::Vector3d(0.001, 0.004, 0.009)}})
+        .x;
   };
-  const TwoTriangles t = two_triangles({{Eigen::Vector3d(0.002, 0.002, 0), Eigen::Vector3d(0.004, 0.003, 0.008),
-                                         Eigen::Vector3d(0.001, 0.004, 0.009)}});
+  const TwoTriangles t =
+      two_triangles({{Eigen::Vector3d(0.002, 0.002, 0), Eigen::Vector3d(0.004, 0.003, 0.008),
+                      Eigen::Vector3d(0.001, 0.004, 0.009)}});
   SelfContactParams params = self_params();
   params.friction = 0;
   SelfContactEnergy e(t.X, t.F, params);
   const Eigen::VectorXd x0 = at_gap(1e-12), v = Eigen::VectorXd::Zero(18);
   Eigen::MatrixX3d p(6, 3);
   for (int k = 0; k < 6; ++k) p.row(k) = x0.segment<3>(3 * k).transpose();
-  const double floor = SelfContactEnergy::floor_fraction * (p.colwise().maxCoeff() - p.colwise().minCoeff()).norm();
+  const double floor =
+      SelfContactEnergy::floor_fraction * (p.colwise().maxCoeff() - p.colwise().minCoeff()).norm();
   ASSERT_GT(floor, 1e-11);  // about 1.6e-11 m: the gaps below are 1e-12 m and more apart
   StepContext ctx;
   ctx.x_t0 = &x0;
@@ -894,7 +932,8 @@ TEST(SelfContactStiffness, DoublesOnlyWhileAPairBelowTheFloorKeepsClosing) {
   double g = 1e-12;
   for (int k = 0; k < 20; ++k) next.adapt(at_gap(g *= 0.7));
   EXPECT_EQ(next.stiffness(), SelfContactEnergy::max_stiffness_factor * params.stiffness);
-  EXPECT_EQ(next.statistics().max_stiffness, SelfContactEnergy::max_stiffness_factor * params.stiffness);
+  EXPECT_EQ(next.statistics().max_stiffness,
+            SelfContactEnergy::max_stiffness_factor * params.stiffness);
 }
 
 /// Two layers of an n x n grid of 2 mm cells, 0.7 mm apart (dhat 1 mm): every vertex is near
@@ -997,7 +1036,8 @@ TEST(EnergyDerivatives, SelfContactResultsAtXDoNotDependOnWhatWasEvaluatedBefore
   };
   const Eigen::VectorXd x = jitter(2e-5);
   Eigen::VectorXd dx = Eigen::VectorXd::Zero(x.size());
-  for (int v = TwoLayers::per_layer; v < 2 * TwoLayers::per_layer; ++v) dx[3 * v + 2] = -6e-4;  // closing
+  // The upper layer closes on the lower one.
+  for (int v = TwoLayers::per_layer; v < 2 * TwoLayers::per_layer; ++v) dx[3 * v + 2] = -6e-4;
   struct Results {
     double value, step;
     Eigen::VectorXd gradient;
@@ -1023,7 +1063,8 @@ TEST(EnergyDerivatives, SelfContactResultsAtXDoNotDependOnWhatWasEvaluatedBefore
   };
   SelfContactEnergy fresh(t.X, t.F, params);
   const Results want = evaluate(fresh);
-  ASSERT_GT(want.active, 2 * (TwoLayers::n - 1) * (TwoLayers::n - 1)) << "pairs across the layers are active";
+  ASSERT_GT(want.active, 2 * (TwoLayers::n - 1) * (TwoLayers::n - 1))
+      << "pairs across the layers are active";
   ASSERT_GT(want.step, 0.0);
   ASSERT_LT(want.step, 1.0) << "the step closing the layers is cut";
   ASSERT_FALSE(want.exact == want.projected) << "projecting changes some pair's Hessian";

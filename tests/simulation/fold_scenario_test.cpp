@@ -92,7 +92,8 @@ TEST(FoldScenario, RollerRollsAcrossPerpendicularToTheFoldDirection) {
     // Rolling without slipping: the lowest point of the roller is at rest mid-travel, and the
     // centre moves at 0.7 m / 3 s along -d.
     const double t = 4.55;
-    const Eigen::Vector3d bottom = roller->motion.pose(t).translation() - Eigen::Vector3d(0, 0, 0.05);
+    const Eigen::Vector3d bottom =
+        roller->motion.pose(t).translation() - Eigen::Vector3d(0, 0, 0.05);
     EXPECT_NEAR(roller->velocity(bottom, t).norm(), 0.0, 1e-9);
     const Eigen::Vector3d v = roller->motion.linear_velocity(t);
     EXPECT_NEAR((v + (0.7 / 3.0) * d).norm(), 0.0, 1e-9);
@@ -152,14 +153,17 @@ Scene crossing(double grip, double pressure) {
   roller.length = 0.5;
   roller.friction = 2.0;
   const double speed = 0.7 / 3.0, t0 = 0.3, t1 = t0 + 0.16 / speed;
-  const Eigen::Quaterniond along_y = Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitY());
+  const Eigen::Quaterniond along_y =
+      Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitY());
   // Rolling without slipping towards -x on a surface below: omega = (v / r) z x (-x) = -(v / r) y.
   for (int i = 0; i <= 20; ++i) {
     const double travelled = 0.16 * i / 20;
     collision::Keyframe k;
     k.time = i == 0 ? 0.0 : t0 + (t1 - t0) * i / 20;
     k.translation = Eigen::Vector3d(0.08 - travelled, 0, 0.057);
-    k.rotation = Eigen::Quaterniond(Eigen::AngleAxisd(-travelled / roller.radius, Eigen::Vector3d::UnitY())) * along_y;
+    k.rotation = Eigen::Quaterniond(
+                     Eigen::AngleAxisd(-travelled / roller.radius, Eigen::Vector3d::UnitY())) *
+                 along_y;
     roller.keyframes.push_back(k);
     if (i == 0) {
       k.time = t0;
@@ -193,9 +197,11 @@ TEST(FoldRun, GripGivesWayToTheRollerOverTheHeldPoint) {
   };
   const RunResult r = run_scene(s, o);
   const double end_z = r.state.positions(3 * held + 2);
-  std::printf("held point: lowest z %.4f m under the roller, %.4f m at the end; roller gap %.3g m; %d Newton "
-              "iterations, %d split steps\n",
-              lowest, end_z, min_roller, r.totals.newton_iterations, r.totals.failed_solves);
+  std::printf(
+      "held point: lowest z %.4f m under the roller, %.4f m at the end; roller gap %.3g m; %d "
+      "Newton "
+      "iterations, %d split steps\n",
+      lowest, end_z, min_roller, r.totals.newton_iterations, r.totals.failed_solves);
   // Pressed below the roller's lowest line plus the contact layer (7 mm + 0.3 mm).
   EXPECT_LT(lowest, 0.0073);
   // Back at its grip after the roller has gone (the weight of the tent sags it by < 1 mm).
@@ -241,7 +247,7 @@ void expect_resumes_to_the_bit(const Scene& s, const RunResult& r, const char* f
 TEST(FoldRun, RollerThatYieldsToALoadRisesOverARigidlyHeldPoint) {
   const Scene fold = make_scenario("fold", 0);
   Scene s = crossing(1e6, fold.contact.stiffness);
-  s.obstacles.at(0).lift.load = 1.0;  // [N]
+  s.obstacles.at(0).lift.load = 1.0;   // [N]
   s.obstacles.at(0).lift.speed = 0.2;  // [m/s]
   simulation::Run run(s);
   double rise_at_middle = 0.0;
@@ -258,10 +264,14 @@ TEST(FoldRun, RollerThatYieldsToALoadRisesOverARigidlyHeldPoint) {
   ASSERT_EQ(r.quality.lifts.size(), 1u);
   const auto& lift = r.quality.lifts[0];
   const collision::RigidMotion m(run.scene().obstacles[0].keyframes);
-  const double end_rise = m.pose(s.duration).translation().z() - keyed.pose(s.duration).translation().z();
-  std::printf("lifted roller: rise %.4f m over the point (%.4f m at most), %.3g m at the end; largest load %.2f N; "
-              "%zu keyframes\n",
-              rise_at_middle, lift.max_rise, end_rise, lift.max_load, run.scene().obstacles[0].keyframes.size());
+  const double end_rise =
+      m.pose(s.duration).translation().z() - keyed.pose(s.duration).translation().z();
+  std::printf(
+      "lifted roller: rise %.4f m over the point (%.4f m at most), %.3g m at the end; largest load "
+      "%.2f N; "
+      "%zu keyframes\n",
+      rise_at_middle, lift.max_rise, end_rise, lift.max_load,
+      run.scene().obstacles[0].keyframes.size());
   // The point stands 20 mm up under a layer of paper and the contact thickness (0.3 mm); the
   // roller's lowest line is at 7 mm: it rises by at least 12.5 mm there, and not far more.
   EXPECT_GT(rise_at_middle, 0.0125);
@@ -305,11 +315,15 @@ TEST(FoldRun, CoupledRollerRidesOverARigidlyHeldPointUnderItsWeight) {
   ASSERT_EQ(r.quality.lifts.size(), 1u);
   const auto& lift = r.quality.lifts[0];
   const collision::RigidMotion m(run.scene().obstacles[0].keyframes);
-  const double end_rise = m.pose(s.duration).translation().z() - keyed.pose(s.duration).translation().z();
-  std::printf("coupled roller (%.1f N): rise %.4f m over the point (%.4f m at most), load there %.3f N (%.3f N at "
-              "most), %.3g m at the end; %d Newton iterations, %d split steps, %zu keyframes\n",
-              weight, rise_at_middle, lift.max_rise, load_at_middle, lift.max_load, end_rise,
-              r.totals.newton_iterations, r.totals.failed_solves, run.scene().obstacles[0].keyframes.size());
+  const double end_rise =
+      m.pose(s.duration).translation().z() - keyed.pose(s.duration).translation().z();
+  std::printf(
+      "coupled roller (%.1f N): rise %.4f m over the point (%.4f m at most), load there %.3f N "
+      "(%.3f N at "
+      "most), %.3g m at the end; %d Newton iterations, %d split steps, %zu keyframes\n",
+      weight, rise_at_middle, lift.max_rise, load_at_middle, lift.max_load, end_rise,
+      r.totals.newton_iterations, r.totals.failed_solves,
+      run.scene().obstacles[0].keyframes.size());
   EXPECT_GT(rise_at_middle, 0.0125);
   EXPECT_LT(lift.max_rise, 0.02);
   EXPECT_NEAR(load_at_middle, weight, 0.2 * weight);

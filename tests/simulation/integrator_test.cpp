@@ -32,10 +32,11 @@ Outcome squeeze_sheet(double strain, bool exact_first, bool backoff = false,
   const int nv = mesh.num_vertices();
   Eigen::VectorXd x0(3 * nv);
   for (int v = 0; v < nv; ++v)
-    x0.segment<3>(3 * v) << (1 - strain) * X(v, 0), X(v, 1), 1e-4 * std::sin(M_PI * X(v, 0) / o.width);
+    x0.segment<3>(3 * v) << (1 - strain) * X(v, 0), X(v, 1),
+        1e-4 * std::sin(M_PI * X(v, 0) / o.width);
   std::vector<HandleSpec> handles;
   for (int v = 0; v < nv; ++v) {
-    const bool left = X(v, 0) < 1e-9, right = X(v, 0) > o.width - 1e-9;
+    const bool left = X(v, 0)<1e-9, right = X(v, 0)> o.width - 1e-9;
     if (!left && !right) continue;
     HandleSpec h;
     h.material_point = X.row(v).transpose();
@@ -65,7 +66,8 @@ Outcome squeeze_sheet(double strain, bool exact_first, bool backoff = false,
 TEST(Integrator, CompressedSheetFallsBackToTheProjectedHessianAndConverges) {
   const Outcome exact = squeeze_sheet(0.02, true);
   EXPECT_EQ(exact.stats.failed_solves, 0);
-  EXPECT_GT(exact.stats.projected_hessians, 0) << "a flat sheet squeezed by 2% has negative curvature (buckling)";
+  EXPECT_GT(exact.stats.projected_hessians, 0)
+      << "a flat sheet squeezed by 2% has negative curvature (buckling)";
   EXPECT_TRUE(exact.x.allFinite());
   // The sheet buckled upwards rather than compressing: its middle rose by millimetres.
   double top = 0;
@@ -94,9 +96,11 @@ TEST(Integrator, BackoffSkipsExactHessiansThatStayIndefiniteAndFindsTheSameBuckl
   EXPECT_GT(backoff.stats.projected_hessians, 0);
   EXPECT_LT(backoff.stats.projected_hessians, every.stats.projected_hessians);
   EXPECT_LT((backoff.x - every.x).cwiseAbs().maxCoeff(), 5e-5);
-  std::printf("exact attempts that failed: %d every iteration, %d with the backoff; Newton iterations %d / %d\n",
-              every.stats.projected_hessians, backoff.stats.projected_hessians, every.stats.newton_iterations,
-              backoff.stats.newton_iterations);
+  std::printf(
+      "exact attempts that failed: %d every iteration, %d with the backoff; Newton iterations %d / "
+      "%d\n",
+      every.stats.projected_hessians, backoff.stats.projected_hessians,
+      every.stats.newton_iterations, backoff.stats.newton_iterations);
 }
 
 TEST(Integrator, TrustRegionStepsOnTheExactHessianFindTheSameBuckle) {

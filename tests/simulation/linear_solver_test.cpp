@@ -317,14 +317,16 @@ TEST(LinearSolver, BlasRunsKernelsForTheCpusInstructions) {
   const Eigen::VectorXd b = Eigen::VectorXd::LinSpaced(A.size(), -1, 1);
   const Eigen::VectorXd x = solver.solve(b);
   EXPECT_LT((A.multiply(x) - b).norm(), 1e-10 * b.norm());
-  if (kernels.empty() || std::getenv("OPENBLAS_CORETYPE")) GTEST_SKIP() << "not OpenBLAS, or kernels chosen by the user";
+  if (kernels.empty() || std::getenv("OPENBLAS_CORETYPE"))
+    GTEST_SKIP() << "not OpenBLAS, or kernels chosen by the user";
 #if defined(__x86_64__) && defined(__GNUC__)
   __builtin_cpu_init();
   const bool avx512 = __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512cd") &&
                       __builtin_cpu_supports("avx512bw") && __builtin_cpu_supports("avx512dq") &&
                       __builtin_cpu_supports("avx512vl");
   if (avx512 || (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma"))) {
-    for (const char* old : {"Prescott", "Core2", "Penryn", "Dunnington", "Nehalem", "Atom", "Sandybridge"})
+    for (const char* old :
+         {"Prescott", "Core2", "Penryn", "Dunnington", "Nehalem", "Atom", "Sandybridge"})
       EXPECT_NE(kernels, old);
   }
 #endif

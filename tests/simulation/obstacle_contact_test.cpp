@@ -74,8 +74,8 @@ TEST(ObstacleContact, MovingSphereSqueezesAndDragsTheSheet) {
     for (const RunResult* r : {&dragged, &held}) {
       const std::vector<double>& d = r->quality.min_obstacle_distance;
       ASSERT_EQ(d.size(), 2u);
-      EXPECT_GT(d[0], 0.0);  // ground
-      EXPECT_GT(d[1], 0.0);  // sphere
+      EXPECT_GT(d[0], 0.0);   // ground
+      EXPECT_GT(d[1], 0.0);   // sphere
       EXPECT_LT(d[1], 3e-4);  // it did press the sheet (within the contact thickness)
       EXPECT_EQ(r->quality.self_intersections, 0);
     }
@@ -141,7 +141,8 @@ TEST(ObstacleContact, SheetIsCarriedByAGrowingOrShrinkingSphere) {
   };
   for (const Case& c : {Case{ColliderKind::sphere, 1.4}, Case{ColliderKind::sphere, 0.6},
                         Case{ColliderKind::inverted_sphere, 0.5}}) {
-    SCOPED_TRACE(std::string(papersim::collision::to_string(c.kind)) + " to scale " + std::to_string(c.end_scale));
+    SCOPED_TRACE(std::string(papersim::collision::to_string(c.kind)) + " to scale " +
+                 std::to_string(c.end_scale));
     const Scene scene = resting_on_scaled(c.kind, c.end_scale);
     const RunResult r = run_scene(scene, {});
     ASSERT_EQ(r.quality.min_obstacle_distance.size(), 1u);
@@ -156,7 +157,9 @@ TEST(ObstacleContact, SheetIsCarriedByAGrowingOrShrinkingSphere) {
     EXPECT_LT(gap, scene.contact.dhat);
     int centre = 0;
     for (int v = 0; v < r.state.num_vertices(); ++v)
-      if (r.state.positions.segment<2>(3 * v).norm() < r.state.positions.segment<2>(3 * centre).norm()) centre = v;
+      if (r.state.positions.segment<2>(3 * v).norm() <
+          r.state.positions.segment<2>(3 * centre).norm())
+        centre = v;
     const double z = r.state.positions[3 * centre + 2];
     // It did move with the surface: the surface moved by at least 2 cm.
     EXPECT_GT(std::abs(z - scene.sheet.position.z()), 0.019);
@@ -176,7 +179,8 @@ TEST(ObstacleContact, ShrinkingCavityIsFollowedWithinTheStep) {
   scene.contact.stiffness = 0.0;  // automatic: rho_A g
   const RunResult r = run_scene(scene, {});
   std::printf("followed: %d Newton iterations (%d following), %d split solves, %d substeps\n",
-              r.totals.newton_iterations, r.totals.following_iterations, r.totals.failed_solves, r.totals.substeps);
+              r.totals.newton_iterations, r.totals.following_iterations, r.totals.failed_solves,
+              r.totals.substeps);
   ASSERT_EQ(r.quality.min_obstacle_distance.size(), 1u);
   EXPECT_GT(r.quality.min_obstacle_distance[0], 0.0);
   EXPECT_EQ(r.quality.self_intersections, 0);
@@ -281,7 +285,8 @@ TEST(ObstacleContact, CarriedStiffnessMovesToHoldTheLoadAtAHundredthOfTheThickne
   spec.kind = collision::ColliderKind::box;
   spec.half_extents = Eigen::Vector3d::Constant(0.05);  // top face at z = 0.05
   spec.friction = 0.0;
-  const std::vector<std::shared_ptr<const collision::Collider>> obstacles{collision::make_collider(spec)};
+  const std::vector<std::shared_ptr<const collision::Collider>> obstacles{
+      collision::make_collider(spec)};
   ContactParams params;  // dhat 0.3 mm, stiffness 1 Pa
   const double dhat = params.dhat, carried = 1000.0, area = 1e-4;
   const auto stiffness_at = [&](double gap, bool hold_load, Eigen::VectorXd* force = nullptr,
@@ -302,7 +307,8 @@ TEST(ObstacleContact, CarriedStiffnessMovesToHoldTheLoadAtAHundredthOfTheThickne
     e.begin_step(ctx, x);
     SheetState end;
     e.end_step(end);
-    EXPECT_EQ(end.contact_stiffness, e.step_stiffness()) << "end_step carries the step's stiffness on";
+    EXPECT_EQ(end.contact_stiffness, e.step_stiffness())
+        << "end_step carries the step's stiffness on";
     if (force) {  // the barrier's force on the vertex at dhat / 100 with this step's stiffness
       Eigen::VectorXd y = x;
       y[2] = 0.05 + dhat / 100;
@@ -321,7 +327,8 @@ TEST(ObstacleContact, CarriedStiffnessMovesToHoldTheLoadAtAHundredthOfTheThickne
   const double k = stiffness_at(dhat / 2, true, &held);
   EXPECT_LT(k, carried);
   EXPECT_GT(k, params.stiffness);
-  EXPECT_NEAR(-held[2], force_now(dhat / 2), 1e-9 * force_now(dhat / 2));  // the gaps are z - 0.05, rounded
+  EXPECT_NEAR(-held[2], force_now(dhat / 2),
+              1e-9 * force_now(dhat / 2));  // the gaps are z - 0.05, rounded
   // At dhat / 200 the load needs 1.93 times the carried stiffness to be held at dhat / 100: it
   // rises that far, within the bound of 2.
   const double k200 = stiffness_at(dhat / 200, true, &held);

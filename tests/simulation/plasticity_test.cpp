@@ -1,20 +1,19 @@
 // The plastic return mapping (simulation/plasticity.hpp) and the bending energies' plastic state.
+#include "simulation/plasticity.hpp"
+
 #include <gtest/gtest.h>
-
-#include <cmath>
-#include <memory>
-#include <random>
-
 #include <unistd.h>
 
+#include <cmath>
 #include <filesystem>
+#include <memory>
+#include <random>
 
 #include "remesh/sheet_generator.hpp"
 #include "simulation/energies/bending_energy.hpp"
 #include "simulation/energies/morley_bending_energy.hpp"
 #include "simulation/errors.hpp"
 #include "simulation/output_files.hpp"
-#include "simulation/plasticity.hpp"
 #include "simulation/run.hpp"
 
 using namespace papersim;
@@ -52,7 +51,8 @@ BentSheet bent_sheet(double bend) {
   const Eigen::MatrixX2d X = s.mesh.material_coords();
   s.x.resize(3 * X.rows());
   for (int v = 0; v < X.rows(); ++v)
-    s.x.segment<3>(3 * v) << std::sin(bend * X(v, 0)) / bend, X(v, 1), (1 - std::cos(bend * X(v, 0))) / bend;
+    s.x.segment<3>(3 * v) << std::sin(bend * X(v, 0)) / bend, X(v, 1),
+        (1 - std::cos(bend * X(v, 0))) / bend;
   return s;
 }
 
@@ -85,7 +85,8 @@ Scene bent_strip_scene(double k, double yield, BendingModel model, double durati
       const double kj = k * j / 5;
       HandleKeyframe f;
       f.time = 0.01 * j;
-      if (j > 0) f.displacement = Eigen::Vector3d(std::sin(kj * s) / kj - s, 0, (1 - std::cos(kj * s)) / kj);
+      if (j > 0)
+        f.displacement = Eigen::Vector3d(std::sin(kj * s) / kj - s, 0, (1 - std::cos(kj * s)) / kj);
       h.keyframes.push_back(f);
     }
     scene.handles.push_back(h);
@@ -221,8 +222,11 @@ TEST_P(PlasticBending, SetPlasticStateMatchesAFreshEnergy) {
   EXPECT_LT((g1 - g2).norm(), 1e-10 * g2.norm());
 }
 
-INSTANTIATE_TEST_SUITE_P(Models, PlasticBending, ::testing::Values(BendingModel::fit, BendingModel::morley),
-                         [](const auto& info) { return info.param == BendingModel::fit ? "fit" : "morley"; });
+INSTANTIATE_TEST_SUITE_P(Models, PlasticBending,
+                         ::testing::Values(BendingModel::fit, BendingModel::morley),
+                         [](const auto& info) {
+                           return info.param == BendingModel::fit ? "fit" : "morley";
+                         });
 
 TEST(MorleyPlasticity, PlasticCurvatureAloneDoesNotRefactor) {
   const BentSheet s = bent_sheet(40);
@@ -234,9 +238,12 @@ TEST(MorleyPlasticity, PlasticCurvatureAloneDoesNotRefactor) {
   const Eigen::VectorXd damage = s.mesh.damage();
   for (unsigned i = 0; i < 3; ++i)
     e.set_plastic_state(random_curvatures(s.mesh.num_faces(), 0, 80, 10 + i), damage);
-  EXPECT_EQ(e.factorizations(), after_construction) << "plastic curvature changes only the right-hand side";
-  e.set_plastic_state(s.mesh.plastic_curvature(), Eigen::VectorXd::Constant(s.mesh.num_faces(), 0.5));
-  EXPECT_EQ(e.factorizations(), after_construction + 1) << "damage changes the stiffness: one numeric factorisation";
+  EXPECT_EQ(e.factorizations(), after_construction)
+      << "plastic curvature changes only the right-hand side";
+  e.set_plastic_state(s.mesh.plastic_curvature(),
+                      Eigen::VectorXd::Constant(s.mesh.num_faces(), 0.5));
+  EXPECT_EQ(e.factorizations(), after_construction + 1)
+      << "damage changes the stiffness: one numeric factorisation";
 }
 
 TEST(MorleyPlasticity, AnUpdateLandsOnTheYieldSurfaceAndASecondChangesNothing) {
@@ -252,9 +259,11 @@ TEST(MorleyPlasticity, AnUpdateLandsOnTheYieldSurfaceAndASecondChangesNothing) {
   const Eigen::MatrixX3d measured = e.yield_curvatures(s.x);
   const PlasticUpdate first = apply_plasticity(e, s.x, m.yield_curvature, mesh);
   EXPECT_EQ(first.yielded_faces, mesh.num_faces());
-  EXPECT_EQ(e.yield_curvatures(s.x), measured) << "the measure does not depend on the plastic state";
+  EXPECT_EQ(e.yield_curvatures(s.x), measured)
+      << "the measure does not depend on the plastic state";
   const Eigen::MatrixX3d K = measured - mesh.plastic_curvature();
-  for (int f = 0; f < K.rows(); ++f) EXPECT_NEAR(curvature_norm(K.row(f).transpose()), m.yield_curvature, 1e-9);
+  for (int f = 0; f < K.rows(); ++f)
+    EXPECT_NEAR(curvature_norm(K.row(f).transpose()), m.yield_curvature, 1e-9);
   const PlasticUpdate second = apply_plasticity(e, s.x, m.yield_curvature, mesh);
   EXPECT_EQ(second.yielded_faces, 0);
   // The measure is exact for constant curvature up to the small-slope approximation of the hinge
@@ -271,7 +280,8 @@ TEST(RunPlasticity, AStepUpdatesThePlasticStateUnderMorleyOnly) {
   EXPECT_GT(morley.mesh().damage().minCoeff(), 0.5) << "every face held at 3 k_y yields";
   EXPECT_NEAR(morley.mesh().plastic_curvature().col(0).mean(), 100, 10);
   const double e = morley.terms().bending->value(morley.state().positions);
-  const double fresh = make_bending_energy(morley.mesh(), morley.scene().sheet.material)->value(morley.state().positions);
+  const double fresh = make_bending_energy(morley.mesh(), morley.scene().sheet.material)
+                           ->value(morley.state().positions);
   EXPECT_NEAR(e, fresh, 1e-9 * fresh) << "the term holds the mesh's plastic state";
   simulation::Run fit(bent_strip_scene(150, 50, BendingModel::fit, 0.08));
   while (!fit.finished()) fit.step();

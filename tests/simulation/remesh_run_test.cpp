@@ -74,7 +74,8 @@ TEST(BuildTerms, ClampsAndHandlesFollowMaterialPointsOntoAnyMesh) {
   EXPECT_EQ(on_fine.handles->size(), 1 + 3 * 11);
   const Eigen::VectorXd x_fine = placed(fine, dx, z0);
   for (int i = 0; i < on_fine.handles->size(); ++i)
-    EXPECT_LT(on_fine.handles->error(i, x_fine, 0.0), 1e-12) << "handle " << i << " is held where it started";
+    EXPECT_LT(on_fine.handles->error(i, x_fine, 0.0), 1e-12)
+        << "handle " << i << " is held where it started";
   // The lift's target at t = 1 is its anchor plus the keyframe displacement on both meshes.
   const Eigen::Vector3d expected(0.07 + dx, 0.03, z0 + 0.05);
   EXPECT_LT((on_coarse.handles->target(0, 1.0) - expected).norm(), 1e-12);
@@ -270,7 +271,8 @@ TEST(RemeshVeto, UnderTheArcMembraneHoldsFlipsToTheStrainOfTheArcs) {
   arc.membrane_model = MembraneModel::arc;
   const MembraneEnergy membrane(mesh, arc);
   const auto flat = [](const Eigen::MatrixX3d& x) {
-    return Eigen::VectorXd(Eigen::Map<const Eigen::VectorXd>(Eigen::MatrixXd(x.transpose()).data(), x.size()));
+    return Eigen::VectorXd(
+        Eigen::Map<const Eigen::VectorXd>(Eigen::MatrixXd(x.transpose()).data(), x.size()));
   };
   RemeshVetoParams p;
   p.self_gap = 0;
@@ -282,7 +284,8 @@ TEST(RemeshVeto, UnderTheArcMembraneHoldsFlipsToTheStrainOfTheArcs) {
   for (auto e : editor.mesh().edges()) {
     if (editor.mesh().is_boundary(e)) continue;
     const auto h = editor.mesh().halfedge_handle(e, 0);
-    const int a = editor.mesh().from_vertex_handle(h).idx(), b = editor.mesh().to_vertex_handle(h).idx();
+    const int a = editor.mesh().from_vertex_handle(h).idx(),
+              b = editor.mesh().to_vertex_handle(h).idx();
     const Eigen::RowVector2d d = X.row(b) - X.row(a), m = 0.5 * (X.row(a) + X.row(b));
     if (std::abs(d.x()) < 1e-9 || std::abs(d.y()) < 1e-9) continue;  // a side, not a diagonal
     const double to_middle = (m - Eigen::RowVector2d(0.015, 0.01)).norm();
@@ -352,10 +355,12 @@ TEST(RemeshVeto, RefusesAFaceThatAPolytopesEdgeOrASpherePiercesBetweenTheSampled
   state.positions.resize(4, 3);
   const Eigen::Vector3d foot(L / 2, L / 2, 0), out = Eigen::Vector3d(-1, -1, 0).normalized();
   const double r = L / std::sqrt(2.0);
-  state.positions.row(0) = foot + r * (std::cos(phi) * out - std::sin(phi) * Eigen::Vector3d::UnitZ());
+  state.positions.row(0) =
+      foot + r * (std::cos(phi) * out - std::sin(phi) * Eigen::Vector3d::UnitZ());
   state.positions.row(1) << L, 0, 0;
   state.positions.row(2) << 0, L, 0;
-  state.positions.row(3) = foot + r * (-std::cos(phi) * out - std::sin(phi) * Eigen::Vector3d::UnitZ());
+  state.positions.row(3) =
+      foot + r * (-std::cos(phi) * out - std::sin(phi) * Eigen::Vector3d::UnitZ());
   state.velocities = Eigen::MatrixX3d::Zero(4, 3);
   rm::MeshEditor editor(mesh, state);
   OpenMesh::EdgeHandle diagonal;
@@ -381,8 +386,10 @@ TEST(RemeshVeto, RefusesAFaceThatAPolytopesEdgeOrASpherePiercesBetweenTheSampled
     auto collider = std::make_shared<papersim::collision::AnalyticCollider>(shape);
     papersim::collision::Keyframe k;
     k.rotation = Eigen::Quaterniond(R);
-    const double top = shape.kind == papersim::collision::ShapeKind::gable ? shape.height : shape.radius;
-    k.translation = Eigen::Vector3d(L, 0, 0) + 2.25e-3 * along - (depth + top) * Eigen::Vector3d::UnitZ();
+    const double top =
+        shape.kind == papersim::collision::ShapeKind::gable ? shape.height : shape.radius;
+    k.translation =
+        Eigen::Vector3d(L, 0, 0) + 2.25e-3 * along - (depth + top) * Eigen::Vector3d::UnitZ();
     collider->motion = papersim::collision::RigidMotion({k});
     RemeshVetoParams p;
     p.self_gap = 0;
@@ -440,7 +447,9 @@ TEST(RemeshRun, LiftedSheetRemeshesAndKeepsEveryInvariant) {
   o.on_step = [&](const StepReport& r) {
     jumps.push_back(r.remesh_energy_change - energy_change);
     energy_change = r.remesh_energy_change;
-    EXPECT_EQ(papersim::collision::count_self_intersections(r.state->positions_matrix(), r.mesh->faces()), 0)
+    EXPECT_EQ(
+        papersim::collision::count_self_intersections(r.state->positions_matrix(), r.mesh->faces()),
+        0)
         << "step " << r.step;
     EXPECT_LT(r.max_stretch, 1.005) << "step " << r.step;
     EXPECT_GT(r.obstacle_distance.at(0), 0.0) << "step " << r.step;
@@ -464,20 +473,26 @@ TEST(RemeshRun, LiftedSheetRemeshesAndKeepsEveryInvariant) {
   ASSERT_EQ(jumps.size(), 20u);
   double largest = 0.0;
   for (size_t k = 0; k < jumps.size(); ++k) {
-    const int step = static_cast<int>(k) + 1, passes = step == 1 ? 2 : step % 2 == 0 && step < 20 ? 1 : 0;
-    EXPECT_LE(std::abs(jumps[k]), passes * r.remesh->max_energy_jump * (1 + 1e-12)) << "step " << step;
+    const int step = static_cast<int>(k) + 1, passes = step == 1                    ? 2
+                                                       : step % 2 == 0 && step < 20 ? 1
+                                                                                    : 0;
+    EXPECT_LE(std::abs(jumps[k]), passes * r.remesh->max_energy_jump * (1 + 1e-12))
+        << "step " << step;
     largest = std::max(largest, std::abs(jumps[k]));
   }
   EXPECT_GT(largest, 0.0);
   const nlohmann::json meta = meta_json(s, r);
   EXPECT_EQ(meta["run"]["remesh"]["passes"].get<int>(), r.remesh->passes);
   EXPECT_EQ(meta["sheet"]["vertices"].get<int>(), r.mesh.num_vertices());
-  std::printf("remeshed lift: %d passes (%d rolled back), %d splits, %d flips, %d collapses, vertices %d -> "
-              "%d (min %d, max %d), largest energy jump %.3g J (%.3g of the range), remeshing %.2f s of %.2f s\n",
-              r.remesh->passes, r.remesh->rollbacks, r.remesh->splits, r.remesh->flips, r.remesh->collapses,
-              r.sheet.vertices_start, r.sheet.vertices, min_vertices, r.sheet.vertices_max,
-              r.remesh->max_energy_jump, r.remesh->max_energy_jump_relative,
-              r.remesh->seconds_remesh + r.remesh->seconds_rebuild, r.wall_seconds);
+  std::printf(
+      "remeshed lift: %d passes (%d rolled back), %d splits, %d flips, %d collapses, vertices %d "
+      "-> "
+      "%d (min %d, max %d), largest energy jump %.3g J (%.3g of the range), remeshing %.2f s of "
+      "%.2f s\n",
+      r.remesh->passes, r.remesh->rollbacks, r.remesh->splits, r.remesh->flips, r.remesh->collapses,
+      r.sheet.vertices_start, r.sheet.vertices, min_vertices, r.sheet.vertices_max,
+      r.remesh->max_energy_jump, r.remesh->max_energy_jump_relative,
+      r.remesh->seconds_remesh + r.remesh->seconds_rebuild, r.wall_seconds);
 }
 
 // Trace topics by name: a comma list or "all"; an unknown or empty name is refused naming it
@@ -498,7 +513,8 @@ TEST(Trace, TopicsByNameAndLinesOnlyForThem) {
       ADD_FAILURE() << "accepted '" << list << "'";
     } catch (const std::invalid_argument& e) {
       const std::string what = e.what();
-      EXPECT_NE(what.find("unknown trace topic '" + std::string(unknown) + "'"), std::string::npos) << what;
+      EXPECT_NE(what.find("unknown trace topic '" + std::string(unknown) + "'"), std::string::npos)
+          << what;
       EXPECT_NE(what.find("line-search"), std::string::npos) << what;
     }
   }
@@ -539,7 +555,8 @@ TEST(RemeshRun, TracingTellsEachIterationAndPassAndChangesNothing) {
       return l.rfind(head, 0) == 0 && l.find(part) != std::string::npos;
     });
   };
-  EXPECT_EQ(count("t ", " E "), traced.totals.newton_iterations - traced.totals.following_iterations);
+  EXPECT_EQ(count("t ", " E "),
+            traced.totals.newton_iterations - traced.totals.following_iterations);
   EXPECT_GE(count("step t ", "follow obstacles"), traced.steps);
   EXPECT_EQ(count("remesh t ", " energy "), traced.remesh->passes);
   EXPECT_EQ(count("remesh t ", " vertices"), traced.remesh->passes + traced.remesh->rollbacks);
@@ -549,8 +566,10 @@ TEST(RemeshRun, TracingTellsEachIterationAndPassAndChangesNothing) {
   std::vector<std::string> contact_lines;
   o.trace = Trace(Trace::contact, [&](const std::string& line) { contact_lines.push_back(line); });
   run_scene(s, o);
-  EXPECT_GE(contact_lines.size(), static_cast<std::size_t>(traced.steps)) << "a line per step start, when asked";
-  for (const auto& l : lines) EXPECT_EQ(l.find('\n'), std::string::npos) << "a line holds its own newline";
+  EXPECT_GE(contact_lines.size(), static_cast<std::size_t>(traced.steps))
+      << "a line per step start, when asked";
+  for (const auto& l : lines)
+    EXPECT_EQ(l.find('\n'), std::string::npos) << "a line holds its own newline";
 }
 
 // Regression: a 1,000-vertex sheet (21 mm edges) draped over three spheres, remeshed with the
@@ -558,11 +577,13 @@ TEST(RemeshRun, TracingTellsEachIterationAndPassAndChangesNothing) {
 // toward one vertex went on while the flips that would repair the fan were vetoed for stretch,
 // and the Morley plate refused the mesh. Every face must now keep aspect >= EDIT_ASPECT_MIN.
 TEST(RemeshRun, DrapedSheetRemeshesWithoutDegenerateFaces) {
-  rm::SheetData d = rm::read_sheet(std::string(PAPERSIM_TEST_DATA_DIR) + "/remesh/drape_spheres.ply");
+  rm::SheetData d =
+      rm::read_sheet(std::string(PAPERSIM_TEST_DATA_DIR) + "/remesh/drape_spheres.ply");
   // The obstacles of the scene the sheet was dumped from: ground z = 0 and three spheres.
   std::vector<std::shared_ptr<const papersim::collision::Collider>> obstacles;
   obstacles.push_back(std::make_shared<papersim::collision::PlaneCollider>());
-  const double spheres[3][4] = {  // centre [m], radius [m]
+  const double spheres[3][4] = {
+      // centre [m], radius [m]
       {-0.023425407531210907, -0.1324292685975573, 0.001841372534163395, 0.037591435630829506},
       {-0.022029561573189006, 0.059936937022903064, -0.008778207936277541, 0.024468225210931623},
       {0.04477783972070336, 0.03297520066067544, 0.022839026654256793, 0.024330462687645528}};
@@ -570,7 +591,8 @@ TEST(RemeshRun, DrapedSheetRemeshesWithoutDegenerateFaces) {
     papersim::collision::ColliderSpec spec;
     spec.kind = papersim::collision::ColliderKind::sphere;
     spec.radius = s[3];
-    spec.keyframes.push_back({0.0, Eigen::Vector3d(s[0], s[1], s[2]), Eigen::Quaterniond::Identity()});
+    spec.keyframes.push_back(
+        {0.0, Eigen::Vector3d(s[0], s[1], s[2]), Eigen::Quaterniond::Identity()});
     obstacles.push_back(papersim::collision::make_collider(spec));
   }
   const double t = 0.034;  // [s] scene time of the pass (the spheres are static)
@@ -610,14 +632,16 @@ TEST(RemeshRun, DrapedSheetRemeshesWithoutDegenerateFaces) {
 }
 
 // remesh.refuse_thin_splits: a 10 cm sheet (the stress suite's knife edge, `papersim_stress_suite
-// --remesh --only gable`) dropped at 4.5 m/s onto a gable whose ridge is 30 degrees, on the 111-vertex
-// mesh its first pass coarsened it to, just before the pass after its fifth step (dumped from the
-// run). Bent over the ridge and stretched by the impact, the sheet lets the run's veto refuse the
-// flips and collapses that would repair the children of midpoint splits, and the pass leaves
-// slivers along the ridge (as in the run: 69 splits, 36 flips, 5 collapses, aspect 0.012); with
-// the option no split makes a face thinner than half of aspect_min, and the pass still refines.
+// --remesh --only gable`) dropped at 4.5 m/s onto a gable whose ridge is 30 degrees, on the
+// 111-vertex mesh its first pass coarsened it to, just before the pass after its fifth step (dumped
+// from the run). Bent over the ridge and stretched by the impact, the sheet lets the run's veto
+// refuse the flips and collapses that would repair the children of midpoint splits, and the pass
+// leaves slivers along the ridge (as in the run: 69 splits, 36 flips, 5 collapses, aspect 0.012);
+// with the option no split makes a face thinner than half of aspect_min, and the pass still
+// refines.
 TEST(RemeshVeto, ThinSplitsAreRefusedOnASheetBentOverAKnifeEdge) {
-  rm::SheetData d = rm::read_sheet(std::string(PAPERSIM_TEST_DATA_DIR) + "/remesh/gable_impact.ply");
+  rm::SheetData d =
+      rm::read_sheet(std::string(PAPERSIM_TEST_DATA_DIR) + "/remesh/gable_impact.ply");
   std::vector<std::shared_ptr<const papersim::collision::Collider>> obstacles;
   obstacles.push_back(std::make_shared<papersim::collision::PlaneCollider>());
   papersim::collision::ColliderSpec gable;
@@ -657,11 +681,14 @@ TEST(RemeshVeto, ThinSplitsAreRefusedOnASheetBentOverAKnifeEdge) {
     const Eigen::MatrixX2d X = mesh.material_coords();
     const Eigen::MatrixX3i F = mesh.faces();
     for (int f = 0; f < F.rows(); ++f)
-      lo[on] = std::min(lo[on], rm::aspect_ratio(X.row(F(f, 0)).transpose(), X.row(F(f, 1)).transpose(),
-                                                 X.row(F(f, 2)).transpose()));
+      lo[on] =
+          std::min(lo[on], rm::aspect_ratio(X.row(F(f, 0)).transpose(), X.row(F(f, 1)).transpose(),
+                                            X.row(F(f, 2)).transpose()));
   }
-  std::printf("knife-edge pass: thinnest face %.4f without refuse_thin_splits (%d splits), %.4f with (%d splits)\n",
-              lo[0], splits[0], lo[1], splits[1]);
+  std::printf(
+      "knife-edge pass: thinnest face %.4f without refuse_thin_splits (%d splits), %.4f with (%d "
+      "splits)\n",
+      lo[0], splits[0], lo[1], splits[1]);
   EXPECT_LT(lo[0], 0.05) << "the default pass leaves slivers";
   EXPECT_GE(lo[1], 0.5 * p.aspect_min);
   EXPECT_GT(splits[1], splits[0] / 2) << "the pass still refines along the ridge";
@@ -682,7 +709,9 @@ Scene remeshed_fall_sphere_25() {
 
 /// After every step: no self-intersection, within the strain limit, outside every obstacle.
 void check_step(const StepReport& r) {
-  EXPECT_EQ(papersim::collision::count_self_intersections(r.state->positions_matrix(), r.mesh->faces()), 0)
+  EXPECT_EQ(
+      papersim::collision::count_self_intersections(r.state->positions_matrix(), r.mesh->faces()),
+      0)
       << "step " << r.step;
   EXPECT_LT(r.max_stretch, 1.005) << "step " << r.step;
   for (double d : r.obstacle_distance) EXPECT_GT(d, 0.0) << "step " << r.step;
@@ -707,7 +736,7 @@ TEST(RemeshRun, AStepThatFailsOnACoarseMeshIsTakenAgainRefinedNearTheObstacles) 
   s.contact.hold_load = false;
   ASSERT_EQ(s.remesh.params.obstacle_distance, 0.0);
   ASSERT_GT(s.remesh.rescue_distance, 0.0);
-  s.duration = 0.146;  // to the end of the failing step
+  s.duration = 0.146;       // to the end of the failing step
   int vertices_before = 0;  // at the start of the failing step
   RunOptions o;
   o.on_step = [&](const StepReport& r) {
@@ -717,14 +746,17 @@ TEST(RemeshRun, AStepThatFailsOnACoarseMeshIsTakenAgainRefinedNearTheObstacles) 
   const RunResult r = run_scene(s, o);
   ASSERT_TRUE(r.remesh.has_value());
   EXPECT_EQ(r.remesh->rescues, 1);
-  EXPECT_EQ(vertices_before, 105) << "the draw or the remesher changed: the failing step is elsewhere";
+  EXPECT_EQ(vertices_before, 105)
+      << "the draw or the remesher changed: the failing step is elsewhere";
   EXPECT_GT(r.sheet.vertices_max, 4 * vertices_before) << "the rescue refines at the sphere";
   EXPECT_EQ(r.quality.self_intersections, 0);
   EXPECT_EQ(meta_json(s, r)["run"]["remesh"]["rescues"].get<int>(), 1);
-  std::printf("rescued fall-sphere seed 25: %d -> %d vertices at t = 0.145 s, %d Newton iterations, %d failed "
-              "solves, %.1f s\n",
-              vertices_before, r.sheet.vertices_max, r.totals.newton_iterations, r.totals.failed_solves,
-              r.wall_seconds);
+  std::printf(
+      "rescued fall-sphere seed 25: %d -> %d vertices at t = 0.145 s, %d Newton iterations, %d "
+      "failed "
+      "solves, %.1f s\n",
+      vertices_before, r.sheet.vertices_max, r.totals.newton_iterations, r.totals.failed_solves,
+      r.wall_seconds);
 }
 
 // The same draw with the load rule (ObstacleContactEnergy, "Load rule") and no rescue: after the
@@ -740,7 +772,8 @@ TEST(RemeshRun, AfterTheImpactTheBarrierHoldsTheLoadSoACoarseMeshFinishesTheFall
   ASSERT_TRUE(s.contact.hold_load);
   double held = 0;  // the largest carried stiffness over the steps after the impact [Pa]
   RunOptions o;
-  o.checkpoint_dir = (std::filesystem::temp_directory_path() / "papersim_remesh_run_test_load_rule").string();
+  o.checkpoint_dir =
+      (std::filesystem::temp_directory_path() / "papersim_remesh_run_test_load_rule").string();
   std::filesystem::remove_all(o.checkpoint_dir);
   o.checkpoint_every = 146;
   o.on_step = [&](const StepReport& r) {
@@ -758,9 +791,12 @@ TEST(RemeshRun, AfterTheImpactTheBarrierHoldsTheLoadSoACoarseMeshFinishesTheFall
   // times that (measured: 162 Pa).
   EXPECT_GT(held, 10 * s.sheet.material.density * s.gravity.norm());
   EXPECT_EQ(r.quality.self_intersections, 0);
-  std::printf("fall-sphere seed 25 remeshed with the load rule: %d vertices at most, %d Newton iterations, %d failed "
-              "solves, largest stiffness after the impact %.0f Pa, %.1f s\n",
-              r.sheet.vertices_max, r.totals.newton_iterations, r.totals.failed_solves, held, r.wall_seconds);
+  std::printf(
+      "fall-sphere seed 25 remeshed with the load rule: %d vertices at most, %d Newton iterations, "
+      "%d failed "
+      "solves, largest stiffness after the impact %.0f Pa, %.1f s\n",
+      r.sheet.vertices_max, r.totals.newton_iterations, r.totals.failed_solves, held,
+      r.wall_seconds);
 
   const Checkpoint c = load_checkpoint(o.checkpoint_dir);
   ASSERT_EQ(c.step, 146);

@@ -1,5 +1,7 @@
 // Scene files: errors name the key, the JSON round trip is exact, and runs leave no partial
 // output.
+#include "simulation/scene.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -8,13 +10,12 @@
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
-#include <sstream>
 #include <nlohmann/json.hpp>
+#include <sstream>
 
 #include "collision/collider_factory.hpp"
 #include "simulation/errors.hpp"
 #include "simulation/scenario.hpp"
-#include "simulation/scene.hpp"
 #include "simulation/simulate.hpp"
 
 using namespace papersim::simulation;
@@ -52,21 +53,27 @@ Scene small_scene() {
 }  // namespace
 
 TEST(Scene, ErrorsNameTheFileAndTheKey) {
-  EXPECT_EQ(error_of({{"sheet", {{"materal", json::object()}}}}), "s.json: key 'sheet.materal': unknown key");
-  EXPECT_NE(error_of({{"sheet", {{"material", {{"poisson", 0.7}}}}}}).find("'sheet.material.poisson'"),
-            std::string::npos);
+  EXPECT_EQ(error_of({{"sheet", {{"materal", json::object()}}}}),
+            "s.json: key 'sheet.materal': unknown key");
+  EXPECT_NE(
+      error_of({{"sheet", {{"material", {{"poisson", 0.7}}}}}}).find("'sheet.material.poisson'"),
+      std::string::npos);
   EXPECT_EQ(error_of({{"sheet", {{"material", {{"compression_limit", 0.6}}}}}}),
             "s.json: key 'sheet.material.compression_limit': value 0.6 out of range [0, 0.5]");
-  EXPECT_NE(error_of({{"duration", "long"}}).find("'duration': expected a number"), std::string::npos);
+  EXPECT_NE(error_of({{"duration", "long"}}).find("'duration': expected a number"),
+            std::string::npos);
   EXPECT_NE(error_of({{"handles", {{{"point", {0.5, 0.1}}}}}}).find("'handles[0].point'"),
             std::string::npos);
   EXPECT_NE(error_of({{"obstacles", {{{"kind", "cone"}}}}}).find("'obstacles[0].kind'"),
             std::string::npos);
   EXPECT_NE(error_of({{"time_step", 2.0}}).find("'time_step'"), std::string::npos);
   EXPECT_THROW(load_scene("/nonexistent/scene.json"), SceneError);
-  EXPECT_NE(error_of({{"self_contact", {{"friction", -0.1}}}}).find("'self_contact.friction'"), std::string::npos);
-  EXPECT_EQ(error_of({{"self_contact", {{"thicknes", 1e-3}}}}), "s.json: key 'self_contact.thicknes': unknown key");
-  EXPECT_NE(error_of({{"self_contact", {{"enabled", 1}}}}).find("'self_contact.enabled': expected true or false"),
+  EXPECT_NE(error_of({{"self_contact", {{"friction", -0.1}}}}).find("'self_contact.friction'"),
+            std::string::npos);
+  EXPECT_EQ(error_of({{"self_contact", {{"thicknes", 1e-3}}}}),
+            "s.json: key 'self_contact.thicknes': unknown key");
+  EXPECT_NE(error_of({{"self_contact", {{"enabled", 1}}}})
+                .find("'self_contact.enabled': expected true or false"),
             std::string::npos);
 }
 
@@ -75,7 +82,8 @@ TEST(Scene, SelfContactDefaultsAndKeys) {
   EXPECT_TRUE(d.self_contact.enabled);
   EXPECT_EQ(d.self_contact.friction, 0.6);
   EXPECT_EQ(d.self_contact.dhat, 0.0) << "0 = the obstacle contact thickness";
-  const Scene s = scene_from_json({{"self_contact", {{"enabled", false}, {"thickness", 2e-4}, {"friction", 0.4}}}}, "s.json");
+  const Scene s = scene_from_json(
+      {{"self_contact", {{"enabled", false}, {"thickness", 2e-4}, {"friction", 0.4}}}}, "s.json");
   EXPECT_FALSE(s.self_contact.enabled);
   EXPECT_EQ(s.self_contact.dhat, 2e-4);
   EXPECT_EQ(s.self_contact.friction, 0.4);
@@ -116,7 +124,8 @@ TEST(Scene, ScenarioScenesRoundTripToTheBitThroughTheirText) {
         for (std::size_t k = 0; k < s.obstacles[o].keyframes.size(); ++k) {
           const auto& a = s.obstacles[o].keyframes[k];
           const auto& b = back.obstacles[o].keyframes[k];
-          EXPECT_EQ(a.rotation.coeffs(), b.rotation.coeffs()) << "obstacle " << o << " keyframe " << k;
+          EXPECT_EQ(a.rotation.coeffs(), b.rotation.coeffs())
+              << "obstacle " << o << " keyframe " << k;
           EXPECT_EQ(a.translation, b.translation);
           EXPECT_EQ(a.scale, b.scale);
           EXPECT_EQ(a.time, b.time);
@@ -125,8 +134,10 @@ TEST(Scene, ScenarioScenesRoundTripToTheBitThroughTheirText) {
         }
       }
     }
-  EXPECT_GT(exact_keys, 0) << "no scenario needed the exact rotation: the check above proves nothing new";
-  EXPECT_LT(exact_keys, keys) << "identity rotations give their degrees back exactly and need no quaternion";
+  EXPECT_GT(exact_keys, 0)
+      << "no scenario needed the exact rotation: the check above proves nothing new";
+  EXPECT_LT(exact_keys, keys)
+      << "identity rotations give their degrees back exactly and need no quaternion";
 }
 
 // `rotation_quaternion` is read as [w, x, y, z], must be a unit quaternion and, with
@@ -136,17 +147,23 @@ TEST(Scene, RotationQuaternionIsCheckedAgainstItsDegrees) {
     return json{{"obstacles", {{{"kind", "cylinder"}, {"keyframes", {key}}}}}};
   };
   const double c = std::cos(M_PI / 8), sn = std::sin(M_PI / 8);  // 45 degrees about z
-  const Scene s = scene_from_json(with({{"rotation_deg", {0, 0, 45}}, {"rotation_quaternion", {c, 0, 0, sn}}}), "s.json");
-  EXPECT_EQ(s.obstacles[0].keyframes[0].rotation.coeffs(), Eigen::Quaterniond(c, 0, 0, sn).coeffs());
+  const Scene s = scene_from_json(
+      with({{"rotation_deg", {0, 0, 45}}, {"rotation_quaternion", {c, 0, 0, sn}}}), "s.json");
+  EXPECT_EQ(s.obstacles[0].keyframes[0].rotation.coeffs(),
+            Eigen::Quaterniond(c, 0, 0, sn).coeffs());
   const Scene alone = scene_from_json(with({{"rotation_quaternion", {c, 0, 0, sn}}}), "s.json");
-  EXPECT_EQ(alone.obstacles[0].keyframes[0].rotation.coeffs(), Eigen::Quaterniond(c, 0, 0, sn).coeffs());
+  EXPECT_EQ(alone.obstacles[0].keyframes[0].rotation.coeffs(),
+            Eigen::Quaterniond(c, 0, 0, sn).coeffs());
   EXPECT_NE(error_of(with({{"rotation_deg", {0, 0, 50}}, {"rotation_quaternion", {c, 0, 0, sn}}}))
-                .find("key 'obstacles[0].keyframes[0].rotation_quaternion': is 5 degrees from rotation_deg"),
+                .find("key 'obstacles[0].keyframes[0].rotation_quaternion': is 5 degrees from "
+                      "rotation_deg"),
             std::string::npos)
       << error_of(with({{"rotation_deg", {0, 0, 50}}, {"rotation_quaternion", {c, 0, 0, sn}}}));
-  EXPECT_NE(error_of(with({{"rotation_quaternion", {1, 0, 0, 0.1}}})).find("expected a unit quaternion"),
-            std::string::npos);
-  EXPECT_NE(error_of(with({{"rotation_quaternion", {1, 0, 0}}})).find("'obstacles[0].keyframes[0].rotation_quaternion'"),
+  EXPECT_NE(
+      error_of(with({{"rotation_quaternion", {1, 0, 0, 0.1}}})).find("expected a unit quaternion"),
+      std::string::npos);
+  EXPECT_NE(error_of(with({{"rotation_quaternion", {1, 0, 0}}}))
+                .find("'obstacles[0].keyframes[0].rotation_quaternion'"),
             std::string::npos);
 }
 
@@ -169,7 +186,8 @@ TEST(Scene, MembraneModelIsReadCheckedAndRoundTrips) {
 TEST(Scene, ObstacleScaleIsReadCheckedAndRoundTrips) {
   const json keys = {{{"time", 0.0}}, {{"time", 1.0}, {"scale", 0.25}}};
   const Scene s = scene_from_json(
-      {{"obstacles", {{{"kind", "inverted_sphere"}, {"radius", 0.2}, {"scale", 2.0}, {"keyframes", keys}}}}},
+      {{"obstacles",
+        {{{"kind", "inverted_sphere"}, {"radius", 0.2}, {"scale", 2.0}, {"keyframes", keys}}}}},
       "s.json");
   ASSERT_EQ(s.obstacles.size(), 1u);
   EXPECT_EQ(s.obstacles[0].kind, papersim::collision::ColliderKind::inverted_sphere);
@@ -179,10 +197,12 @@ TEST(Scene, ObstacleScaleIsReadCheckedAndRoundTrips) {
   EXPECT_EQ(scene_to_json(scene_from_json(scene_to_json(s), "again")), scene_to_json(s));
   for (const json& bad : {json(0.0), json(-1.0), json("big")}) {
     const json k = {{{"time", 0.0}}, {{"time", 1.0}, {"scale", bad}}};
-    EXPECT_NE(error_of({{"obstacles", {{{"kind", "sphere"}, {"keyframes", k}}}}}).find("'obstacles[0].keyframes[1].scale'"),
+    EXPECT_NE(error_of({{"obstacles", {{{"kind", "sphere"}, {"keyframes", k}}}}})
+                  .find("'obstacles[0].keyframes[1].scale'"),
               std::string::npos)
         << bad;
-    EXPECT_NE(error_of({{"obstacles", {{{"kind", "sphere"}, {"scale", bad}}}}}).find("'obstacles[0].scale'"),
+    EXPECT_NE(error_of({{"obstacles", {{{"kind", "sphere"}, {"scale", bad}}}}})
+                  .find("'obstacles[0].scale'"),
               std::string::npos)
         << bad;
   }
@@ -190,7 +210,8 @@ TEST(Scene, ObstacleScaleIsReadCheckedAndRoundTrips) {
 
 TEST(Scene, ObstacleLiftIsReadCheckedAndRoundTrips) {
   const Scene s = scene_from_json(
-      {{"obstacles", {{{"kind", "cylinder"}, {"lift", {{"load", 5.0}, {"speed", 0.2}}}}, {{"kind", "sphere"}}}}},
+      {{"obstacles",
+        {{{"kind", "cylinder"}, {"lift", {{"load", 5.0}, {"speed", 0.2}}}}, {{"kind", "sphere"}}}}},
       "s.json");
   ASSERT_EQ(s.obstacles.size(), 2u);
   EXPECT_EQ(s.obstacles[0].lift.load, 5.0);
@@ -200,17 +221,20 @@ TEST(Scene, ObstacleLiftIsReadCheckedAndRoundTrips) {
   EXPECT_EQ(scene_to_json(scene_from_json(scene_to_json(s), "again")), scene_to_json(s));
   EXPECT_FALSE(scene_to_json(s)["obstacles"][1].contains("lift"));
   for (const json& bad : {json(0.0), json(-1.0), json("big")}) {
-    EXPECT_NE(error_of({{"obstacles", {{{"kind", "sphere"}, {"lift", {{"load", bad}}}}}}}).find("'obstacles[0].lift.load'"),
+    EXPECT_NE(error_of({{"obstacles", {{{"kind", "sphere"}, {"lift", {{"load", bad}}}}}}})
+                  .find("'obstacles[0].lift.load'"),
               std::string::npos)
         << bad;
-    EXPECT_NE(error_of({{"obstacles", {{{"kind", "sphere"}, {"lift", {{"load", 1.0}, {"speed", bad}}}}}}})
-                  .find("'obstacles[0].lift.speed'"),
-              std::string::npos)
+    EXPECT_NE(
+        error_of({{"obstacles", {{{"kind", "sphere"}, {"lift", {{"load", 1.0}, {"speed", bad}}}}}}})
+            .find("'obstacles[0].lift.speed'"),
+        std::string::npos)
         << bad;
   }
-  EXPECT_NE(error_of({{"obstacles", {{{"kind", "sphere"}, {"lift", {{"load", 1.0}, {"sped", 1.0}}}}}}})
-                .find("'obstacles[0].lift.sped'"),
-            std::string::npos);
+  EXPECT_NE(
+      error_of({{"obstacles", {{{"kind", "sphere"}, {"lift", {{"load", 1.0}, {"sped", 1.0}}}}}}})
+          .find("'obstacles[0].lift.sped'"),
+      std::string::npos);
 }
 
 // crumple: the same seed draws the same scene, the cavity holds at 0.2 m until 1 s and shrinks
@@ -229,7 +253,7 @@ TEST(Scenario, CrumpleDrawsTheSheetInsideTheShrinkingCavity) {
     EXPECT_DOUBLE_EQ(s.sheet.material.yield_curvature, 200.0);
     EXPECT_DOUBLE_EQ(s.sheet.material.weakening, 2.0);
     EXPECT_DOUBLE_EQ(s.sheet.material.damping, 1e-3);
-    EXPECT_EQ(s.newton.max_iterations, 200);  // 60 does not finish the 5 s (docs/crumple.md)
+    EXPECT_EQ(s.newton.max_iterations, 200);   // 60 does not finish the 5 s (docs/crumple.md)
     EXPECT_TRUE(s.contact.static_whole_step);  // seed 3 fails without it (docs/crumple.md)
     ASSERT_EQ(s.obstacles.size(), 1u);
     ASSERT_EQ(s.obstacles[0].kind, ColliderKind::inverted_sphere);
@@ -242,10 +266,12 @@ TEST(Scenario, CrumpleDrawsTheSheetInsideTheShrinkingCavity) {
     const Eigen::Vector3d a = s.sheet.rotation_deg * M_PI / 180;
     const Eigen::Matrix3d R = (Eigen::AngleAxisd(a.z(), Eigen::Vector3d::UnitZ()) *
                                Eigen::AngleAxisd(a.y(), Eigen::Vector3d::UnitY()) *
-                               Eigen::AngleAxisd(a.x(), Eigen::Vector3d::UnitX())).toRotationMatrix();
+                               Eigen::AngleAxisd(a.x(), Eigen::Vector3d::UnitX()))
+                                  .toRotationMatrix();
     EXPECT_GT(std::abs(a.x()) * 180 / M_PI, 81.9);  // nearly upright, as the reference starts it
     for (int c = 0; c < 4; ++c) {
-      const Eigen::Vector3d corner((c & 1 ? 0.5 : -0.5) * s.sheet.width, (c & 2 ? 0.5 : -0.5) * s.sheet.height, 0);
+      const Eigen::Vector3d corner((c & 1 ? 0.5 : -0.5) * s.sheet.width,
+                                   (c & 2 ? 0.5 : -0.5) * s.sheet.height, 0);
       EXPECT_GT(cavity->distance(s.sheet.position + R * corner, 0.0), 5e-3);
     }
   }
@@ -279,7 +305,8 @@ TEST(Run, WritesOutputsAndLeavesNothingOnFailure) {
   const fs::path dir = fs::temp_directory_path() / ("papersim_run_" + std::to_string(::getpid()));
   fs::remove_all(dir);
   const RunResult r = run_scene(small_scene(), options_for(dir.string()));
-  EXPECT_TRUE(fs::exists(dir / "sheet.obj") && fs::exists(dir / "sheet.ply") && fs::exists(dir / "meta.json"));
+  EXPECT_TRUE(fs::exists(dir / "sheet.obj") && fs::exists(dir / "sheet.ply") &&
+              fs::exists(dir / "meta.json"));
   EXPECT_FALSE(fs::exists(dir / ".papersim-partial"));
   EXPECT_LE(r.quality.max_principal_stretch, 1.005);
   EXPECT_GT(r.quality.min_obstacle_distance.at(0), 0.0);
@@ -302,7 +329,8 @@ namespace {
 /// Highest point of a scene's obstacles [m].
 double highest_obstacle(const Scene& s) {
   double top = 0;
-  for (const auto& o : s.obstacles) top = std::max(top, papersim::collision::make_collider(o)->bounds(0).hi.z());
+  for (const auto& o : s.obstacles)
+    top = std::max(top, papersim::collision::make_collider(o)->bounds(0).hi.z());
   return top;
 }
 
@@ -338,7 +366,8 @@ TEST(Scenario, FallScenariosDrawWithinTheirRangesAndReachTheirObstacles) {
           EXPECT_TRUE(o.radius >= 0.01 && o.radius <= 0.10);
           EXPECT_TRUE(o.length >= 0.10 && o.length <= 1.0);
           EXPECT_LE(heading_and_tilt(o)[1], 5 + 1e-9);
-          EXPECT_TRUE(std::abs(c.x()) <= 0.15 && std::abs(c.y()) <= 0.2 && std::abs(c.z()) <= o.radius);
+          EXPECT_TRUE(std::abs(c.x()) <= 0.15 && std::abs(c.y()) <= 0.2 &&
+                      std::abs(c.z()) <= o.radius);
           EXPECT_DOUBLE_EQ(s.gravity.z(), -9.8);
         } else if (name == "fall-gable") {
           EXPECT_EQ(o.kind, ColliderKind::gable);
@@ -351,7 +380,8 @@ TEST(Scenario, FallScenariosDrawWithinTheirRangesAndReachTheirObstacles) {
         } else if (name == "fall-sphere") {
           EXPECT_EQ(o.kind, ColliderKind::sphere);
           EXPECT_TRUE(o.radius >= 0.01 && o.radius <= 0.05);
-          EXPECT_TRUE(std::abs(c.x()) <= 0.05 && std::abs(c.y()) <= 0.15 && std::abs(c.z()) <= o.radius);
+          EXPECT_TRUE(std::abs(c.x()) <= 0.05 && std::abs(c.y()) <= 0.15 &&
+                      std::abs(c.z()) <= o.radius);
           EXPECT_TRUE(s.gravity.z() >= -1000 && s.gravity.z() <= -9.8);
         } else {
           EXPECT_EQ(o.kind, ColliderKind::sphere);
@@ -393,8 +423,10 @@ TEST(Run, ExtrapolatedProjectedStepsSaveIterationsAndKeepTheResult) {
   EXPECT_GT(longer.totals.extrapolations, 0);
   EXPECT_LT(it_longer, it_plain);
   const double diff = (plain.state.positions - longer.state.positions).cwiseAbs().maxCoeff();
-  std::printf("iterations %d plain, %d with extrapolation (%d extrapolated); largest coordinate difference %.3g m\n",
-              it_plain, it_longer, longer.totals.extrapolations, diff);
+  std::printf(
+      "iterations %d plain, %d with extrapolation (%d extrapolated); largest coordinate difference "
+      "%.3g m\n",
+      it_plain, it_longer, longer.totals.extrapolations, diff);
   // Each step stops within 1e-4 m/s x h = 1 micrometre of its minimiser; 10 micrometres allows
   // 40 steps of such differences to grow through the buckling (measured: 2e-8 m).
   EXPECT_LT(diff, 1e-5);
@@ -403,7 +435,8 @@ TEST(Run, ExtrapolatedProjectedStepsSaveIterationsAndKeepTheResult) {
 TEST(Scene, NullDuplicateKeysAndHugeValuesAreErrors) {
   EXPECT_EQ(error_of(json{{"duration", nullptr}}),
             "s.json: key 'duration': null is not a value (leave the key out for its default)");
-  EXPECT_EQ(error_of(json{{"duration", 1e300}}), "s.json: key 'duration': value 1e+300 out of range (0, 10000]");
+  EXPECT_EQ(error_of(json{{"duration", 1e300}}),
+            "s.json: key 'duration': value 1e+300 out of range (0, 10000]");
   EXPECT_EQ(error_of(json{{"seed", 2147483648LL}}),
             "s.json: key 'seed': value 2147483648 out of range [0, 2147483647]");
   EXPECT_EQ(error_of(json{{"seed", 18446744073709551615ULL}}),
@@ -430,7 +463,8 @@ TEST(Scene, NullDuplicateKeysAndHugeValuesAreErrors) {
 }
 
 TEST(Run, PublishesThisRunsFilesOnlyAndStopsWhenAsked) {
-  const fs::path dir = fs::temp_directory_path() / ("papersim_publish_" + std::to_string(::getpid()));
+  const fs::path dir =
+      fs::temp_directory_path() / ("papersim_publish_" + std::to_string(::getpid()));
   fs::remove_all(dir);
   Scene s = small_scene();
   s.duration = 4 * s.time_step;
@@ -513,8 +547,8 @@ TEST(Run, ReusedFactorisationsOfAnUnchangedMatrixSaveFactoringAndKeepTheResult) 
   const int factored_plain = plain.totals.newton_iterations;
   const int factored_reused = reused.totals.newton_iterations - reused.totals.reused_factorizations;
   std::printf("iterations %d plain, %d with reuse (%d reused); factorisations %d against %d\n",
-              plain.totals.newton_iterations, reused.totals.newton_iterations, reused.totals.reused_factorizations,
-              factored_reused, factored_plain);
+              plain.totals.newton_iterations, reused.totals.newton_iterations,
+              reused.totals.reused_factorizations, factored_reused, factored_plain);
   // Four of every five iterations reuse (at most 4 in a row), so at most about a third factor.
   EXPECT_LT(3 * factored_reused, factored_plain + 3);
   // The sheet falls about 0.29 m; the same matrix gives the same steps up to round-off in the
@@ -534,19 +568,33 @@ TEST(Run, CompressionLimitHoldsAFlatStripPressedEndToEnd) {
     for (double y : {0.0, 0.01, 0.02})
       for (double side : {0.0, 1.0})
         handles.push_back({{"point", {0.1 * side, y}},
-                           {"keyframes", {{{"time", 0.0}, {"displacement", {0, 0, 0}}},
-                                          {{"time", 0.05}, {"displacement", {0.006 * (1 - 2 * side), 0, 0}}}}}});
-    const json plate = {{"kind", "plane"}, {"position", {0, 0, 0.0012}}, {"rotation_deg", {180, 0, 0}}, {"friction", 0}};
-    const json j = {{"sheet", {{"width", 0.1}, {"height", 0.02}, {"edge_length", 0.005}, {"position", {0, 0, 0.0006}},
-                               {"material", {{"compression_limit", compression_limit}}}}},
-                    {"gravity", {0, 0, 0}}, {"ground_friction", 0}, {"obstacles", {plate}},
-                    {"contact", {{"thickness", 2e-4}}}, {"duration", 0.06}, {"time_step", 0.002},
-                    {"self_contact", {{"enabled", false}}}, {"handles", handles}};
+                           {"keyframes",
+                            {{{"time", 0.0}, {"displacement", {0, 0, 0}}},
+                             {{"time", 0.05}, {"displacement", {0.006 * (1 - 2 * side), 0, 0}}}}}});
+    const json plate = {{"kind", "plane"},
+                        {"position", {0, 0, 0.0012}},
+                        {"rotation_deg", {180, 0, 0}},
+                        {"friction", 0}};
+    const json j = {{"sheet",
+                     {{"width", 0.1},
+                      {"height", 0.02},
+                      {"edge_length", 0.005},
+                      {"position", {0, 0, 0.0006}},
+                      {"material", {{"compression_limit", compression_limit}}}}},
+                    {"gravity", {0, 0, 0}},
+                    {"ground_friction", 0},
+                    {"obstacles", {plate}},
+                    {"contact", {{"thickness", 2e-4}}},
+                    {"duration", 0.06},
+                    {"time_step", 0.002},
+                    {"self_contact", {{"enabled", false}}},
+                    {"handles", handles}};
     RunOptions quiet;
     return run_scene(scene_from_json(j, "strip.json"), quiet).quality.min_principal_stretch;
   };
   const double free = run(0.0), limited = run(0.05);
-  std::printf("smallest principal stretch: %.4f without a limit, %.4f with a 5%% limit\n", free, limited);
+  std::printf("smallest principal stretch: %.4f without a limit, %.4f with a 5%% limit\n", free,
+              limited);
   EXPECT_LT(free, 0.95);
   EXPECT_GT(limited, 0.95);
   EXPECT_LT(limited, 0.975);  // the barrier acts (from 0.975 down), not a run that never pressed

@@ -1,5 +1,7 @@
 // Self-contact end to end: scenes in which the sheet meets itself, checked for intersecting
 // triangle pairs (exact predicates) after every step.
+#include "collision/self_contact.hpp"
+
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -7,7 +9,6 @@
 #include <cstdlib>
 #include <functional>
 
-#include "collision/self_contact.hpp"
 #include "collision/self_intersection.hpp"
 #include "simulation/simulate.hpp"
 #include "tests/simulation/folded_sheet_scene.hpp"
@@ -19,11 +20,11 @@ namespace {
 
 struct Watched {
   int steps = 0;
-  int max_intersections = 0;     ///< largest count of intersecting triangle pairs at any step
+  int max_intersections = 0;  ///< largest count of intersecting triangle pairs at any step
   int first_bad_step = -1;
-  double min_separation = INF;   ///< smallest distance between two parts of the sheet [m]
-  double min_ground = INF;       ///< smallest vertex height above the ground [m]
-  double min_extra = INF;        ///< smallest value of the test's own measure
+  double min_separation = INF;  ///< smallest distance between two parts of the sheet [m]
+  double min_ground = INF;      ///< smallest vertex height above the ground [m]
+  double min_extra = INF;       ///< smallest value of the test's own measure
   double seconds = 0;
   RunResult result;
 };
@@ -35,7 +36,8 @@ Watched watch(const Scene& scene, const std::function<double(const Eigen::Vector
   SheetState initial;
   initial_sheet(scene, mesh, initial);
   const Eigen::MatrixX3i faces = mesh.faces();
-  const collision::SelfContactMesh contact_mesh = collision::SelfContactMesh::from_faces(faces, mesh.num_vertices());
+  const collision::SelfContactMesh contact_mesh =
+      collision::SelfContactMesh::from_faces(faces, mesh.num_vertices());
   Watched w;
   RunOptions options;
   options.on_step = [&](const StepReport& r) {
@@ -43,9 +45,11 @@ Watched watch(const Scene& scene, const std::function<double(const Eigen::Vector
     const int n = collision::count_self_intersections(r.state->positions_matrix(), faces);
     if (n > 0 && w.first_bad_step < 0) w.first_bad_step = r.step;
     w.max_intersections = std::max(w.max_intersections, n);
-    w.min_separation = std::min(w.min_separation, collision::min_self_distance(contact_mesh, r.state->positions, 0.01));
+    w.min_separation = std::min(
+        w.min_separation, collision::min_self_distance(contact_mesh, r.state->positions, 0.01));
     if (extra) w.min_extra = std::min(w.min_extra, extra(r.state->positions));
-    if (scene.ground && !r.obstacle_distance.empty()) w.min_ground = std::min(w.min_ground, r.obstacle_distance[0]);
+    if (scene.ground && !r.obstacle_distance.empty())
+      w.min_ground = std::min(w.min_ground, r.obstacle_distance[0]);
   };
   const auto t0 = std::chrono::steady_clock::now();
   w.result = run_scene(scene, options);
@@ -55,11 +59,11 @@ Watched watch(const Scene& scene, const std::function<double(const Eigen::Vector
 
 void report(const char* name, const Watched& w) {
   const SelfContactStatistics sc = w.result.self_contact.value_or(SelfContactStatistics{});
-  std::printf("%s: %d steps, %.2f s, min separation %.3g m, max active pairs %d, self-contact %.2f s, "
-              "pattern changes %d, Newton iterations %d, most intersecting pairs %d, min height %.3g m\n",
-              name, w.steps, w.seconds, w.min_separation, sc.max_active_pairs,
-              sc.seconds, sc.pattern_changes, w.result.totals.newton_iterations,
-              w.max_intersections, w.min_ground);
+  std::printf(
+      "%s: %d steps, %.2f s, min separation %.3g m, max active pairs %d, self-contact %.2f s, "
+      "pattern changes %d, Newton iterations %d, most intersecting pairs %d, min height %.3g m\n",
+      name, w.steps, w.seconds, w.min_separation, sc.max_active_pairs, sc.seconds,
+      sc.pattern_changes, w.result.totals.newton_iterations, w.max_intersections, w.min_ground);
 }
 
 }  // namespace
@@ -97,15 +101,19 @@ TEST(SelfContact, StripOverRodEndsCrossWithoutIntersecting) {
   initial_sheet(s, mesh, initial);
   const Eigen::MatrixX2d X = mesh.material_coords();
   const Eigen::MatrixX3i F = mesh.faces();
-  const collision::SelfContactMesh cm = collision::SelfContactMesh::from_faces(F, mesh.num_vertices());
+  const collision::SelfContactMesh cm =
+      collision::SelfContactMesh::from_faces(F, mesh.num_vertices());
   const auto ends_distance = [&](const Eigen::VectorXd& x) {
     auto P = [&](int v) { return Eigen::Vector3d(x.segment<3>(3 * v)); };
     auto region = [&](int v) { return X(v, 0) < 0.05 ? 0 : (X(v, 0) > 0.2 ? 1 : -1); };
     double d2 = INF;
-    for (const auto& [v, f] : collision::find_self_contact_candidates(cm, x, x, 0.01).point_triangle) {
+    for (const auto& [v, f] :
+         collision::find_self_contact_candidates(cm, x, x, 0.01).point_triangle) {
       const int r = region(v);
-      if (r < 0 || region(F(f, 0)) != 1 - r || region(F(f, 1)) != 1 - r || region(F(f, 2)) != 1 - r) continue;
-      d2 = std::min(d2, collision::point_triangle_distance_squared({P(v), P(F(f, 0)), P(F(f, 1)), P(F(f, 2))}));
+      if (r < 0 || region(F(f, 0)) != 1 - r || region(F(f, 1)) != 1 - r || region(F(f, 2)) != 1 - r)
+        continue;
+      d2 = std::min(d2, collision::point_triangle_distance_squared(
+                            {P(v), P(F(f, 0)), P(F(f, 1)), P(F(f, 2))}));
     }
     return std::sqrt(d2);
   };

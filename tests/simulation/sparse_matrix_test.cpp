@@ -1,7 +1,6 @@
 // Assembly into the block matrix: an element's blocks added at places found once (ElementSlots)
 // are the sums the searching add_element makes and the dense sum of the elements, and a matrix of
 // another layout is told apart.
-#include "simulation/linear_solver.hpp"
 #include "simulation/sparse_matrix.hpp"
 
 #include <gtest/gtest.h>
@@ -11,6 +10,8 @@
 #include <stdexcept>
 #include <string>
 #include <vector>
+
+#include "simulation/linear_solver.hpp"
 
 using namespace papersim::simulation;
 
@@ -60,7 +61,8 @@ TEST(ElementSlots, AddWhatTheSearchAddsAndAreFoundAgainForANewLayout) {
   std::mt19937 rng(7);
   const auto elements = random_elements(60, rng);
   std::vector<Eigen::MatrixXd> hessians;
-  for (const auto& e : elements) hessians.push_back(random_symmetric(3 * static_cast<int>(e.size()), rng));
+  for (const auto& e : elements)
+    hessians.push_back(random_symmetric(3 * static_cast<int>(e.size()), rng));
   SparsityBuilder builder(40);
   for (const auto& e : elements) builder.add_clique(e.data(), static_cast<int>(e.size()));
   const BlockPattern pattern = builder.finish();
@@ -72,7 +74,8 @@ TEST(ElementSlots, AddWhatTheSearchAddsAndAreFoundAgainForANewLayout) {
   assemble(slotted, elements, hessians, &slots);
   ASSERT_EQ(searched.values().size(), slotted.values().size());
   for (std::size_t k = 0; k < searched.values().size(); ++k)
-    ASSERT_EQ(searched.values()[k], slotted.values()[k]) << "entry " << k;  // the same sums, bit for bit
+    ASSERT_EQ(searched.values()[k], slotted.values()[k])
+        << "entry " << k;  // the same sums, bit for bit
   // And they are the elements' sum: against the dense matrix, column by column.
   Eigen::MatrixXd dense = Eigen::MatrixXd::Zero(120, 120);
   for (std::size_t k = 0; k < elements.size(); ++k)
@@ -82,7 +85,8 @@ TEST(ElementSlots, AddWhatTheSearchAddsAndAreFoundAgainForANewLayout) {
             hessians[k].block<3, 3>(3 * static_cast<int>(a), 3 * static_cast<int>(b));
   for (int c = 0; c < 120; ++c) {
     const Eigen::VectorXd e = Eigen::VectorXd::Unit(120, c);
-    ASSERT_LT((slotted.multiply(e) - dense.col(c)).norm(), 1e-12 * (1 + dense.col(c).norm())) << "column " << c;
+    ASSERT_LT((slotted.multiply(e) - dense.col(c)).norm(), 1e-12 * (1 + dense.col(c).norm()))
+        << "column " << c;
   }
 
   // A copy has the layout: the slots hold on it.
@@ -105,7 +109,8 @@ TEST(ElementSlots, AddWhatTheSearchAddsAndAreFoundAgainForANewLayout) {
   const std::vector<int> before(slots.slots(0), slots.slots(static_cast<int>(elements.size()) - 1));
   assemble(wider, elements, hessians, &slots);
   assemble(wider_searched, elements, hessians, nullptr);
-  for (std::size_t k = 0; k < wider.values().size(); ++k) ASSERT_EQ(wider.values()[k], wider_searched.values()[k]);
+  for (std::size_t k = 0; k < wider.values().size(); ++k)
+    ASSERT_EQ(wider.values()[k], wider_searched.values()[k]);
   const std::vector<int> after(slots.slots(0), slots.slots(static_cast<int>(elements.size()) - 1));
   EXPECT_NE(before, after) << "the new coupling moves some block of column " << pair[1];
   // Both layouts' matrices hold the same element sums (the new coupling's block stays zero).
@@ -131,7 +136,8 @@ TEST(ElementSlots, PositionsFoundOnceAddTheColumnsAndEntriesTheSearchAdds) {
     for (int i = 0; i < 30; ++i) all[i] = i;
     std::shuffle(all.begin(), all.end(), rng);
     e.vertices.assign(all.begin(), all.begin() + 1 + static_cast<int>(rng() % 6));
-    for (int c = 0, n = 1 + static_cast<int>(rng() % 4); c < n; ++c) e.columns.push_back(90 + static_cast<int>(rng() % 30));
+    for (int c = 0, n = 1 + static_cast<int>(rng() % 4); c < n; ++c)
+      e.columns.push_back(90 + static_cast<int>(rng() % 30));
     std::vector<int> blocks = e.vertices;
     std::vector<unsigned char> components(blocks.size(), 7);
     for (int c : e.columns) {
@@ -194,7 +200,8 @@ TEST(ElementSlots, PositionsFoundOnceAddTheColumnsAndEntriesTheSearchAdds) {
   add(searched, nullptr);
   add(slotted, &slots);
   for (std::size_t k = 0; k < searched.values().size(); ++k)
-    ASSERT_EQ(searched.values()[k], slotted.values()[k]) << "entry " << k;  // the same sums, bit for bit
+    ASSERT_EQ(searched.values()[k], slotted.values()[k])
+        << "entry " << k;  // the same sums, bit for bit
   // And they are the sums asked for: against a dense matrix of the upper triangle.
   Eigen::MatrixXd dense = Eigen::MatrixXd::Zero(120, 120);
   for (std::size_t k = 0; k < elements.size(); ++k) {
@@ -202,9 +209,11 @@ TEST(ElementSlots, PositionsFoundOnceAddTheColumnsAndEntriesTheSearchAdds) {
     const int nv = static_cast<int>(e.vertices.size());
     for (std::size_t j = 0; j < e.columns.size(); ++j) {
       for (int a = 0; a < nv; ++a)
-        for (int p = 0; p < 3; ++p) dense(3 * e.vertices[a] + p, e.columns[j]) += column_values[k][3 * nv * j + 3 * a + p];
+        for (int p = 0; p < 3; ++p)
+          dense(3 * e.vertices[a] + p, e.columns[j]) += column_values[k][3 * nv * j + 3 * a + p];
       for (std::size_t i = 0; i < e.columns.size(); ++i)
-        if (e.columns[i] <= e.columns[j]) dense(e.columns[i], e.columns[j]) += entry_values[k][i + e.columns.size() * j];
+        if (e.columns[i] <= e.columns[j])
+          dense(e.columns[i], e.columns[j]) += entry_values[k][i + e.columns.size() * j];
     }
   }
   const auto& starts = slotted.column_starts();
@@ -212,7 +221,8 @@ TEST(ElementSlots, PositionsFoundOnceAddTheColumnsAndEntriesTheSearchAdds) {
   double checked = 0;
   for (int c = 0; c < 120; ++c)
     for (int k = starts[c]; k < starts[c + 1]; ++k) {
-      ASSERT_NEAR(slotted.values()[k], dense(rows[k], c), 1e-12) << "entry (" << rows[k] << ", " << c << ")";
+      ASSERT_NEAR(slotted.values()[k], dense(rows[k], c), 1e-12)
+          << "entry (" << rows[k] << ", " << c << ")";
       checked += std::abs(dense(rows[k], c));
     }
   EXPECT_NEAR(checked, dense.cwiseAbs().sum(), 1e-9);  // no sum fell outside the stored entries

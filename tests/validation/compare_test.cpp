@@ -1,3 +1,5 @@
+#include "validation/compare.hpp"
+
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
@@ -5,7 +7,6 @@
 #include <cmath>
 
 #include "remesh/sheet_generator.hpp"
-#include "validation/compare.hpp"
 
 namespace pv = papersim::validation;
 
@@ -32,11 +33,14 @@ pv::SheetGeometry flat(int nx, int ny, papersim::remesh::Triangulation t) {
 
 TEST(CompareSheets, ClosestPointOnTriangleRegions) {
   const Eigen::Vector3d a(0, 0, 0), b(1, 0, 0), c(0, 1, 0);
-  EXPECT_TRUE(pv::closest_point_on_triangle({0.2, 0.2, 3}, a, b, c).isApprox(Eigen::Vector3d(0.2, 0.2, 0)));
+  EXPECT_TRUE(
+      pv::closest_point_on_triangle({0.2, 0.2, 3}, a, b, c).isApprox(Eigen::Vector3d(0.2, 0.2, 0)));
   EXPECT_TRUE(pv::closest_point_on_triangle({-1, -1, 0}, a, b, c).isApprox(a));
   EXPECT_TRUE(pv::closest_point_on_triangle({2, -1, 0}, a, b, c).isApprox(b));
-  EXPECT_TRUE(pv::closest_point_on_triangle({1, 1, 0}, a, b, c).isApprox(Eigen::Vector3d(0.5, 0.5, 0)));
-  EXPECT_TRUE(pv::closest_point_on_triangle({0.5, -2, 1}, a, b, c).isApprox(Eigen::Vector3d(0.5, 0, 0)));
+  EXPECT_TRUE(
+      pv::closest_point_on_triangle({1, 1, 0}, a, b, c).isApprox(Eigen::Vector3d(0.5, 0.5, 0)));
+  EXPECT_TRUE(
+      pv::closest_point_on_triangle({0.5, -2, 1}, a, b, c).isApprox(Eigen::Vector3d(0.5, 0, 0)));
 }
 
 TEST(CompareSheets, SameSurfaceDifferentMeshesIsZero) {
@@ -73,8 +77,10 @@ TEST(CompareSheets, BentSheetAgainstItsLinearInterpolation) {
   // interpolation error, at most h_ref^2 / 8 * z'' = (2.5 mm)^2 / 8 * 2.
   auto ref = flat(41, 21, papersim::remesh::Triangulation::alternating);
   auto test = flat(11, 6, papersim::remesh::Triangulation::alternating);
-  for (int v = 0; v < ref.positions.rows(); ++v) ref.positions(v, 2) = std::pow(ref.positions(v, 0), 2);
-  for (int v = 0; v < test.positions.rows(); ++v) test.positions(v, 2) = std::pow(test.positions(v, 0), 2);
+  for (int v = 0; v < ref.positions.rows(); ++v)
+    ref.positions(v, 2) = std::pow(ref.positions(v, 0), 2);
+  for (int v = 0; v < test.positions.rows(); ++v)
+    test.positions(v, 2) = std::pow(test.positions(v, 0), 2);
   const auto d = pv::compare_sheets(ref, test);
   EXPECT_LT(d.max, 2.5e-3 * 2.5e-3 / 8 * 2 + 1e-15);
   // The coarse chords sag by up to (10 mm)^2 / 8 * 2 = 25 micrometres below the fine surface.
@@ -88,11 +94,13 @@ TEST(CompareSheets, ARigidMotionLeavesTheShapeErrorZeroAndAShapeChangeSurvivesTh
   auto ref = flat(41, 21, papersim::remesh::Triangulation::alternating);
   auto test = flat(11, 6, papersim::remesh::Triangulation::random);
   const auto bend = [](pv::SheetGeometry& g) {
-    for (int v = 0; v < g.positions.rows(); ++v) g.positions(v, 2) = 5 * std::pow(g.positions(v, 0), 2);
+    for (int v = 0; v < g.positions.rows(); ++v)
+      g.positions(v, 2) = 5 * std::pow(g.positions(v, 0), 2);
   };
   bend(ref);
   bend(test);
-  const Eigen::Matrix3d R = Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  const Eigen::Matrix3d R =
+      Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
   const Eigen::Vector3d t(0.03, -0.02, 0.005);
   const Eigen::MatrixX3d original = test.positions;
   for (int v = 0; v < test.positions.rows(); ++v)
@@ -119,7 +127,8 @@ TEST(CompareSheets, ARigidMotionLeavesTheShapeErrorZeroAndAShapeChangeSurvivesTh
   test = flat(11, 6, papersim::remesh::Triangulation::random);
   bend(test);
   for (int v = 0; v < test.positions.rows(); ++v)
-    if (test.positions(v, 0) > 0.05 - 1e-9 && test.positions(v, 0) < 0.075 + 1e-9) test.positions(v, 2) += 1e-3;
+    if (test.positions(v, 0) > 0.05 - 1e-9 && test.positions(v, 0) < 0.075 + 1e-9)
+      test.positions(v, 2) += 1e-3;
   d = pv::compare_sheets(ref, test);
   EXPECT_GT(d.rms_aligned, 0.25e-3);
   EXPECT_LE(d.rms_aligned, d.rms + 1e-12);  // the alignment never adds error in the RMS sense

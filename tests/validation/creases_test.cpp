@@ -67,7 +67,8 @@ TEST_F(FoldedSheet, PlasticWhenTheRestAngleExceedsTheThreshold) {
   EXPECT_EQ(plastic.creases.plastic_lines, 1);
 
   // Rest angle 20 degrees < 30: the fold would spring back, so it is elastic.
-  const MeshMetrics elastic = compute_metrics(g.material, p, g.faces, plastic_curvature(20 * PI / 180));
+  const MeshMetrics elastic =
+      compute_metrics(g.material, p, g.faces, plastic_curvature(20 * PI / 180));
   EXPECT_NEAR(elastic.creases.plastic_length, 0.0, ROUNDING);
   EXPECT_NEAR(elastic.creases.elastic_length, 0.1, ROUNDING);
   EXPECT_EQ(elastic.creases.plastic_lines, 0);
@@ -82,7 +83,8 @@ TEST_F(FoldedSheet, PlasticNetworkComesFromThePlasticStateAloneFlatOrFolded) {
   // on the fold edges: the plastic faces (two columns) give the next columns of edges 25 deg
   // and the diagonals between them 50 / (2 sqrt 2) = 17.7 deg, below the 30 deg threshold.
   const Eigen::MatrixX3d k = plastic_curvature(50 * PI / 180);
-  const MeshMetrics flat = compute_metrics(g.material, test::flat_positions(g.material), g.faces, k);
+  const MeshMetrics flat =
+      compute_metrics(g.material, test::flat_positions(g.material), g.faces, k);
   EXPECT_EQ(flat.creases.edges, 0);
   EXPECT_EQ(flat.creases.plastic_network_lines, 1);
   EXPECT_EQ(flat.creases.plastic_network_edges, g.ny - 1);
@@ -91,7 +93,8 @@ TEST_F(FoldedSheet, PlasticNetworkComesFromThePlasticStateAloneFlatOrFolded) {
   const MeshMetrics folded = compute_metrics(g.material, p, g.faces, k);
   EXPECT_NEAR(folded.creases.plastic_network_length, 0.1, ROUNDING);
   // Below the threshold (a rest angle of 20 degrees): no plastic network.
-  const MeshMetrics weak = compute_metrics(g.material, p, g.faces, plastic_curvature(20 * PI / 180));
+  const MeshMetrics weak =
+      compute_metrics(g.material, p, g.faces, plastic_curvature(20 * PI / 180));
   EXPECT_EQ(weak.creases.plastic_network_lines, 0);
   EXPECT_EQ(weak.creases.plastic_network_length, 0.0);
 }
@@ -158,7 +161,8 @@ TEST(Creases, ClosedRimIsOneClosedLine) {
   }
   MetricsOptions options;
   options.crease_angle_deg = 40.0;
-  const MeshMetrics m = compute_metrics(c.material, c.positions, c.faces, Eigen::MatrixX3d(0, 3), options);
+  const MeshMetrics m =
+      compute_metrics(c.material, c.positions, c.faces, Eigen::MatrixX3d(0, 3), options);
   const double tilt = std::atan(h1 / (r1 * std::cos(PI / n)));  // cone face against the plane
   EXPECT_EQ(m.creases.lines, 1);
   EXPECT_EQ(m.creases.edges, n);

@@ -47,7 +47,8 @@ TEST(Metrics, FlatSheetIsAllZero) {
   EXPECT_EQ(m.self_intersections, 0);
   // Right isosceles triangles: 45 degrees, aspect 12 sqrt(3) (1/2) / (2 + sqrt(2))^2.
   EXPECT_NEAR(m.quality.min_angle_deg, 45.0, 1e-9);
-  EXPECT_NEAR(m.quality.aspect_min, 6.0 * std::sqrt(3.0) / std::pow(2.0 + std::sqrt(2.0), 2), 1e-12);
+  EXPECT_NEAR(m.quality.aspect_min, 6.0 * std::sqrt(3.0) / std::pow(2.0 + std::sqrt(2.0), 2),
+              1e-12);
   EXPECT_NEAR(m.quality.edge_length_min, 0.02, 1e-15);
   EXPECT_NEAR(m.quality.edge_length_max, 0.02 * std::sqrt(2.0), 1e-15);
 }
@@ -82,8 +83,7 @@ TEST(Metrics, CylinderWrapHasZeroDefectAndKnownDihedrals) {
   const MeshTopology t = build_topology(g.faces, static_cast<int>(p.rows()));
   const Eigen::VectorXd strain = edge_strains(g.material, p, t);
   const Eigen::VectorXd dihedral = dihedral_angles(p, g.faces, t);
-  const double diagonal =
-      std::hypot(chord, g.dy) / std::hypot(g.dx, g.dy) - 1.0;
+  const double diagonal = std::hypot(chord, g.dy) / std::hypot(g.dx, g.dy) - 1.0;
   for (Eigen::Index e = 0; e < t.edges.rows(); ++e) {
     const int a = t.edges(e, 0), b = t.edges(e, 1);
     const bool axial = a % g.nx == b % g.nx, across = a / g.nx == b / g.nx;
@@ -138,8 +138,9 @@ TEST(Metrics, StretchedSheetHasKnownStrain) {
   const double diagonal = std::hypot(sx * g.dx, sy * g.dy) / std::hypot(g.dx, g.dy) - 1.0;
   const double n_across = (g.nx - 1) * g.ny, n_axial = g.nx * (g.ny - 1),
                n_diagonal = (g.nx - 1) * (g.ny - 1);
-  const double mean = (n_across * (sx - 1.0) + n_axial * (1.0 - sy) + n_diagonal * std::abs(diagonal)) /
-                      (n_across + n_axial + n_diagonal);
+  const double mean =
+      (n_across * (sx - 1.0) + n_axial * (1.0 - sy) + n_diagonal * std::abs(diagonal)) /
+      (n_across + n_axial + n_diagonal);
   EXPECT_NEAR(m.isometry.edge_strain_max, sx - 1.0, ROUNDING);
   EXPECT_NEAR(m.isometry.edge_stretch_max, sx - 1.0, ROUNDING);
   EXPECT_NEAR(m.isometry.edge_compression_max, 1.0 - sy, ROUNDING);
@@ -176,7 +177,8 @@ TEST(Metrics, PrincipalStretchesOfShearAreSorted) {
 TEST(Metrics, GaussBonnetResidualOnBumpySheet) {
   const test::Grid g = test::make_grid(31, 23, 0.21, 0.297);
   const Eigen::MatrixX3d p = test::map_positions(g.material, [](double x, double y) {
-    return Eigen::Vector3d(x + 0.01 * std::sin(40 * y), y, 0.03 * std::sin(30 * x) * std::cos(25 * y));
+    return Eigen::Vector3d(x + 0.01 * std::sin(40 * y), y,
+                           0.03 * std::sin(30 * x) * std::cos(25 * y));
   });
   const MeshMetrics m = measure(g.material, p, g.faces);
   EXPECT_GT(m.developability.angle_defect_integral, 0.1);
@@ -237,8 +239,8 @@ TEST(Metrics, SheetDataOverloadMatchesArrays) {
   sheet.width = r.width;
   sheet.height = r.height;
   const MeshMetrics from_sheet = compute_metrics(sheet, {}, false);
-  const MeshMetrics from_arrays = measure(sheet.mesh.material_coords(), sheet.positions,
-                                          sheet.mesh.faces());
+  const MeshMetrics from_arrays =
+      measure(sheet.mesh.material_coords(), sheet.positions, sheet.mesh.faces());
   EXPECT_EQ(metric_fields(from_sheet), metric_fields(from_arrays));
   EXPECT_FALSE(from_sheet.creases.has_plastic_data);
   EXPECT_TRUE(compute_metrics(sheet, {}, true).creases.has_plastic_data);

@@ -20,8 +20,8 @@ Eigen::MatrixX3d rows(std::initializer_list<Eigen::RowVector3d> points) {
 
 TEST(SelfIntersection, TwoCrossingTrianglesAreOnePair) {
   // A horizontal triangle and a vertical one piercing it; no shared vertex.
-  const Eigen::MatrixX3d p = rows({{0, 0, 0}, {1, 0, 0}, {0, 1, 0},
-                                   {0.2, 0.2, -0.5}, {0.3, 0.2, 0.5}, {0.2, 0.3, 0.5}});
+  const Eigen::MatrixX3d p =
+      rows({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0.2, 0.2, -0.5}, {0.3, 0.2, 0.5}, {0.2, 0.3, 0.5}});
   Eigen::MatrixX3i f(2, 3);
   f << 0, 1, 2, 3, 4, 5;
   const SelfIntersections s = find_self_intersections(p, f);
@@ -33,8 +33,8 @@ TEST(SelfIntersection, TwoCrossingTrianglesAreOnePair) {
 }
 
 TEST(SelfIntersection, SeparatedAndTouchingTriangles) {
-  Eigen::MatrixX3d p = rows({{0, 0, 0}, {1, 0, 0}, {0, 1, 0},
-                             {0.2, 0.2, 0.1}, {0.3, 0.2, 0.5}, {0.2, 0.3, 0.5}});
+  Eigen::MatrixX3d p =
+      rows({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0.2, 0.2, 0.1}, {0.3, 0.2, 0.5}, {0.2, 0.3, 0.5}});
   Eigen::MatrixX3i f(2, 3);
   f << 0, 1, 2, 3, 4, 5;
   EXPECT_EQ(count_self_intersections(p, f), 0);  // hovering 0.1 above
@@ -70,9 +70,9 @@ TEST(SelfIntersection, SharedEdgeCountsOnlyWhenFoldedFlatOntoItself) {
   Eigen::MatrixX3i f(2, 3);
   f << 0, 1, 2, 1, 0, 3;
   EXPECT_EQ(count_self_intersections(p, f), 0);  // flat, opposite sides
-  p.row(3) << 0.5, 1e-9, 1;                         // folded nearly shut, not flat
+  p.row(3) << 0.5, 1e-9, 1;                      // folded nearly shut, not flat
   EXPECT_EQ(count_self_intersections(p, f), 0);
-  p.row(3) << 0.3, 0.5, 0;                          // folded flat onto the first
+  p.row(3) << 0.3, 0.5, 0;  // folded flat onto the first
   const SelfIntersections s = find_self_intersections(p, f);
   EXPECT_EQ(s.count(), 1);
   EXPECT_EQ(s.edge_pairs, 1);
@@ -80,8 +80,8 @@ TEST(SelfIntersection, SharedEdgeCountsOnlyWhenFoldedFlatOntoItself) {
 
 TEST(SelfIntersection, DegenerateTriangleIsTestedThroughItsEdges) {
   // The second triangle is collinear (a needle) and pierces the first.
-  const Eigen::MatrixX3d p = rows({{0, 0, 0}, {1, 0, 0}, {0, 1, 0},
-                                   {0.2, 0.2, -1}, {0.2, 0.2, 0.5}, {0.2, 0.2, 1}});
+  const Eigen::MatrixX3d p =
+      rows({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0.2, 0.2, -1}, {0.2, 0.2, 0.5}, {0.2, 0.2, 1}});
   Eigen::MatrixX3i f(2, 3);
   f << 0, 1, 2, 3, 4, 5;
   EXPECT_EQ(count_self_intersections(p, f), 1);

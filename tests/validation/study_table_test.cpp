@@ -1,13 +1,14 @@
+#include "validation/study_table.hpp"
+
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
-#include <unistd.h>
 
 #include "common/errors.hpp"
-#include "validation/study_table.hpp"
 
 namespace fs = std::filesystem;
 namespace pv = papersim::validation;

@@ -64,8 +64,7 @@ inline Eigen::MatrixX3d cylinder_positions(const Eigen::MatrixX2d& material, dou
 }
 
 /// Fold the part x > a up about the line x = a by `angle` [rad].
-inline Eigen::MatrixX3d folded_positions(const Eigen::MatrixX2d& material, double a,
-                                         double angle) {
+inline Eigen::MatrixX3d folded_positions(const Eigen::MatrixX2d& material, double a, double angle) {
   return map_positions(material, [a, angle](double x, double y) {
     if (x <= a) return Eigen::Vector3d(x, y, 0.0);
     const double s = x - a;
