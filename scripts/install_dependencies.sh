@@ -14,6 +14,7 @@ PACKAGES=(
   povray gnuplot-nox fonts-dejavu-core fonts-liberation
   slurm-wlm munge  # the one-node Slurm test of the batch job arrays (scripts/slurm_cluster.sh)
   clang libclang-rt-14-dev  # the libFuzzer targets (scripts/fuzz.sh)
+  clang-format  # the layout check of the C++ files (scripts/check_format.sh)
   python3  # the analysis scripts of docs/ and their self-test (scripts/adaptive_mesh_bound.py)
 )
 
