@@ -1,10 +1,10 @@
-// Exact self-intersection counting (collision/self_intersection). Lives with the metrics tests
-// because the metrics are its user; it only needs papersim::collision.
+// Exact self-intersection counting (collision/self_intersection). The meshes with known answers
+// are the metrics tests' (header-only, Eigen alone).
 #include "collision/self_intersection.hpp"
 
 #include <gtest/gtest.h>
 
-#include "test_meshes.hpp"
+#include "../validation/test_meshes.hpp"
 
 namespace papersim::collision {
 namespace {
