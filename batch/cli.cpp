@@ -109,7 +109,7 @@ fs::path write_slurm_script(const fs::path& root, const std::string& name,
   so.job_name = name;
   const fs::path dir = fs::absolute(root) / "slurm";
   fs::create_directories(dir);
-  const fs::path file = dir / (name + ".sbatch");
+  fs::path file = dir / (name + ".sbatch");
   write_file_atomically(file, slurm_script(command, so, dir));
   fs::permissions(file, fs::perms::owner_exec, fs::perm_options::add);
   return file;

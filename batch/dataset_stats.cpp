@@ -39,24 +39,24 @@ double quantile(const std::vector<double>& sorted, double q) {
 class RowFields : public nlohmann::json_sax<json> {
  public:
   explicit RowFields(const std::vector<std::string>& figures)
-      : figures_(figures), values_(figures.size()) {}
+      : m_figures(figures), m_values(figures.size()) {}
 
   /// Parse `line`: whether it is a JSON object whose "key" is a string and whose "scenario" and
   /// "reason" are strings where present.
   bool read(const std::string& line) {
-    depth_ = 0;
-    seen_object_ = false;
-    key_ = scenario_ = reason_ = Field{};
-    std::fill(values_.begin(), values_.end(), NAN);
+    m_depth = 0;
+    m_seen_object = false;
+    m_key = m_scenario = m_reason = Field{};
+    std::fill(m_values.begin(), m_values.end(), NAN);
     if (!json::sax_parse(line, this)) return false;
-    return seen_object_ && key_.given && key_.is_string &&
-           (!scenario_.given || scenario_.is_string) && (!reason_.given || reason_.is_string);
+    return m_seen_object && m_key.given && m_key.is_string &&
+           (!m_scenario.given || m_scenario.is_string) && (!m_reason.given || m_reason.is_string);
   }
-  const std::string& key() const { return key_.text; }
-  std::string scenario() const { return scenario_.given ? scenario_.text : "?"; }
-  std::string reason() const { return reason_.given ? reason_.text : "?"; }
+  const std::string& key() const { return m_key.text; }
+  std::string scenario() const { return m_scenario.given ? m_scenario.text : "?"; }
+  std::string reason() const { return m_reason.given ? m_reason.text : "?"; }
   /// Figure i when the row gives it as a number, else NaN.
-  double value(std::size_t i) const { return values_[i]; }
+  double value(std::size_t i) const { return m_values[i]; }
 
   bool null() override { return scalar(nullptr, NAN); }
   bool boolean(bool) override { return scalar(nullptr, NAN); }
@@ -71,10 +71,10 @@ class RowFields : public nlohmann::json_sax<json> {
   bool binary(binary_t&) override { return scalar(nullptr, NAN); }
   bool start_object(std::size_t) override { return open(true); }
   bool start_array(std::size_t) override { return open(false); }
-  bool end_object() override { return --depth_, true; }
-  bool end_array() override { return --depth_, true; }
+  bool end_object() override { return --m_depth, true; }
+  bool end_array() override { return --m_depth, true; }
   bool key(string_t& name) override {
-    if (depth_ == 1) name_ = name;
+    if (m_depth == 1) m_name = name;
     return true;
   }
   bool parse_error(std::size_t, const std::string&, const nlohmann::detail::exception&) override {
@@ -87,38 +87,38 @@ class RowFields : public nlohmann::json_sax<json> {
     std::string text;
   };
 
-  /// The top-level value named `name_` is a string (`text`), a number (`number`) or neither.
+  /// The top-level value named `m_name` is a string (`text`), a number (`number`) or neither.
   bool scalar(const std::string* text, double number) {
-    if (depth_ != 1) return true;
-    Field* f = name_ == "key"        ? &key_
-               : name_ == "scenario" ? &scenario_
-               : name_ == "reason"   ? &reason_
-                                     : nullptr;
+    if (m_depth != 1) return true;
+    Field* f = m_name == "key"        ? &m_key
+               : m_name == "scenario" ? &m_scenario
+               : m_name == "reason"   ? &m_reason
+                                      : nullptr;
     if (f) {
       f->given = true;
       f->is_string = text != nullptr;
       if (text) f->text = *text;
       return true;
     }
-    for (std::size_t i = 0; i < figures_.size(); ++i)
-      if (name_ == figures_[i]) values_[i] = number;
+    for (std::size_t i = 0; i < m_figures.size(); ++i)
+      if (m_name == m_figures[i]) m_values[i] = number;
     return true;
   }
   bool open(bool object) {
-    if (depth_ == 0)
-      seen_object_ = object;
-    else if (depth_ == 1)
+    if (m_depth == 0)
+      m_seen_object = object;
+    else if (m_depth == 1)
       scalar(nullptr, NAN);  // a container is neither a string nor a number
-    ++depth_;
+    ++m_depth;
     return true;
   }
 
-  const std::vector<std::string>& figures_;
-  std::vector<double> values_;
-  Field key_, scenario_, reason_;
-  std::string name_;
-  int depth_ = 0;
-  bool seen_object_ = false;
+  const std::vector<std::string>& m_figures;
+  std::vector<double> m_values;
+  Field m_key, m_scenario, m_reason;
+  std::string m_name;
+  int m_depth = 0;
+  bool m_seen_object = false;
 };
 
 /// Bytes read of the files of a dataset, told to a ReadProgress every 4,096 lines.

@@ -328,7 +328,7 @@ batch::BatchSpec mesh_batch_spec(const fs::path& root, const fs::path& papersim,
     return c;
   };
   spec.finalize = [with_metrics, root](const batch::Task& t, const batch::Attempt& a) {
-    const fs::path out = a.stage / "out";
+    fs::path out = a.stage / "out";
     for (const char* f : {"scene.json", "sheet.obj", "sheet.ply", "meta.json"})
       if (!fs::exists(out / f)) throw std::runtime_error(std::string("missing ") + f);
     if (with_metrics) {

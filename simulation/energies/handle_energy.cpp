@@ -46,7 +46,7 @@ MaterialLocation locate_material_point(const remesh::SheetMesh& mesh, const Eige
 namespace {
 
 MaterialLocation locate_or_throw(const remesh::SheetMesh& mesh, const Eigen::Vector2d& p) {
-  const MaterialLocation loc = locate_material_point(mesh, p);
+  MaterialLocation loc = locate_material_point(mesh, p);
   if (loc.face < 0) {
     std::ostringstream s;
     s << "handle: material point (" << p.x() << ", " << p.y() << ") lies outside the sheet";
