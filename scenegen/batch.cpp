@@ -235,7 +235,7 @@ batch::BatchSpec render_batch_spec(const fs::path& root, const fs::path& scenege
     return std::vector<batch::Command>{{argv, {}}};
   };
   spec.finalize = [](const batch::Task&, const batch::Attempt& a) {
-    const fs::path out = a.stage / "out";
+    fs::path out = a.stage / "out";
     if (!fs::exists(out / "meta.json")) throw IoError("missing meta.json");
     return out;
   };

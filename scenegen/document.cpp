@@ -128,9 +128,7 @@ bool table(Rng& rng, DocumentLayout& doc, Flow& flow, const Fonts& f, double siz
   for (int r = 0; r <= rows; ++r) {
     for (int c = 0; c < cols; ++c) {
       std::ostringstream s;
-      if (r == 0)
-        s << capitalised(word(rng));
-      else if (c == 0)
+      if (r == 0 || c == 0)  // the header row and the first column: words
         s << capitalised(word(rng));
       else
         s << std::fixed << std::setprecision(rng.randint(1, 3)) << rng.uniform(0, 100);
@@ -199,7 +197,7 @@ int DocumentLayout::height_px() const {
 }
 
 std::vector<std::pair<std::string, std::string>> document_font_files() {
-  const std::vector<std::pair<std::string, std::string>> fonts = {
+  std::vector<std::pair<std::string, std::string>> fonts = {
       {"DejaVuSerif.ttf", "/usr/share/fonts/truetype/dejavu/DejaVuSerif.ttf"},
       {"DejaVuSans-Bold.ttf", "/usr/share/fonts/truetype/dejavu/DejaVuSans-Bold.ttf"},
       {"DejaVuSans.ttf", "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf"},

@@ -43,9 +43,9 @@ class Rng {
   double uniform() { return static_cast<double>(next() >> 11) * 0x1.0p-53; }
   /// Uniform in [a, b).
   double uniform(double a, double b) { return a + (b - a) * uniform(); }
-  /// Uniform integer in [a, b] (inclusive).
+  /// Uniform integer in [a, b] (inclusive; a <= b), any range of int (b - a + 1 in 64 bits).
   int randint(int a, int b) {
-    const auto n = static_cast<std::uint64_t>(b - a + 1);
+    const auto n = static_cast<std::uint64_t>(static_cast<std::int64_t>(b) - a + 1);
     return a + static_cast<int>(next() % n);
   }
   /// A fresh 32-bit seed for a sub-generator (noise seeds recorded in meta.json).

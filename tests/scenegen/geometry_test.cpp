@@ -2,7 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <climits>
 #include <cmath>
+#include <utility>
 
 #include "scenegen/example_sheets.hpp"
 #include "scenegen/random.hpp"
@@ -65,6 +68,28 @@ TEST(RestingPose, UpsideDownBumpTurnsOverToAStablePose) {
   const Eigen::VectorXd h = (m.positions.rowwise() - s.origin.transpose()) * s.up;
   EXPECT_GE(h.minCoeff(), -1e-9);
   EXPECT_LT(s.up.z(), 0.999);  // tilted: resting on the bump and one edge
+}
+
+TEST(Rng, RandintCoversRangesWiderThanHalfTheInts) {
+  // b - a + 1 is formed in 64 bits: over [0, INT_MAX] and over every int, the width does not
+  // overflow an int (which gave draws outside the range), and the draws spread over it.
+  Rng rng(7, "randint");
+  for (const auto& [a, b] :
+       {std::pair{0, INT_MAX}, std::pair{INT_MIN, INT_MAX}, std::pair{-5, 5}}) {
+    int low = INT_MAX, high = INT_MIN;
+    for (int k = 0; k < 2000; ++k) {
+      const int v = rng.randint(a, b);
+      ASSERT_GE(v, a);
+      ASSERT_LE(v, b);
+      low = std::min(low, v);
+      high = std::max(high, v);
+    }
+    // 2000 uniform draws: the extremes lie within 1% of the width of the ends (fails with
+    // probability about 2 e^-20).
+    const double width = static_cast<double>(b) - a;
+    EXPECT_LT(low - static_cast<double>(a), 0.01 * width + 1) << a << ".." << b;
+    EXPECT_LT(static_cast<double>(b) - high, 0.01 * width + 1) << a << ".." << b;
+  }
 }
 
 }  // namespace
