@@ -9,8 +9,8 @@
 #include <set>
 #include <sstream>
 #include <stdexcept>
-#include <unordered_set>
 
+#include "batch/key_set.hpp"
 #include "batch/runner.hpp"
 #include "batch/slurm.hpp"
 
@@ -197,7 +197,7 @@ void write_distributions(std::ostream& out, const PartStats& p) {
     out << line;
     std::map<std::string, Distribution> dists;
     for (const auto& [s, v] : per) {
-      const Distribution d = dists[s] = distribution(v);
+      const Distribution d = dists[s] = distribution(v.to_vector());
       std::snprintf(line, sizeof line, "  %-16s %7zu %10s %10s %10s %10s %10s %10s\n", s.c_str(),
                     d.count, fmt(d.min).c_str(), fmt(d.p10).c_str(), fmt(d.median).c_str(),
                     fmt(d.p90).c_str(), fmt(d.max).c_str(), fmt(d.mean).c_str());
@@ -240,20 +240,21 @@ bool whole_svg(const fs::path& path) {
 }
 
 /// One histogram file: bin centre, then one count column per scenario.
-std::string write_histogram(const fs::path& dat,
-                            const std::map<std::string, std::vector<double>>& per, int bins) {
+std::string write_histogram(const fs::path& dat, const std::map<std::string, FigureValues>& per,
+                            int bins) {
   double lo = INFINITY, hi = -INFINITY;
   for (const auto& [s, v] : per)
-    for (double x : v) lo = std::min(lo, x), hi = std::max(hi, x);
+    v.for_each([&](double x) { lo = std::min(lo, x), hi = std::max(hi, x); });
   if (!(hi > lo)) hi = lo + 1;
   const double w = (hi - lo) / bins;
   std::vector<std::vector<long long>> counts(
       per.size(), std::vector<long long>(static_cast<std::size_t>(bins), 0));
   std::size_t k = 0;
   for (const auto& [s, v] : per) {
-    for (double x : v)
+    v.for_each([&](double x) {
       ++counts[k][std::min(static_cast<std::size_t>(bins - 1),
                            static_cast<std::size_t>((x - lo) / w))];
+    });
     ++k;
   }
   std::ostringstream text;
@@ -267,6 +268,26 @@ std::string write_histogram(const fs::path& dat,
 }
 
 }  // namespace
+
+FigureValues::FigureValues(std::initializer_list<double> values) {
+  for (double v : values) push_back(v);
+}
+
+void FigureValues::push_back(double v) {
+  if (m_blocks.empty() || m_blocks.back().size() == kBlock) {
+    m_blocks.emplace_back();
+    m_blocks.back().reserve(kBlock);
+  }
+  m_blocks.back().push_back(v);
+  ++m_size;
+}
+
+std::vector<double> FigureValues::to_vector() const {
+  std::vector<double> v;
+  v.reserve(m_size);
+  for (const auto& block : m_blocks) v.insert(v.end(), block.begin(), block.end());
+  return v;
+}
 
 Distribution distribution(std::vector<double> v) {
   Distribution d;
@@ -289,18 +310,26 @@ PartStats read_part(const std::string& name, const fs::path& manifest, const fs:
   ReadCount count{progress, read_before, total};
   PartStats p;
   p.name = name;
-  // Rows are read one at a time and only what the report needs is kept: the done keys and the
-  // figures (a million rows: about 0.2 GB instead of 2 GB of parsed rows).
-  std::unordered_set<std::string> done_keys;
-  std::vector<std::map<std::string, std::vector<double>>*> per_figure;
-  for (const auto& f : figures) per_figure.push_back(&p.values[f]);
+  // Rows are read one at a time and only what the report needs is kept: the done keys, compactly
+  // (KeySet), and the figures, in blocks that are moved into exact vectors at the end (ten
+  // million rows: see docs/batch.md, "Statistics").
+  KeySet done_keys;
+  std::map<std::string, std::vector<FigureValues*>> per_scenario;  // scenario -> per figure
   for_each_row(manifest, figures, p.skipped_lines, count, [&](const RowFields& row) {
-    if (!done_keys.insert(row.key()).second) return;
+    if (!done_keys.insert(row.key())) return;
     const std::string s = row.scenario();
     ++p.done[s];
+    auto [it, added] = per_scenario.try_emplace(s);
+    if (added)
+      for (const auto& f : figures) it->second.push_back(&p.values[f][s]);
     for (std::size_t i = 0; i < figures.size(); ++i)
-      if (!std::isnan(row.value(i))) (*per_figure[i])[s].push_back(row.value(i));
+      if (!std::isnan(row.value(i))) it->second[i]->push_back(row.value(i));
   });
+  // A figure no row of a scenario gives is left out.
+  for (auto& [figure, per] : p.values) {
+    for (auto it = per.begin(); it != per.end();)
+      it = it->second.empty() ? per.erase(it) : std::next(it);
+  }
   for (auto it = p.values.begin(); it != p.values.end();)
     it = it->second.empty() ? p.values.erase(it) : std::next(it);
   std::map<std::string, std::pair<std::string, std::string>>
@@ -310,7 +339,7 @@ PartStats read_part(const std::string& name, const fs::path& manifest, const fs:
     latest_failure[row.key()] = {row.scenario(), row.reason()};
   });
   for (const auto& [key, failure] : latest_failure) {
-    if (done_keys.count(key)) continue;
+    if (done_keys.contains(key)) continue;
     ++p.failed[failure.first];
     ++p.reasons[failure.second];
   }

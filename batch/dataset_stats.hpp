@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <initializer_list>
 #include <iosfwd>
 #include <map>
 #include <stdexcept>
@@ -38,6 +39,31 @@ struct Distribution {
 /// min / quantiles / max / mean of `values` (quantiles by linear interpolation).
 Distribution distribution(std::vector<double> values);
 
+/// One figure's values over the samples of a scenario, in the order read. They are kept in
+/// blocks of fixed size, so that millions of them grow with no copy and no slack, and copied
+/// into one vector only where a distribution is computed, one figure at a time.
+class FigureValues {
+ public:
+  FigureValues() = default;
+  FigureValues(std::initializer_list<double> values);
+  void push_back(double v);
+  std::size_t size() const { return m_size; }
+  bool empty() const { return m_size == 0; }
+  /// Call `f(v)` on each value in order.
+  template <class F>
+  void for_each(F f) const {
+    for (const auto& block : m_blocks)
+      for (double v : block) f(v);
+  }
+  std::vector<double> to_vector() const;
+  bool operator==(const FigureValues& other) const { return to_vector() == other.to_vector(); }
+
+ private:
+  static constexpr std::size_t kBlock = 8192;
+  std::vector<std::vector<double>> m_blocks;  ///< each reserved to kBlock values
+  std::size_t m_size = 0;
+};
+
 /// One part of a dataset (meshes or renders) as its manifest and failures file describe it.
 struct PartStats {
   std::string name;                          ///< "meshes" or "renders"
@@ -50,7 +76,7 @@ struct PartStats {
   /// killed writer, or a file edited by hand.
   long long skipped_lines = 0;
   /// figure -> scenario -> values over finished samples (wall_seconds, max_stretch, ...)
-  std::map<std::string, std::map<std::string, std::vector<double>>> values;
+  std::map<std::string, std::map<std::string, FigureValues>> values;
 };
 
 /// Told the bytes read so far of the files read_dataset reads, and their total size, every few

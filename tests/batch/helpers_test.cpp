@@ -246,7 +246,7 @@ TEST(DatasetStats, CountsLatestStatePerSampleAndQuantiles) {
   EXPECT_EQ(p.failed.at("fall-sphere"), 2);
   EXPECT_EQ(p.reasons.at("time limit"), 1);
   EXPECT_EQ(p.failed_attempts, 3);
-  const auto d = papersim::batch::distribution(p.values.at("wall_seconds").at("pull"));
+  const auto d = papersim::batch::distribution(p.values.at("wall_seconds").at("pull").to_vector());
   EXPECT_EQ(d.count, 5u);  // the duplicate row counts once
   EXPECT_DOUBLE_EQ(d.median, 3.0);
   EXPECT_DOUBLE_EQ(d.p90, 4.6);
@@ -426,14 +426,14 @@ TEST(DatasetStats, StreamedRowsGiveWhatParsingEveryRowGives) {
   EXPECT_EQ(got.done,
             (std::map<std::string, long long>{{"pull", 5}, {"fold", 2}, {"fo\"ld", 1}, {"?", 1}}));
   EXPECT_EQ(got.skipped_lines, 10);  // 8 in the manifest, 2 in the failures
-  EXPECT_EQ(got.values.at("wall_seconds"), (std::map<std::string, std::vector<double>>{
+  EXPECT_EQ(got.values.at("wall_seconds"), (std::map<std::string, papersim::batch::FigureValues>{
                                                {"pull", {1}}, {"fold", {2}}, {"fo\"ld", {4.5}}}));
   EXPECT_EQ(got.values.at("cpu_seconds"),
-            (std::map<std::string, std::vector<double>>{{"pull", {-3}}}));
-  EXPECT_EQ(got.values.at("vertices"),
-            (std::map<std::string, std::vector<double>>{{"pull", {100, 18446744073709551615.0}}}));
+            (std::map<std::string, papersim::batch::FigureValues>{{"pull", {-3}}}));
+  EXPECT_EQ(got.values.at("vertices"), (std::map<std::string, papersim::batch::FigureValues>{
+                                           {"pull", {100, 18446744073709551615.0}}}));
   EXPECT_EQ(got.values.at("newton_iterations"),
-            (std::map<std::string, std::vector<double>>{{"pull", {12}}}));
+            (std::map<std::string, papersim::batch::FigureValues>{{"pull", {12}}}));
   EXPECT_EQ(got.failed, (std::map<std::string, long long>{{"fold", 2}}));
   EXPECT_EQ(got.reasons, (std::map<std::string, long long>{{"simulation failed", 1}, {"?", 1}}));
   EXPECT_EQ(got.failed_attempts, 4);
