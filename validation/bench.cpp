@@ -133,7 +133,7 @@ int run_child(const std::vector<std::string>& argv, const fs::path& log, double&
 json read_json(const fs::path& path) {
   std::ifstream in(path);
   if (!in) throw BenchError("cannot read " + path.string());
-  const json j = json::parse(in, nullptr, false);
+  json j = json::parse(in, nullptr, false);
   if (j.is_discarded()) throw BenchError(path.string() + " is not valid JSON");
   return j;
 }
@@ -468,7 +468,8 @@ void bench_scenario(const BenchOptions& o, const std::string& scenario, std::vec
     std::vector<Row> draw_rows;
     for (int k_run = 0; k_run < o.repeat; ++k_run) {
       for (std::size_t i = 0; i < runs.size(); ++i) {
-        const auto& [binary, scene] = runs[k_run % 2 == 0 ? i : runs.size() - 1 - i];
+        const auto& [binary_name, scene] = runs[k_run % 2 == 0 ? i : runs.size() - 1 - i];
+        const std::string& binary = binary_name;  // a lambda below captures it
         const std::string run =
             o.repeat > 1 ? "run " + std::to_string(k_run + 1) + "/" + std::to_string(o.repeat) : "";
         const fs::path out = dir / (k_run == 0 ? binary : binary + "_repeat");

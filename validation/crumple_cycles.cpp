@@ -158,7 +158,7 @@ PhaseFigures run_phase(const ps::Scene& scene, int cycle, const std::string& pha
 std::string save(const std::string& dir, const std::string& name,
                  const papersim::remesh::SheetMesh& mesh, const Eigen::MatrixX3d& x,
                  const ps::Scene& scene) {
-  const std::string path = (fs::path(dir) / name).string();
+  std::string path = (fs::path(dir) / name).string();
   papersim::remesh::write_sheet_file(path, mesh, x, Eigen::MatrixX3d::Zero(x.rows(), 3),
                                      scene.sheet.width, scene.sheet.height);
   return path;
@@ -455,7 +455,7 @@ int main(int argc, char** argv) {
     const auto phase = [&](const ps::Scene& scene, int k, const std::string& name,
                            const std::string& file) {
       const PhaseFigures p = run_phase(scene, k, name, o, mesh, x);
-      const std::string written = save(o.out, file, mesh, x, scene);
+      std::string written = save(o.out, file, mesh, x, scene);
       print_figures(p);
       check(p, scene);
       all.push_back(p);

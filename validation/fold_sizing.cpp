@@ -71,7 +71,7 @@ void report(const ps::Run& run, const rm::RemeshParams& p, const std::string& du
   std::vector<int> finest(5, 0), dominant(5, 0);
   std::vector<std::vector<int>> finest_at(5, std::vector<int>(12, 0));  // by material x, 1 cm bins
   std::vector<std::vector<double>> wanted(5);
-  double implied = 0, area_total = 0, green_min = 0;
+  double implied = 0, green_min = 0;
   int compressed = 0;
   for (int i = 0; i < f.rows(); ++i) {
     const rm::SizingTerms& t = terms[i];
@@ -120,7 +120,6 @@ void report(const ps::Run& run, const rm::RemeshParams& p, const std::string& du
     const Eigen::Matrix2d clamped =
         rm::clamp_metric(rm::tensor_max({m[0], m[1], m[2], m[3], m[4]}), p);
     implied += area * std::sqrt(std::max(clamped.determinant(), 0.0)) / (std::sqrt(3.0) / 4);
-    area_total += area;
     Eigen::Matrix<double, 3, 2> def;
     def.col(0) = (x.row(f(i, 1)) - x.row(f(i, 0))).transpose();
     def.col(1) = (x.row(f(i, 2)) - x.row(f(i, 0))).transpose();

@@ -172,12 +172,15 @@ void write_csv_header(std::ostream& out) {
 
 void write_csv_row(std::ostream& out, const std::string& mesh_name, const MeshMetrics& metrics) {
   out << csv_quote(mesh_name);
-  for (const auto& [name, value] : metric_fields(metrics))
-    out << ',' << (is_count(name) ? format_value(name, value) : [&] {
+  for (const auto& [name, value] : metric_fields(metrics)) {
+    if (is_count(name)) {
+      out << ',' << format_value(name, value);
+    } else {
       std::ostringstream s;
       s << std::setprecision(std::numeric_limits<double>::max_digits10) << value;
-      return s.str();
-    }());
+      out << ',' << s.str();
+    }
+  }
   out << '\n';
 }
 

@@ -8,17 +8,17 @@
 
 namespace papersim::validation {
 
-StudyTable::StudyTable(std::string path, const std::string& header) : path_(std::move(path)) {
-  if (path_.empty()) return;
-  text_ = header + '\n';
-  common::write_text_atomically(path_, text_);
+StudyTable::StudyTable(std::string path, const std::string& header) : m_path(std::move(path)) {
+  if (m_path.empty()) return;
+  m_text = header + '\n';
+  common::write_text_atomically(m_path, m_text);
 }
 
 void StudyTable::add(const std::string& row) {
-  if (path_.empty()) return;
-  text_ += row;
-  text_ += '\n';
-  common::write_text_atomically(path_, text_);
+  if (m_path.empty()) return;
+  m_text += row;
+  m_text += '\n';
+  common::write_text_atomically(m_path, m_text);
 }
 
 int run_study(const char* program, int (*study)(int, char**), int argc, char** argv) {

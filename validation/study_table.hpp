@@ -19,11 +19,11 @@ class StudyTable {
   /// @throw common::OutputError naming the path when it cannot be written
   void add(const std::string& row);
 
-  bool enabled() const { return !path_.empty(); }
+  bool enabled() const { return !m_path.empty(); }
 
  private:
-  std::string path_;
-  std::string text_;
+  std::string m_path;
+  std::string m_text;
 };
 
 /// The main of a study program: `study(argc, argv)`, with a table that cannot be written
