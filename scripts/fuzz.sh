@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # Fuzz the input readers with libFuzzer (clang, AddressSanitizer, UndefinedBehaviorSanitizer):
-# the scene reader, the sheet OBJ and PLY readers, scenegen's mesh reader and the checkpoint
-# reader with the run it continues.
+# the scene reader, the sheet OBJ and PLY readers, scenegen's mesh reader, the checkpoint
+# reader with the run it continues, and dataset-stats' manifest reader against a plain parse.
 #   bash scripts/fuzz.sh [SECONDS_PER_TARGET] [TARGET...]     (default 60 s, every target)
 # Targets: fuzz_scene fuzz_sheet_obj fuzz_sheet_ply fuzz_scenegen_obj fuzz_checkpoint
+# fuzz_dataset_stats
 # (tests/fuzz/). They run one after another on one core. Needs Debian's clang and libclang-rt-14-dev
 # (scripts/install_dependencies.sh installs them); the build goes to build-fuzz/ (configure log
 # in build-fuzz/configure.log). Each target starts from its seed corpus in
@@ -17,7 +18,7 @@
 # or a missing compiler. Callable from anywhere (it works in the repository it lives in).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-all_targets=(fuzz_scene fuzz_sheet_obj fuzz_sheet_ply fuzz_scenegen_obj fuzz_checkpoint)
+all_targets=(fuzz_scene fuzz_sheet_obj fuzz_sheet_ply fuzz_scenegen_obj fuzz_checkpoint fuzz_dataset_stats)
 seconds="${1:-60}"
 if [ $# -gt 0 ]; then shift; fi
 targets=("$@")

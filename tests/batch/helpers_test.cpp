@@ -135,7 +135,8 @@ TEST(Selection, SeedListsDrawTheirSeedsInOrderAndRefuseOverlaps) {
                                                         {"1-10,5", "'5'"},
                                                         {"4,2-4", "'2-4'"},
                                                         {"3,x", "'x'"}}) {
-    const std::string e = scene_error([&] { ps::parse_seeds(bad); });
+    const std::string& seeds = bad;  // a lambda captures it (not a structured binding)
+    const std::string e = scene_error([&] { ps::parse_seeds(seeds); });
     EXPECT_NE(e.find("--seeds"), std::string::npos) << bad << ": " << e;
     EXPECT_NE(e.find(part), std::string::npos) << bad << ": " << e;
   }

@@ -1,0 +1,125 @@
+// libFuzzer target: `papersim dataset-stats`' reader of a manifest and its failures file
+// (batch::read_part: rows read as streams of JSON events, keys in a KeySet, values in blocks),
+// checked against parsing every line into a JSON object. The input is the manifest, then a form
+// feed and the failures file (a form feed is no JSON whitespace, so a line with one is malformed
+// either way; without one, the failures file is empty). Any difference in the counts, the
+// reasons, the lines left out or any figure's values, any exception, a crash or a sanitizer
+// report is a finding.
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "batch/dataset_stats.hpp"
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+using papersim::batch::PartStats;
+
+namespace {
+
+const std::vector<std::string> FIGURES = {"wall_seconds", "vertices", "key", "seed"};
+
+/// The oracle: what parsing each line of the two files into a JSON object gives.
+PartStats parsed(const std::string& manifest, const std::string& failures) {
+  PartStats want;
+  const auto well_formed = [](const json& j) {
+    if (!j.is_object() || !j.contains("key") || !j["key"].is_string()) return false;
+    for (const char* k : {"scenario", "reason"})
+      if (j.contains(k) && !j[k].is_string()) return false;
+    return true;
+  };
+  const auto rows = [&](const std::string& text, auto row) {
+    std::istringstream in(text);
+    std::string line;
+    while (std::getline(in, line)) {
+      if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
+      const json j = json::parse(line, nullptr, false);
+      if (j.is_discarded() || !well_formed(j))
+        ++want.skipped_lines;
+      else
+        row(j);
+    }
+  };
+  std::set<std::string> done;
+  rows(manifest, [&](const json& j) {
+    if (!done.insert(j["key"].get<std::string>()).second) return;
+    const std::string s = j.value("scenario", std::string("?"));
+    ++want.done[s];
+    for (const auto& f : FIGURES)
+      if (j.contains(f) && j[f].is_number()) want.values[f][s].push_back(j[f].get<double>());
+  });
+  std::map<std::string, json> latest;
+  rows(failures, [&](const json& j) {
+    ++want.failed_attempts;
+    latest[j["key"].get<std::string>()] = j;
+  });
+  for (const auto& [key, j] : latest)
+    if (!done.count(key)) {
+      ++want.failed[j.value("scenario", std::string("?"))];
+      ++want.reasons[j.value("reason", std::string("?"))];
+    }
+  return want;
+}
+
+/// Values equal to the bit, NaN included (a figure is never NaN, but a difference must show).
+bool same_values(const PartStats& a, const PartStats& b) {
+  if (a.values.size() != b.values.size()) return false;
+  for (const auto& [figure, per] : a.values) {
+    const auto it = b.values.find(figure);
+    if (it == b.values.end() || it->second.size() != per.size()) return false;
+    for (const auto& [s, v] : per) {
+      const auto jt = it->second.find(s);
+      if (jt == it->second.end()) return false;
+      const std::vector<double> x = v.to_vector(), y = jt->second.to_vector();
+      if (x.size() != y.size()) return false;
+      for (std::size_t i = 0; i < x.size(); ++i)
+        if (std::memcmp(&x[i], &y[i], sizeof(double)) != 0) return false;
+    }
+  }
+  return true;
+}
+
+const fs::path& dir() {
+  static const fs::path d = [] {
+    fs::path p = fs::temp_directory_path() / ("papersim_fuzz_stats_" + std::to_string(getpid()));
+    fs::create_directories(p);
+    return p;
+  }();
+  return d;
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  const std::string input(reinterpret_cast<const char*>(data), size);
+  const std::size_t cut = std::min(input.find('\f'), input.size());
+  const std::string manifest = input.substr(0, cut),
+                    failures = cut < input.size() ? input.substr(cut + 1) : std::string();
+  std::ofstream(dir() / "manifest.jsonl", std::ios::binary | std::ios::trunc) << manifest;
+  std::ofstream(dir() / "failures.jsonl", std::ios::binary | std::ios::trunc) << failures;
+  const PartStats got = papersim::batch::read_part("meshes", dir() / "manifest.jsonl",
+                                                   dir() / "failures.jsonl", FIGURES);
+  const PartStats want = parsed(manifest, failures);
+  const bool same = got.done == want.done && got.failed == want.failed &&
+                    got.reasons == want.reasons && got.failed_attempts == want.failed_attempts &&
+                    got.skipped_lines == want.skipped_lines && same_values(got, want);
+  if (!same) {
+    std::fprintf(stderr, "read_part differs from parsing every line into an object\n");
+    std::abort();
+  }
+  return 0;
+}
