@@ -11,6 +11,7 @@
 
 #include "batch/dataset_stats.hpp"
 #include "batch/runner.hpp"
+#include "parsed_rows.hpp"
 #include "simulation/batch.hpp"
 #include "simulation/errors.hpp"
 #include "simulation/scenario.hpp"
@@ -376,44 +377,15 @@ TEST(DatasetStats, StreamedRowsGiveWhatParsingEveryRowGives) {
   }
 
   // What parsing every row into a JSON object gives.
-  papersim::batch::PartStats want;
   const std::vector<std::string> figures = {"wall_seconds", "cpu_seconds", "vertices",
                                             "newton_iterations"};
-  const auto well_formed = [](const json& j) {
-    if (!j.is_object() || !j.contains("key") || !j["key"].is_string()) return false;
-    for (const char* k : {"scenario", "reason"})
-      if (j.contains(k) && !j[k].is_string()) return false;
-    return true;
+  const auto joined = [](const std::vector<std::string>& lines) {
+    std::string text;
+    for (const auto& l : lines) text += l + "\n";
+    return text;
   };
-  std::set<std::string> done;
-  for (const auto& l : manifest) {
-    if (l.find_first_not_of(" \t\r") == std::string::npos) continue;
-    const json j = json::parse(l, nullptr, false);
-    if (j.is_discarded() || !well_formed(j)) {
-      ++want.skipped_lines;
-      continue;
-    }
-    if (!done.insert(j["key"].get<std::string>()).second) continue;
-    const std::string s = j.value("scenario", std::string("?"));
-    ++want.done[s];
-    for (const auto& f : figures)
-      if (j.contains(f) && j[f].is_number()) want.values[f][s].push_back(j[f].get<double>());
-  }
-  std::map<std::string, json> latest;
-  for (const auto& l : failures) {
-    const json j = json::parse(l, nullptr, false);
-    if (j.is_discarded() || !well_formed(j)) {
-      ++want.skipped_lines;
-      continue;
-    }
-    ++want.failed_attempts;
-    latest[j["key"].get<std::string>()] = j;
-  }
-  for (const auto& [key, j] : latest)
-    if (!done.count(key)) {
-      ++want.failed[j.value("scenario", std::string("?"))];
-      ++want.reasons[j.value("reason", std::string("?"))];
-    }
+  const papersim::batch::PartStats want =
+      papersim::batch::testing::parse_every_line(joined(manifest), joined(failures), figures);
 
   const auto got = papersim::batch::read_part("meshes", root / "manifest.jsonl",
                                               root / "failures.jsonl", figures);

@@ -16,64 +16,18 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <map>
-#include <nlohmann/json.hpp>
-#include <set>
-#include <sstream>
 #include <string>
 #include <vector>
 
+#include "../batch/parsed_rows.hpp"
 #include "batch/dataset_stats.hpp"
 
 namespace fs = std::filesystem;
-using nlohmann::json;
 using papersim::batch::PartStats;
 
 namespace {
 
 const std::vector<std::string> FIGURES = {"wall_seconds", "vertices", "key", "seed"};
-
-/// The oracle: what parsing each line of the two files into a JSON object gives.
-PartStats parsed(const std::string& manifest, const std::string& failures) {
-  PartStats want;
-  const auto well_formed = [](const json& j) {
-    if (!j.is_object() || !j.contains("key") || !j["key"].is_string()) return false;
-    for (const char* k : {"scenario", "reason"})
-      if (j.contains(k) && !j[k].is_string()) return false;
-    return true;
-  };
-  const auto rows = [&](const std::string& text, auto row) {
-    std::istringstream in(text);
-    std::string line;
-    while (std::getline(in, line)) {
-      if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
-      const json j = json::parse(line, nullptr, false);
-      if (j.is_discarded() || !well_formed(j))
-        ++want.skipped_lines;
-      else
-        row(j);
-    }
-  };
-  std::set<std::string> done;
-  rows(manifest, [&](const json& j) {
-    if (!done.insert(j["key"].get<std::string>()).second) return;
-    const std::string s = j.value("scenario", std::string("?"));
-    ++want.done[s];
-    for (const auto& f : FIGURES)
-      if (j.contains(f) && j[f].is_number()) want.values[f][s].push_back(j[f].get<double>());
-  });
-  std::map<std::string, json> latest;
-  rows(failures, [&](const json& j) {
-    ++want.failed_attempts;
-    latest[j["key"].get<std::string>()] = j;
-  });
-  for (const auto& [key, j] : latest)
-    if (!done.count(key)) {
-      ++want.failed[j.value("scenario", std::string("?"))];
-      ++want.reasons[j.value("reason", std::string("?"))];
-    }
-  return want;
-}
 
 /// Values equal to the bit, NaN included (a figure is never NaN, but a difference must show).
 bool same_values(const PartStats& a, const PartStats& b) {
@@ -113,7 +67,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   std::ofstream(dir() / "failures.jsonl", std::ios::binary | std::ios::trunc) << failures;
   const PartStats got = papersim::batch::read_part("meshes", dir() / "manifest.jsonl",
                                                    dir() / "failures.jsonl", FIGURES);
-  const PartStats want = parsed(manifest, failures);
+  const PartStats want = papersim::batch::testing::parse_every_line(manifest, failures, FIGURES);
   const bool same = got.done == want.done && got.failed == want.failed &&
                     got.reasons == want.reasons && got.failed_attempts == want.failed_attempts &&
                     got.skipped_lines == want.skipped_lines && same_values(got, want);
