@@ -32,7 +32,7 @@
 
 namespace papersim::simulation {
 
-class FitBendingEnergy : public BendingEnergy {
+class FitBendingEnergy final : public BendingEnergy {
  public:
   /// @throw NumericError when a face's stencil cannot determine its curvature (a mesh with
   ///        fewer than three interior edges).

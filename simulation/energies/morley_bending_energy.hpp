@@ -47,7 +47,7 @@
 
 namespace papersim::simulation {
 
-class MorleyBendingEnergy : public BendingEnergy {
+class MorleyBendingEnergy final : public BendingEnergy {
  public:
   /// @param clamped_faces faces held rigidly, slopes included (a clamp's jaws).
   MorleyBendingEnergy(const remesh::SheetMesh& mesh, const Material& material,
