@@ -37,7 +37,7 @@ bool KeySet::contains(std::string_view key) const {
 
 std::size_t KeySet::memory_bytes() const {
   std::size_t bytes = m_blocks.size() * kBlock + m_slots.capacity() * sizeof(std::uint64_t);
-  for (const auto& k : m_long) bytes += sizeof(k) + k.capacity();
+  for (const auto& k : m_long) bytes += sizeof(std::string) + k.capacity();
   return bytes;
 }
 
