@@ -311,8 +311,8 @@ PartStats read_part(const std::string& name, const fs::path& manifest, const fs:
   PartStats p;
   p.name = name;
   // Rows are read one at a time and only what the report needs is kept: the done keys, compactly
-  // (KeySet), and the figures, in blocks that are moved into exact vectors at the end (ten
-  // million rows: see docs/batch.md, "Statistics").
+  // (KeySet), and the figures, in fixed blocks (FigureValues) (ten million rows: docs/batch.md,
+  // "Statistics").
   KeySet done_keys;
   std::map<std::string, std::vector<FigureValues*>> per_scenario;  // scenario -> per figure
   for_each_row(manifest, figures, p.skipped_lines, count, [&](const RowFields& row) {
