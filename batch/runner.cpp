@@ -18,8 +18,8 @@
 #include <memory>
 #include <sstream>
 #include <stdexcept>
+#include <string_view>
 #include <thread>
-#include <unordered_set>
 
 #include "common/clock.hpp"
 #include "common/errors.hpp"
@@ -207,18 +207,17 @@ class Runner {
 };
 
 void Runner::scan() {
-  std::unordered_set<std::string> keys;
-  keys.reserve(m_tasks.size());
+  KeySet keys;
   for (const Task& t : m_tasks) keys.insert(t.key);
-  const std::unordered_set<std::string> rows = keys_in_json_lines(manifest(), keys);
-  const std::unordered_set<std::string> failed = keys_in_json_lines(failures(), keys);
+  const KeySet rows = keys_in_json_lines(manifest(), keys);
+  const KeySet failed = keys_in_json_lines(failures(), keys);
   std::vector<std::size_t> missing_rows;
   for (std::size_t i = 0; i < m_tasks.size(); ++i) {
     const Task& t = m_tasks[i];
     if (finished(t)) {
       ++m_sum.done;
-      if (!rows.count(t.key)) missing_rows.push_back(i);
-    } else if (failed.count(t.key) && !m_spec.retry_failed) {
+      if (!rows.contains(t.key)) missing_rows.push_back(i);
+    } else if (failed.contains(t.key) && !m_spec.retry_failed) {
       ++m_sum.failed;
     } else {
       m_pending.push_back(i);
@@ -236,20 +235,20 @@ void Runner::repair(const std::vector<std::size_t>& missing_rows) {
     TaskLock lock = TaskLock::try_take(lock_file(m_tasks[i]));
     if (lock.held()) held.emplace_back(i, std::move(lock));
   }
-  std::unordered_set<std::string> keys;
+  KeySet keys;
   for (const auto& [i, lock] : held) keys.insert(m_tasks[i].key);
-  const std::unordered_set<std::string> rows = keys_in_json_lines(manifest(), keys);
+  const KeySet rows = keys_in_json_lines(manifest(), keys);
   for (auto& [i, lock] : held) {
-    if (rows.count(m_tasks[i].key)) continue;
+    if (rows.contains(m_tasks[i].key)) continue;
     append_manifest_row(m_tasks[i], -1.0, -1.0);
     ++m_sum.repaired;
   }
 }
 
 void Runner::append_manifest_row(const Task& t, double wall, double cpu) {
-  nlohmann::json row = t.info;
+  nlohmann::json row = t.info_object();
   row["key"] = t.key;
-  row["path"] = t.final_dir.generic_string();
+  row["path"] = t.final_dir;
   row["cpu_seconds"] = cpu >= 0 ? nlohmann::json(cpu) : nlohmann::json(nullptr);
   if (m_spec.manifest_row) row.update(m_spec.manifest_row(t, m_spec.root / t.final_dir, wall));
   append_line(manifest(), row.dump());
@@ -257,7 +256,7 @@ void Runner::append_manifest_row(const Task& t, double wall, double cpu) {
 
 void Runner::record_failure(const Task& t, const std::string& reason, const std::string& detail,
                             double wall) {
-  nlohmann::json row = t.info;
+  nlohmann::json row = t.info_object();
   row["key"] = t.key;
   row["reason"] = reason;
   row["detail"] = detail;
@@ -618,10 +617,9 @@ std::vector<nlohmann::json> read_json_lines(const fs::path& path) {
   return rows;
 }
 
-std::unordered_set<std::string> keys_in_json_lines(const fs::path& path,
-                                                   const std::unordered_set<std::string>& wanted) {
-  std::unordered_set<std::string> found;
-  if (wanted.empty()) return found;
+KeySet keys_in_json_lines(const fs::path& path, const KeySet& wanted) {
+  KeySet found;
+  if (wanted.size() == 0) return found;
   std::ifstream in(path, std::ios::binary);
   std::string line;
   while (std::getline(in, line)) {
@@ -637,15 +635,16 @@ std::unordered_set<std::string> keys_in_json_lines(const fs::path& path,
       i = line.find_first_not_of(" \t", i + 1);
       if (i == std::string::npos || line[i] != '"') continue;
       const std::size_t end = line.find('"', i + 1);
-      if (end != std::string::npos && wanted.count(line.substr(i + 1, end - i - 1)))
+      if (end != std::string::npos &&
+          wanted.contains(std::string_view(line).substr(i + 1, end - i - 1)))
         candidate = true;
     }
     if (!candidate) continue;
     const nlohmann::json j = nlohmann::json::parse(line, nullptr, false);
     if (j.is_discarded() || !j.is_object()) continue;
     const auto key = j.find("key");
-    if (key != j.end() && key->is_string() && wanted.count(key->get<std::string>()))
-      found.insert(key->get<std::string>());
+    if (key != j.end() && key->is_string() && wanted.contains(key->get_ref<const std::string&>()))
+      found.insert(key->get_ref<const std::string&>());
   }
   return found;
 }

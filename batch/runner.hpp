@@ -17,16 +17,23 @@
 #include <functional>
 #include <nlohmann/json.hpp>
 #include <string>
-#include <unordered_set>
 #include <vector>
+
+#include "batch/key_set.hpp"
 
 namespace papersim::batch {
 
-/// One sample of a batch.
+/// One sample of a batch. A batch holds up to ten million of them, so each is three strings: a
+/// std::filesystem::path keeps a list of its components and a nlohmann::json object a tree of
+/// nodes, and a batch of such tasks took three times the memory (docs/batch.md).
 struct Task {
-  std::string key;  ///< unique within the batch, e.g. "pull/0/17"; used in file names
-  std::filesystem::path final_dir;  ///< relative to the root; exists only when finished
-  nlohmann::json info = nlohmann::json::object();  ///< copied into manifest and failure rows
+  std::string key;        ///< unique within the batch, e.g. "meshes/pull/0/17"; used in file names
+  std::string final_dir;  ///< '/'-separated, relative to the root; exists only when finished
+  /// A JSON object's text (nlohmann::json::dump()), copied into manifest and failure rows.
+  std::string info = "{}";
+
+  /// `info` parsed.
+  nlohmann::json info_object() const { return nlohmann::json::parse(info); }
 };
 
 /// One child process of a task: argv[0] is the executable path.
@@ -161,8 +168,7 @@ std::vector<nlohmann::json> read_json_lines(const std::filesystem::path& path);
 /// file gives none; a line that is not JSON is skipped, as by read_json_lines). Streams the file
 /// and parses only the lines that name a wanted key, so memory holds the matches alone: a batch
 /// (or one shard of it) checks its tasks against a manifest of millions of rows this way.
-std::unordered_set<std::string> keys_in_json_lines(const std::filesystem::path& path,
-                                                   const std::unordered_set<std::string>& wanted);
+KeySet keys_in_json_lines(const std::filesystem::path& path, const KeySet& wanted);
 
 /// Write `text` to `path` through a temporary file in the same folder and a rename.
 /// @throw common::OutputError naming the file when it cannot be written

@@ -28,7 +28,7 @@ bool all_digits(const std::string& s) {
 struct MeshEntry {
   std::string scenario;
   std::uint64_t seed = 0;
-  fs::path dir;  ///< relative to the root
+  std::string dir;  ///< '/'-separated, relative to the root (not a fs::path: a million of them)
 };
 
 /// Finished meshes: meshes/<scenario>/<bucket>/<seed>/ holding sheet.obj, sorted by scenario, then
@@ -51,8 +51,8 @@ std::vector<MeshEntry> finished_meshes(const fs::path& root, const ListProgress&
       if (!d.is_directory() || !all_digits(name) || !fs::exists(d.path() / "sheet.obj")) continue;
       // The folder relative to the root, composed (fs::relative resolves links: 8 readlink
       // calls a mesh, which dominated the walk over a large dataset).
-      out.push_back(
-          {scenario, std::stoull(name), fs::path("meshes") / scenario / bucket.filename() / name});
+      out.push_back({scenario, std::stoull(name),
+                     "meshes/" + scenario + '/' + bucket.filename().string() + '/' + name});
     }
     if (progress) progress(i + 1, buckets.size(), out.size());
   }
@@ -84,7 +84,7 @@ MeshEntry parse_mesh_line(const std::string& line) {
   if (parts.size() != 4 || parts[0] != "meshes" || !name(parts[1]) || !name(parts[2]) ||
       !all_digits(parts[3]))
     return {};
-  return {parts[1], std::stoull(parts[3]), fs::path(line)};
+  return {parts[1], std::stoull(parts[3]), line};
 }
 
 /// The meshes of a list written by write_mesh_list, checked line by line (format, order, count).
@@ -158,12 +158,12 @@ std::size_t write_mesh_list(const fs::path& root, const fs::path& file,
                             const ListProgress& progress) {
   const std::vector<MeshEntry> meshes = finished_meshes(root, progress);
   for (const MeshEntry& m : meshes)
-    if (m.dir.generic_string().find_first_of("\n\r") != std::string::npos)
+    if (m.dir.find_first_of("\n\r") != std::string::npos)
       throw InputError("mesh folder '" + (root / m.dir).string() +
                        "' has a line break in its path: it cannot be listed");
   common::write_file_atomically(file, [&](std::ostream& out) {
     out << MESH_LIST_HEAD << meshes.size() << " meshes\n";
-    for (const MeshEntry& m : meshes) out << m.dir.generic_string() << '\n';
+    for (const MeshEntry& m : meshes) out << m.dir << '\n';
   });
   return meshes.size();
 }
@@ -174,22 +174,31 @@ std::vector<batch::Task> render_tasks(const fs::path& root, const RenderBatchOpt
                                       const batch::Shard& shard, const fs::path& mesh_list,
                                       const ListProgress& progress) {
   if (o.views < 1) throw InputError("--views must be >= 1");
+  const std::vector<MeshEntry> meshes =
+      mesh_list.empty() ? finished_meshes(root, progress) : read_mesh_list(mesh_list);
+  // The shard's positions p < n with p % count == index.
+  const std::size_t n = meshes.size() * static_cast<std::size_t>(o.views);
+  const auto index = static_cast<std::size_t>(shard.index);
+  const auto count = static_cast<std::size_t>(shard.count);
   std::vector<batch::Task> tasks;
+  tasks.reserve(n > index ? (n - index + count - 1) / count : 0);
   std::size_t position = 0;
-  for (const MeshEntry& m :
-       mesh_list.empty() ? finished_meshes(root, progress) : read_mesh_list(mesh_list)) {
-    const fs::path bucket = fs::path(std::to_string(m.seed / 1000)) / std::to_string(m.seed);
+  for (const MeshEntry& m : meshes) {
+    const std::string bucket = std::to_string(m.seed / 1000) + '/' + std::to_string(m.seed);
     for (int k = 0; k < o.views; ++k) {
       if (!shard.holds(position++)) continue;
       batch::Task t;
-      t.final_dir = fs::path("renders") / m.scenario / bucket / ("view" + std::to_string(k));
-      t.key = t.final_dir.generic_string();
-      t.info = {{"scenario", m.scenario},
-                {"seed", m.seed},
-                {"view", k},
-                {"flipped", o.flip && k % 2 == 1},
-                {"render_seed", view_seed(m.scenario, m.seed, k)},
-                {"mesh", (m.dir / "sheet.obj").generic_string()}};
+      t.final_dir = "renders/" + m.scenario + '/' + bucket + "/view" + std::to_string(k);
+      t.key = t.final_dir;
+      t.info = nlohmann::json{{"scenario", m.scenario},
+                              {"seed", m.seed},
+                              {"view", k},
+                              {"flipped", o.flip && k % 2 == 1},
+                              {"render_seed", view_seed(m.scenario, m.seed, k)},
+                              {"mesh", m.dir + "/sheet.obj"}}
+                   .dump();
+      t.final_dir.shrink_to_fit();  // a dump and appends grow their strings by doubling
+      t.info.shrink_to_fit();
       tasks.push_back(std::move(t));
     }
   }
@@ -203,21 +212,23 @@ batch::BatchSpec render_batch_spec(const fs::path& root, const fs::path& scenege
   spec.manifest_name = "renders.jsonl";
   spec.failures_name = "renders_failures.jsonl";
   spec.prepare = [root](const batch::Task& t, const fs::path& stage) {
-    if (!t.info.at("flipped").get<bool>()) return;
-    const SheetMesh mesh = read_sheet_obj((root / t.info.at("mesh").get<std::string>()).string());
+    const nlohmann::json info = t.info_object();
+    if (!info.at("flipped").get<bool>()) return;
+    const SheetMesh mesh = read_sheet_obj((root / info.at("mesh").get<std::string>()).string());
     write_obj_file(stage / "flipped.obj", flipped_sheet(mesh));
   };
   spec.commands = [root, scenegen, o](const batch::Task& t, const fs::path& stage) {
-    const bool flipped = t.info.at("flipped").get<bool>();
+    const nlohmann::json info = t.info_object();
+    const bool flipped = info.at("flipped").get<bool>();
     const fs::path mesh =
-        flipped ? stage / "flipped.obj" : root / t.info.at("mesh").get<std::string>();
+        flipped ? stage / "flipped.obj" : root / info.at("mesh").get<std::string>();
     std::vector<std::string> argv{scenegen.string(),
                                   "render",
                                   mesh.string(),
                                   "--out",
                                   (stage / "out").string(),
                                   "--seed",
-                                  std::to_string(t.info.at("render_seed").get<std::uint64_t>()),
+                                  std::to_string(info.at("render_seed").get<std::uint64_t>()),
                                   "--size",
                                   o.size,
                                   "--quality",

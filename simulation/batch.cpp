@@ -192,7 +192,12 @@ std::vector<SampleDraw> draw_samples(const MeshBatchSelection& sel) {
     merged[i].update(mix.overrides[i]);
     merged[i].update(sel.overrides);
   }
+  std::vector<std::shared_ptr<const json>> shared(merged.size());
+  for (std::size_t i = 0; i < merged.size(); ++i)
+    if (!merged[i].empty()) shared[i] = std::make_shared<const json>(merged[i]);
   std::vector<SampleDraw> draws;
+  const auto shards = static_cast<std::uint64_t>(sel.shard.count);
+  draws.reserve((samples + shards - 1) / shards);
   std::set<std::size_t> checked;
   std::size_t position = 0;  // in the whole selection, for the shard
   const auto draw_seed = [&](std::uint64_t seed) {
@@ -207,7 +212,7 @@ std::vector<SampleDraw> draw_samples(const MeshBatchSelection& sel) {
       if (checked.insert(i).second)
         apply_overrides(make_scenario(mix.scenarios[i], seed), merged[i],
                         sel.mix_path.empty() ? "--set" : sel.mix_path + " / --set");
-      if (sel.shard.holds(position++)) draws.push_back({mix.scenarios[i], seed, merged[i]});
+      if (sel.shard.holds(position++)) draws.push_back({mix.scenarios[i], seed, shared[i]});
     }
   };
   // Each range to `last` inclusive, which may be the largest seed.
@@ -224,10 +229,13 @@ std::vector<batch::Task> mesh_tasks(const std::vector<SampleDraw>& draws) {
   tasks.reserve(draws.size());
   for (const auto& d : draws) {
     batch::Task t;
-    t.final_dir = fs::path("meshes") / d.scenario / seed_bucket(d.seed) / std::to_string(d.seed);
-    t.key = t.final_dir.generic_string();
-    t.info = {{"scenario", d.scenario}, {"seed", d.seed}};
-    if (!d.overrides.empty()) t.info["set"] = d.overrides;
+    t.final_dir = "meshes/" + d.scenario + '/' + seed_bucket(d.seed) + '/' + std::to_string(d.seed);
+    t.final_dir.shrink_to_fit();  // so do the appends
+    t.key = t.final_dir;
+    json info = {{"scenario", d.scenario}, {"seed", d.seed}};
+    if (d.overrides && !d.overrides->empty()) info["set"] = *d.overrides;
+    t.info = info.dump();
+    t.info.shrink_to_fit();  // a dump grows its string by doubling
     tasks.push_back(std::move(t));
   }
   return tasks;
@@ -300,9 +308,10 @@ batch::BatchSpec mesh_batch_spec(const fs::path& root, const fs::path& papersim,
   batch::BatchSpec spec;
   spec.root = root;
   spec.prepare = [](const batch::Task& t, const fs::path& stage) {
-    const Scene scene = apply_overrides(make_scenario(t.info.at("scenario").get<std::string>(),
-                                                      t.info.at("seed").get<std::uint64_t>()),
-                                        t.info.value("set", json::object()), "--set");
+    const json info = t.info_object();
+    const Scene scene = apply_overrides(
+        make_scenario(info.at("scenario").get<std::string>(), info.at("seed").get<std::uint64_t>()),
+        info.value("set", json::object()), "--set");
     fs::create_directories(stage / "out");
     std::ostringstream text;
     text << std::setw(2) << scene_to_json(scene) << '\n';

@@ -6,6 +6,7 @@
 /// has one row per finished sample, failures.jsonl one per failed attempt (batch/runner.hpp).
 #include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -19,8 +20,9 @@ namespace papersim::simulation {
 struct SampleDraw {
   std::string scenario;
   std::uint64_t seed = 0;
-  /// Dotted scene keys to values, e.g. {"duration": 0.1, "sheet.edge_length": 0.02}.
-  nlohmann::json overrides = nlohmann::json::object();
+  /// Dotted scene keys to values, e.g. {"duration": 0.1, "sheet.edge_length": 0.02}; shared by
+  /// the draws of one scenario (a batch draws up to ten million); null: none.
+  std::shared_ptr<const nlohmann::json> overrides;
 };
 
 /// A mix of scenarios: each seed draws one scenario with probability weight / sum of weights.

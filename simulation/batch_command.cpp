@@ -53,9 +53,9 @@ int run_mesh_batch(const BatchCommand& c, bool with_metrics, std::ostream& out, 
   sel.mix_path = c.mix;
   sel.seeds = parse_seeds(c.seeds);
   sel.overrides = parse_overrides(c.set);
-  const batch::Shard shard = batch::cli_shard(c.common);    // a malformed --shard is refused here
-  if (c.common.slurm_shards == 0) sel.shard = shard;        // the script's line counts them all
-  const std::vector<SampleDraw> draws = draw_samples(sel);  // checks every option first
+  const batch::Shard shard = batch::cli_shard(c.common);  // a malformed --shard is refused here
+  if (c.common.slurm_shards == 0) sel.shard = shard;      // the script's line counts them all
+  std::vector<SampleDraw> draws = draw_samples(sel);      // checks every option first
   if (c.common.slurm_shards > 0) {
     const fs::path script =
         batch::write_slurm_script(c.out, "papersim-batch", shard_command(c), c.common);
@@ -66,8 +66,9 @@ int run_mesh_batch(const BatchCommand& c, bool with_metrics, std::ostream& out, 
   }
   const batch::BatchSpec spec =
       mesh_batch_spec(c.out, batch::self_executable(), with_metrics, c.checkpoint_every);
-  const batch::BatchSummary s =
-      batch::run_cli_batch(mesh_tasks(draws), spec, c.common, err, "papersim batch");
+  const std::vector<batch::Task> tasks = mesh_tasks(draws);
+  std::vector<SampleDraw>().swap(draws);  // not needed while the batch runs
+  const batch::BatchSummary s = batch::run_cli_batch(tasks, spec, c.common, err, "papersim batch");
   out << batch::summary_line(s, c.out, spec) << '\n';
   if (s.interrupted) return 130;
   return s.done == s.total ? 0 : 1;

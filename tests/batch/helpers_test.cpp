@@ -110,8 +110,10 @@ TEST(Selection, ProductOfScenariosAndSeedsWithFoldersPerSeed) {
   EXPECT_EQ(draws[1].scenario, "fall-gable");
   EXPECT_EQ(draws[1].seed, 998u);
   const auto tasks = ps::mesh_tasks(draws);
-  EXPECT_EQ(tasks[0].final_dir, fs::path("meshes/pull/0/998"));
-  EXPECT_EQ(tasks[7].final_dir, fs::path("meshes/fall-gable/1/1001"));
+  EXPECT_EQ(tasks[0].final_dir, "meshes/pull/0/998");
+  EXPECT_EQ(tasks[0].key, "meshes/pull/0/998");
+  EXPECT_EQ(tasks[0].info_object(), (json{{"scenario", "pull"}, {"seed", 998}}));
+  EXPECT_EQ(tasks[7].final_dir, "meshes/fall-gable/1/1001");
   for (const char* bad : {"5-1", "a-3", "-3", "1-", ""})
     EXPECT_NE(scene_error([&] { ps::parse_seed_range(bad); }).find("--seeds"), std::string::npos)
         << bad;

@@ -8,12 +8,12 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <csignal>
 #include <fstream>
 #include <set>
 #include <sstream>
-#include <unordered_set>
 
 #include "batch/cli.hpp"
 #include "batch/slurm.hpp"
@@ -23,6 +23,7 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 using papersim::batch::BatchSpec;
 using papersim::batch::Command;
+using papersim::batch::KeySet;
 using papersim::batch::Task;
 
 namespace {
@@ -37,7 +38,8 @@ fs::path fresh_dir(const std::string& name) {
 std::vector<Task> numbered_tasks(int n) {
   std::vector<Task> tasks;
   for (int i = 0; i < n; ++i)
-    tasks.push_back({"t/" + std::to_string(i), fs::path("t") / std::to_string(i), {{"index", i}}});
+    tasks.push_back(
+        {"t/" + std::to_string(i), "t/" + std::to_string(i), json{{"index", i}}.dump()});
   return tasks;
 }
 
@@ -48,7 +50,7 @@ BatchSpec shell_spec(const fs::path& root, const std::string& script) {
   spec.root = root;
   spec.jobs = 2;
   spec.commands = [root, script](const Task& t, const fs::path& stage) {
-    const std::string index = std::to_string(t.info.at("index").get<int>());
+    const std::string index = std::to_string(t.info_object().at("index").get<int>());
     return std::vector<Command>{{{"/bin/sh", "-c",
                                   "echo " + index + " >> '" + (root / "runs.txt").string() +
                                       "'; mkdir -p \"$1\" && " + script,
@@ -134,7 +136,7 @@ TEST(Runner, ProgressShowsTheShareOfRunningTasks) {
   auto spec = shell_spec(root, "if [ $2 = 0 ]; then sleep 0.8; fi; echo ok > \"$1/value\"");
   spec.progress_every = 0.05;
   spec.running_share = [](const Task& t) {
-    return t.info.at("index").get<int>() == 0 ? 0.414 : -1.0;
+    return t.info_object().at("index").get<int>() == 0 ? 0.414 : -1.0;
   };
   std::vector<std::vector<double>> seen;
   spec.progress = [&seen](const papersim::batch::Progress& p) {
@@ -230,20 +232,32 @@ TEST(Runner, ManifestKeysAreFoundByTheRowsOwnKeyOnly) {
                       << R"({"key":"m/6","not":"a row")" << '\n'  // cut short: not a row
                       << R"(["key","m/7"])" << '\n'               // not an object
                       << R"({"key":"m/8"})";                      // a last line without newline
-  const std::unordered_set<std::string> wanted{"m/0", "m/2", "m/3", "m/4", "m/5",
-                                               "m/6", "m/7", "m/8", "m/9"};
-  const auto found = papersim::batch::keys_in_json_lines(file, wanted);
-  EXPECT_EQ(found, (std::unordered_set<std::string>{"m/0", "m/3", "m/4", "m/8"}));
+  const auto set_of = [](std::initializer_list<const char*> keys) {
+    KeySet s;
+    for (const char* k : keys) s.insert(k);
+    return s;
+  };
+  const std::vector<std::string> asked{"m/0", "m/2", "m/3", "m/4", "m/5",
+                                       "m/6", "m/7", "m/8", "m/9"};
+  KeySet wanted;
+  for (const auto& k : asked) wanted.insert(k);
+  const KeySet found = papersim::batch::keys_in_json_lines(file, wanted);
+  std::vector<std::string> found_keys;
+  for (const auto& k : asked)
+    if (found.contains(k)) found_keys.push_back(k);
+  EXPECT_EQ(found_keys, (std::vector<std::string>{"m/0", "m/3", "m/4", "m/8"}));
+  EXPECT_EQ(found.size(), 4u);
   // m/1 is a row but not wanted; nothing is found in a missing file or for no wanted key.
-  EXPECT_TRUE(papersim::batch::keys_in_json_lines(file, {"m/1"}).count("m/1"));
-  EXPECT_TRUE(papersim::batch::keys_in_json_lines(root / "none.jsonl", wanted).empty());
-  EXPECT_TRUE(papersim::batch::keys_in_json_lines(file, {}).empty());
+  EXPECT_TRUE(papersim::batch::keys_in_json_lines(file, set_of({"m/1"})).contains("m/1"));
+  EXPECT_EQ(papersim::batch::keys_in_json_lines(root / "none.jsonl", wanted).size(), 0u);
+  EXPECT_EQ(papersim::batch::keys_in_json_lines(file, KeySet()).size(), 0u);
   // The same answer as reading every row.
-  std::unordered_set<std::string> all;
+  std::vector<std::string> all;
   for (const auto& r : papersim::batch::read_json_lines(file))
-    if (r.contains("key") && r["key"].is_string() && wanted.count(r["key"].get<std::string>()))
-      all.insert(r["key"]);
-  EXPECT_EQ(found, all);
+    if (r.contains("key") && r["key"].is_string() && wanted.contains(r["key"].get<std::string>()))
+      all.push_back(r["key"]);
+  std::sort(all.begin(), all.end());
+  EXPECT_EQ(found_keys, all);
   fs::remove_all(root);
 }
 
