@@ -251,7 +251,7 @@ void Runner::append_manifest_row(const Task& t, double wall, double cpu) {
   row["path"] = t.final_dir;
   row["cpu_seconds"] = cpu >= 0 ? nlohmann::json(cpu) : nlohmann::json(nullptr);
   if (m_spec.manifest_row) row.update(m_spec.manifest_row(t, m_spec.root / t.final_dir, wall));
-  append_line(manifest(), row.dump());
+  append_line(manifest(), row.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
 }
 
 void Runner::record_failure(const Task& t, const std::string& reason, const std::string& detail,
@@ -261,7 +261,8 @@ void Runner::record_failure(const Task& t, const std::string& reason, const std:
   row["reason"] = reason;
   row["detail"] = detail;
   row["wall_seconds"] = wall;
-  append_line(failures(), row.dump());
+  // The detail is a child's last log line: any bytes. Bytes that are not UTF-8 become U+FFFD.
+  append_line(failures(), row.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
   ++m_sum.failed;
   ++m_sum.failed_now;
 }

@@ -7,6 +7,7 @@
 
 #include "batch/cli.hpp"
 #include "common/atomic_file.hpp"
+#include "common/utf8.hpp"
 #include "scenegen/errors.hpp"
 
 namespace papersim::scenegen {
@@ -34,7 +35,8 @@ struct MeshEntry {
 /// Finished meshes: meshes/<scenario>/<bucket>/<seed>/ holding sheet.obj, sorted by scenario, then
 /// seed. One `stat` a mesh (sheet.obj's). The bucket folders are listed first, so that `progress`
 /// hears after each of them how many of them are done.
-/// @throw InputError when a seed of a scenario is in two bucket folders
+/// @throw InputError when a seed of a scenario is in two bucket folders, or a mesh folder's name
+/// is not UTF-8
 std::vector<MeshEntry> finished_meshes(const fs::path& root, const ListProgress& progress) {
   std::vector<std::pair<std::string, fs::path>> buckets;  // (scenario, folder)
   std::error_code ec;
@@ -53,6 +55,10 @@ std::vector<MeshEntry> finished_meshes(const fs::path& root, const ListProgress&
       // calls a mesh, which dominated the walk over a large dataset).
       out.push_back({scenario, std::stoull(name),
                      "meshes/" + scenario + '/' + bucket.filename().string() + '/' + name});
+      if (!common::is_utf8(out.back().dir))
+        throw InputError("mesh folder '" + (root / out.back().dir).string() +
+                         "' has a name that is not UTF-8: its rows cannot be written (the "
+                         "manifests are UTF-8 JSON)");
     }
     if (progress) progress(i + 1, buckets.size(), out.size());
   }
@@ -114,6 +120,7 @@ std::vector<MeshEntry> read_mesh_list(const fs::path& file) {
     };
     if (e.scenario.empty())
       throw InputError(where() + "'" + line + "' is not meshes/<scenario>/<bucket>/<seed>");
+    if (!common::is_utf8(line)) throw InputError(where() + "'" + line + "' is not UTF-8 text");
     if (!out.empty() && !(out.back().scenario < e.scenario ||
                           (out.back().scenario == e.scenario && out.back().seed < e.seed)))
       throw InputError(where() + "'" + line +

@@ -44,6 +44,12 @@ namespace {
 
 thread_local std::string g_failed_meta;
 
+/// `j` as indented text and a line break. Names from outside (the mesh's, a document's or a
+/// background's file name) are any bytes: those that are not UTF-8 become U+FFFD.
+std::string json_text(const json& j) {
+  return j.dump(2, ' ', false, json::error_handler_t::replace) + "\n";
+}
+
 /// POV-Ray 3.7's message when its worker threads do not start in time (vfeInitializeTimedOut):
 /// on a loaded machine it fails a render before it begins (seen once in the test suite beside
 /// two simulations on two cores). Such a render is started again, up to POVRAY_STARTS times in all.
@@ -291,7 +297,7 @@ void prepare_job(const SampleOptions& o, const std::string& job_dir) {
     meta["failure"] =
         "no valid camera direction: none of the 26 candidates sees the whole sheet "
         "in frame (2% margin) without self-occlusion and backfacing";
-    g_failed_meta = meta.dump(2) + "\n";
+    g_failed_meta = json_text(meta);
     throw NoValidCameraError("mesh '" + o.mesh_path + "': " + meta["failure"].get<std::string>());
   }
 
@@ -435,7 +441,7 @@ void prepare_job(const SampleOptions& o, const std::string& job_dir) {
     job["document_file"] = doc_file;
     job["layout"] = o.layout;
     job["lit_bands"] = std::clamp(scene.quality.bands, 1, o.height);
-    write_text(tmp / "job.json", job.dump(2) + "\n");
+    write_text(tmp / "job.json", json_text(job));
     remove_quietly(final_dir);
     fs::rename(tmp, final_dir, ec);
     if (ec)
@@ -833,9 +839,9 @@ void finish_into(const fs::path& job, const fs::path& stage) {
   meta["layout"] = "scenegen";
   if (j.value("layout", "scenegen") == "syntheticdoc") {
     apply_syntheticdoc_layout(stage, meta);
-    write_text(stage / "metadata.json", meta.dump(2) + "\n");
+    write_text(stage / "metadata.json", json_text(meta));
   } else {
-    write_text(stage / "meta.json", meta.dump(2) + "\n");
+    write_text(stage / "meta.json", json_text(meta));
   }
 }
 

@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "batch/cli.hpp"
+#include "common/utf8.hpp"
 #include "simulation/errors.hpp"
 #include "simulation/scenario.hpp"
 #include "simulation/simulate.hpp"
@@ -142,6 +143,8 @@ json parse_overrides(const std::vector<std::string>& pairs) {
     const auto eq = p.find('=');
     if (eq == std::string::npos || eq == 0)
       throw SceneError("--set '" + p + "': expected KEY=VALUE (e.g. duration=0.2)");
+    if (!common::is_utf8(p))
+      throw SceneError("--set '" + p + "': not UTF-8 text (scene files and rows are UTF-8 JSON)");
     const std::string value = p.substr(eq + 1);
     json v = json::parse(value, nullptr, false);
     out[p.substr(0, eq)] = v.is_discarded() ? json(value) : v;

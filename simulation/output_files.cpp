@@ -48,7 +48,9 @@ void write_outputs(const fs::path& dir, const Scene& scene, const remesh::SheetM
 }
 
 void write_json(const fs::path& path, const json& j) {
-  common::write_file_atomically(path, [&](std::ostream& out) { out << std::setw(2) << j << '\n'; });
+  // Names from outside (paths) are any bytes: those that are not UTF-8 become U+FFFD.
+  const std::string text = j.dump(2, ' ', false, json::error_handler_t::replace);
+  common::write_file_atomically(path, [&](std::ostream& out) { out << text << '\n'; });
 }
 
 fs::path Staging::path_for(const std::string& out_dir) { return fs::path(out_dir) / STAGING_NAME; }

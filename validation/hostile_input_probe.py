@@ -2,8 +2,9 @@
 """Hostile-input probe of papersim and scenegen (issue 17).
 
 Runs the two programs as a careless, hostile or unlucky user would - broken scene files, broken
-meshes, bad options, inputs beyond any sane size, interruptions at 25 / 50 / 90 % of a run, a
-full disk, re-runs into a used folder - and counts what went wrong:
+meshes, bad options, file names and values that are not UTF-8, inputs beyond any sane size,
+interruptions at 25 / 50 / 90 % of a run, a full disk, re-runs into a used folder - and counts
+what went wrong:
 
   crash       ended by a signal it was not sent, or an uncaught exception / sanitizer report
   hang        still running after the timeout (60 s)
@@ -343,6 +344,39 @@ def options(p, quick):
         p.judge("command line", " ".join(os.path.basename(a) if a.startswith("/") else repr(a) if a == "" else a for a in argv), r, True, target)
 
 
+def foreign_names(p, quick):
+    """File names and --set values that are not UTF-8 (0xFF, here the surrogate escape \\udcff):
+    names are written into the JSON outputs with U+FFFD in their place; values that would go
+    into a scene, and dataset folders whose rows could not be written, are refused."""
+    d = p.fresh("names")
+    ff = "\udcff"  # os.fsencode gives the byte 0xFF
+    mesh = write(os.path.join(d, "sheet" + ff + ".obj"), p.example("flat"))
+    out = os.path.join(d, "out")
+    succeed = [
+        ("prepare of a mesh named 0xFF", [p.scenegen, "prepare", mesh, "--out", os.path.join(d, "job"), "--size", "32x48"]),
+        ("metrics --json of a mesh named 0xFF", [p.papersim, "metrics", mesh, "--json"]),
+        ("metrics of the folder holding it", [p.papersim, "metrics", d]),
+    ]
+    for what, argv in succeed:
+        shutil.rmtree(os.path.join(d, "job"), ignore_errors=True)
+        p.judge("names not UTF-8", what, p.run(argv), False)
+    ds = os.path.join(d, "ds")
+    os.makedirs(os.path.join(ds, "meshes", "pu" + ff + "ll", "0", "0"))
+    write(os.path.join(ds, "meshes", "pu" + ff + "ll", "0", "0", "sheet.obj"), p.example("flat"))
+    with open(os.path.join(d, "list.meshes"), "wb") as f:
+        f.write(b"# scenegen batch mesh list: 1 meshes\nmeshes/pu\xffll/0/0\n")
+    listed = os.path.join(d, "list.meshes")
+    fail = [
+        ("batch --set name=0xFF", [p.papersim, "batch", "--out", out, "--scenarios", "pull", "--seeds", "0", "--set", "name=" + ff], out),
+        ("batch --set 0xFF=1", [p.papersim, "batch", "--out", out, "--scenarios", "pull", "--seeds", "0", "--set", ff + "=1"], out),
+        ("scenegen batch over a scenario folder named 0xFF", [p.scenegen, "batch", ds, "--size", "32x48"], os.path.join(ds, "renders")),
+        ("scenegen batch --slurm over a scenario folder named 0xFF", [p.scenegen, "batch", ds, "--slurm", "2"], os.path.join(ds, "slurm")),
+        ("scenegen batch --mesh-list with a line of 0xFF", [p.scenegen, "batch", ds, "--mesh-list", listed], os.path.join(ds, "renders")),
+    ]
+    for what, argv, target in fail:
+        p.judge("names not UTF-8", what, p.run(argv), True, target)
+
+
 def limits(p, quick):
     d = p.fresh("limits")
     mesh = write(os.path.join(d, "flat.obj"), p.example("flat"))
@@ -581,7 +615,7 @@ def main():
     p.full_disk_method = "?"
     t0 = time.time()
     try:
-        for family in [scene_files, mesh_files, options, limits, full_disk, mixed_outputs, interruptions]:
+        for family in [scene_files, mesh_files, options, foreign_names, limits, full_disk, mixed_outputs, interruptions]:
             family(p, args.quick)
     finally:
         subprocess.run(["umount", os.path.join(work, "disk")], capture_output=True)

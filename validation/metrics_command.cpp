@@ -194,7 +194,8 @@ void write_json_report(std::ostream& out, const std::vector<MeshResult>& results
                        {"measured", metrics.size()},
                        {"failed", results.size() - metrics.size()},
                        {"fields", fields}};
-  out << report.dump(2) << '\n';
+  // File names are any bytes: those that are not UTF-8 become U+FFFD.
+  out << report.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) << '\n';
 }
 
 /// @throw common::OutputError when the file cannot be written (nothing is left at `path`)

@@ -261,6 +261,19 @@ TEST(Runner, ManifestKeysAreFoundByTheRowsOwnKeyOnly) {
   fs::remove_all(root);
 }
 
+// A failure's detail is the child's last log line, any bytes: one that is not UTF-8 (a path
+// with 0xFF in it) made the row's dump throw and the batch end with an internal error.
+TEST(Runner, AFailureWhoseLastLineIsNotUtf8IsRecorded) {
+  const fs::path root = fresh_dir("utf8");
+  const auto spec = shell_spec(root, "printf 'cannot read /data/page\\377.png\\n' >&2; exit 3");
+  const auto s = papersim::batch::run_batch(numbered_tasks(2), spec);
+  EXPECT_EQ(s.failed, 2);
+  const auto f = papersim::batch::read_json_lines(root / "failures.jsonl");
+  ASSERT_EQ(f.size(), 2u);
+  EXPECT_EQ(f[0]["detail"], "cannot read /data/page\xef\xbf\xbd.png");
+  fs::remove_all(root);
+}
+
 TEST(Runner, AFailedOutputCheckIsRecordedAndLeavesNoFolder) {
   const fs::path root = fresh_dir("outputs");
   auto spec = shell_spec(root, "true");

@@ -341,6 +341,34 @@ TEST(HostileInput, PovrayFailureDoesNotPointIntoADeletedFolder) {
   EXPECT_FALSE(fs::exists(dir.str("out")));
 }
 
+// A file name or a --set value that is not UTF-8 (0xFF is never in UTF-8) made nlohmann::json
+// refuse to dump meta.json, job.json, a metrics report or a manifest row: "internal error",
+// exit status 1. A name is now written with U+FFFD in its place; a value that would go into a
+// scene is refused.
+TEST(HostileInput, NamesThatAreNotUtf8AreWrittenAndValuesRefused) {
+  Scratch dir("utf8");
+  const std::string name = "sheet\xff.obj", replaced = "sheet\xef\xbf\xbd.obj";
+  const std::string mesh = example_sheet(dir, "flat", name);
+  const Outcome prepare =
+      run({SCENEGEN, "prepare", mesh, "--out", dir.str("job"), "--size", "32x48"});
+  ASSERT_EQ(prepare.status, 0) << prepare.err;
+  const json job = json::parse(read_text(dir.str("job") + "/job.json"));
+  EXPECT_EQ(job["meta"]["mesh"]["file"], replaced);
+
+  const Outcome metrics = run({PAPERSIM, "metrics", mesh, "--json"});
+  ASSERT_EQ(metrics.status, 0) << metrics.err;
+  const json report = json::parse(metrics.out);
+  ASSERT_EQ(report["meshes"].size(), 1u);
+  EXPECT_TRUE(contains(report["meshes"][0]["path"].get<std::string>(), replaced))
+      << report["meshes"][0]["path"];
+
+  const Outcome batch = run({PAPERSIM, "batch", "--out", dir.str("ds"), "--scenarios", "pull",
+                             "--seeds", "0", "--set", "name=page\xff", "--quiet"});
+  EXPECT_EQ(batch.status, 2) << batch.err;
+  EXPECT_TRUE(contains(batch.err, "--set 'name=page\xff': not UTF-8")) << batch.err;
+  EXPECT_FALSE(fs::exists(dir.str("ds")));
+}
+
 TEST(HostileInput, CommandLineErrorsExitWithStatus2AndHelpWith0) {
   for (const std::string& program : {PAPERSIM, SCENEGEN}) {
     EXPECT_EQ(run({program}).status, 2) << program;

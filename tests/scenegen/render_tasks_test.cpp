@@ -151,6 +151,8 @@ TEST(RenderTasks, AMalformedMeshListIsRefusedNamingItsLine) {
       {head + "meshes/pull/0/0\nmeshes/pull/0/1\nmeshes/pull/0/7\n",
        "announces 2 meshes but holds 3"},
       {head + "meshes/pull/0/0\n", "announces 2 meshes but holds 1"},
+      {head + "meshes/pull/0/0\nmeshes/pu\xffll/0/1\n",
+       "line 3: 'meshes/pu\xffll/0/1' is not UTF-8"},
   };
   sg::RenderBatchOptions o;
   for (const auto& [text, message] : cases) {
@@ -169,6 +171,21 @@ TEST(RenderTasks, AMalformedMeshListIsRefusedNamingItsLine) {
   std::ofstream(root / "meshes" / "pu\nll" / "0" / "3" / "sheet.obj") << "";
   EXPECT_THROW(sg::write_mesh_list(root, list), sg::InputError);
   fs::remove_all(root / "meshes" / "pu\nll");
+  // Nor can a folder whose name is not UTF-8 be in a row: the walk refuses it, naming it.
+  fs::create_directories(root / "meshes" / "pu\xffll" / "0" / "3");
+  std::ofstream(root / "meshes" / "pu\xffll" / "0" / "3" / "sheet.obj") << "";
+  for (const bool listed : {true, false}) try {
+      if (listed)
+        sg::write_mesh_list(root, list);
+      else
+        sg::render_tasks(root, o);
+      ADD_FAILURE() << "a folder that is not UTF-8 was taken";
+    } catch (const sg::InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("meshes/pu\xffll/0/3' has a name that is not UTF-8"),
+                std::string::npos)
+          << e.what();
+    }
+  fs::remove_all(root / "meshes" / "pu\xffll");
   // A seed in two bucket folders would give two tasks one folder: the walk refuses it.
   fs::create_directories(root / "meshes" / "pull" / "9" / "1");
   std::ofstream(root / "meshes" / "pull" / "9" / "1" / "sheet.obj") << "";
