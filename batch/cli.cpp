@@ -102,15 +102,29 @@ BatchSummary run_cli_batch(const std::vector<Task>& tasks, BatchSpec spec, const
   return s;
 }
 
-fs::path write_slurm_script(const fs::path& root, const std::string& name,
-                            const std::vector<std::string>& command, const BatchCliOptions& o) {
+namespace {
+
+std::string script_text(const fs::path& root, const std::string& name,
+                        const std::vector<std::string>& command, const BatchCliOptions& o) {
   SlurmOptions so = o.slurm;
   so.shards = o.slurm_shards;
   so.job_name = name;
+  return slurm_script(command, so, fs::absolute(root) / "slurm");
+}
+
+}  // namespace
+
+void check_slurm_script(const fs::path& root, const std::string& name, const BatchCliOptions& o) {
+  (void)script_text(root, name, {}, o);
+}
+
+fs::path write_slurm_script(const fs::path& root, const std::string& name,
+                            const std::vector<std::string>& command, const BatchCliOptions& o) {
+  const std::string text = script_text(root, name, command, o);
   const fs::path dir = fs::absolute(root) / "slurm";
   fs::create_directories(dir);
   fs::path file = dir / (name + ".sbatch");
-  write_file_atomically(file, slurm_script(command, so, dir));
+  write_file_atomically(file, text);
   fs::permissions(file, fs::perms::owner_exec, fs::perm_options::add);
   return file;
 }

@@ -56,11 +56,19 @@ BatchSummary run_cli_batch(const std::vector<Task>& tasks, BatchSpec spec,
                            const std::string& label);
 
 /// Write ROOT/slurm/NAME.sbatch for `command` (the batch command line without --shard and
-/// --jobs; absolute paths) and return its path.
-/// @throw std::runtime_error when the file cannot be written
+/// --jobs; absolute paths) and return its path. The script is made before anything is written.
+/// @throw std::invalid_argument as check_slurm_script; std::runtime_error when the file cannot
+/// be written
 std::filesystem::path write_slurm_script(const std::filesystem::path& root, const std::string& name,
                                          const std::vector<std::string>& command,
                                          const BatchCliOptions& options);
+
+/// Whether write_slurm_script(root, name, ...) can write its script, for a command to check
+/// before it writes anything else.
+/// @throw std::invalid_argument naming the option or folder whose text no #SBATCH line can hold
+/// (a line break)
+void check_slurm_script(const std::filesystem::path& root, const std::string& name,
+                        const BatchCliOptions& options);
 
 /// One line: "N done (M now, R manifest rows restored), F failed; ..." for the end of a run.
 std::string summary_line(const BatchSummary& summary, const std::filesystem::path& root,

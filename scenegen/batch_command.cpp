@@ -103,6 +103,13 @@ void check_options(const RenderBatchCommand& c) {
       throw InputError(e.what());
     }
   }
+  if (c.common.slurm_shards > 0) {
+    try {
+      batch::check_slurm_script(c.dataset, "scenegen-batch", c.common);
+    } catch (const std::invalid_argument& e) {
+      throw InputError(std::string("--slurm: ") + e.what());
+    }
+  }
 }
 
 }  // namespace

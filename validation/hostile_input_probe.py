@@ -347,7 +347,8 @@ def options(p, quick):
 def foreign_names(p, quick):
     """File names and --set values that are not UTF-8 (0xFF, here the surrogate escape \\udcff):
     names are written into the JSON outputs with U+FFFD in their place; values that would go
-    into a scene, and dataset folders whose rows could not be written, are refused."""
+    into a scene, and dataset folders whose rows could not be written, are refused. Dataset
+    folders a Slurm script cannot name are refused too."""
     d = p.fresh("names")
     ff = "\udcff"  # os.fsencode gives the byte 0xFF
     mesh = write(os.path.join(d, "sheet" + ff + ".obj"), p.example("flat"))
@@ -359,7 +360,7 @@ def foreign_names(p, quick):
     ]
     for what, argv in succeed:
         shutil.rmtree(os.path.join(d, "job"), ignore_errors=True)
-        p.judge("names not UTF-8", what, p.run(argv), False)
+        p.judge("names", what, p.run(argv), False)
     ds = os.path.join(d, "ds")
     os.makedirs(os.path.join(ds, "meshes", "pu" + ff + "ll", "0", "0"))
     write(os.path.join(ds, "meshes", "pu" + ff + "ll", "0", "0", "sheet.obj"), p.example("flat"))
@@ -374,7 +375,17 @@ def foreign_names(p, quick):
         ("scenegen batch --mesh-list with a line of 0xFF", [p.scenegen, "batch", ds, "--mesh-list", listed], os.path.join(ds, "renders")),
     ]
     for what, argv, target in fail:
-        p.judge("names not UTF-8", what, p.run(argv), True, target)
+        p.judge("names", what, p.run(argv), True, target)
+    # Dataset folders a Slurm script must name: a space and '#' are quoted, a '%' (sbatch's log
+    # name pattern) and a backslash (its escape) are refused before anything is written.
+    spaced = os.path.join(d, "my data #2")
+    p.judge("names", "batch --slurm into 'my data #2'",
+            p.run([p.papersim, "batch", "--out", spaced, "--scenarios", "pull", "--seeds", "0-3", "--slurm", "2"]), False)
+    for name in ["a%Ab", "a\\b"]:
+        target = os.path.join(d, name)
+        p.judge("names", "batch --slurm into '%s'" % name,
+                p.run([p.papersim, "batch", "--out", target, "--scenarios", "pull", "--seeds", "0-3", "--slurm", "2"]),
+                True, target)
 
 
 def limits(p, quick):

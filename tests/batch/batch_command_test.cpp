@@ -317,7 +317,7 @@ TEST(PapersimBatch, SlurmWritesAJobArrayAndRunsNothing) {
   const std::string script = pt::read_text(d / "slurm" / "papersim-batch.sbatch");
   EXPECT_NE(script.find("#SBATCH --array=0-2\n"), std::string::npos) << script;
   EXPECT_NE(script.find("#SBATCH --cpus-per-task=2\n"), std::string::npos) << script;
-  EXPECT_NE(script.find("#SBATCH --time=00:10:00\n"), std::string::npos) << script;
+  EXPECT_NE(script.find("#SBATCH --time=\"00:10:00\"\n"), std::string::npos) << script;
   EXPECT_NE(script.find("--shard \"${SLURM_ARRAY_TASK_ID}/3\""), std::string::npos) << script;
   EXPECT_NE(script.find("'--checkpoint-every' '25'"), std::string::npos) << script;
   EXPECT_NE(pt::read_text(work_dir() / "slurm.log")

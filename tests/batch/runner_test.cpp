@@ -409,12 +409,45 @@ TEST(Slurm, ScriptMapsTheArrayIndexToTheShard) {
   o.partition = "cpu";
   const std::string s = papersim::batch::slurm_script(
       {"/opt/papersim", "batch", "--out", "/data/it's"}, o, "/data/slurm");
-  for (const char* line : {"#SBATCH --array=0-7\n", "#SBATCH --cpus-per-task=4\n",
-                           "#SBATCH --mem=8G\n", "#SBATCH --time=02:00:00\n",
-                           "#SBATCH --partition=cpu\n", "#SBATCH --output=/data/slurm/%A_%a.out\n",
-                           "exec '/opt/papersim' 'batch' '--out' '/data/it'\\''s' --shard "
-                           "\"${SLURM_ARRAY_TASK_ID}/8\""})
+  for (const char* line :
+       {"#SBATCH --array=0-7\n", "#SBATCH --cpus-per-task=4\n", "#SBATCH --mem=\"8G\"\n",
+        "#SBATCH --time=\"02:00:00\"\n", "#SBATCH --partition=\"cpu\"\n",
+        "#SBATCH --output=\"/data/slurm/%A_%a.out\"\n",
+        "exec '/opt/papersim' 'batch' '--out' '/data/it'\\''s' --shard "
+        "\"${SLURM_ARRAY_TASK_ID}/8\""})
     EXPECT_NE(s.find(line), std::string::npos) << line << "\nin\n" << s;
   o.shards = 0;
   EXPECT_THROW(papersim::batch::slurm_script({"x"}, o, "/tmp"), std::invalid_argument);
+}
+
+// sbatch 22.05 ends a directive's value at white space or '#' unless it is quoted: a dataset
+// folder named "my data #2" made sbatch refuse the script ("Invalid directive"). Values are in
+// double quotes now (the Slurm test runs such a folder on a real cluster); what no #SBATCH line
+// can hold is refused, naming it.
+TEST(Slurm, DirectiveValuesAreQuotedAndWhatNoLineCanHoldIsRefused) {
+  papersim::batch::SlurmOptions o;
+  const std::string s =
+      papersim::batch::slurm_script({"/opt/papersim"}, o, "/data/my data #2 \"q\"/slurm");
+  EXPECT_NE(s.find("#SBATCH --output=\"/data/my data #2 \\\"q\\\"/slurm/%A_%a.out\"\n"),
+            std::string::npos)
+      << s;
+  const auto refused = [&](const std::string& log_dir, const std::string& part) {
+    try {
+      (void)papersim::batch::slurm_script({"/opt/papersim"}, o, log_dir);
+      ADD_FAILURE() << "accepted " << log_dir;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(part), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(log_dir), std::string::npos) << e.what();
+    }
+  };
+  refused("/data/a%Ab/slurm", "has a '%'");
+  refused("/data/a\\b/slurm", "has a backslash");
+  refused("/data/a\nb/slurm", "has a line break");
+  o.mem = "2G\n#SBATCH --exclusive";
+  try {
+    (void)papersim::batch::slurm_script({"/opt/papersim"}, o, "/data/slurm");
+    ADD_FAILURE() << "accepted a line break in --slurm-mem";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("--slurm-mem"), std::string::npos) << e.what();
+  }
 }

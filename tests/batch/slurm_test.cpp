@@ -2,6 +2,8 @@
 // arrays papersim batch --slurm and scenegen batch --slurm write for 8 small meshes and 8 small
 // renders; one array task is cancelled mid-run and submitted again; the dataset must then be
 // complete and equal to a local batch of the same seeds.
+#include "batch/slurm.hpp"
+
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -112,14 +114,16 @@ TEST(Slurm, OneNodeClusterRunsTheArraysAResubmittedTaskResumesAndTheDatasetEqual
   fs::create_directories(work);
   Cluster cluster(work / "cluster");
   ASSERT_TRUE(cluster.started()) << "see " << (work / "cluster" / "log").string();
-  const fs::path ds = work / "dataset", local = work / "local";
+  // A folder name with a space, a '#' and quotes: sbatch reads #SBATCH values up to white space
+  // or '#' unless they are quoted.
+  const fs::path ds = work / "data set #1 'q\"", local = work / "local";
   const std::vector<std::string> slurm = {"--slurm",      "4",       "--slurm-mem", "300M",
                                           "--slurm-time", "00:05:00"};
 
   ASSERT_EQ(run(with(mesh_args(ds), slurm), work / "write_meshes.log"), 0)
       << pt::read_text(work / "write_meshes.log");
   const std::string script = (ds / "slurm" / "papersim-batch.sbatch").string();
-  const std::string job = shell("sbatch --parsable '" + script + "'");
+  const std::string job = shell("sbatch --parsable " + papersim::batch::shell_quote(script));
   ASSERT_FALSE(job.empty());
   // Cancel array task 0 once it is running and has a sample in progress.
   ASSERT_TRUE(
@@ -133,7 +137,8 @@ TEST(Slurm, OneNodeClusterRunsTheArraysAResubmittedTaskResumesAndTheDatasetEqual
   const std::size_t after_cancel = pt::line_count(ds / "manifest.jsonl");
   EXPECT_LT(after_cancel, 8u);
   // Resubmit the cancelled task: it resumes shard 0.
-  const std::string again = shell("sbatch --parsable --array=0 '" + script + "'");
+  const std::string again =
+      shell("sbatch --parsable --array=0 " + papersim::batch::shell_quote(script));
   ASSERT_FALSE(again.empty());
   ASSERT_TRUE(wait_for_job(again));
   EXPECT_EQ(pt::line_count(ds / "manifest.jsonl"), 8u);
@@ -141,14 +146,15 @@ TEST(Slurm, OneNodeClusterRunsTheArraysAResubmittedTaskResumesAndTheDatasetEqual
   ASSERT_EQ(run(with(render_args(ds), slurm), work / "write_renders.log"), 0)
       << pt::read_text(work / "write_renders.log");
   const std::string renders =
-      shell("sbatch --parsable '" + (ds / "slurm" / "scenegen-batch.sbatch").string() + "'");
+      shell("sbatch --parsable " +
+            papersim::batch::shell_quote((ds / "slurm" / "scenegen-batch.sbatch").string()));
   ASSERT_FALSE(renders.empty());
   ASSERT_TRUE(wait_for_job(renders));
   // Every view is rendered or recorded as failed (a draw with no valid camera is a recorded
   // failure, not a crash).
   EXPECT_EQ(pt::line_count(ds / "renders.jsonl") + failures(ds / "renders_failures.jsonl").size(),
             8u)
-      << shell("cat '" + (ds / "slurm").string() + "'/*.err");
+      << shell("cat " + papersim::batch::shell_quote((ds / "slurm").string()) + "/*.err");
 
   // The same seeds locally.
   ASSERT_EQ(run(with(mesh_args(local), {"--jobs", "2"}), work / "local_meshes.log"), 0);
