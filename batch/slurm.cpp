@@ -1,7 +1,10 @@
 #include "batch/slurm.hpp"
 
+#include <algorithm>
+#include <cctype>
 #include <sstream>
 #include <stdexcept>
+#include <string_view>
 
 namespace papersim::batch {
 
@@ -9,6 +12,14 @@ std::string shell_quote(const std::string& word) {
   std::string q = "'";
   for (char c : word) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
   return q + "'";
+}
+
+std::string shell_word(const std::string& word) {
+  const bool plain = !word.empty() && std::all_of(word.begin(), word.end(), [](char c) {
+    return std::isalnum(static_cast<unsigned char>(c)) ||
+           std::string_view("%+,-./:=@_").find(c) != std::string_view::npos;
+  });
+  return plain ? word : shell_quote(word);
 }
 
 std::string directive_word(const std::string& word, const std::string& what) {

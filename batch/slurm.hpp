@@ -21,6 +21,10 @@ struct SlurmOptions {
 /// A bash word in single quotes.
 std::string shell_quote(const std::string& word);
 
+/// `word` as it may be pasted into bash: unchanged when it holds only letters, digits and
+/// "%+,-./:=@_", else in single quotes (a script path in the "submit it with" line).
+std::string shell_word(const std::string& word);
+
 /// `word` as the value of a #SBATCH line: in double quotes, a '"' in it as \". sbatch 22.05
 /// reads a directive's value up to white space or '#' unless quoted ("my data#2" is one value
 /// only in quotes) and takes a backslash as an escape.

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <ostream>
 
+#include "batch/slurm.hpp"
 #include "common/cli_checks.hpp"
 #include "common/errors.hpp"
 #include "scenegen/errors.hpp"
@@ -191,8 +192,8 @@ int run_render_batch(const RenderBatchCommand& c, std::ostream& out, std::ostrea
     out << "wrote " << list.string() << " (" << meshes << " meshes) and " << script.string() << " ("
         << c.common.slurm_shards << " array tasks over "
         << meshes * static_cast<std::size_t>(c.render.views) << " views)\nsubmit it with:  sbatch "
-        << script.string() << "\na task that died: sbatch --array=I " << script.string()
-        << "  (it resumes shard I)\n";
+        << batch::shell_word(script.string()) << "\na task that died: sbatch --array=I "
+        << batch::shell_word(script.string()) << "  (it resumes shard I)\n";
     return 0;
   }
   // Only the shard's tasks are made (an array task holds 1/N of the list in memory).

@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "batch/dataset_stats.hpp"
+#include "batch/slurm.hpp"
 #include "common/cli_checks.hpp"
 #include "common/exit_status.hpp"
 #include "simulation/batch.hpp"
@@ -60,8 +61,9 @@ int run_mesh_batch(const BatchCommand& c, bool with_metrics, std::ostream& out, 
     const fs::path script =
         batch::write_slurm_script(c.out, "papersim-batch", shard_command(c), c.common);
     out << "wrote " << script.string() << " (" << c.common.slurm_shards << " array tasks over "
-        << draws.size() << " samples)\nsubmit it with:  sbatch " << script.string()
-        << "\na task that died: sbatch --array=I " << script.string() << "  (it resumes shard I)\n";
+        << draws.size() << " samples)\nsubmit it with:  sbatch "
+        << batch::shell_word(script.string()) << "\na task that died: sbatch --array=I "
+        << batch::shell_word(script.string()) << "  (it resumes shard I)\n";
     return 0;
   }
   const batch::BatchSpec spec =

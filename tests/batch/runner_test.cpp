@@ -420,6 +420,15 @@ TEST(Slurm, ScriptMapsTheArrayIndexToTheShard) {
   EXPECT_THROW(papersim::batch::slurm_script({"x"}, o, "/tmp"), std::invalid_argument);
 }
 
+TEST(Slurm, AScriptPathIsPrintedAsBashTakesIt) {
+  EXPECT_EQ(papersim::batch::shell_word("/scratch/DS/slurm/papersim-batch.sbatch"),
+            "/scratch/DS/slurm/papersim-batch.sbatch");
+  EXPECT_EQ(papersim::batch::shell_word("/data/my data #2/it's.sbatch"),
+            "'/data/my data #2/it'\\''s.sbatch'");
+  EXPECT_EQ(papersim::batch::shell_word("a$b"), "'a$b'");
+  EXPECT_EQ(papersim::batch::shell_word(""), "''");
+}
+
 // sbatch 22.05 ends a directive's value at white space or '#' unless it is quoted: a dataset
 // folder named "my data #2" made sbatch refuse the script ("Invalid directive"). Values are in
 // double quotes now (the Slurm test runs such a folder on a real cluster); what no #SBATCH line
