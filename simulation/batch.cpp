@@ -109,6 +109,13 @@ Mix mix_from_json(const json& j, const std::string& source) {
     throw SceneError(source + ": 'scenarios' must be a non-empty object {name: weight}");
   Mix mix;
   for (const auto& [name, v] : j["scenarios"].items()) add_mix_entry(mix, name, v, source);
+  // mix_pick divides by the sum: an infinite one (two weights of 1e308) gave every weight the
+  // share 0, and every seed the last scenario.
+  double total = 0;
+  for (const double w : mix.weights) total += w;
+  if (!std::isfinite(total))
+    throw SceneError(source + ": the weights add up to more than the largest number (" +
+                     std::to_string(mix.weights.size()) + " weights): scale them down");
   if (j.contains("set")) {
     if (!j["set"].is_object()) throw SceneError(source + ": 'set' must be an object of scene keys");
     mix.common = j["set"];

@@ -85,6 +85,18 @@ TEST(Mix, ParsesWeightsAndOverridesAndRefusesBadKeys) {
               ps::mix_from_json(json::parse(R"({"scenario": {"pull": 1}})"), "m.json");
             }).find("scenario"),
             std::string::npos);
+  // Each weight finite, their sum not: every seed drew the last scenario.
+  EXPECT_NE(scene_error([] {
+              ps::mix_from_json(json::parse(R"({"scenarios": {"pull": 1e308, "fold": 1e308}})"),
+                                "m.json");
+            }).find("the weights add up to more than the largest number"),
+            std::string::npos);
+  // Just below that, the draw still splits them.
+  const ps::Mix big =
+      ps::mix_from_json(json::parse(R"({"scenarios": {"pull": 8e307, "fold": 8e307}})"), "m.json");
+  std::set<std::size_t> picked;
+  for (std::uint64_t seed = 0; seed < 64; ++seed) picked.insert(ps::mix_pick(big, seed));
+  EXPECT_EQ(picked.size(), 2u);
 }
 
 TEST(Mix, DrawsScenariosInProportionToTheirWeights) {
