@@ -387,18 +387,30 @@ batch::BatchSpec mesh_batch_spec(const fs::path& root, const fs::path& papersim,
   return spec;
 }
 
-std::pair<std::uint64_t, std::uint64_t> parse_seed_range(const std::string& text) {
+namespace {
+
+/// What is wrong with the seed range `text` ("A-B" or "A"), or "" when nothing is.
+std::string seed_range_problem(const std::string& text) {
   const auto dash = text.find('-');
   const std::string a = text.substr(0, dash),
                     b = dash == std::string::npos ? a : text.substr(dash + 1);
-  auto digits = [](const std::string& s) {
-    return !s.empty() && s.size() < 19 && s.find_first_not_of("0123456789") == std::string::npos;
-  };
-  if (!digits(a) || !digits(b))
-    throw SceneError("--seeds '" + text + "': expected A-B or A (non-negative integers)");
-  const std::uint64_t first = std::stoull(a), last = std::stoull(b);
-  if (last < first) throw SceneError("--seeds '" + text + "': the last seed is below the first");
-  return {first, last};
+  for (const std::string& s : {a, b})
+    if (s.empty() || s.find_first_not_of("0123456789") != std::string::npos)
+      return "is not A-B or A (non-negative integers, B >= A)";
+  if (a.size() > 18 || b.size() > 18)
+    return "has a seed of more than 18 digits (the largest seed is 999999999999999999)";
+  if (std::stoull(b) < std::stoull(a)) return "has its last seed below the first";
+  return "";
+}
+
+}  // namespace
+
+std::pair<std::uint64_t, std::uint64_t> parse_seed_range(const std::string& text) {
+  const std::string problem = seed_range_problem(text);
+  if (!problem.empty()) throw SceneError("--seeds '" + text + "' " + problem);
+  const auto dash = text.find('-');
+  return {std::stoull(text.substr(0, dash)),
+          std::stoull(dash == std::string::npos ? text : text.substr(dash + 1))};
 }
 
 std::vector<std::pair<std::uint64_t, std::uint64_t>> parse_seeds(const std::string& text) {
@@ -408,12 +420,9 @@ std::vector<std::pair<std::uint64_t, std::uint64_t>> parse_seeds(const std::stri
     const std::size_t comma = text.find(',', start);
     const std::string part =
         text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
-    try {
-      ranges.push_back(parse_seed_range(part));
-    } catch (const SceneError&) {
-      throw SceneError("--seeds '" + text + "': '" + part +
-                       "' is not A-B or A (non-negative integers, B >= A)");
-    }
+    const std::string problem = seed_range_problem(part);
+    if (!problem.empty()) throw SceneError("--seeds '" + text + "': '" + part + "' " + problem);
+    ranges.push_back(parse_seed_range(part));
     for (std::size_t i = 0; i + 1 < ranges.size(); ++i)
       if (ranges[i].first <= ranges.back().second && ranges.back().first <= ranges[i].second)
         throw SceneError("--seeds '" + text + "': '" + part + "' overlaps an earlier part");

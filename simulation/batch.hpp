@@ -103,8 +103,8 @@ std::filesystem::path checkpoint_folder(const std::filesystem::path& root, const
 /// @throw std::runtime_error when meta.json cannot be read
 nlohmann::json mesh_manifest_fields(const std::filesystem::path& sample_dir);
 
-/// Parse "A-B" or "A" into an inclusive seed range.
-/// @throw SceneError naming --seeds when the text is not of that form or B < A
+/// Parse "A-B" or "A" into an inclusive seed range; a seed has at most 18 digits.
+/// @throw SceneError naming --seeds when the text is not of that form, a seed is longer or B < A
 std::pair<std::uint64_t, std::uint64_t> parse_seed_range(const std::string& text);
 
 /// Parse a comma list of "A-B" or "A" (e.g. "3,7,12-13") into inclusive seed ranges, in order.

@@ -13,6 +13,7 @@
 #include "simulation/batch.hpp"
 #include "simulation/errors.hpp"
 #include "simulation/scenario.hpp"
+#include "simulation/simulate.hpp"
 
 namespace papersim::simulation {
 namespace fs = std::filesystem;
@@ -154,7 +155,7 @@ void add_batch_subcommands(CLI::App& app, BatchCommand& c) {
           "again (with --retry-failed for a recorded failure), to the same mesh; the progress line "
           "then shows how far "
           "the running samples are, and an ETA from that before any sample has ended")
-      ->check(papersim::common::non_negative())
+      ->check(CLI::Range(0, MAX_CHECKPOINT_EVERY))
       ->capture_default_str();
   batch::add_batch_cli_options(c.batch, c.common);
   c.stats =

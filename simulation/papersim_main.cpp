@@ -97,7 +97,7 @@ void add_checkpoint_options(CLI::App* app, CheckpointOptions& c) {
                       "Save the state every --checkpoint-every steps in DIR, a folder "
                       "outside --out (kept when the run fails; continue with --resume DIR)");
   app->add_option("--checkpoint-every", c.every, "Steps between checkpoints (default 100)")
-      ->check(CLI::Range(1, 1 << 30))
+      ->check(CLI::Range(1, ps::MAX_CHECKPOINT_EVERY))
       ->needs(dir);
   dir->check(non_empty());
   app->add_option("--resume", c.resume,

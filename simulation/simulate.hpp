@@ -58,7 +58,7 @@ struct RunOptions {
   /// (save_checkpoint), which is outside the run's output and stays when the run fails, so a
   /// run can be continued from its last checkpoint or a failure studied from just before it.
   std::string checkpoint_dir;
-  int checkpoint_every = 0;
+  int checkpoint_every = 0;  ///< at most MAX_CHECKPOINT_EVERY on the command line
   /// Continue from the checkpoint in this folder (load_checkpoint) instead of the start. The
   /// scene may differ from the checkpoint's (e.g. other solver settings at a hard spot) but not
   /// in time step or duration; meta.json's `resumed` lists what differs.
@@ -66,6 +66,10 @@ struct RunOptions {
   /// What the run tells on stderr about its inner workings (`--trace`; off by default).
   Trace trace;
 };
+
+/// The most steps between checkpoints `papersim run --checkpoint-every` and `papersim batch
+/// --checkpoint-every` take (2^30; a batch passes its value on to every sample's run).
+constexpr int MAX_CHECKPOINT_EVERY = 1 << 30;
 
 /// A saved state of a run: DIR/checkpoint.json (format, step, time, the sheet file's name, the
 /// scene, what the run had counted) and the sheet file it names (PLY, doubles: positions,

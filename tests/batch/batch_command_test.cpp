@@ -295,6 +295,12 @@ TEST(PapersimBatch, BadOptionsAreNamedAndNothingRuns) {
       {{"--mix", (work_dir() / "missing.json").string(), "--seeds", "1-2"}, "--mix"},
       {{"--scenarios", "pull", "--seeds", "1-2", "--shard", "2/2"}, "--shard"},
       {{"--seeds", "1-2"}, "--scenarios or --mix"},
+      // Passed on to every sample's papersim run, which takes at most 2^30: each sample failed.
+      {{"--scenarios", "pull", "--seeds", "1-2", "--checkpoint-every", "2147483647"},
+       "--checkpoint-every"},
+      // A well-formed number, only too long: the message says so.
+      {{"--scenarios", "pull", "--seeds", "1000000000000000000"},
+       "'1000000000000000000' has a seed of more than 18 digits"},
   };
   for (const auto& [args, named] : cases) {
     std::vector<std::string> argv{PAPERSIM, "batch", "--out", d.string()};
