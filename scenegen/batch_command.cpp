@@ -4,11 +4,14 @@
 #include <chrono>
 #include <cmath>
 #include <ostream>
+#include <tuple>
 
 #include "batch/slurm.hpp"
 #include "common/cli_checks.hpp"
 #include "common/errors.hpp"
 #include "scenegen/errors.hpp"
+#include "scenegen/job.hpp"
+#include "scenegen/limits.hpp"
 #include "scenegen/passes.hpp"
 #include "scenegen/pov_writer.hpp"
 
@@ -85,18 +88,18 @@ void check_options(const RenderBatchCommand& c) {
   } catch (const InputError& e) {
     throw InputError(std::string("--quality: ") + e.what());
   }
-  const auto x = c.render.size.find('x');
-  if (x == std::string::npos ||
-      c.render.size.find_first_not_of("0123456789x") != std::string::npos || x == 0 ||
-      x + 1 == c.render.size.size())
-    throw InputError("--size '" + c.render.size + "' is not WIDTHxHEIGHT");
+  int width = 0, height = 0;  // the limits scenegen render checks, so that no view fails on them
+  parse_image_size(c.render.size, width, height, "--size", false, 8);
   if (!c.mesh_list.empty() && !fs::is_regular_file(c.mesh_list))
     throw InputError("--mesh-list '" + c.mesh_list + "' is not a file");
-  for (const auto& [opt, dir] :
-       {std::pair<const char*, std::string>{"--documents", c.render.documents_dir},
-        {"--backgrounds", c.render.backgrounds_dir}})
-    if (!dir.empty() && !fs::is_directory(dir))
-      throw InputError(std::string(opt) + " '" + dir + "' is not a folder");
+  for (const auto& [opt, dir, what] : {std::tuple<const char*, std::string, const char*>{
+                                           "--documents", c.render.documents_dir, "documents"},
+                                       {"--backgrounds", c.render.backgrounds_dir, "backgrounds"}})
+    if (!dir.empty()) {
+      if (!fs::is_directory(dir))
+        throw InputError(std::string(opt) + " '" + dir + "' is not a folder");
+      (void)image_files(dir, what);  // one with no image would fail every view
+    }
   if (!c.common.shard.empty()) {
     try {
       batch::parse_shard(c.common.shard, "--shard");
@@ -158,13 +161,13 @@ void add_render_batch_subcommand(CLI::App& app, RenderBatchCommand& c) {
                     "folder of PNG/JPEG background images");
   c.app
       ->add_option("--dpi", c.render.dpi,
-                   "built-in page resolution [dpi] (0: scenegen render's default)")
-      ->check(papersim::common::non_negative())
+                   "built-in page resolution [dpi] (0: scenegen render's default; at most 1200)")
+      ->check(CLI::Range(0, static_cast<int>(MAX_DPI)))
       ->capture_default_str();
   c.app
       ->add_option("--threads", c.render.threads,
-                   "POV-Ray threads per view (1 keeps radiosity reproducible)")
-      ->check(papersim::common::positive())
+                   "POV-Ray threads per view (1 keeps radiosity reproducible; at most 1024)")
+      ->check(CLI::Range(1, MAX_PROCESSES))
       ->capture_default_str();
   batch::add_batch_cli_options(c.app, c.common);
 }

@@ -80,21 +80,6 @@ std::string lower_ext(const fs::path& p) {
   return e;
 }
 
-/// Sorted PNG / JPEG files of a folder. @throw IoError when it cannot be listed or is empty.
-std::vector<fs::path> image_files(const std::string& dir, const std::string& what) {
-  std::error_code ec;
-  std::vector<fs::path> files;
-  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
-    const std::string e = lower_ext(it->path());
-    if (it->is_regular_file() && (e == ".png" || e == ".jpg" || e == ".jpeg"))
-      files.push_back(it->path());
-  }
-  if (ec) throw IoError("cannot list " + what + " folder '" + dir + "': " + ec.message());
-  if (files.empty()) throw InputError(what + " folder '" + dir + "' has no PNG or JPEG file");
-  std::sort(files.begin(), files.end());
-  return files;
-}
-
 /// Check that an image is a readable PNG or JPEG. @throw IoError / InputError
 void check_image(const fs::path& p, const std::string& what) {
   if (!fs::is_regular_file(p)) throw IoError(what + " '" + p.string() + "' does not exist");
@@ -237,6 +222,42 @@ void remove_quietly(const fs::path& p) {
 }
 
 }  // namespace
+
+std::vector<fs::path> image_files(const std::string& dir, const std::string& what) {
+  std::error_code ec;
+  std::vector<fs::path> files;
+  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string e = lower_ext(it->path());
+    if (it->is_regular_file() && (e == ".png" || e == ".jpg" || e == ".jpeg"))
+      files.push_back(it->path());
+  }
+  if (ec) throw IoError("cannot list " + what + " folder '" + dir + "': " + ec.message());
+  if (files.empty()) throw InputError(what + " folder '" + dir + "' has no PNG or JPEG file");
+  std::sort(files.begin(), files.end());
+  return files;
+}
+
+void parse_image_size(const std::string& s, int& w, int& h, const std::string& what,
+                      bool allow_full, int min_side) {
+  if (allow_full && s == "full") {
+    w = h = 0;
+    return;
+  }
+  const auto x = s.find('x');
+  const auto digits = [](const std::string& t) {
+    return !t.empty() && t.size() <= 9 && t.find_first_not_of("0123456789") == std::string::npos;
+  };
+  if (x == std::string::npos || !digits(s.substr(0, x)) || !digits(s.substr(x + 1)))
+    throw InputError(what + " '" + s + "' is not WIDTHxHEIGHT (two whole numbers)");
+  w = std::stoi(s.substr(0, x));
+  h = std::stoi(s.substr(x + 1));
+  if (w < min_side || h < min_side)
+    throw InputError(what + " '" + s + "' is too small (at least " + std::to_string(min_side) +
+                     " per side)");
+  if (w > MAX_IMAGE_SIDE || h > MAX_IMAGE_SIDE)
+    throw InputError(what + " '" + s + "' exceeds the limit of " + std::to_string(MAX_IMAGE_SIDE) +
+                     " per side");
+}
 
 double RunReport::total() const {
   double t = 0;

@@ -3,6 +3,7 @@
 /// renders it with POV-Ray alone, `finish` decodes the raw renders into the final files;
 /// `render_sample` = prepare + run + finish with no partial output on failure.
 #include <cstdint>
+#include <filesystem>
 #include <functional>
 #include <optional>
 #include <string>
@@ -121,5 +122,15 @@ std::vector<std::string> render_staging_paths(const std::string& out_dir);
 
 /// meta.json text of the last NoValidCameraError thrown by prepare_job in this thread.
 const std::string& failed_meta();
+
+/// Sorted PNG / JPEG files of a folder (--documents, --backgrounds; `what` names it).
+/// @throw IoError when it cannot be listed, InputError when it has none
+std::vector<std::filesystem::path> image_files(const std::string& dir, const std::string& what);
+
+/// Parse WIDTHxHEIGHT with both sides in [min_side, MAX_IMAGE_SIDE] (or "full", giving 0 x 0,
+/// when `allow_full`); nothing may follow the digits. `what` names the option in errors.
+/// @throw InputError
+void parse_image_size(const std::string& text, int& width, int& height, const std::string& what,
+                      bool allow_full, int min_side);
 
 }  // namespace papersim::scenegen

@@ -28,29 +28,6 @@ struct Cli {
   int parallel = 0, views = 1;
 };
 
-/// WIDTHxHEIGHT with both sides in [min_side, MAX_IMAGE_SIDE]; nothing may follow the digits.
-void parse_size(const std::string& s, int& w, int& h, const std::string& what, bool allow_full,
-                int min_side) {
-  if (allow_full && s == "full") {
-    w = h = 0;
-    return;
-  }
-  const auto x = s.find('x');
-  const auto digits = [](const std::string& t) {
-    return !t.empty() && t.size() <= 9 && t.find_first_not_of("0123456789") == std::string::npos;
-  };
-  if (x == std::string::npos || !digits(s.substr(0, x)) || !digits(s.substr(x + 1)))
-    throw sg::InputError(what + " '" + s + "' is not WIDTHxHEIGHT (two whole numbers)");
-  w = std::stoi(s.substr(0, x));
-  h = std::stoi(s.substr(x + 1));
-  if (w < min_side || h < min_side)
-    throw sg::InputError(what + " '" + s + "' is too small (at least " + std::to_string(min_side) +
-                         " per side)");
-  if (w > sg::MAX_IMAGE_SIDE || h > sg::MAX_IMAGE_SIDE)
-    throw sg::InputError(what + " '" + s + "' exceeds the limit of " +
-                         std::to_string(sg::MAX_IMAGE_SIDE) + " per side");
-}
-
 /// An unsigned decimal number, digits only (CLI11 would read -1 as 2^64 - 1).
 CLI::Validator digits_only() {
   return CLI::Validator(
@@ -129,9 +106,9 @@ void add_sample_options(CLI::App* app, Cli& c) {
 }
 
 void finalise(Cli& c) {
-  parse_size(c.size, c.sample.width, c.sample.height, "--size", false, 8);
-  parse_size(c.backward_grid, c.sample.backward.grid_width, c.sample.backward.grid_height,
-             "--backward-grid", true, 2);
+  sg::parse_image_size(c.size, c.sample.width, c.sample.height, "--size", false, 8);
+  sg::parse_image_size(c.backward_grid, c.sample.backward.grid_width, c.sample.backward.grid_height,
+                       "--backward-grid", true, 2);
   c.sample.passes = sg::parse_passes(c.passes);
   try {
     c.sample.quality = sg::parse_quality(c.quality);

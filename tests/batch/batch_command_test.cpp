@@ -333,6 +333,36 @@ TEST(PapersimBatch, SlurmWritesAJobArrayAndRunsNothing) {
 }
 
 #ifdef SCENEGEN_EXE
+// Values every view's scenegen render would refuse were taken, and each view of the dataset was
+// then recorded as failed (a million meshes: four million failure rows, or a cluster's time).
+TEST(ScenegenBatch, ValuesEveryViewWouldRefuseAreRefusedBeforeAnyRuns) {
+  const fs::path d = work_dir() / "bad_render_options";
+  fs::remove_all(d);
+  fs::create_directories(d / "meshes" / "pull" / "0" / "0");
+  std::ofstream(d / "meshes" / "pull" / "0" / "0" / "sheet.obj") << "";
+  fs::create_directories(d / "no_images");
+  std::ofstream(d / "no_images" / "notes.txt") << "not an image\n";
+  const std::string none = (d / "no_images").string();
+  const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
+      {{"--dpi", "5000"}, "--dpi"},
+      {{"--threads", "5000"}, "--threads"},
+      {{"--size", "9000x9000"}, "exceeds the limit of 8192"},
+      {{"--size", "4x4"}, "too small"},
+      {{"--documents", none}, "documents folder '" + none + "' has no PNG or JPEG file"},
+      {{"--backgrounds", none}, "backgrounds folder '" + none + "' has no PNG or JPEG file"},
+  };
+  for (const auto& [args, named] : cases) {
+    std::vector<std::string> argv{SCENEGEN_EXE, "batch", d.string()};
+    argv.insert(argv.end(), args.begin(), args.end());
+    EXPECT_EQ(run(argv, work_dir() / "bad_render.log"), 2) << named;
+    EXPECT_NE(pt::read_text(work_dir() / "bad_render.log").find(named), std::string::npos)
+        << named << ": " << pt::read_text(work_dir() / "bad_render.log");
+    EXPECT_FALSE(fs::exists(d / "renders"));
+    EXPECT_FALSE(fs::exists(d / "renders_failures.jsonl"));
+  }
+  fs::remove_all(d);
+}
+
 TEST(ScenegenBatch, ResumedAfterSigkillEqualsAnUninterruptedBatch) {
   // Three meshes of the reference, two views each (one flipped), tiny renders.
   const fs::path a = work_dir() / "render_ref", b = work_dir() / "render_kill";
