@@ -23,6 +23,7 @@ std::string shell_word(const std::string& word) {
 }
 
 std::string directive_word(const std::string& word, const std::string& what) {
+  if (word.empty()) throw std::invalid_argument(what + " is empty");
   std::string out = "\"";
   for (const char c : word) {
     if (c == '\n' || c == '\r')

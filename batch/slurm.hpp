@@ -28,16 +28,16 @@ std::string shell_word(const std::string& word);
 /// `word` as the value of a #SBATCH line: in double quotes, a '"' in it as \". sbatch 22.05
 /// reads a directive's value up to white space or '#' unless quoted ("my data#2" is one value
 /// only in quotes) and takes a backslash as an escape.
-/// @throw std::invalid_argument naming `what` when `word` has a line break (no line holds it) or
-/// a backslash
+/// @throw std::invalid_argument naming `what` when `word` is empty, has a line break (no line
+/// holds it) or a backslash
 std::string directive_word(const std::string& word, const std::string& what);
 
 /// The script: #SBATCH lines (--array, --cpus-per-task, --mem, --time, --output, --error,
 /// --job-name, --partition), then `command` with "--shard ${SLURM_ARRAY_TASK_ID}/N --jobs C"
 /// appended. Logs go to LOG_DIR/%A_%a.out and .err.
 /// @throw std::invalid_argument when shards or cpus_per_task < 1, when a directive's value (the
-/// options' texts, LOG_DIR) has a line break or a backslash, or LOG_DIR has a '%' (sbatch reads
-/// it as a file name pattern: the task could not open its log and would not start)
+/// options' texts, LOG_DIR) is empty or has a line break or a backslash, or LOG_DIR has a '%'
+/// (sbatch reads it as a file name pattern: the task could not open its log and would not start)
 std::string slurm_script(const std::vector<std::string>& command, const SlurmOptions& options,
                          const std::filesystem::path& log_dir);
 

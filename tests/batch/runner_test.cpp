@@ -452,6 +452,9 @@ TEST(Slurm, DirectiveValuesAreQuotedAndWhatNoLineCanHoldIsRefused) {
   refused("/data/a%Ab/slurm", "has a '%'");
   refused("/data/a\\b/slurm", "has a backslash");
   refused("/data/a\nb/slurm", "has a line break");
+  o.mem = "";
+  EXPECT_THROW((void)papersim::batch::slurm_script({"/opt/papersim"}, o, "/data/slurm"),
+               std::invalid_argument);
   o.mem = "2G\n#SBATCH --exclusive";
   try {
     (void)papersim::batch::slurm_script({"/opt/papersim"}, o, "/data/slurm");
