@@ -528,6 +528,16 @@ BatchSummary Runner::run() {
 
 }  // namespace
 
+Task Task::in_folder(std::string folder, const nlohmann::json& info) {
+  Task t;
+  folder.shrink_to_fit();
+  t.key = folder;
+  t.final_dir = std::move(folder);
+  t.info = info.dump();
+  t.info.shrink_to_fit();
+  return t;
+}
+
 std::vector<Task> select_shard(const std::vector<Task>& tasks, int index, int count) {
   if (count < 1 || index < 0 || index >= count)
     throw std::invalid_argument("shard " + std::to_string(index) + "/" + std::to_string(count) +

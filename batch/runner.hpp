@@ -34,6 +34,10 @@ struct Task {
 
   /// `info` parsed.
   nlohmann::json info_object() const { return nlohmann::json::parse(info); }
+
+  /// The task whose key and final folder are both `folder`, with `info` as its text. The
+  /// strings hold no spare capacity (appends and a dump grow theirs by doubling).
+  static Task in_folder(std::string folder, const nlohmann::json& info);
 };
 
 /// One child process of a task: argv[0] is the executable path.

@@ -194,19 +194,14 @@ std::vector<batch::Task> render_tasks(const fs::path& root, const RenderBatchOpt
     const std::string bucket = std::to_string(m.seed / 1000) + '/' + std::to_string(m.seed);
     for (int k = 0; k < o.views; ++k) {
       if (!shard.holds(position++)) continue;
-      batch::Task t;
-      t.final_dir = "renders/" + m.scenario + '/' + bucket + "/view" + std::to_string(k);
-      t.key = t.final_dir;
-      t.info = nlohmann::json{{"scenario", m.scenario},
-                              {"seed", m.seed},
-                              {"view", k},
-                              {"flipped", o.flip && k % 2 == 1},
-                              {"render_seed", view_seed(m.scenario, m.seed, k)},
-                              {"mesh", m.dir + "/sheet.obj"}}
-                   .dump();
-      t.final_dir.shrink_to_fit();  // a dump and appends grow their strings by doubling
-      t.info.shrink_to_fit();
-      tasks.push_back(std::move(t));
+      tasks.push_back(batch::Task::in_folder(
+          "renders/" + m.scenario + '/' + bucket + "/view" + std::to_string(k),
+          {{"scenario", m.scenario},
+           {"seed", m.seed},
+           {"view", k},
+           {"flipped", o.flip && k % 2 == 1},
+           {"render_seed", view_seed(m.scenario, m.seed, k)},
+           {"mesh", m.dir + "/sheet.obj"}}));
     }
   }
   return tasks;

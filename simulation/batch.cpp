@@ -238,15 +238,10 @@ std::vector<batch::Task> mesh_tasks(const std::vector<SampleDraw>& draws) {
   std::vector<batch::Task> tasks;
   tasks.reserve(draws.size());
   for (const auto& d : draws) {
-    batch::Task t;
-    t.final_dir = "meshes/" + d.scenario + '/' + seed_bucket(d.seed) + '/' + std::to_string(d.seed);
-    t.final_dir.shrink_to_fit();  // so do the appends
-    t.key = t.final_dir;
     json info = {{"scenario", d.scenario}, {"seed", d.seed}};
     if (d.overrides && !d.overrides->empty()) info["set"] = *d.overrides;
-    t.info = info.dump();
-    t.info.shrink_to_fit();  // a dump grows its string by doubling
-    tasks.push_back(std::move(t));
+    tasks.push_back(batch::Task::in_folder(
+        "meshes/" + d.scenario + '/' + seed_bucket(d.seed) + '/' + std::to_string(d.seed), info));
   }
   return tasks;
 }
@@ -389,8 +384,9 @@ batch::BatchSpec mesh_batch_spec(const fs::path& root, const fs::path& papersim,
 
 namespace {
 
-/// What is wrong with the seed range `text` ("A-B" or "A"), or "" when nothing is.
-std::string seed_range_problem(const std::string& text) {
+/// Read the seed range `text` ("A-B" or "A") into `range`; what is wrong with it, or "".
+std::string read_seed_range(const std::string& text,
+                            std::pair<std::uint64_t, std::uint64_t>& range) {
   const auto dash = text.find('-');
   const std::string a = text.substr(0, dash),
                     b = dash == std::string::npos ? a : text.substr(dash + 1);
@@ -399,18 +395,17 @@ std::string seed_range_problem(const std::string& text) {
       return "is not A-B or A (non-negative integers, B >= A)";
   if (a.size() > 18 || b.size() > 18)
     return "has a seed of more than 18 digits (the largest seed is 999999999999999999)";
-  if (std::stoull(b) < std::stoull(a)) return "has its last seed below the first";
-  return "";
+  range = {std::stoull(a), std::stoull(b)};
+  return range.second < range.first ? "has its last seed below the first" : "";
 }
 
 }  // namespace
 
 std::pair<std::uint64_t, std::uint64_t> parse_seed_range(const std::string& text) {
-  const std::string problem = seed_range_problem(text);
+  std::pair<std::uint64_t, std::uint64_t> range;
+  const std::string problem = read_seed_range(text, range);
   if (!problem.empty()) throw SceneError("--seeds '" + text + "' " + problem);
-  const auto dash = text.find('-');
-  return {std::stoull(text.substr(0, dash)),
-          std::stoull(dash == std::string::npos ? text : text.substr(dash + 1))};
+  return range;
 }
 
 std::vector<std::pair<std::uint64_t, std::uint64_t>> parse_seeds(const std::string& text) {
@@ -420,9 +415,10 @@ std::vector<std::pair<std::uint64_t, std::uint64_t>> parse_seeds(const std::stri
     const std::size_t comma = text.find(',', start);
     const std::string part =
         text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
-    const std::string problem = seed_range_problem(part);
+    std::pair<std::uint64_t, std::uint64_t> range;
+    const std::string problem = read_seed_range(part, range);
     if (!problem.empty()) throw SceneError("--seeds '" + text + "': '" + part + "' " + problem);
-    ranges.push_back(parse_seed_range(part));
+    ranges.push_back(range);
     for (std::size_t i = 0; i + 1 < ranges.size(); ++i)
       if (ranges[i].first <= ranges.back().second && ranges.back().first <= ranges[i].second)
         throw SceneError("--seeds '" + text + "': '" + part + "' overlaps an earlier part");
