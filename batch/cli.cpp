@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
@@ -11,6 +12,7 @@
 #include <thread>
 
 #include "common/cli_checks.hpp"
+#include "common/errors.hpp"
 
 namespace papersim::batch {
 namespace fs = std::filesystem;
@@ -46,8 +48,8 @@ void add_batch_cli_options(CLI::App* app, BatchCliOptions& o) {
                 "run samples recorded in the failures file again");
   app->add_flag("--quiet", o.quiet, "no progress line");
   app->add_option("--slurm", o.slurm_shards,
-                  "write DATASET/slurm/*.sbatch, a job array of this many shards, and print how to "
-                  "submit it (nothing runs)")
+                  "write DATASET/slurm/*.sbatch, a job array of this many shards (at most one per "
+                  "sample or view), and print how to submit it (nothing runs)")
       ->check(papersim::common::positive());
   app->add_option("--slurm-cpus", o.slurm.cpus_per_task,
                   "cores per array task (= samples at once in it; at most 1024)")
@@ -80,6 +82,23 @@ ProgressFn progress_printer(std::ostream& out, bool tty, const std::string& labe
     if (p.running_done.size() > 4) shares += ", ...";
     out << (tty ? "\r\033[K" : "") << line << shares << (tty ? "" : "\n") << std::flush;
   };
+}
+
+void check_dataset_folder(const fs::path& root, const std::string& option) {
+  std::error_code ec;
+  for (fs::path p = fs::absolute(root, ec); !ec && !p.empty(); p = p.parent_path()) {
+    const fs::file_status st = fs::status(p, ec);
+    if (ec && st.type() != fs::file_type::not_found) break;  // cannot tell: creating it says why
+    ec.clear();
+    if (st.type() == fs::file_type::not_found) {
+      if (p == p.parent_path()) break;
+      continue;
+    }
+    if (st.type() != fs::file_type::directory)
+      throw common::OutputError("cannot make the dataset folder " + option + " '" + root.string() +
+                                "': '" + p.string() + "' is not a folder");
+    return;
+  }
 }
 
 Shard cli_shard(const BatchCliOptions& o) {
@@ -118,15 +137,42 @@ void check_slurm_script(const fs::path& root, const std::string& name, const Bat
   (void)script_text(root, name, {}, o);
 }
 
-fs::path write_slurm_script(const fs::path& root, const std::string& name,
-                            const std::vector<std::string>& command, const BatchCliOptions& o) {
-  const std::string text = script_text(root, name, command, o);
+SlurmScript write_slurm_script(const fs::path& root, const std::string& name,
+                               const std::vector<std::string>& command, const BatchCliOptions& o,
+                               std::size_t tasks) {
+  BatchCliOptions used = o;
+  used.slurm_shards = static_cast<int>(std::min<std::size_t>(
+      static_cast<std::size_t>(o.slurm_shards), std::max<std::size_t>(tasks, 1)));
+  const std::string text = script_text(root, name, command, used);
   const fs::path dir = fs::absolute(root) / "slurm";
   fs::create_directories(dir);
   fs::path file = dir / (name + ".sbatch");
   write_file_atomically(file, text);
   fs::permissions(file, fs::perms::owner_exec, fs::perm_options::add);
-  return file;
+  return {file, used.slurm_shards};
+}
+
+std::string slurm_written_text(const SlurmScript& script, const BatchCliOptions& o,
+                               std::size_t tasks, const std::string& unit) {
+  std::ostringstream out;
+  const std::string file = shell_word(script.path.string());
+  out << "wrote " << script.path.string() << " (" << script.array_tasks << " array task"
+      << (script.array_tasks == 1 ? "" : "s") << " over " << tasks << ' ' << unit << ")\n";
+  if (tasks == 0)
+    out << "note: there are no " << unit << " to run; the array's one task ends at once\n";
+  else if (script.array_tasks < o.slurm_shards)
+    out << "note: --slurm " << o.slurm_shards << " is more than the " << tasks << ' ' << unit
+        << ": one array task per " << unit.substr(0, unit.size() - 1) << "\n";
+  if (script.array_tasks > SLURM_DEFAULT_MAX_ARRAY_SIZE)
+    out << "note: Slurm takes array indices below MaxArraySize, " << SLURM_DEFAULT_MAX_ARRAY_SIZE
+        << " unless slurm.conf sets it (scontrol show config | grep MaxArraySize), and this "
+           "array's last index is "
+        << script.array_tasks - 1
+        << ": if sbatch says \"Invalid job array specification\", use --slurm "
+        << SLURM_DEFAULT_MAX_ARRAY_SIZE << " or less\n";
+  out << "submit it with:  sbatch " << file << "\na task that died: sbatch --array=I " << file
+      << "  (it resumes shard I)\n";
+  return out.str();
 }
 
 std::string summary_line(const BatchSummary& s, const fs::path& root, const BatchSpec& spec) {

@@ -44,6 +44,11 @@ void add_batch_cli_options(CLI::App* app, BatchCliOptions& options);
 /// terminal, one line per `every_seconds` otherwise.
 ProgressFn progress_printer(std::ostream& out, bool tty, const std::string& label);
 
+/// Whether the dataset folder `root` (given as `option`) exists or can be made: refused when it
+/// or the nearest of its parents that exists is not a folder, before a long draw of samples.
+/// @throw common::OutputError naming the option, the folder and the part that is a file
+void check_dataset_folder(const std::filesystem::path& root, const std::string& option);
+
 /// The slice of --shard, or the whole list when it was not given.
 /// @throw std::invalid_argument naming --shard when it is malformed
 Shard cli_shard(const BatchCliOptions& options);
@@ -55,13 +60,28 @@ BatchSummary run_cli_batch(const std::vector<Task>& tasks, BatchSpec spec,
                            const BatchCliOptions& options, std::ostream& progress_out,
                            const std::string& label);
 
+/// A job-array script written by write_slurm_script.
+struct SlurmScript {
+  std::filesystem::path path;
+  int array_tasks = 0;  ///< --slurm N, or one per task when the batch has fewer than N
+};
+
 /// Write ROOT/slurm/NAME.sbatch for `command` (the batch command line without --shard and
-/// --jobs; absolute paths) and return its path. The script is made before anything is written.
+/// --jobs; absolute paths) over `tasks` tasks (samples, or views). The array has --slurm N tasks,
+/// or `tasks` when that is fewer (a task given an empty shard would start, find nothing and
+/// end), at least one. The script is made before anything is written.
 /// @throw std::invalid_argument as check_slurm_script; std::runtime_error when the file cannot
 /// be written
-std::filesystem::path write_slurm_script(const std::filesystem::path& root, const std::string& name,
-                                         const std::vector<std::string>& command,
-                                         const BatchCliOptions& options);
+SlurmScript write_slurm_script(const std::filesystem::path& root, const std::string& name,
+                               const std::vector<std::string>& command,
+                               const BatchCliOptions& options, std::size_t tasks);
+
+/// What a command prints after writing `script` for `tasks` tasks counted in `unit` ("samples",
+/// "views"): the array's size, how to submit it and how to run a task that died again, and a note
+/// when --slurm asked for more tasks than there are, or for more than Slurm's default
+/// MaxArraySize (1001) takes.
+std::string slurm_written_text(const SlurmScript& script, const BatchCliOptions& options,
+                               std::size_t tasks, const std::string& unit);
 
 /// Whether write_slurm_script(root, name, ...) can write its script, for a command to check
 /// before it writes anything else.

@@ -18,6 +18,10 @@ struct SlurmOptions {
   int max_running = 0;  ///< at most this many array tasks at once (%M); 0: no limit
 };
 
+/// Slurm's default MaxArraySize (slurm.conf): array indices must be below it, so a default
+/// cluster takes arrays of at most this many tasks (0 .. 1000).
+inline constexpr int SLURM_DEFAULT_MAX_ARRAY_SIZE = 1001;
+
 /// A bash word in single quotes.
 std::string shell_quote(const std::string& word);
 

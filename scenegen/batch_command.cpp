@@ -190,13 +190,11 @@ int run_render_batch(const RenderBatchCommand& c, std::ostream& out, std::ostrea
     } else {
       meshes = mesh_list_size(list);
     }
-    const fs::path script =
-        batch::write_slurm_script(c.dataset, "scenegen-batch", shard_command(c, list), c.common);
-    out << "wrote " << list.string() << " (" << meshes << " meshes) and " << script.string() << " ("
-        << c.common.slurm_shards << " array tasks over "
-        << meshes * static_cast<std::size_t>(c.render.views) << " views)\nsubmit it with:  sbatch "
-        << batch::shell_word(script.string()) << "\na task that died: sbatch --array=I "
-        << batch::shell_word(script.string()) << "  (it resumes shard I)\n";
+    const std::size_t views = meshes * static_cast<std::size_t>(c.render.views);
+    const batch::SlurmScript script = batch::write_slurm_script(
+        c.dataset, "scenegen-batch", shard_command(c, list), c.common, views);
+    out << "wrote " << list.string() << " (" << meshes << " meshes)\n"
+        << batch::slurm_written_text(script, c.common, views, "views");
     return 0;
   }
   // Only the shard's tasks are made (an array task holds 1/N of the list in memory).

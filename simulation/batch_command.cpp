@@ -50,6 +50,7 @@ std::vector<std::string> shard_command(const BatchCommand& c) {
 }
 
 int run_mesh_batch(const BatchCommand& c, bool with_metrics, std::ostream& out, std::ostream& err) {
+  batch::check_dataset_folder(c.out, "--out");
   MeshBatchSelection sel;
   sel.scenarios = split_commas(c.scenarios);
   sel.mix_path = c.mix;
@@ -59,12 +60,9 @@ int run_mesh_batch(const BatchCommand& c, bool with_metrics, std::ostream& out, 
   if (c.common.slurm_shards == 0) sel.shard = shard;      // the script's line counts them all
   std::vector<SampleDraw> draws = draw_samples(sel);      // checks every option first
   if (c.common.slurm_shards > 0) {
-    const fs::path script =
-        batch::write_slurm_script(c.out, "papersim-batch", shard_command(c), c.common);
-    out << "wrote " << script.string() << " (" << c.common.slurm_shards << " array tasks over "
-        << draws.size() << " samples)\nsubmit it with:  sbatch "
-        << batch::shell_word(script.string()) << "\na task that died: sbatch --array=I "
-        << batch::shell_word(script.string()) << "  (it resumes shard I)\n";
+    const batch::SlurmScript script = batch::write_slurm_script(
+        c.out, "papersim-batch", shard_command(c), c.common, draws.size());
+    out << batch::slurm_written_text(script, c.common, draws.size(), "samples");
     return 0;
   }
   const batch::BatchSpec spec =

@@ -332,6 +332,66 @@ TEST(PapersimBatch, SlurmWritesAJobArrayAndRunsNothing) {
   EXPECT_FALSE(fs::exists(d / "meshes"));
 }
 
+// An array task whose shard is empty would start, find nothing and end: --slurm N over fewer
+// samples makes one task per sample. An array whose last index is at Slurm's default
+// MaxArraySize or above gets a note (sbatch of a default cluster refuses it; checked on
+// scripts/slurm_cluster.sh's cluster: --array=0-1000 is taken, 0-1500 refused).
+TEST(PapersimBatch, SlurmMakesNoMoreArrayTasksThanSamplesAndNotesSlurmsArrayLimit) {
+  const fs::path d = work_dir() / "slurm_small";
+  const fs::path log = work_dir() / "slurm_small.log";
+  ASSERT_EQ(run({PAPERSIM, "batch", "--out", d.string(), "--mix", tiny_mix().string(), "--seeds",
+                 "1-3", "--slurm", "500"},
+                log),
+            0)
+      << pt::read_text(log);
+  std::string script = pt::read_text(d / "slurm" / "papersim-batch.sbatch");
+  EXPECT_NE(script.find("#SBATCH --array=0-2\n"), std::string::npos) << script;
+  EXPECT_NE(script.find("--shard \"${SLURM_ARRAY_TASK_ID}/3\""), std::string::npos) << script;
+  EXPECT_NE(pt::read_text(log).find("(3 array tasks over 3 samples)\nnote: --slurm 500 is more "
+                                    "than the 3 samples: one array task per sample"),
+            std::string::npos)
+      << pt::read_text(log);
+  EXPECT_EQ(pt::read_text(log).find("MaxArraySize"), std::string::npos) << pt::read_text(log);
+  for (const auto& [shards, noted] :
+       std::vector<std::pair<std::string, bool>>{{"1001", false}, {"1002", true}}) {
+    ASSERT_EQ(run({PAPERSIM, "batch", "--out", d.string(), "--mix", tiny_mix().string(), "--seeds",
+                   "1-5000", "--slurm", shards},
+                  log),
+              0)
+        << pt::read_text(log);
+    script = pt::read_text(d / "slurm" / "papersim-batch.sbatch");
+    EXPECT_NE(script.find("#SBATCH --array=0-" + std::to_string(std::stoi(shards) - 1) + "\n"),
+              std::string::npos)
+        << script;
+    EXPECT_EQ(pt::read_text(log).find("note: --slurm"), std::string::npos) << pt::read_text(log);
+    EXPECT_EQ(pt::read_text(log).find("MaxArraySize, 1001 unless slurm.conf sets it") !=
+                  std::string::npos,
+              noted)
+        << pt::read_text(log);
+  }
+  EXPECT_FALSE(fs::exists(d / "meshes"));
+}
+
+// A dataset folder that is a file, or lies under one, is named before the samples are drawn
+// (it was "filesystem error: cannot create directories: Not a directory [F/.locks]").
+TEST(PapersimBatch, ADatasetFolderThatIsAFileIsNamed) {
+  const fs::path file = work_dir() / "a file";
+  std::ofstream(file) << "kept\n";
+  const fs::path log = work_dir() / "out_file.log";
+  for (const fs::path& out : {file, file / "sub"})
+    for (const bool slurm : {false, true}) {
+      std::vector<std::string> argv{
+          PAPERSIM, "batch", "--out", out.string(), "--mix", tiny_mix().string(), "--seeds", "1-2"};
+      if (slurm) argv.insert(argv.end(), {"--slurm", "2"});
+      EXPECT_EQ(run(argv, log), 5) << out;
+      EXPECT_NE(pt::read_text(log).find("--out '" + out.string() + "': '" + file.string() +
+                                        "' is not a folder"),
+                std::string::npos)
+          << pt::read_text(log);
+    }
+  EXPECT_EQ(pt::read_text(file), "kept\n");
+}
+
 #ifdef SCENEGEN_EXE
 // Values every view's scenegen render would refuse were taken, and each view of the dataset was
 // then recorded as failed (a million meshes: four million failure rows, or a cluster's time).

@@ -319,8 +319,11 @@ TEST(Runner, AChildThatCannotWriteStopsTheBatchAndRecordsNoFailure) {
   EXPECT_TRUE(papersim::batch::read_json_lines(root / "failures.jsonl").empty());
   EXPECT_TRUE(papersim::batch::read_json_lines(root / "manifest.jsonl").empty());
   EXPECT_TRUE(fs::is_empty(root / ".staging"));
-  EXPECT_EQ(lines(root / "runs.txt").size(), 2u)
-      << "a task started after the batch should have stopped";
+  // Task 1 ran; task 0, started beside it, may have been stopped before its shell wrote its line.
+  std::vector<std::string> ran = lines(root / "runs.txt");
+  std::sort(ran.begin(), ran.end());
+  EXPECT_TRUE(ran == std::vector<std::string>{"1"} || ran == (std::vector<std::string>{"0", "1"}))
+      << "a task started after the batch should have stopped: " << ran.size() << " ran";
   fs::remove(full);
   const auto again = papersim::batch::run_batch(tasks, spec);
   EXPECT_EQ(again.done_now, 6);
