@@ -129,10 +129,16 @@ struct ReadCount {
 
 /// Call `row` with the fields of each well-formed row of a JSON-lines file (none when it is
 /// missing), one row at a time; `skipped` counts the other non-empty lines.
+/// @throw DatasetError when `path` exists but is not a regular file or cannot be read
 template <class F>
 void for_each_row(const fs::path& path, const std::vector<std::string>& figures, long long& skipped,
                   ReadCount& count, F row) {
+  std::error_code ec;
+  const fs::file_type type = fs::status(path, ec).type();
+  if (type == fs::file_type::not_found) return;
+  if (type != fs::file_type::regular) throw DatasetError("'" + path.string() + "' is not a file");
   std::ifstream in(path);
+  if (!in) throw DatasetError("cannot open '" + path.string() + "'");
   std::string line;
   RowFields fields(figures);
   for (std::size_t lines = 1; std::getline(in, line); ++lines) {
@@ -145,6 +151,7 @@ void for_each_row(const fs::path& path, const std::vector<std::string>& figures,
     else
       ++skipped;
   }
+  if (in.bad()) throw DatasetError("cannot read '" + path.string() + "'");
 }
 
 std::string fmt(double v) {

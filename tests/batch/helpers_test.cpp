@@ -345,6 +345,23 @@ TEST(DatasetStats, LeavesOutAndCountsMalformedLines) {
   fs::remove_all(root);
 }
 
+// A manifest that is a folder (or a FIFO) was read as no rows: "0 done", exit 0.
+TEST(DatasetStats, AManifestThatIsNotAFileIsNamed) {
+  const fs::path root =
+      fs::temp_directory_path() / ("papersim_stats_dir_" + std::to_string(getpid()));
+  for (const char* name : {"manifest.jsonl", "failures.jsonl", "renders.jsonl"}) {
+    fs::remove_all(root);
+    fs::create_directories(root / name);
+    try {
+      papersim::batch::read_dataset(root);
+      ADD_FAILURE() << name << " was read";
+    } catch (const papersim::batch::DatasetError& e) {
+      EXPECT_EQ(std::string(e.what()), "'" + (root / name).string() + "' is not a file");
+    }
+  }
+  fs::remove_all(root);
+}
+
 // The report reads each row as a stream of JSON events and keeps only its key, scenario, reason
 // and figures. On rows written to catch a reader that looks at the wrong level or the wrong
 // occurrence, it must give exactly what parsing every row into a JSON object gives: a name given
