@@ -2,7 +2,7 @@
 /// A resumable, failure-isolated batch of samples run as child processes, one per core.
 ///
 /// Dataset layout under the batch root (shared by `papersim batch` and `scenegen batch`):
-///   ROOT/<final_dir of each task>/   a finished sample: exists only when complete (renamed in)
+///   ROOT/<key of each task>/         a finished sample: exists only when complete (renamed in)
 ///   ROOT/<manifest_name>             one JSON line per finished sample (appended atomically)
 ///   ROOT/<failures_name>             one JSON line per failed attempt (appended atomically)
 ///   ROOT/.locks/<task>.lock          flock held while a process works on the task
@@ -27,17 +27,21 @@ namespace papersim::batch {
 /// std::filesystem::path keeps a list of its components and a nlohmann::json object a tree of
 /// nodes, and a batch of such tasks took three times the memory (docs/batch.md).
 struct Task {
-  std::string key;        ///< unique within the batch, e.g. "meshes/pull/0/17"; used in file names
-  std::string final_dir;  ///< '/'-separated, relative to the root; exists only when finished
+  /// The task's folder, '/'-separated, relative to the root (e.g. "meshes/pull/0/17"): unique
+  /// within the batch, it names the task in rows and file names, and it exists only when the
+  /// task is finished.
+  std::string key;
   /// A JSON object's text (nlohmann::json::dump()), copied into manifest and failure rows.
   std::string info = "{}";
 
   /// `info` parsed.
   nlohmann::json info_object() const { return nlohmann::json::parse(info); }
 
-  /// The task whose key and final folder are both `folder`, with `info` as its text. The
-  /// strings hold no spare capacity (appends and a dump grow theirs by doubling).
+  /// The task of `folder` with `info` as its text. The strings hold no spare capacity (appends
+  /// and a dump grow theirs by doubling).
   static Task in_folder(std::string folder, const nlohmann::json& info);
+  /// The same with `info` given as its text (an object's dump()), for a caller that writes it.
+  static Task in_folder(std::string folder, std::string info);
 };
 
 /// One child process of a task: argv[0] is the executable path.

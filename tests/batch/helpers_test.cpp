@@ -6,8 +6,10 @@
 #include <cstdlib>
 #include <fstream>
 #include <limits>
+#include <memory>
 #include <set>
 #include <sstream>
+#include <tuple>
 
 #include "batch/dataset_stats.hpp"
 #include "batch/runner.hpp"
@@ -122,13 +124,52 @@ TEST(Selection, ProductOfScenariosAndSeedsWithFoldersPerSeed) {
   EXPECT_EQ(draws[1].scenario, "fall-gable");
   EXPECT_EQ(draws[1].seed, 998u);
   const auto tasks = ps::mesh_tasks(draws);
-  EXPECT_EQ(tasks[0].final_dir, "meshes/pull/0/998");
   EXPECT_EQ(tasks[0].key, "meshes/pull/0/998");
   EXPECT_EQ(tasks[0].info_object(), (json{{"scenario", "pull"}, {"seed", 998}}));
-  EXPECT_EQ(tasks[7].final_dir, "meshes/fall-gable/1/1001");
+  EXPECT_EQ(tasks[7].key, "meshes/fall-gable/1/1001");
   for (const char* bad : {"5-1", "a-3", "-3", "1-", ""})
     EXPECT_NE(scene_error([&] { ps::parse_seed_range(bad); }).find("--seeds"), std::string::npos)
         << bad;
+}
+
+// mesh_tasks writes each task's fields as text put together from pieces dumped once per run of
+// draws: it must be the text of the object {scenario, seed, set (when there are overrides)},
+// whatever the order of scenarios and shared or separate overrides.
+TEST(Selection, EachTasksFieldsAreTheTextOfItsObject) {
+  const auto some = std::make_shared<const json>(
+      json{{"duration", 0.05}, {"sheet.edge_length", 0.04}, {"name", "q\"\\ \u00e9\n"}});
+  const auto other = std::make_shared<const json>(json{{"duration", 0.5}});
+  const auto none = std::make_shared<const json>(json::object());
+  const std::uint64_t top = std::numeric_limits<std::uint64_t>::max();
+  std::vector<ps::SampleDraw> draws;
+  for (const auto& [scenario, seed, overrides] :
+       std::vector<std::tuple<std::string, std::uint64_t, std::shared_ptr<const json>>>{
+           {"pull", 0, nullptr},
+           {"pull", 1, some},
+           {"pull", 2, some},
+           {"fall-sphere", 2, some},
+           {"fall-sphere", 999, other},
+           {"pull", 1000, other},
+           {"pull", 1001, none},
+           {"fold", top, nullptr},
+           {"fold", 7, some}}) {
+    ps::SampleDraw d;
+    d.scenario = scenario;
+    d.seed = seed;
+    d.overrides = overrides;
+    draws.push_back(d);
+  }
+  const auto tasks = ps::mesh_tasks(draws);
+  ASSERT_EQ(tasks.size(), draws.size());
+  for (std::size_t i = 0; i < draws.size(); ++i) {
+    json expected = {{"scenario", draws[i].scenario}, {"seed", draws[i].seed}};
+    if (draws[i].overrides && !draws[i].overrides->empty()) expected["set"] = *draws[i].overrides;
+    EXPECT_EQ(tasks[i].info, expected.dump()) << i;
+    EXPECT_EQ(tasks[i].info_object(), expected) << i;
+    EXPECT_EQ(tasks[i].key, "meshes/" + draws[i].scenario + "/" +
+                                std::to_string(draws[i].seed / 1000) + "/" +
+                                std::to_string(draws[i].seed));
+  }
 }
 
 TEST(Selection, SeedListsDrawTheirSeedsInOrderAndRefuseOverlaps) {

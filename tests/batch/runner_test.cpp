@@ -38,8 +38,7 @@ fs::path fresh_dir(const std::string& name) {
 std::vector<Task> numbered_tasks(int n) {
   std::vector<Task> tasks;
   for (int i = 0; i < n; ++i)
-    tasks.push_back(
-        {"t/" + std::to_string(i), "t/" + std::to_string(i), json{{"index", i}}.dump()});
+    tasks.push_back({"t/" + std::to_string(i), json{{"index", i}}.dump()});
   return tasks;
 }
 
@@ -215,6 +214,45 @@ TEST(Runner, RestoresTheManifestRowOfATaskFinishedBeforeACrash) {
     keys.insert(r["key"]);
   EXPECT_EQ(keys.size(), 4u);
   EXPECT_EQ(lines(root / "manifest.jsonl").size(), 4u);
+  fs::remove_all(root);
+}
+
+// The scan lists each parent folder once instead of looking up every task's folder: a task is
+// finished exactly when fs::exists says its folder is there, whether that is a folder, a file,
+// a link to a folder, in a parent of many (more than the scan keeps listed at once); not when only
+// another name is there or the parent is missing.
+TEST(Runner, AFinishedTaskIsOneWhoseFolderExists) {
+  const fs::path root = fresh_dir("exists");
+  std::vector<papersim::batch::Task> tasks;
+  for (int p = 0; p < 300; ++p)  // 300 parents, two tasks each, the second made below
+    for (int i = 0; i < 2; ++i)
+      tasks.push_back(papersim::batch::Task::in_folder(
+          "p" + std::to_string(p) + "/" + std::to_string(i), json{{"index", 2 * p + i}}));
+  fs::create_directories(root / "elsewhere");
+  std::set<std::string> made;  // the indices of the tasks whose folder is made here
+  for (int p = 0; p < 300; ++p) {
+    const fs::path dir = root / ("p" + std::to_string(p));
+    if (p % 50 == 49) continue;  // a missing parent
+    fs::create_directories(dir / "0");
+    made.insert(std::to_string(2 * p));
+    if (p % 50 == 48) {
+      fs::create_directories(dir / "11");  // another name only
+      continue;
+    }
+    if (p % 3 == 0) fs::create_directories(dir / "1");
+    if (p % 3 == 1) std::ofstream(dir / "1") << "a file\n";
+    if (p % 3 == 2) fs::create_directory_symlink(root / "elsewhere", dir / "1");
+    made.insert(std::to_string(2 * p + 1));
+  }
+  const auto spec = shell_spec(root, "echo ok > \"$1/value\"");
+  papersim::batch::BatchSpec quick = spec;
+  quick.jobs = 8;
+  const auto s = papersim::batch::run_batch(tasks, quick);
+  EXPECT_EQ(s.done, 600);
+  EXPECT_EQ(s.repaired, static_cast<long long>(made.size()));
+  EXPECT_EQ(s.done_now, 600 - static_cast<long long>(made.size()));
+  for (const auto& ran : lines(root / "runs.txt"))
+    EXPECT_EQ(made.count(ran), 0u) << "task " << ran << " was finished and ran";
   fs::remove_all(root);
 }
 
