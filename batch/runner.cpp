@@ -217,10 +217,10 @@ bool has_bytes(const fs::path& file) {
 }
 
 /// fs::exists(root / path) for many paths of few parent folders, as a dataset's sample folders
-/// are (meshes/<scenario>/<bucket>/<seed>): each parent is listed once, so a path whose parent
-/// is missing or does not list its name costs no system call (a fresh batch of ten million
-/// samples made ten million failing `stat`s, 19 s). A listed symbolic link is looked up as
-/// fs::exists would.
+/// are (meshes/<scenario>/<bucket>/<seed>): each parent is listed once, and only when its own
+/// parent lists it, so a path whose parent is missing or does not list its name costs no system
+/// call (a fresh batch of ten million samples made ten million failing `stat`s, 19 s). A listed
+/// symbolic link is looked up as fs::exists would.
 class FolderCheck {
  public:
   explicit FolderCheck(fs::path root) : m_root(std::move(root)) {}
@@ -229,18 +229,27 @@ class FolderCheck {
     const std::size_t slash = path.rfind('/');
     const std::string parent = slash == std::string::npos ? "" : path.substr(0, slash);
     const std::string name = slash == std::string::npos ? path : path.substr(slash + 1);
-    auto it = m_parents.find(parent);
-    if (it == m_parents.end()) {
-      if (m_parents.size() >= kParents) m_parents.clear();
-      it = m_parents.emplace(parent, list(m_root / parent)).first;
-    }
-    const auto entry = it->second.find(name);
-    if (entry == it->second.end()) return false;
+    const auto& names = listing(parent);
+    const auto entry = names.find(name);
+    if (entry == names.end()) return false;
     return entry->second || fs::exists(m_root / path);
   }
 
  private:
   static constexpr std::size_t kParents = 256;  ///< parents listed at once (a mix interleaves some)
+
+  /// The listing of `parent` (relative to the root; "" is the root), made when first asked for:
+  /// none when the parent is missing by its own parent's listing, so a missing bucket costs one
+  /// listing of its scenario's folder rather than an attempt per sample or mesh in it.
+  const std::unordered_map<std::string, bool>& listing(const std::string& parent) {
+    auto it = m_parents.find(parent);
+    if (it != m_parents.end()) return it->second;
+    const bool there = parent.empty() || exists(parent);
+    if (m_parents.size() >= kParents) m_parents.clear();
+    return m_parents
+        .emplace(parent, there ? list(m_root / parent) : std::unordered_map<std::string, bool>{})
+        .first->second;
+  }
 
   /// The names in `dir`, each with whether it surely exists: all but symbolic links, whose
   /// target may be missing (none when `dir` cannot be listed). The listing tells each entry's

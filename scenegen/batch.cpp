@@ -189,19 +189,38 @@ std::vector<batch::Task> render_tasks(const fs::path& root, const RenderBatchOpt
   const auto count = static_cast<std::size_t>(shard.count);
   std::vector<batch::Task> tasks;
   tasks.reserve(n > index ? (n - index + count - 1) / count : 0);
+  // Each task's fields are the text json{{"scenario", ...}, {"seed", ...}, {"view", k},
+  // {"flipped", ...}, {"render_seed", ...}, {"mesh", ...}}.dump() writes (keys in order), put
+  // together from the mesh's dumped strings: building and dumping an object per view was most of
+  // the start of a million meshes' views.
   std::size_t position = 0;
+  std::string folder, info, mesh_text, scenario_text;
+  const std::string* scenario = nullptr;
   for (const MeshEntry& m : meshes) {
-    const std::string bucket = std::to_string(m.seed / 1000) + '/' + std::to_string(m.seed);
+    const std::size_t first = position;
+    position += static_cast<std::size_t>(o.views);
+    bool any = false;
+    for (std::size_t p = first; p < position && !any; ++p) any = shard.holds(p);
+    if (!any) continue;
+    if (scenario == nullptr || *scenario != m.scenario) {
+      scenario = &m.scenario;
+      scenario_text = json(m.scenario).dump();
+    }
+    mesh_text = json(m.dir + "/sheet.obj").dump();
+    const std::string seed = std::to_string(m.seed);
+    const std::string bucket = std::to_string(m.seed / 1000) + '/' + seed;
     for (int k = 0; k < o.views; ++k) {
-      if (!shard.holds(position++)) continue;
-      tasks.push_back(batch::Task::in_folder(
-          "renders/" + m.scenario + '/' + bucket + "/view" + std::to_string(k),
-          {{"scenario", m.scenario},
-           {"seed", m.seed},
-           {"view", k},
-           {"flipped", o.flip && k % 2 == 1},
-           {"render_seed", view_seed(m.scenario, m.seed, k)},
-           {"mesh", m.dir + "/sheet.obj"}}));
+      if (!shard.holds(first + static_cast<std::size_t>(k))) continue;
+      const std::string view = std::to_string(k);
+      folder.assign("renders/").append(m.scenario).append(1, '/').append(bucket);
+      folder.append("/view").append(view);
+      info.assign("{\"flipped\":").append(o.flip && k % 2 == 1 ? "true" : "false");
+      info.append(",\"mesh\":").append(mesh_text);
+      info.append(",\"render_seed\":").append(std::to_string(view_seed(m.scenario, m.seed, k)));
+      info.append(",\"scenario\":").append(scenario_text).append(",\"seed\":").append(seed);
+      info.append(",\"view\":").append(view).append(1, '}');
+      // Copies hold just their bytes: one allocation each, nothing for in_folder to shrink.
+      tasks.push_back(batch::Task::in_folder(std::string(folder), std::string(info)));
     }
   }
   return tasks;

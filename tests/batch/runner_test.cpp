@@ -220,7 +220,7 @@ TEST(Runner, RestoresTheManifestRowOfATaskFinishedBeforeACrash) {
 // The scan lists each parent folder once instead of looking up every task's folder: a task is
 // finished exactly when fs::exists says its folder is there, whether that is a folder, a file,
 // a link to a folder, in a parent of many (more than the scan keeps listed at once); not when only
-// another name is there or the parent is missing.
+// another name is there or a parent is missing.
 TEST(Runner, AFinishedTaskIsOneWhoseFolderExists) {
   const fs::path root = fresh_dir("exists");
   std::vector<papersim::batch::Task> tasks;
@@ -228,8 +228,15 @@ TEST(Runner, AFinishedTaskIsOneWhoseFolderExists) {
     for (int i = 0; i < 2; ++i)
       tasks.push_back(papersim::batch::Task::in_folder(
           "p" + std::to_string(p) + "/" + std::to_string(i), json{{"index", 2 * p + i}}));
+  for (int q = 0; q < 10; ++q)  // two levels down: q0-q4 hold x/0, q5-q9 are missing
+    tasks.push_back(papersim::batch::Task::in_folder("q" + std::to_string(q) + "/x/0",
+                                                     json{{"index", 600 + q}}));
   fs::create_directories(root / "elsewhere");
   std::set<std::string> made;  // the indices of the tasks whose folder is made here
+  for (int q = 0; q < 5; ++q) {
+    fs::create_directories(root / ("q" + std::to_string(q)) / "x" / "0");
+    made.insert(std::to_string(600 + q));
+  }
   for (int p = 0; p < 300; ++p) {
     const fs::path dir = root / ("p" + std::to_string(p));
     if (p % 50 == 49) continue;  // a missing parent
@@ -248,9 +255,9 @@ TEST(Runner, AFinishedTaskIsOneWhoseFolderExists) {
   papersim::batch::BatchSpec quick = spec;
   quick.jobs = 8;
   const auto s = papersim::batch::run_batch(tasks, quick);
-  EXPECT_EQ(s.done, 600);
+  EXPECT_EQ(s.done, 610);
   EXPECT_EQ(s.repaired, static_cast<long long>(made.size()));
-  EXPECT_EQ(s.done_now, 600 - static_cast<long long>(made.size()));
+  EXPECT_EQ(s.done_now, 610 - static_cast<long long>(made.size()));
   for (const auto& ran : lines(root / "runs.txt"))
     EXPECT_EQ(made.count(ran), 0u) << "task " << ran << " was finished and ran";
   fs::remove_all(root);

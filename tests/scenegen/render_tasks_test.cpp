@@ -64,6 +64,41 @@ void expect_same_tasks(const std::vector<papersim::batch::Task>& a,
 
 }  // namespace
 
+// render_tasks writes each view's fields as text from the mesh's dumped strings: it must be the
+// text of the object nlohmann would dump, for any scenario folder name (quotes, backslashes,
+// letters beyond ASCII).
+TEST(RenderTasks, EachTasksFieldsAreTheTextOfItsObject) {
+  const fs::path root = small_dataset("render_tasks_text");
+  add_mesh(root, "q\"\\ \u00e9", 12);
+  sg::RenderBatchOptions o;
+  o.views = 3;
+  o.flip = true;
+  const auto tasks = sg::render_tasks(root, o);
+  ASSERT_EQ(tasks.size(), 24u);
+  std::size_t odd = 0;
+  for (const auto& t : tasks) {
+    const nlohmann::json info = t.info_object();
+    EXPECT_EQ(t.info, info.dump()) << t.key;
+    const std::string scenario = info.at("scenario");
+    const std::uint64_t seed = info.at("seed");
+    const int view = info.at("view");
+    const std::string mesh =
+        "meshes/" + scenario + "/" + std::to_string(seed / 1000) + "/" + std::to_string(seed);
+    EXPECT_EQ(t.key, "renders/" + mesh.substr(7) + "/view" + std::to_string(view));
+    EXPECT_EQ(info, (nlohmann::json{{"scenario", scenario},
+                                    {"seed", seed},
+                                    {"view", view},
+                                    {"flipped", view % 2 == 1},
+                                    {"render_seed", sg::view_seed(scenario, seed, view)},
+                                    {"mesh", mesh + "/sheet.obj"}}))
+        << t.key;
+    odd += view % 2;
+  }
+  EXPECT_EQ(odd, 8u);
+  EXPECT_EQ(tasks.back().info_object().at("scenario"), "q\"\\ \u00e9");
+  fs::remove_all(root);
+}
+
 TEST(RenderTasks, AShardMadeDirectlyIsTheSliceOfTheWholeList) {
   const fs::path root = small_dataset("render_tasks");
   sg::RenderBatchOptions o;
