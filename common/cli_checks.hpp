@@ -1,5 +1,5 @@
 #pragma once
-// Range checks for CLI11 options that name the bad value in a short line. CLI11's own
+// Range and emptiness checks for CLI11 options that name the bad value in a short line. CLI11's own
 // NonNegativeNumber and PositiveNumber report "not in range 0.000000 to" the largest double,
 // written out in full (309 digits). Header only: include it where CLI11 is linked.
 #include <CLI/CLI.hpp>
@@ -29,5 +29,12 @@ inline CLI::Validator non_negative() { return number_at_least_zero(false); }
 
 /// A finite number > 0.
 inline CLI::Validator positive() { return number_at_least_zero(true); }
+
+/// A text that is not empty (a path: "" is no file or folder).
+inline CLI::Validator non_empty() {
+  return CLI::Validator(
+      [](std::string& v) { return v.empty() ? std::string("must not be empty") : std::string(); },
+      "NONEMPTY");
+}
 
 }  // namespace papersim::common

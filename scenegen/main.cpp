@@ -7,6 +7,7 @@
 #include <string>
 
 #include "common/atomic_file.hpp"
+#include "common/cli_checks.hpp"
 #include "common/exit_status.hpp"
 #include "common/interrupt.hpp"
 #include "scenegen/batch_command.hpp"
@@ -40,16 +41,10 @@ CLI::Validator digits_only() {
       "UINT");
 }
 
-CLI::Validator non_empty() {
-  return CLI::Validator(
-      [](std::string& v) { return v.empty() ? std::string("must not be empty") : std::string(); },
-      "NONEMPTY");
-}
-
 void add_sample_options(CLI::App* app, Cli& c) {
   app->add_option("mesh", c.sample.mesh_path, "sheet OBJ (v, vt = material UV, f)")
       ->required()
-      ->check(non_empty());
+      ->check(common::non_empty());
   app->add_option("--document", c.sample.document,
                   "document page (PNG or JPEG); default: built-in generator");
   app->add_option("--documents", c.sample.documents_dir, "folder of PNG/JPEG pages to draw from");
@@ -182,7 +177,7 @@ int main(int argc, char** argv) {
   auto* render =
       app.add_subcommand("render", "prepare + run POV-Ray + finish: a whole sample in --out");
   add_sample_options(render, c);
-  render->add_option("--out", c.out, "sample folder")->required()->check(non_empty());
+  render->add_option("--out", c.out, "sample folder")->required()->check(common::non_empty());
   render->add_option("--povray", c.povray, "POV-Ray 3.7 executable")->capture_default_str();
   render->add_option("--parallel", c.parallel, "POV-Ray processes at once (0: one per core)")
       ->capture_default_str()
@@ -197,12 +192,12 @@ int main(int argc, char** argv) {
   auto* prepare = app.add_subcommand(
       "prepare", "write a self-contained POV-Ray job folder (run it with its run.sh)");
   add_sample_options(prepare, c);
-  prepare->add_option("--out", c.out, "job folder")->required()->check(non_empty());
+  prepare->add_option("--out", c.out, "job folder")->required()->check(common::non_empty());
   auto* finish = app.add_subcommand(
       "finish",
       "decode a rendered job folder into the sample files (and cast the ground-truth rays)");
   finish->add_option("job", c.job, "job folder (rendered)")->required();
-  finish->add_option("--out", c.out, "sample folder")->required()->check(non_empty());
+  finish->add_option("--out", c.out, "sample folder")->required()->check(common::non_empty());
   auto* run = app.add_subcommand("run", "render a prepared job folder with POV-Ray");
   run->add_option("job", c.job, "job folder")->required();
   run->add_option("--povray", c.povray, "POV-Ray 3.7 executable")->capture_default_str();
@@ -213,7 +208,7 @@ int main(int argc, char** argv) {
   auto* example =
       app.add_subcommand("example", "write a synthetic sheet OBJ (flat, cylinder, fold, bump)");
   example->add_option("kind", example_kind, "flat | cylinder | fold | bump")->required();
-  example->add_option("--out", c.out, "OBJ file")->required()->check(non_empty());
+  example->add_option("--out", c.out, "OBJ file")->required()->check(common::non_empty());
   sg::RenderBatchCommand batch;
   sg::add_render_batch_subcommand(app, batch);
   try {

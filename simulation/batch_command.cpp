@@ -127,7 +127,7 @@ void add_batch_subcommands(CLI::App& app, BatchCommand& c) {
       "when a sample failed (failures.jsonl); a full disk stops the batch with status 5 and "
       "records "
       "nothing (docs/batch.md).");
-  c.batch->add_option("--out", c.out, "dataset folder")->required();
+  c.batch->add_option("--out", c.out, "dataset folder")->required()->check(common::non_empty());
   c.batch->add_option(
       "--scenarios", c.scenarios, "comma list of scenarios; every one for every seed (" + [] {
         std::string s;

@@ -13,6 +13,7 @@
 
 #include "collision/errors.hpp"
 #include "common/atomic_file.hpp"
+#include "common/cli_checks.hpp"
 #include "common/eta.hpp"
 #include "common/exit_status.hpp"
 #include "common/interrupt.hpp"
@@ -76,15 +77,6 @@ void prepare_output(const std::string& out) {
   if (!fs::exists(out, ec)) common::add_cleanup_path(out);
 }
 
-/// A non-empty option value.
-CLI::Validator non_empty() {
-  return CLI::Validator(
-      [](std::string& value) {
-        return value.empty() ? std::string("must not be empty") : std::string();
-      },
-      "NONEMPTY");
-}
-
 /// Checkpoint options of `run` and `scenario`.
 struct CheckpointOptions {
   std::string dir, resume;
@@ -99,7 +91,7 @@ void add_checkpoint_options(CLI::App* app, CheckpointOptions& c) {
   app->add_option("--checkpoint-every", c.every, "Steps between checkpoints (default 100)")
       ->check(CLI::Range(1, ps::MAX_CHECKPOINT_EVERY))
       ->needs(dir);
-  dir->check(non_empty());
+  dir->check(common::non_empty());
   app->add_option("--resume", c.resume,
                   "Continue from the checkpoint in DIR (same duration; another time step only if "
                   "the checkpoint's time is a whole number of its steps; other scene keys may "
@@ -214,7 +206,7 @@ int main(int argc, char** argv) {
   run->add_option("scene", scene_path, "Scene file (JSON)")->required();
   run->add_option("--out", out_dir, "Output folder: sheet.obj, sheet.ply, meta.json")
       ->required()
-      ->check(non_empty());
+      ->check(common::non_empty());
   run->add_option("--frames", frames, "Write every K-th step to OUT/frames/ (0: none)")
       ->check(CLI::Range(0, 1 << 30));
   run->add_flag("--quiet", quiet,
@@ -237,7 +229,7 @@ int main(int argc, char** argv) {
   scen->add_option("--seed", seed, "Random seed, 0 to 2147483647")
       ->required()
       ->check(CLI::Range(0LL, 2147483647LL));
-  scen->add_option("--out", out_dir, "Output folder")->required()->check(non_empty());
+  scen->add_option("--out", out_dir, "Output folder")->required()->check(common::non_empty());
   scen->add_option("--frames", frames, "Write every K-th step to OUT/frames/ (0: none)")
       ->check(CLI::Range(0, 1 << 30));
   scen->add_flag("--quiet", quiet,

@@ -373,7 +373,8 @@ TEST(PapersimBatch, SlurmMakesNoMoreArrayTasksThanSamplesAndNotesSlurmsArrayLimi
 }
 
 // A dataset folder that is a file, or lies under one, is named before the samples are drawn
-// (it was "filesystem error: cannot create directories: Not a directory [F/.locks]").
+// (it was "filesystem error: cannot create directories: Not a directory [F/.locks]"), and so is an
+// empty one.
 TEST(PapersimBatch, ADatasetFolderThatIsAFileIsNamed) {
   const fs::path file = work_dir() / "a file";
   std::ofstream(file) << "kept\n";
@@ -390,6 +391,12 @@ TEST(PapersimBatch, ADatasetFolderThatIsAFileIsNamed) {
           << pt::read_text(log);
     }
   EXPECT_EQ(pt::read_text(file), "kept\n");
+  // An empty one is a usage error (it was exit 5, "cannot make absolute path").
+  EXPECT_EQ(
+      run({PAPERSIM, "batch", "--out", "", "--mix", tiny_mix().string(), "--seeds", "1-2"}, log),
+      2);
+  EXPECT_NE(pt::read_text(log).find("--out: must not be empty"), std::string::npos)
+      << pt::read_text(log);
 }
 
 #ifdef SCENEGEN_EXE
