@@ -276,22 +276,28 @@ TEST(Runner, ManifestKeysAreFoundByTheRowsOwnKeyOnly) {
                       << '\n'                                     // escapes: m/4, not m/5
                       << R"({"key":"m/6","not":"a row")" << '\n'  // cut short: not a row
                       << R"(["key","m/7"])" << '\n'               // not an object
-                      << R"({"key":"m/8"})";                      // a last line without newline
+                      << R"({"key":"m/9","key":5})" << '\n'       // the last "key" counts
+                      << R"({"key":7,"key":"m/10"})" << '\n'
+                      << R"({"key":"m/13","key":{"a":"m/13"}})" << '\n'
+                      << R"({"x":[{"key":"m/12"}],"key":"m/11"})" << '\n'
+                      << "{\"key\"\r:\r\"m/14\"}\r\n"  // '\r' is white space in JSON
+                      << R"({"key":"m/8"})";           // a last line without newline
   const auto set_of = [](std::initializer_list<const char*> keys) {
     KeySet s;
     for (const char* k : keys) s.insert(k);
     return s;
   };
-  const std::vector<std::string> asked{"m/0", "m/2", "m/3", "m/4", "m/5",
-                                       "m/6", "m/7", "m/8", "m/9"};
+  const std::vector<std::string> asked{"m/0", "m/2", "m/3",  "m/4",  "m/5",  "m/6",  "m/7",
+                                       "m/8", "m/9", "m/10", "m/11", "m/12", "m/13", "m/14"};
   KeySet wanted;
   for (const auto& k : asked) wanted.insert(k);
   const KeySet found = papersim::batch::keys_in_json_lines(file, wanted);
   std::vector<std::string> found_keys;
   for (const auto& k : asked)
     if (found.contains(k)) found_keys.push_back(k);
-  EXPECT_EQ(found_keys, (std::vector<std::string>{"m/0", "m/3", "m/4", "m/8"}));
-  EXPECT_EQ(found.size(), 4u);
+  EXPECT_EQ(found_keys,
+            (std::vector<std::string>{"m/0", "m/3", "m/4", "m/8", "m/10", "m/11", "m/14"}));
+  EXPECT_EQ(found.size(), 7u);
   // m/1 is a row but not wanted; nothing is found in a missing file or for no wanted key.
   EXPECT_TRUE(papersim::batch::keys_in_json_lines(file, set_of({"m/1"})).contains("m/1"));
   EXPECT_EQ(papersim::batch::keys_in_json_lines(root / "none.jsonl", wanted).size(), 0u);
@@ -302,6 +308,7 @@ TEST(Runner, ManifestKeysAreFoundByTheRowsOwnKeyOnly) {
     if (r.contains("key") && r["key"].is_string() && wanted.contains(r["key"].get<std::string>()))
       all.push_back(r["key"]);
   std::sort(all.begin(), all.end());
+  std::sort(found_keys.begin(), found_keys.end());
   EXPECT_EQ(found_keys, all);
   fs::remove_all(root);
 }
