@@ -11,6 +11,7 @@
 #include <stdexcept>
 
 #include "batch/key_set.hpp"
+#include "batch/row_fields.hpp"
 #include "batch/runner.hpp"
 #include "batch/slurm.hpp"
 
@@ -32,94 +33,6 @@ double quantile(const std::vector<double>& sorted, double q) {
   const std::size_t j = std::min(i + 1, sorted.size() - 1);
   return sorted[i] + (pos - static_cast<double>(i)) * (sorted[j] - sorted[i]);
 }
-
-/// What the report reads of one JSON-lines row, gathered by a SAX handler so that no row is kept
-/// as a JSON value: its top-level "key", "scenario" and "reason" and the wanted figures. A name
-/// given twice takes its last value, as parsing the row into an object would.
-class RowFields : public nlohmann::json_sax<json> {
- public:
-  explicit RowFields(const std::vector<std::string>& figures)
-      : m_figures(figures), m_values(figures.size()) {}
-
-  /// Parse `line`: whether it is a JSON object whose "key" is a string and whose "scenario" and
-  /// "reason" are strings where present.
-  bool read(const std::string& line) {
-    m_depth = 0;
-    m_seen_object = false;
-    m_key = m_scenario = m_reason = Field{};
-    std::fill(m_values.begin(), m_values.end(), NAN);
-    if (!json::sax_parse(line, this)) return false;
-    return m_seen_object && m_key.given && m_key.is_string &&
-           (!m_scenario.given || m_scenario.is_string) && (!m_reason.given || m_reason.is_string);
-  }
-  const std::string& key() const { return m_key.text; }
-  std::string scenario() const { return m_scenario.given ? m_scenario.text : "?"; }
-  std::string reason() const { return m_reason.given ? m_reason.text : "?"; }
-  /// Figure i when the row gives it as a number, else NaN.
-  double value(std::size_t i) const { return m_values[i]; }
-
-  bool null() override { return scalar(nullptr, NAN); }
-  bool boolean(bool) override { return scalar(nullptr, NAN); }
-  bool number_integer(number_integer_t v) override {
-    return scalar(nullptr, static_cast<double>(v));
-  }
-  bool number_unsigned(number_unsigned_t v) override {
-    return scalar(nullptr, static_cast<double>(v));
-  }
-  bool number_float(number_float_t v, const string_t&) override { return scalar(nullptr, v); }
-  bool string(string_t& v) override { return scalar(&v, NAN); }
-  bool binary(binary_t&) override { return scalar(nullptr, NAN); }
-  bool start_object(std::size_t) override { return open(true); }
-  bool start_array(std::size_t) override { return open(false); }
-  bool end_object() override { return --m_depth, true; }
-  bool end_array() override { return --m_depth, true; }
-  bool key(string_t& name) override {
-    if (m_depth == 1) m_name = name;
-    return true;
-  }
-  bool parse_error(std::size_t, const std::string&, const nlohmann::detail::exception&) override {
-    return false;
-  }
-
- private:
-  struct Field {
-    bool given = false, is_string = false;
-    std::string text;
-  };
-
-  /// The top-level value named `m_name` is a string (`text`), a number (`number`) or neither.
-  bool scalar(const std::string* text, double number) {
-    if (m_depth != 1) return true;
-    Field* f = m_name == "key"        ? &m_key
-               : m_name == "scenario" ? &m_scenario
-               : m_name == "reason"   ? &m_reason
-                                      : nullptr;
-    if (f) {
-      f->given = true;
-      f->is_string = text != nullptr;
-      if (text) f->text = *text;
-      return true;
-    }
-    for (std::size_t i = 0; i < m_figures.size(); ++i)
-      if (m_name == m_figures[i]) m_values[i] = number;
-    return true;
-  }
-  bool open(bool object) {
-    if (m_depth == 0)
-      m_seen_object = object;
-    else if (m_depth == 1)
-      scalar(nullptr, NAN);  // a container is neither a string nor a number
-    ++m_depth;
-    return true;
-  }
-
-  const std::vector<std::string>& m_figures;
-  std::vector<double> m_values;
-  Field m_key, m_scenario, m_reason;
-  std::string m_name;
-  int m_depth = 0;
-  bool m_seen_object = false;
-};
 
 /// Bytes read of the files of a dataset, told to a ReadProgress every 4,096 lines.
 struct ReadCount {

@@ -22,6 +22,7 @@
 #include <thread>
 #include <unordered_map>
 
+#include "batch/row_fields.hpp"
 #include "common/clock.hpp"
 #include "common/errors.hpp"
 #include "common/exit_status.hpp"
@@ -699,66 +700,11 @@ std::vector<nlohmann::json> read_json_lines(const fs::path& path) {
   return rows;
 }
 
-namespace {
-
-/// A JSON-lines row's own "key", read by a SAX handler (no row is built as a JSON value: that was
-/// most of the time a batch took to read a manifest of a million rows).
-class RowKey : public nlohmann::json_sax<nlohmann::json> {
- public:
-  /// Parse `line`: whether it is a JSON object whose "key" is a string. A name given twice takes
-  /// its last value, as parsing the row into an object would.
-  bool read(const std::string& line) {
-    m_depth = 0;
-    m_object = m_in_key = m_is_string = false;
-    return nlohmann::json::sax_parse(line, this) && m_object && m_is_string;
-  }
-  const std::string& key() const { return m_key; }
-
-  bool null() override { return scalar(nullptr); }
-  bool boolean(bool) override { return scalar(nullptr); }
-  bool number_integer(number_integer_t) override { return scalar(nullptr); }
-  bool number_unsigned(number_unsigned_t) override { return scalar(nullptr); }
-  bool number_float(number_float_t, const string_t&) override { return scalar(nullptr); }
-  bool string(string_t& v) override { return scalar(&v); }
-  bool binary(binary_t&) override { return scalar(nullptr); }
-  bool start_object(std::size_t) override { return open(true); }
-  bool start_array(std::size_t) override { return open(false); }
-  bool end_object() override { return --m_depth, true; }
-  bool end_array() override { return --m_depth, true; }
-  bool key(string_t& name) override {
-    if (m_depth == 1) m_in_key = name == "key";
-    return true;
-  }
-  bool parse_error(std::size_t, const std::string&, const nlohmann::detail::exception&) override {
-    return false;
-  }
-
- private:
-  /// The value of a top-level name: a string (`text`) or not.
-  bool scalar(const std::string* text) {
-    if (m_depth != 1 || !m_in_key) return true;
-    m_is_string = text != nullptr;
-    if (text) m_key = *text;
-    return true;
-  }
-  bool open(bool object) {
-    if (m_depth == 0) m_object = object;
-    if (m_depth == 1) scalar(nullptr);  // a container is not a string
-    ++m_depth;
-    return true;
-  }
-
-  std::string m_key;
-  int m_depth = 0;
-  bool m_object = false, m_in_key = false, m_is_string = false;
-};
-
-}  // namespace
-
 KeySet keys_in_json_lines(const fs::path& path, const KeySet& wanted) {
   KeySet found;
   if (wanted.size() == 0) return found;
-  RowKey row_key;
+  const std::vector<std::string> no_figures;
+  RowFields row(no_figures);  // the row's own "key", read without building the row
   std::ifstream in(path, std::ios::binary);
   std::string line;
   while (std::getline(in, line)) {
@@ -779,7 +725,7 @@ KeySet keys_in_json_lines(const fs::path& path, const KeySet& wanted) {
         candidate = true;
     }
     if (!candidate) continue;
-    if (row_key.read(line) && wanted.contains(row_key.key())) found.insert(row_key.key());
+    if (row.read_key(line) && wanted.contains(row.key())) found.insert(row.key());
   }
   return found;
 }
