@@ -107,7 +107,7 @@ Shard cli_shard(const BatchCliOptions& o) {
   return {index, count};
 }
 
-BatchSummary run_cli_batch(const std::vector<Task>& tasks, BatchSpec spec, const BatchCliOptions& o,
+BatchSummary run_cli_batch(const TaskList& tasks, BatchSpec spec, const BatchCliOptions& o,
                            std::ostream& progress_out, const std::string& label) {
   spec.jobs =
       o.jobs > 0 ? o.jobs : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));

@@ -56,9 +56,8 @@ Shard cli_shard(const BatchCliOptions& options);
 /// Fill jobs / time limit / retry / progress into the spec and run `tasks`, which are the
 /// shard's alone: the caller makes only the tasks cli_shard() holds (an array task of a large
 /// dataset then holds 1/N of its tasks in memory). --jobs 0 means one per core.
-BatchSummary run_cli_batch(const std::vector<Task>& tasks, BatchSpec spec,
-                           const BatchCliOptions& options, std::ostream& progress_out,
-                           const std::string& label);
+BatchSummary run_cli_batch(const TaskList& tasks, BatchSpec spec, const BatchCliOptions& options,
+                           std::ostream& progress_out, const std::string& label);
 
 /// A job-array script written by write_slurm_script.
 struct SlurmScript {

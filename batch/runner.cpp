@@ -172,11 +172,11 @@ struct Slot {
 
 class Runner {
  public:
-  Runner(const std::vector<Task>& tasks, const BatchSpec& spec) : m_tasks(tasks), m_spec(spec) {}
+  Runner(const TaskList& tasks, const BatchSpec& spec) : m_tasks(tasks), m_spec(spec) {}
   BatchSummary run();
 
  private:
-  const std::vector<Task>& m_tasks;
+  const TaskList& m_tasks;
   const BatchSpec& m_spec;
   std::deque<std::size_t> m_pending, m_waiting;
   std::vector<std::unique_ptr<Slot>> m_slots;
@@ -186,10 +186,10 @@ class Runner {
 
   fs::path manifest() const { return m_spec.root / m_spec.manifest_name; }
   fs::path failures() const { return m_spec.root / m_spec.failures_name; }
-  fs::path lock_file(const Task& t) const {
-    return m_spec.root / ".locks" / (safe_name(t.key) + ".lock");
+  fs::path lock_file(std::string_view key) const {
+    return m_spec.root / ".locks" / (safe_name(std::string(key)) + ".lock");
   }
-  bool finished(const Task& t) const { return fs::exists(m_spec.root / t.key); }
+  bool finished(std::string_view key) const { return fs::exists(m_spec.root / key); }
 
   void scan();
   void repair(const std::vector<std::size_t>& missing_rows);
@@ -226,10 +226,10 @@ class FolderCheck {
  public:
   explicit FolderCheck(fs::path root) : m_root(std::move(root)) {}
 
-  bool exists(const std::string& path) {
+  bool exists(std::string_view path) {
     const std::size_t slash = path.rfind('/');
-    const std::string parent = slash == std::string::npos ? "" : path.substr(0, slash);
-    const std::string name = slash == std::string::npos ? path : path.substr(slash + 1);
+    const std::string parent(slash == std::string::npos ? "" : path.substr(0, slash));
+    const std::string name(slash == std::string::npos ? path : path.substr(slash + 1));
     const auto& names = listing(parent);
     const auto entry = names.find(name);
     if (entry == names.end()) return false;
@@ -275,18 +275,18 @@ void Runner::scan() {
   KeySet rows, failed;
   if (has_bytes(manifest()) || has_bytes(failures())) {
     KeySet keys;
-    for (const Task& t : m_tasks) keys.insert(t.key);
+    for (std::size_t i = 0; i < m_tasks.size(); ++i) keys.insert(m_tasks.key(i));
     rows = keys_in_json_lines(manifest(), keys);
     failed = keys_in_json_lines(failures(), keys);
   }
   FolderCheck folders(m_spec.root);
   std::vector<std::size_t> missing_rows;
   for (std::size_t i = 0; i < m_tasks.size(); ++i) {
-    const Task& t = m_tasks[i];
-    if (folders.exists(t.key)) {
+    const std::string_view key = m_tasks.key(i);
+    if (folders.exists(key)) {
       ++m_sum.done;
-      if (!rows.contains(t.key)) missing_rows.push_back(i);
-    } else if (failed.contains(t.key) && !m_spec.retry_failed) {
+      if (!rows.contains(key)) missing_rows.push_back(i);
+    } else if (failed.contains(key) && !m_spec.retry_failed) {
       ++m_sum.failed;
     } else {
       m_pending.push_back(i);
@@ -301,14 +301,14 @@ void Runner::repair(const std::vector<std::size_t>& missing_rows) {
   if (missing_rows.empty()) return;
   std::vector<std::pair<std::size_t, TaskLock>> held;
   for (std::size_t i : missing_rows) {
-    TaskLock lock = TaskLock::try_take(lock_file(m_tasks[i]));
+    TaskLock lock = TaskLock::try_take(lock_file(m_tasks.key(i)));
     if (lock.held()) held.emplace_back(i, std::move(lock));
   }
   KeySet keys;
-  for (const auto& [i, lock] : held) keys.insert(m_tasks[i].key);
+  for (const auto& [i, lock] : held) keys.insert(m_tasks.key(i));
   const KeySet rows = keys_in_json_lines(manifest(), keys);
   for (auto& [i, lock] : held) {
-    if (rows.contains(m_tasks[i].key)) continue;
+    if (rows.contains(m_tasks.key(i))) continue;
     append_manifest_row(m_tasks[i], -1.0, -1.0);
     ++m_sum.repaired;
   }
@@ -344,10 +344,10 @@ void Runner::remove_stages(const Task& t) const {
 }
 
 bool Runner::try_start(std::size_t task) {
-  const Task& t = m_tasks[task];
-  TaskLock lock = TaskLock::try_take(lock_file(t));
+  const Task t = m_tasks[task];
+  TaskLock lock = TaskLock::try_take(lock_file(t.key));
   if (!lock.held()) return false;
-  if (finished(t)) {  // another process finished it since the scan
+  if (finished(t.key)) {  // another process finished it since the scan
     ++m_sum.done;
     return true;
   }
@@ -438,7 +438,7 @@ void Runner::on_exit(Slot& s, int status) {
     // later sample would fail the same way at its end, so the batch stops, and records nothing for
     // this sample, which the same command runs again once there is room.
     throw common::OutputError(
-        m_tasks[s.task].key + ": " + last_line(s.log) +
+        std::string(m_tasks.key(s.task)) + ": " + last_line(s.log) +
         " (the batch stopped; nothing is recorded for this sample: free space and "
         "run the same command again)");
   }
@@ -457,7 +457,7 @@ void Runner::on_exit(Slot& s, int status) {
 }
 
 void Runner::finish(Slot& s) {
-  const Task& t = m_tasks[s.task];
+  const Task t = m_tasks[s.task];
   const Attempt attempt{s.stage, seconds_since(s.start), s.cpu_seconds};
   fs::path product;
   try {
@@ -597,27 +597,14 @@ BatchSummary Runner::run() {
 
 }  // namespace
 
-Task Task::in_folder(std::string folder, const nlohmann::json& info) {
-  return in_folder(std::move(folder), info.dump());
-}
-
-Task Task::in_folder(std::string folder, std::string info) {
-  Task t;
-  folder.shrink_to_fit();
-  t.key = std::move(folder);
-  t.info = std::move(info);
-  t.info.shrink_to_fit();
-  return t;
-}
-
-std::vector<Task> select_shard(const std::vector<Task>& tasks, int index, int count) {
+TaskList select_shard(const TaskList& tasks, int index, int count) {
   if (count < 1 || index < 0 || index >= count)
     throw std::invalid_argument("shard " + std::to_string(index) + "/" + std::to_string(count) +
                                 " is not I/N with 0 <= I < N");
-  std::vector<Task> out;
+  TaskList out;
   for (std::size_t p = static_cast<std::size_t>(index); p < tasks.size();
        p += static_cast<std::size_t>(count))
-    out.push_back(tasks[p]);
+    out.add(tasks.key(p), tasks.info(p));
   return out;
 }
 
@@ -652,7 +639,7 @@ std::pair<int, int> parse_shard(const std::string& text, const std::string& opti
   }
 }
 
-BatchSummary run_batch(const std::vector<Task>& tasks, const BatchSpec& spec) {
+BatchSummary run_batch(const TaskList& tasks, const BatchSpec& spec) {
   if (spec.jobs < 1) throw std::invalid_argument("jobs must be >= 1");
   if (!spec.commands || !spec.finalize)
     throw std::invalid_argument("batch spec needs commands and finalize");

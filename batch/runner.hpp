@@ -20,29 +20,9 @@
 #include <vector>
 
 #include "batch/key_set.hpp"
+#include "batch/task_list.hpp"
 
 namespace papersim::batch {
-
-/// One sample of a batch. A batch holds up to ten million of them, so each is three strings: a
-/// std::filesystem::path keeps a list of its components and a nlohmann::json object a tree of
-/// nodes, and a batch of such tasks took three times the memory (docs/batch.md).
-struct Task {
-  /// The task's folder, '/'-separated, relative to the root (e.g. "meshes/pull/0/17"): unique
-  /// within the batch, it names the task in rows and file names, and it exists only when the
-  /// task is finished.
-  std::string key;
-  /// A JSON object's text (nlohmann::json::dump()), copied into manifest and failure rows.
-  std::string info = "{}";
-
-  /// `info` parsed.
-  nlohmann::json info_object() const { return nlohmann::json::parse(info); }
-
-  /// The task of `folder` with `info` as its text. The strings hold no spare capacity (appends
-  /// and a dump grow theirs by doubling).
-  static Task in_folder(std::string folder, const nlohmann::json& info);
-  /// The same with `info` given as its text (an object's dump()), for a caller that writes it.
-  static Task in_folder(std::string folder, std::string info);
-};
 
 /// One child process of a task: argv[0] is the executable path.
 struct Command {
@@ -71,7 +51,7 @@ struct Shard {
 /// The slice `index` of `count` (0 <= index < count): tasks whose position p in the list has
 /// p % count == index. Round robin, so every shard gets a similar mix of scenarios.
 /// @throw std::invalid_argument when count < 1 or index is outside [0, count)
-std::vector<Task> select_shard(const std::vector<Task>& tasks, int index, int count);
+TaskList select_shard(const TaskList& tasks, int index, int count);
 
 /// Parse "I/N" into (index, count) with 0 <= I < N.
 /// @throw std::invalid_argument naming `option` when the text is not of that form
@@ -160,7 +140,7 @@ struct BatchSummary {
 /// sample, and throws.
 /// @throw common::OutputError when a child or the batch cannot write (the manifest, the failures
 /// file, a lock, a sample's folder)
-BatchSummary run_batch(const std::vector<Task>& tasks, const BatchSpec& spec);
+BatchSummary run_batch(const TaskList& tasks, const BatchSpec& spec);
 
 /// Append one line (text + '\n') to `path` with a single write on an O_APPEND descriptor under
 /// an exclusive flock, then fdatasync: concurrent writers never interleave inside a line, and a

@@ -177,9 +177,9 @@ std::size_t write_mesh_list(const fs::path& root, const fs::path& file,
 
 std::size_t mesh_list_size(const fs::path& file) { return read_mesh_list(file).size(); }
 
-std::vector<batch::Task> render_tasks(const fs::path& root, const RenderBatchOptions& o,
-                                      const batch::Shard& shard, const fs::path& mesh_list,
-                                      const ListProgress& progress) {
+batch::TaskList render_tasks(const fs::path& root, const RenderBatchOptions& o,
+                             const batch::Shard& shard, const fs::path& mesh_list,
+                             const ListProgress& progress) {
   if (o.views < 1) throw InputError("--views must be >= 1");
   const std::vector<MeshEntry> meshes =
       mesh_list.empty() ? finished_meshes(root, progress) : read_mesh_list(mesh_list);
@@ -187,7 +187,7 @@ std::vector<batch::Task> render_tasks(const fs::path& root, const RenderBatchOpt
   const std::size_t n = meshes.size() * static_cast<std::size_t>(o.views);
   const auto index = static_cast<std::size_t>(shard.index);
   const auto count = static_cast<std::size_t>(shard.count);
-  std::vector<batch::Task> tasks;
+  batch::TaskList tasks;
   tasks.reserve(n > index ? (n - index + count - 1) / count : 0);
   // Each task's fields are the text json{{"scenario", ...}, {"seed", ...}, {"view", k},
   // {"flipped", ...}, {"render_seed", ...}, {"mesh", ...}}.dump() writes (keys in order), put
@@ -219,8 +219,7 @@ std::vector<batch::Task> render_tasks(const fs::path& root, const RenderBatchOpt
       info.append(",\"render_seed\":").append(std::to_string(view_seed(m.scenario, m.seed, k)));
       info.append(",\"scenario\":").append(scenario_text).append(",\"seed\":").append(seed);
       info.append(",\"view\":").append(view).append(1, '}');
-      // Copies hold just their bytes: one allocation each, nothing for in_folder to shrink.
-      tasks.push_back(batch::Task::in_folder(std::string(folder), std::string(info)));
+      tasks.add(folder, info);
     }
   }
   return tasks;

@@ -46,11 +46,10 @@ using ListProgress = std::function<void(std::size_t done, std::size_t buckets, s
 /// otherwise those found by walking root/meshes/ (one `stat` a mesh), telling `progress`.
 /// @throw InputError when views < 1, when a seed is in two folders, or naming the line of
 ///        `mesh_list` that is malformed or out of order
-std::vector<batch::Task> render_tasks(const std::filesystem::path& root,
-                                      const RenderBatchOptions& options,
-                                      const batch::Shard& shard = {},
-                                      const std::filesystem::path& mesh_list = {},
-                                      const ListProgress& progress = {});
+batch::TaskList render_tasks(const std::filesystem::path& root, const RenderBatchOptions& options,
+                             const batch::Shard& shard = {},
+                             const std::filesystem::path& mesh_list = {},
+                             const ListProgress& progress = {});
 
 /// Walk root/meshes/ once and write its finished meshes to `file` (through a temporary and a
 /// rename): a first line "# scenegen batch mesh list: N meshes", then one

@@ -198,7 +198,7 @@ int run_render_batch(const RenderBatchCommand& c, std::ostream& out, std::ostrea
     return 0;
   }
   // Only the shard's tasks are made (an array task holds 1/N of the list in memory).
-  const std::vector<batch::Task> tasks =
+  const batch::TaskList tasks =
       render_tasks(c.dataset, c.render, batch::cli_shard(c.common), c.mesh_list,
                    walk_printer(err, c.common.quiet, c.dataset));
   const batch::BatchSpec spec = render_batch_spec(c.dataset, batch::self_executable(), c.render);

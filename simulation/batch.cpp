@@ -234,12 +234,12 @@ std::vector<SampleDraw> draw_samples(const MeshBatchSelection& sel) {
   return draws;
 }
 
-std::vector<batch::Task> mesh_tasks(const std::vector<SampleDraw>& draws) {
+batch::TaskList mesh_tasks(const std::vector<SampleDraw>& draws) {
   // Each task's fields are the text json{{"scenario", S}, {"seed", N}, {"set", O}}.dump() writes
   // (its keys in order), put together from the scenario's and the overrides' texts, each dumped
   // once for a run of draws that share them: building and dumping an object per sample took
   // 17 s of ten million samples' start.
-  std::vector<batch::Task> tasks;
+  batch::TaskList tasks;
   tasks.reserve(draws.size());
   const std::string* scenario = nullptr;
   const json* overrides = nullptr;
@@ -257,8 +257,7 @@ std::vector<batch::Task> mesh_tasks(const std::vector<SampleDraw>& draws) {
     folder.assign("meshes/").append(d.scenario).append(1, '/').append(seed_bucket(d.seed));
     folder.append(1, '/').append(seed);
     info.assign(scenario_text).append(seed).append(set_text);
-    // Copies hold just their bytes: one allocation each, nothing for in_folder to shrink.
-    tasks.push_back(batch::Task::in_folder(std::string(folder), std::string(info)));
+    tasks.add(folder, info);
   }
   return tasks;
 }

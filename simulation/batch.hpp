@@ -75,7 +75,7 @@ inline constexpr std::uint64_t MAX_BATCH_SAMPLES = 10'000'000;
 std::vector<SampleDraw> draw_samples(const MeshBatchSelection& selection);
 
 /// The runner tasks of `draws`: key and folder meshes/<scenario>/<seed/1000>/<seed>.
-std::vector<batch::Task> mesh_tasks(const std::vector<SampleDraw>& draws);
+batch::TaskList mesh_tasks(const std::vector<SampleDraw>& draws);
 
 /// Hooks of a mesh batch: prepare writes scene.json, the commands are `papersim run` (and
 /// `papersim metrics --json` into metrics.json when with_metrics), the manifest row carries

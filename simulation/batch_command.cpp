@@ -67,7 +67,7 @@ int run_mesh_batch(const BatchCommand& c, bool with_metrics, std::ostream& out, 
   }
   const batch::BatchSpec spec =
       mesh_batch_spec(c.out, batch::self_executable(), with_metrics, c.checkpoint_every);
-  const std::vector<batch::Task> tasks = mesh_tasks(draws);
+  const batch::TaskList tasks = mesh_tasks(draws);
   std::vector<SampleDraw>().swap(draws);  // not needed while the batch runs
   const batch::BatchSummary s = batch::run_cli_batch(tasks, spec, c.common, err, "papersim batch");
   out << batch::summary_line(s, c.out, spec) << '\n';

@@ -35,8 +35,8 @@ fs::path fresh_dir(const std::string& name) {
   return d;
 }
 
-std::vector<Task> numbered_tasks(int n) {
-  std::vector<Task> tasks;
+papersim::batch::TaskList numbered_tasks(int n) {
+  papersim::batch::TaskList tasks;
   for (int i = 0; i < n; ++i)
     tasks.push_back({"t/" + std::to_string(i), json{{"index", i}}.dump()});
   return tasks;
@@ -223,7 +223,7 @@ TEST(Runner, RestoresTheManifestRowOfATaskFinishedBeforeACrash) {
 // another name is there or a parent is missing.
 TEST(Runner, AFinishedTaskIsOneWhoseFolderExists) {
   const fs::path root = fresh_dir("exists");
-  std::vector<papersim::batch::Task> tasks;
+  papersim::batch::TaskList tasks;
   for (int p = 0; p < 300; ++p)  // 300 parents, two tasks each, the second made below
     for (int i = 0; i < 2; ++i)
       tasks.push_back(papersim::batch::Task::in_folder(

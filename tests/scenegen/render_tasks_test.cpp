@@ -53,8 +53,7 @@ std::string input_error(const std::function<void()>& f) {
   return "(no error)";
 }
 
-void expect_same_tasks(const std::vector<papersim::batch::Task>& a,
-                       const std::vector<papersim::batch::Task>& b) {
+void expect_same_tasks(const papersim::batch::TaskList& a, const papersim::batch::TaskList& b) {
   ASSERT_EQ(a.size(), b.size());
   for (std::size_t i = 0; i < a.size(); ++i) {
     EXPECT_EQ(a[i].key, b[i].key);
@@ -168,7 +167,7 @@ TEST(RenderTasks, AMeshListGivesTheWalksTasksAndLooksAtNoFolder) {
       expect_same_tasks(sg::render_tasks(root, o, {index, count}, list),
                         papersim::batch::select_shard(walked, index, count));
   // The walk sees the change: one mesh in, one out.
-  const auto key_set = [](const std::vector<papersim::batch::Task>& tasks) {
+  const auto key_set = [](const papersim::batch::TaskList& tasks) {
     std::set<std::string> keys;
     for (const auto& t : tasks) keys.insert(t.key);
     return keys;
