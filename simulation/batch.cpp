@@ -166,7 +166,12 @@ Scene apply_overrides(const Scene& scene, const json& overrides, const std::stri
   return scene_from_json(j, source);
 }
 
-std::vector<SampleDraw> draw_samples(const MeshBatchSelection& sel) {
+namespace {
+
+/// Each sample of a selection (draw_samples), given to `visit` in order, after `reserve` was told
+/// how many there are at most.
+template <class Reserve, class Visit>
+void draw_each(const MeshBatchSelection& sel, Reserve reserve, Visit visit) {
   if (sel.seeds.empty()) throw SceneError("--seeds: no seed given");
   for (const auto& [first, last] : sel.seeds)
     if (last < first) throw SceneError("--seeds: the last seed is below the first");
@@ -205,9 +210,8 @@ std::vector<SampleDraw> draw_samples(const MeshBatchSelection& sel) {
   std::vector<std::shared_ptr<const json>> shared(merged.size());
   for (std::size_t i = 0; i < merged.size(); ++i)
     if (!merged[i].empty()) shared[i] = std::make_shared<const json>(merged[i]);
-  std::vector<SampleDraw> draws;
   const auto shards = static_cast<std::uint64_t>(sel.shard.count);
-  draws.reserve((samples + shards - 1) / shards);
+  reserve(static_cast<std::size_t>((samples + shards - 1) / shards));
   std::set<std::size_t> checked;
   std::size_t position = 0;  // in the whole selection, for the shard
   const auto draw_seed = [&](std::uint64_t seed) {
@@ -222,7 +226,7 @@ std::vector<SampleDraw> draw_samples(const MeshBatchSelection& sel) {
       if (checked.insert(i).second)
         apply_overrides(make_scenario(mix.scenarios[i], seed), merged[i],
                         sel.mix_path.empty() ? "--set" : sel.mix_path + " / --set");
-      if (sel.shard.holds(position++)) draws.push_back({mix.scenarios[i], seed, shared[i]});
+      if (sel.shard.holds(position++)) visit(SampleDraw{mix.scenarios[i], seed, shared[i]});
     }
   };
   // Each range to `last` inclusive, which may be the largest seed.
@@ -231,34 +235,66 @@ std::vector<SampleDraw> draw_samples(const MeshBatchSelection& sel) {
       draw_seed(seed);
       if (seed == last) break;
     }
+}
+
+/// Appends the task of each draw to a list. Each task's fields are the text
+/// json{{"scenario", S}, {"seed", N}, {"set", O}}.dump() writes (its keys in order), put together
+/// from the scenario's and the overrides' texts, each dumped once for a run of draws that share
+/// them: building and dumping an object per sample took 17 s of ten million samples' start.
+class MeshTaskWriter {
+ public:
+  explicit MeshTaskWriter(batch::TaskList& tasks) : m_tasks(tasks) {}
+
+  void add(const SampleDraw& d) {
+    if (m_first || m_scenario != d.scenario) {
+      m_scenario = d.scenario;
+      m_scenario_text = "{\"scenario\":" + json(d.scenario).dump() + ",\"seed\":";
+    }
+    // The overrides are shared by the draws of one scenario and outlive them.
+    if (m_first || d.overrides.get() != m_overrides) {
+      m_overrides = d.overrides.get();
+      m_set_text =
+          m_overrides && !m_overrides->empty() ? ",\"set\":" + m_overrides->dump() + "}" : "}";
+    }
+    m_first = false;
+    const std::string seed = std::to_string(d.seed);
+    m_folder.assign("meshes/").append(d.scenario).append(1, '/').append(seed_bucket(d.seed));
+    m_folder.append(1, '/').append(seed);
+    m_info.assign(m_scenario_text).append(seed).append(m_set_text);
+    m_tasks.add(m_folder, m_info);
+  }
+
+ private:
+  batch::TaskList& m_tasks;
+  bool m_first = true;
+  std::string m_scenario;
+  const json* m_overrides = nullptr;
+  std::string m_scenario_text, m_set_text, m_folder, m_info;
+};
+
+}  // namespace
+
+std::vector<SampleDraw> draw_samples(const MeshBatchSelection& sel) {
+  std::vector<SampleDraw> draws;
+  draw_each(
+      sel, [&](std::size_t n) { draws.reserve(n); },
+      [&](const SampleDraw& d) { draws.push_back(d); });
   return draws;
 }
 
 batch::TaskList mesh_tasks(const std::vector<SampleDraw>& draws) {
-  // Each task's fields are the text json{{"scenario", S}, {"seed", N}, {"set", O}}.dump() writes
-  // (its keys in order), put together from the scenario's and the overrides' texts, each dumped
-  // once for a run of draws that share them: building and dumping an object per sample took
-  // 17 s of ten million samples' start.
   batch::TaskList tasks;
   tasks.reserve(draws.size());
-  const std::string* scenario = nullptr;
-  const json* overrides = nullptr;
-  std::string scenario_text, set_text, folder, info;
-  for (const auto& d : draws) {
-    if (scenario == nullptr || *scenario != d.scenario) {
-      scenario = &d.scenario;
-      scenario_text = "{\"scenario\":" + json(d.scenario).dump() + ",\"seed\":";
-    }
-    if (d.overrides.get() != overrides || tasks.empty()) {
-      overrides = d.overrides.get();
-      set_text = overrides && !overrides->empty() ? ",\"set\":" + overrides->dump() + "}" : "}";
-    }
-    const std::string seed = std::to_string(d.seed);
-    folder.assign("meshes/").append(d.scenario).append(1, '/').append(seed_bucket(d.seed));
-    folder.append(1, '/').append(seed);
-    info.assign(scenario_text).append(seed).append(set_text);
-    tasks.add(folder, info);
-  }
+  MeshTaskWriter writer(tasks);
+  for (const auto& d : draws) writer.add(d);
+  return tasks;
+}
+
+batch::TaskList mesh_tasks(const MeshBatchSelection& sel) {
+  batch::TaskList tasks;
+  MeshTaskWriter writer(tasks);
+  draw_each(
+      sel, [&](std::size_t n) { tasks.reserve(n); }, [&](const SampleDraw& d) { writer.add(d); });
   return tasks;
 }
 

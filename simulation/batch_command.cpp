@@ -58,17 +58,16 @@ int run_mesh_batch(const BatchCommand& c, bool with_metrics, std::ostream& out, 
   sel.overrides = parse_overrides(c.set);
   const batch::Shard shard = batch::cli_shard(c.common);  // a malformed --shard is refused here
   if (c.common.slurm_shards == 0) sel.shard = shard;      // the script's line counts them all
-  std::vector<SampleDraw> draws = draw_samples(sel);      // checks every option first
   if (c.common.slurm_shards > 0) {
-    const batch::SlurmScript script = batch::write_slurm_script(
-        c.out, "papersim-batch", shard_command(c), c.common, draws.size());
-    out << batch::slurm_written_text(script, c.common, draws.size(), "samples");
+    const std::size_t samples = draw_samples(sel).size();  // checks every option first
+    const batch::SlurmScript script =
+        batch::write_slurm_script(c.out, "papersim-batch", shard_command(c), c.common, samples);
+    out << batch::slurm_written_text(script, c.common, samples, "samples");
     return 0;
   }
+  const batch::TaskList tasks = mesh_tasks(sel);  // checks every option first
   const batch::BatchSpec spec =
       mesh_batch_spec(c.out, batch::self_executable(), with_metrics, c.checkpoint_every);
-  const batch::TaskList tasks = mesh_tasks(draws);
-  std::vector<SampleDraw>().swap(draws);  // not needed while the batch runs
   const batch::BatchSummary s = batch::run_cli_batch(tasks, spec, c.common, err, "papersim batch");
   out << batch::summary_line(s, c.out, spec) << '\n';
   if (s.interrupted) return 130;

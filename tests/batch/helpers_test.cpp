@@ -199,7 +199,9 @@ TEST(Selection, SeedListsDrawTheirSeedsInOrderAndRefuseOverlaps) {
 }
 
 // An array task draws only its shard's samples: the same slice, task for task, as the shard
-// taken from the whole selection's tasks (select_shard), with a mix and with scenarios.
+// taken from the whole selection's tasks (select_shard), with a mix and with scenarios. The tasks
+// written while drawing (mesh_tasks of the selection, as a batch makes them) are those of the
+// draws kept.
 TEST(Selection, AShardDrawnDirectlyIsTheSliceOfTheWholeSelection) {
   for (const bool mix : {false, true}) {
     ps::MeshBatchSelection sel;
@@ -208,17 +210,22 @@ TEST(Selection, AShardDrawnDirectlyIsTheSliceOfTheWholeSelection) {
     else
       sel.scenarios = {"pull", "fall-gable", "fold"};
     sel.seeds = ps::parse_seeds("3-9,20,100-104");
+    sel.overrides = {{"duration", 0.05}};
     const auto all = ps::mesh_tasks(ps::draw_samples(sel));
     ASSERT_EQ(all.size(), mix ? 13u : 39u);
     for (int count : {1, 2, 5, 40})
       for (int index = 0; index < count; ++index) {
         sel.shard = {index, count};
         const auto direct = ps::mesh_tasks(ps::draw_samples(sel));
+        const auto streamed = ps::mesh_tasks(sel);
         const auto sliced = papersim::batch::select_shard(all, index, count);
         ASSERT_EQ(direct.size(), sliced.size()) << index << "/" << count;
+        ASSERT_EQ(streamed.size(), sliced.size()) << index << "/" << count;
         for (std::size_t i = 0; i < direct.size(); ++i) {
-          EXPECT_EQ(direct[i].key, sliced[i].key);
-          EXPECT_EQ(direct[i].info, sliced[i].info);
+          EXPECT_EQ(direct.key(i), sliced.key(i));
+          EXPECT_EQ(direct.info(i), sliced.info(i));
+          EXPECT_EQ(streamed.key(i), sliced.key(i));
+          EXPECT_EQ(streamed.info(i), sliced.info(i));
         }
       }
   }
