@@ -67,14 +67,15 @@ void add_batch_cli_options(CLI::App* app, BatchCliOptions& o) {
       ->capture_default_str();
 }
 
-ProgressFn progress_printer(std::ostream& out, bool tty, const std::string& label) {
-  return [&out, tty, label](const Progress& p) {
+ProgressFn progress_printer(std::ostream& out, bool tty, const std::string& label,
+                            const std::string& items) {
+  return [&out, tty, label, items](const Progress& p) {
     char line[256];
     std::snprintf(line, sizeof line,
-                  "%s: done %lld/%lld  failed %lld  running %lld%s  %.1f samples/h  ETA %s",
+                  "%s: done %lld/%lld  failed %lld  running %lld%s  %.1f %s/h  ETA %s",
                   label.c_str(), p.done, p.total, p.failed, p.running,
                   p.waiting > 0 ? ("  held elsewhere " + std::to_string(p.waiting)).c_str() : "",
-                  p.per_hour, duration_text(p.eta).c_str());
+                  p.per_hour, items.c_str(), duration_text(p.eta).c_str());
     std::string shares;  // "  running at 41%, 17%": the first four running tasks that tell it
     for (std::size_t i = 0; i < p.running_done.size() && i < 4; ++i)
       shares +=
@@ -115,7 +116,7 @@ BatchSummary run_cli_batch(const TaskList& tasks, BatchSpec spec, const BatchCli
   spec.retry_failed = o.retry_failed;
   const bool tty = &progress_out == &std::cerr ? isatty(2) : false;
   spec.progress_every = tty ? 1.0 : 30.0;
-  if (!o.quiet) spec.progress = progress_printer(progress_out, tty, label);
+  if (!o.quiet) spec.progress = progress_printer(progress_out, tty, label, spec.items);
   BatchSummary s = run_batch(tasks, spec);
   if (!o.quiet && tty) progress_out << '\n';
   return s;
@@ -177,8 +178,8 @@ std::string slurm_written_text(const SlurmScript& script, const BatchCliOptions&
 
 std::string summary_line(const BatchSummary& s, const fs::path& root, const BatchSpec& spec) {
   std::ostringstream out;
-  out << (s.interrupted ? "interrupted: " : "") << s.done << " of " << s.total << " samples done ("
-      << s.done_now << " in this run";
+  out << (s.interrupted ? "interrupted: " : "") << s.done << " of " << s.total << ' ' << spec.items
+      << " done (" << s.done_now << " in this run";
   if (s.repaired > 0) out << ", " << s.repaired << " manifest rows restored";
   out << "), " << s.failed << " failed";
   if (s.failed > 0) out << " (" << (root / spec.failures_name).string() << ")";

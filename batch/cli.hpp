@@ -40,9 +40,10 @@ struct BatchCliOptions {
 /// Register the shared options on `app`.
 void add_batch_cli_options(CLI::App* app, BatchCliOptions& options);
 
-/// A progress printer: "done D/T  failed F  running R  S samples/h  ETA ...", redrawn on a
-/// terminal, one line per `every_seconds` otherwise.
-ProgressFn progress_printer(std::ostream& out, bool tty, const std::string& label);
+/// A progress printer: "done D/T  failed F  running R  S samples/h  ETA ..." (`items` for
+/// "samples"), redrawn on a terminal, one line per `every_seconds` otherwise.
+ProgressFn progress_printer(std::ostream& out, bool tty, const std::string& label,
+                            const std::string& items = "samples");
 
 /// Whether the dataset folder `root` (given as `option`) exists or can be made: refused when it
 /// or the nearest of its parents that exists is not a folder, before a long draw of samples.
@@ -89,7 +90,8 @@ std::string slurm_written_text(const SlurmScript& script, const BatchCliOptions&
 void check_slurm_script(const std::filesystem::path& root, const std::string& name,
                         const BatchCliOptions& options);
 
-/// One line: "N done (M now, R manifest rows restored), F failed; ..." for the end of a run.
+/// One line: "N of T samples done (M in this run, R manifest rows restored), F failed; ..." for
+/// the end of a run (spec.items for "samples").
 std::string summary_line(const BatchSummary& summary, const std::filesystem::path& root,
                          const BatchSpec& spec);
 

@@ -94,10 +94,11 @@ struct BatchSpec {
   std::filesystem::path root;  ///< dataset folder (created if missing)
   std::string manifest_name = "manifest.jsonl";
   std::string failures_name = "failures.jsonl";
-  int jobs = 1;                 ///< child processes at once (>= 1)
-  double time_limit = 0.0;      ///< per task, all its commands [s]; <= 0: none
-  bool retry_failed = false;    ///< run tasks with a recorded failure again
-  double progress_every = 1.0;  ///< seconds between progress calls [s]
+  std::string items = "samples";  ///< what a task is, for the progress and summary lines
+  int jobs = 1;                   ///< child processes at once (>= 1)
+  double time_limit = 0.0;        ///< per task, all its commands [s]; <= 0: none
+  bool retry_failed = false;      ///< run tasks with a recorded failure again
+  double progress_every = 1.0;    ///< seconds between progress calls [s]
   /// Write the inputs of a task into its (empty) staging folder; runs in this process, so
   /// keep it cheap. A throw is recorded as a failure with reason "prepare".
   std::function<void(const Task&, const std::filesystem::path& stage)> prepare;

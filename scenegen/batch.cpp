@@ -231,6 +231,7 @@ batch::BatchSpec render_batch_spec(const fs::path& root, const fs::path& scenege
   spec.root = root;
   spec.manifest_name = "renders.jsonl";
   spec.failures_name = "renders_failures.jsonl";
+  spec.items = "views";
   spec.prepare = [root](const batch::Task& t, const fs::path& stage) {
     const nlohmann::json info = t.info_object();
     if (!info.at("flipped").get<bool>()) return;

@@ -455,6 +455,11 @@ TEST(ScenegenBatch, ResumedAfterSigkillEqualsAnUninterruptedBatch) {
       << pt::read_text(work_dir() / "render_ref.log");
   const std::size_t views = pt::line_count(a / "renders.jsonl");
   EXPECT_EQ(views, 6u);
+  // Its lines count views, not samples.
+  const std::string said = pt::read_text(work_dir() / "render_ref.log");
+  EXPECT_NE(said.find("6 of 6 views done (6 in this run)"), std::string::npos) << said;
+  EXPECT_NE(said.find(" views/h "), std::string::npos) << said;
+  EXPECT_EQ(said.find("samples"), std::string::npos) << said;
   const auto [status, rows] = interrupt_at_half(argv(b), b / "renders.jsonl", views, SIGKILL,
                                                 work_dir() / "render_kill.log");
   EXPECT_EQ(status, 128 + SIGKILL);

@@ -154,6 +154,7 @@ TEST(Runner, ProgressShowsTheShareOfRunningTasks) {
   papersim::batch::progress_printer(line, false, "papersim batch")(p);
   EXPECT_NE(line.str().find("  running at 41%, 17%, 100%, 0%, ...\n"), std::string::npos)
       << line.str();
+  EXPECT_NE(line.str().find(" samples/h "), std::string::npos) << line.str();
   fs::remove_all(root);
 }
 
