@@ -33,26 +33,30 @@ std::string duration_text(double s) {
 
 }  // namespace
 
-void add_batch_cli_options(CLI::App* app, BatchCliOptions& o) {
+void add_batch_cli_options(CLI::App* app, BatchCliOptions& o, const std::string& item) {
+  const std::string items = item + "s";
   app->add_option("--jobs,-j", o.jobs,
-                  "samples at once, one child process each (0: one per core; at most 1024)")
+                  items + " at once, one child process each (0: one per core; at most 1024)")
       ->check(CLI::Range(0, 1024))
       ->capture_default_str();
   app->add_option("--time-limit", o.time_limit,
-                  "seconds per sample; a sample over it is killed and recorded as failed (0: none)")
+                  "seconds per " + item + "; a " + item +
+                      " over it is killed and recorded as failed (0: none)")
       ->check(papersim::common::non_negative())
       ->capture_default_str();
-  app->add_option("--shard", o.shard,
-                  "run only slice I of N (0 <= I < N): the samples at positions p with p % N == I");
+  app->add_option(
+      "--shard", o.shard,
+      "run only slice I of N (0 <= I < N): the " + items + " at positions p with p % N == I");
   app->add_flag("--retry-failed", o.retry_failed,
-                "run samples recorded in the failures file again");
+                "run " + items + " recorded in the failures file again");
   app->add_flag("--quiet", o.quiet, "no progress line");
-  app->add_option("--slurm", o.slurm_shards,
-                  "write DATASET/slurm/*.sbatch, a job array of this many shards (at most one per "
-                  "sample or view), and print how to submit it (nothing runs)")
+  app->add_option(
+         "--slurm", o.slurm_shards,
+         "write DATASET/slurm/*.sbatch, a job array of this many shards (at most one per " + item +
+             "), and print how to submit it (nothing runs)")
       ->check(papersim::common::positive());
   app->add_option("--slurm-cpus", o.slurm.cpus_per_task,
-                  "cores per array task (= samples at once in it; at most 1024)")
+                  "cores per array task (= " + items + " at once in it; at most 1024)")
       ->check(CLI::Range(1, 1024))
       ->capture_default_str();
   app->add_option("--slurm-mem", o.slurm.mem, "memory per array task (sbatch --mem)")

@@ -37,8 +37,9 @@ struct BatchCliOptions {
   SlurmOptions slurm;
 };
 
-/// Register the shared options on `app`.
-void add_batch_cli_options(CLI::App* app, BatchCliOptions& options);
+/// Register the shared options on `app`; their help names a task `item` ("sample", "view").
+void add_batch_cli_options(CLI::App* app, BatchCliOptions& options,
+                           const std::string& item = "sample");
 
 /// A progress printer: "done D/T  failed F  running R  S samples/h  ETA ..." (`items` for
 /// "samples"), redrawn on a terminal, one line per `every_seconds` otherwise.

@@ -169,7 +169,7 @@ void add_render_batch_subcommand(CLI::App& app, RenderBatchCommand& c) {
                    "POV-Ray threads per view (1 keeps radiosity reproducible; at most 1024)")
       ->check(CLI::Range(1, MAX_PROCESSES))
       ->capture_default_str();
-  batch::add_batch_cli_options(c.app, c.common);
+  batch::add_batch_cli_options(c.app, c.common, "view");
 }
 
 int run_render_batch(const RenderBatchCommand& c, std::ostream& out, std::ostream& err) {

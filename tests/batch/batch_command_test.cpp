@@ -400,6 +400,21 @@ TEST(PapersimBatch, ADatasetFolderThatIsAFileIsNamed) {
 }
 
 #ifdef SCENEGEN_EXE
+// scenegen batch's tasks are views: its help says so for the options it shares with papersim
+// batch, whose help says samples.
+TEST(ScenegenBatch, ItsHelpCountsViews) {
+  const fs::path log = work_dir() / "help.log";
+  ASSERT_EQ(run({SCENEGEN_EXE, "batch", "--help"}, log), 0);
+  const std::string help = pt::read_text(log);
+  for (const char* said :
+       {"views at once", "seconds per view; a view over it", "the views at positions",
+        "run views recorded", "at most one per view", "= views at once"})
+    EXPECT_NE(help.find(said), std::string::npos) << said << "\n" << help;
+  EXPECT_EQ(help.find("sample"), std::string::npos) << help;
+  ASSERT_EQ(run({PAPERSIM, "batch", "--help"}, log), 0);
+  EXPECT_NE(pt::read_text(log).find("samples at once"), std::string::npos);
+}
+
 // Values every view's scenegen render would refuse were taken, and each view of the dataset was
 // then recorded as failed (a million meshes: four million failure rows, or a cluster's time).
 TEST(ScenegenBatch, ValuesEveryViewWouldRefuseAreRefusedBeforeAnyRuns) {
