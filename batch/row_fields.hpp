@@ -20,14 +20,25 @@ class RowFields : public nlohmann::json_sax<nlohmann::json> {
       : m_figures(figures), m_values(figures.size()) {}
 
   /// Parse `line`: whether it is a JSON object whose "key" is a string (a row a batch counts).
+  /// A line of plain JSON (ASCII strings without escapes, integers of at most 18 digits, nesting
+  /// at most 64 deep: every row a batch writes) is read by a scanner of that subset, which gives
+  /// this handler the events nlohmann's parser would; any other line, or one the scanner is
+  /// unsure of, by nlohmann's parser (tests/batch: RowFields.*, and fuzz_dataset_stats).
   bool read_key(const std::string& line) {
-    m_depth = 0;
-    m_seen_object = false;
-    m_key = m_scenario = m_reason = Field{};
-    std::fill(m_values.begin(), m_values.end(), NAN);
-    if (!nlohmann::json::sax_parse(line, this)) return false;
+    reset();
+    if (m_simple_scan && scan_plain_json(line)) {
+      ++m_plain_lines;
+    } else {
+      reset();
+      if (!nlohmann::json::sax_parse(line, this)) return false;
+    }
     return m_seen_object && m_key.given && m_key.is_string;
   }
+  /// Whether lines are tried with the scanner of plain JSON first (the default); off, every
+  /// line goes through nlohmann's parser (a test compares the two).
+  void use_simple_scan(bool on) { m_simple_scan = on; }
+  /// Lines read so far by the scanner of plain JSON.
+  std::size_t plain_lines() const { return m_plain_lines; }
   /// read_key, and "scenario" and "reason" are strings where present (a row the report counts).
   bool read(const std::string& line) {
     return read_key(line) && (!m_scenario.given || m_scenario.is_string) &&
@@ -63,6 +74,17 @@ class RowFields : public nlohmann::json_sax<nlohmann::json> {
   }
 
  private:
+  void reset() {
+    m_depth = 0;
+    m_seen_object = false;
+    m_name.clear();
+    m_key = m_scenario = m_reason = Field{};
+    std::fill(m_values.begin(), m_values.end(), NAN);
+  }
+  /// The scanner of plain JSON: true when `line` is plain JSON and its events were given; false
+  /// when it is not or the scanner cannot tell (events given so far must be reset).
+  bool scan_plain_json(const std::string& line);
+
   struct Field {
     bool given = false, is_string = false;
     std::string text;
@@ -100,6 +122,9 @@ class RowFields : public nlohmann::json_sax<nlohmann::json> {
   std::string m_name;
   int m_depth = 0;
   bool m_seen_object = false;
+  bool m_simple_scan = true;
+  std::size_t m_plain_lines = 0;
+  std::string m_scan_text;  ///< the scanner's text of a string (its capacity kept across lines)
 };
 
 }  // namespace papersim::batch
