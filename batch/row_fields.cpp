@@ -103,9 +103,9 @@ class PlainJsonScan {
     if (m_p >= m_end) return false;
     switch (*m_p) {
       case '{':
-        return object(depth + 1);
+        return container(depth + 1, true);
       case '[':
-        return array(depth + 1);
+        return container(depth + 1, false);
       case '"':
         if (!string(depth == 1)) return false;
         return m_h.string(m_text);
@@ -120,56 +120,36 @@ class PlainJsonScan {
     }
   }
 
-  bool object(int depth) {
+  /// An object or an array at m_p: comma-separated members (a name, a colon and a value) or
+  /// elements between its brackets.
+  bool container(int depth, bool object) {
     if (depth > kMaxDepth) return false;
+    const char close = object ? '}' : ']';
     ++m_p;
-    m_h.start_object(static_cast<std::size_t>(-1));
+    if (object)
+      m_h.start_object(static_cast<std::size_t>(-1));
+    else
+      m_h.start_array(static_cast<std::size_t>(-1));
     skip_space();
-    if (at('}')) {
-      ++m_p;
-      return m_h.end_object();
-    }
-    for (;;) {
-      if (!at('"') || !string(depth == 1)) return false;
-      if (depth == 1) m_h.key(m_text);
-      skip_space();
-      if (!at(':')) return false;
-      ++m_p;
-      skip_space();
-      if (!value(depth)) return false;
-      skip_space();
-      if (at(',')) {
+    for (bool first = true;; first = false) {
+      if (first && at(close)) break;  // empty; after a comma, a value must follow
+      if (object) {
+        if (!at('"') || !string(depth == 1)) return false;
+        if (depth == 1) m_h.key(m_text);
+        skip_space();
+        if (!at(':')) return false;
         ++m_p;
         skip_space();
-        continue;
       }
-      if (!at('}')) return false;
-      ++m_p;
-      return m_h.end_object();
-    }
-  }
-
-  bool array(int depth) {
-    if (depth > kMaxDepth) return false;
-    ++m_p;
-    m_h.start_array(static_cast<std::size_t>(-1));
-    skip_space();
-    if (at(']')) {
-      ++m_p;
-      return m_h.end_array();
-    }
-    for (;;) {
       if (!value(depth)) return false;
       skip_space();
-      if (at(',')) {
-        ++m_p;
-        skip_space();
-        continue;
-      }
-      if (!at(']')) return false;
+      if (!at(',')) break;
       ++m_p;
-      return m_h.end_array();
+      skip_space();
     }
+    if (!at(close)) return false;
+    ++m_p;
+    return object ? m_h.end_object() : m_h.end_array();
   }
 
   RowFields& m_h;
