@@ -282,6 +282,13 @@ std::vector<SampleDraw> draw_samples(const MeshBatchSelection& sel) {
   return draws;
 }
 
+std::size_t count_samples(const MeshBatchSelection& sel) {
+  std::size_t n = 0;
+  draw_each(
+      sel, [](std::size_t) {}, [&n](const SampleDraw&) { ++n; });
+  return n;
+}
+
 batch::TaskList mesh_tasks(const std::vector<SampleDraw>& draws) {
   batch::TaskList tasks;
   tasks.reserve(draws.size());

@@ -75,6 +75,10 @@ inline constexpr std::uint64_t MAX_BATCH_SAMPLES = 10'000'000;
 /// MAX_BATCH_SAMPLES samples
 std::vector<SampleDraw> draw_samples(const MeshBatchSelection& selection);
 
+/// draw_samples(selection).size(), without keeping the draws (for a Slurm script).
+/// @throw SceneError as draw_samples
+std::size_t count_samples(const MeshBatchSelection& selection);
+
 /// The runner tasks of `draws`: key and folder meshes/<scenario>/<seed/1000>/<seed>.
 batch::TaskList mesh_tasks(const std::vector<SampleDraw>& draws);
 /// The same as mesh_tasks(draw_samples(selection)), without keeping the draws (ten million of

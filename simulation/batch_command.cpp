@@ -59,7 +59,7 @@ int run_mesh_batch(const BatchCommand& c, bool with_metrics, std::ostream& out, 
   const batch::Shard shard = batch::cli_shard(c.common);  // a malformed --shard is refused here
   if (c.common.slurm_shards == 0) sel.shard = shard;      // the script's line counts them all
   if (c.common.slurm_shards > 0) {
-    const std::size_t samples = draw_samples(sel).size();  // checks every option first
+    const std::size_t samples = count_samples(sel);  // checks every option first
     const batch::SlurmScript script =
         batch::write_slurm_script(c.out, "papersim-batch", shard_command(c), c.common, samples);
     out << batch::slurm_written_text(script, c.common, samples, "samples");

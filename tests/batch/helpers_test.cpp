@@ -218,6 +218,7 @@ TEST(Selection, AShardDrawnDirectlyIsTheSliceOfTheWholeSelection) {
         sel.shard = {index, count};
         const auto direct = ps::mesh_tasks(ps::draw_samples(sel));
         const auto streamed = ps::mesh_tasks(sel);
+        EXPECT_EQ(ps::count_samples(sel), direct.size());
         const auto sliced = papersim::batch::select_shard(all, index, count);
         ASSERT_EQ(direct.size(), sliced.size()) << index << "/" << count;
         ASSERT_EQ(streamed.size(), sliced.size()) << index << "/" << count;
