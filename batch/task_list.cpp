@@ -7,17 +7,6 @@
 
 namespace papersim::batch {
 
-Task Task::in_folder(std::string folder, const nlohmann::json& info) {
-  return in_folder(std::move(folder), info.dump());
-}
-
-Task Task::in_folder(std::string folder, std::string info) {
-  Task t;
-  t.key = std::move(folder);
-  t.info = std::move(info);
-  return t;
-}
-
 TaskList::TaskList(std::initializer_list<Task> tasks) {
   reserve(tasks.size());
   for (const Task& t : tasks) push_back(t);
@@ -41,7 +30,6 @@ void TaskList::add(std::string_view key, std::string_view info) {
   if (n > m_room || m_blocks.empty()) {  // a new block; a task larger than one gets its own
     const std::size_t size = std::max(n, kBlock);
     m_blocks.push_back(std::unique_ptr<char[]>(new char[size]));  // not zeroed: written next
-    m_block_bytes += size;
     m_next = m_blocks.back().get();
     m_room = size;
   }
@@ -51,11 +39,6 @@ void TaskList::add(std::string_view key, std::string_view info) {
       {m_next, static_cast<std::uint32_t>(key.size()), static_cast<std::uint32_t>(info.size())});
   m_next += n;
   m_room -= n;
-}
-
-std::size_t TaskList::memory_bytes() const {
-  return m_block_bytes + m_blocks.capacity() * sizeof(m_blocks[0]) +
-         m_entries.capacity() * sizeof(Entry);
 }
 
 }  // namespace papersim::batch

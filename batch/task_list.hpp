@@ -1,7 +1,7 @@
 #pragma once
 /// The tasks of a batch as text in a few large blocks: a batch holds up to ten million samples,
 /// and as ten million Task objects (two strings each, twenty million allocations) they peaked at
-/// 2.45 GB and took 5.2-5.6 s to free when the batch ended or was stopped (docs/batch.md).
+/// 2.45 GB and took 5.2-5.7 s to free when the batch ended or was stopped (docs/batch.md).
 #include <cstddef>
 #include <cstdint>
 #include <initializer_list>
@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 namespace papersim::batch {
@@ -27,9 +28,9 @@ struct Task {
   nlohmann::json info_object() const { return nlohmann::json::parse(info); }
 
   /// The task of `folder` with `info` as its text.
-  static Task in_folder(std::string folder, const nlohmann::json& info);
-  /// The same with `info` given as its text (an object's dump()), for a caller that writes it.
-  static Task in_folder(std::string folder, std::string info);
+  static Task in_folder(std::string folder, const nlohmann::json& info) {
+    return {std::move(folder), info.dump()};
+  }
 };
 
 /// A list of tasks kept as their bytes, back to back in blocks of 1 MiB, with 16 bytes per task
@@ -91,9 +92,6 @@ class TaskList {
   const_iterator begin() const { return {this, 0}; }
   const_iterator end() const { return {this, size()}; }
 
-  /// Bytes held (blocks and index), for the memory figures.
-  std::size_t memory_bytes() const;
-
  private:
   static constexpr std::size_t kBlock = std::size_t{1} << 20;
 
@@ -104,9 +102,8 @@ class TaskList {
   };
 
   std::vector<std::unique_ptr<char[]>> m_blocks;
-  std::size_t m_block_bytes = 0;  ///< bytes of all blocks
-  char* m_next = nullptr;         ///< where the next task's bytes go, in the last block
-  std::size_t m_room = 0;         ///< bytes left in the last block from m_next
+  char* m_next = nullptr;  ///< where the next task's bytes go, in the last block
+  std::size_t m_room = 0;  ///< bytes left in the last block from m_next
   std::vector<Entry> m_entries;
 };
 
