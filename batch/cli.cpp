@@ -4,9 +4,11 @@
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <memory>
 #include <ostream>
 #include <sstream>
 #include <thread>
@@ -31,6 +33,9 @@ std::string duration_text(double s) {
   return buf;
 }
 
+/// Whether `out` is standard error on a terminal (progress redrawn in place).
+bool on_terminal(const std::ostream& out) { return &out == &std::cerr && isatty(2); }
+
 }  // namespace
 
 void add_batch_cli_options(CLI::App* app, BatchCliOptions& o, const std::string& item) {
@@ -49,7 +54,7 @@ void add_batch_cli_options(CLI::App* app, BatchCliOptions& o, const std::string&
       "run only slice I of N (0 <= I < N): the " + items + " at positions p with p % N == I");
   app->add_flag("--retry-failed", o.retry_failed,
                 "run " + items + " recorded in the failures file again");
-  app->add_flag("--quiet", o.quiet, "no progress line");
+  app->add_flag("--quiet", o.quiet, "no progress lines on stderr");
   app->add_option(
          "--slurm", o.slurm_shards,
          "write DATASET/slurm/*.sbatch, a job array of this many shards (at most one per " + item +
@@ -89,6 +94,39 @@ ProgressFn progress_printer(std::ostream& out, bool tty, const std::string& labe
   };
 }
 
+StepProgressFn step_printer(std::ostream& out, bool tty, const std::string& label) {
+  using Clock = std::chrono::steady_clock;
+  struct State {
+    std::string what;
+    Clock::time_point start = Clock::now(), last = Clock::now();
+  };
+  auto state = std::make_shared<State>();
+  const auto every = std::chrono::seconds(tty ? 1 : 5);
+  return [&out, tty, label, state, every](const std::string& what, double done, double total,
+                                          const std::string& unit) {
+    const auto now = Clock::now();
+    if (what != state->what) {
+      state->what = what;
+      state->start = now;
+    }
+    if (now - state->last < every || now - state->start < std::chrono::seconds(1)) return;
+    state->last = now;
+    const double t = std::chrono::duration<double>(now - state->start).count();
+    const double eta = done > 0 && total >= done ? t / done * (total - done) : -1.0;
+    char line[128];
+    std::snprintf(line, sizeof line, ": %.0f of %.0f %s, %.0f s, ETA %s", done, total, unit.c_str(),
+                  t, duration_text(eta).c_str());
+    out << (tty ? "\r\033[K" : "") << label << ": " << what << line << (tty ? "" : "\n")
+        << std::flush;
+  };
+}
+
+StepProgressFn cli_step_printer(const BatchCliOptions& o, std::ostream& out,
+                                const std::string& label) {
+  if (o.quiet) return {};
+  return step_printer(out, on_terminal(out), label);
+}
+
 void check_dataset_folder(const fs::path& root, const std::string& option) {
   std::error_code ec;
   for (fs::path p = fs::absolute(root, ec); !ec && !p.empty(); p = p.parent_path()) {
@@ -118,9 +156,12 @@ BatchSummary run_cli_batch(const TaskList& tasks, BatchSpec spec, const BatchCli
       o.jobs > 0 ? o.jobs : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   spec.time_limit = o.time_limit;
   spec.retry_failed = o.retry_failed;
-  const bool tty = &progress_out == &std::cerr ? isatty(2) : false;
+  const bool tty = on_terminal(progress_out);
   spec.progress_every = tty ? 1.0 : 30.0;
-  if (!o.quiet) spec.progress = progress_printer(progress_out, tty, label, spec.items);
+  if (!o.quiet) {
+    spec.progress = progress_printer(progress_out, tty, label, spec.items);
+    spec.step_progress = step_printer(progress_out, tty, label);
+  }
   BatchSummary s = run_batch(tasks, spec);
   if (!o.quiet && tty) progress_out << '\n';
   return s;

@@ -46,6 +46,16 @@ void add_batch_cli_options(CLI::App* app, BatchCliOptions& options,
 ProgressFn progress_printer(std::ostream& out, bool tty, const std::string& label,
                             const std::string& items = "samples");
 
+/// A printer of the steps before a batch's first task (drawing the samples, reading the
+/// manifest): "LABEL: WHAT: D of T UNIT, S s, ETA E s", S and E of the step WHAT, once its first
+/// second has passed; redrawn every second on a terminal, a line every 5 s otherwise. Steps
+/// shorter than that print nothing.
+StepProgressFn step_printer(std::ostream& out, bool tty, const std::string& label);
+
+/// step_printer on `out` for a batch command's options: none with --quiet.
+StepProgressFn cli_step_printer(const BatchCliOptions& options, std::ostream& out,
+                                const std::string& label);
+
 /// Whether the dataset folder `root` (given as `option`) exists or can be made: refused when it
 /// or the nearest of its parents that exists is not a folder, before a long draw of samples.
 /// @throw common::OutputError naming the option, the folder and the part that is a file

@@ -182,6 +182,7 @@ class Runner {
   std::vector<std::unique_ptr<Slot>> m_slots;
   BatchSummary m_sum;
   Clock::time_point m_t0 = Clock::now(), m_last_progress = Clock::now(), m_last_wait_check;
+  Clock::time_point m_run_start = Clock::now();  ///< when the tasks were checked (scan)
   unsigned m_attempt = 0;
 
   fs::path manifest() const { return m_spec.root / m_spec.manifest_name; }
@@ -272,16 +273,28 @@ class FolderCheck {
 void Runner::scan() {
   // Only a manifest or failures file with rows is searched for the tasks' keys (a fresh batch
   // of ten million samples spent 4.4 s on a set of keys it never looked up).
+  const auto& tell = m_spec.step_progress;
+  const auto reading = [&tell](const fs::path& file) {
+    std::function<void(std::uintmax_t, std::uintmax_t)> f;
+    if (tell)
+      f = [&tell, what = "reading " + file.string()](std::uintmax_t read, std::uintmax_t size) {
+        tell(what, static_cast<double>(read) / 1e6, static_cast<double>(size) / 1e6, "MB");
+      };
+    return f;
+  };
   KeySet rows, failed;
   if (has_bytes(manifest()) || has_bytes(failures())) {
     KeySet keys;
     for (std::size_t i = 0; i < m_tasks.size(); ++i) keys.insert(m_tasks.key(i));
-    rows = keys_in_json_lines(manifest(), keys);
-    failed = keys_in_json_lines(failures(), keys);
+    rows = keys_in_json_lines(manifest(), keys, reading(manifest()));
+    failed = keys_in_json_lines(failures(), keys, reading(failures()));
   }
   FolderCheck folders(m_spec.root);
   std::vector<std::size_t> missing_rows;
+  const std::string looking = "looking for the " + m_spec.items + "' folders";
   for (std::size_t i = 0; i < m_tasks.size(); ++i) {
+    if (tell && i % 65536 == 65535)
+      tell(looking, static_cast<double>(i), static_cast<double>(m_tasks.size()), m_spec.items);
     const std::string_view key = m_tasks.key(i);
     if (folders.exists(key)) {
       ++m_sum.done;
@@ -526,10 +539,11 @@ void Runner::report(bool force) {
   p.done_now = m_sum.done_now;
   p.elapsed = seconds_since(m_t0);
   const long long ended_now = m_sum.done_now + m_sum.failed_now;
-  if (ended_now > 0 && p.elapsed > 0) {
-    p.per_hour = 3600.0 * static_cast<double>(m_sum.done_now) / p.elapsed;
+  const double running = seconds_since(m_run_start);
+  if (ended_now > 0 && running > 0) {
+    p.per_hour = 3600.0 * static_cast<double>(m_sum.done_now) / running;
     const long long left = p.total - p.done - p.failed;
-    p.eta = static_cast<double>(left) * p.elapsed / static_cast<double>(ended_now);
+    p.eta = static_cast<double>(left) * running / static_cast<double>(ended_now);
   }
   std::vector<RunningRate> rates;
   if (m_spec.running_share) {
@@ -551,7 +565,9 @@ void Runner::report(bool force) {
         rates.push_back({share, (s->share_last - s->share_first) / dt});
     }
   }
-  if (ended_now == 0) {
+  if (p.total - p.done - p.failed == 0) {
+    p.eta = 0.0;
+  } else if (ended_now == 0) {
     const long long queued = p.total - p.done - p.failed - static_cast<long long>(rates.size());
     p.eta = eta_from_running(rates, queued, m_spec.jobs);
   }
@@ -564,6 +580,10 @@ BatchSummary Runner::run() {
   m_sum.total = static_cast<long long>(m_tasks.size());
   StopSignals signals;
   scan();
+  // The first line once the tasks are checked: how many were done before. The rate counts
+  // from here, without the check.
+  m_run_start = Clock::now();
+  report(true);
   m_last_wait_check = Clock::now() - std::chrono::seconds(1);
   try {
     while (!m_pending.empty() || !m_waiting.empty() || !m_slots.empty()) {
@@ -687,14 +707,20 @@ std::vector<nlohmann::json> read_json_lines(const fs::path& path) {
   return rows;
 }
 
-KeySet keys_in_json_lines(const fs::path& path, const KeySet& wanted) {
+KeySet keys_in_json_lines(const fs::path& path, const KeySet& wanted,
+                          const std::function<void(std::uintmax_t, std::uintmax_t)>& progress) {
   KeySet found;
   if (wanted.size() == 0) return found;
   const std::vector<std::string> no_figures;
   RowFields row(no_figures);  // the row's own "key", read without building the row
   std::ifstream in(path, std::ios::binary);
+  std::error_code ec;
+  const std::uintmax_t size = progress ? fs::file_size(path, ec) : 0;
+  std::uintmax_t read = 0, lines = 0;
   std::string line;
   while (std::getline(in, line)) {
+    read += line.size() + 1;
+    if (progress && ++lines % 4096 == 0) progress(read, ec ? read : size);
     // Every wanted row holds "key" then a colon and the key as a JSON string. Only a line where
     // such a string, read up to its closing quote, is a wanted key is parsed, so that the row's
     // own "key" decides (the pattern may also be a nested object's). A line with a backslash

@@ -80,7 +80,9 @@ struct Progress {
   long long waiting = 0;   ///< tasks held by another process (lock taken)
   long long done_now = 0;  ///< finished by this run
   double elapsed = 0.0;    ///< wall seconds since this run started [s]
-  double per_hour = 0.0;   ///< samples finished by this run per hour of wall time
+  /// Tasks finished by this run per hour of wall time since its tasks were checked (checking a
+  /// million done tasks against their dataset takes seconds and runs nothing)
+  double per_hour = 0.0;
   /// Seconds to finish the rest at that rate; before any task ended in this run, from the
   /// running tasks' shares (eta_from_running); -1 when unknown [s].
   double eta = -1.0;
@@ -88,6 +90,12 @@ struct Progress {
   std::vector<double> running_done;
 };
 using ProgressFn = std::function<void(const Progress&)>;
+
+/// How far a step before the first task has come: `what` ("reading DATASET/manifest.jsonl"),
+/// `done` of `total` in `unit` ("MB", "samples"). Called often (every few thousand items); the
+/// receiver decides what to show (batch::step_printer).
+using StepProgressFn = std::function<void(const std::string& what, double done, double total,
+                                          const std::string& unit)>;
 
 /// How a batch runs and what it does with each task.
 struct BatchSpec {
@@ -117,7 +125,11 @@ struct BatchSpec {
   /// The reason of a failed command from its exit status (>= 0) and last log line; empty
   /// means "exit status N".
   std::function<std::string(int exit_status, const std::string& last_line)> failure_reason;
-  ProgressFn progress;  ///< called every progress_every and at the end
+  ProgressFn progress;  ///< called once the tasks are checked, every progress_every, and at the end
+  /// Optional: the progress of checking the tasks against the dataset before the first starts
+  /// (reading the manifest and the failures file, looking for the tasks' folders): about 2 s for
+  /// a million done tasks, so tens of seconds for ten million.
+  StepProgressFn step_progress;
   /// Optional: the share of a running task done so far (0-1), negative when unknown; asked for
   /// every running task before each progress call (Progress::running_done).
   std::function<double(const Task&)> running_share;
@@ -157,7 +169,10 @@ std::vector<nlohmann::json> read_json_lines(const std::filesystem::path& path);
 /// file gives none; a line that is not JSON is skipped, as by read_json_lines). Streams the file
 /// and parses only the lines that name a wanted key, so memory holds the matches alone: a batch
 /// (or one shard of it) checks its tasks against a manifest of millions of rows this way.
-KeySet keys_in_json_lines(const std::filesystem::path& path, const KeySet& wanted);
+/// `progress`, when given, hears every 4,096 lines the bytes read so far and the file's size.
+KeySet keys_in_json_lines(
+    const std::filesystem::path& path, const KeySet& wanted,
+    const std::function<void(std::uintmax_t read, std::uintmax_t size)>& progress = {});
 
 /// Write `text` to `path` through a temporary file in the same folder and a rename.
 /// @throw common::OutputError naming the file when it cannot be written

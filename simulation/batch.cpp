@@ -297,11 +297,22 @@ batch::TaskList mesh_tasks(const std::vector<SampleDraw>& draws) {
   return tasks;
 }
 
-batch::TaskList mesh_tasks(const MeshBatchSelection& sel) {
+batch::TaskList mesh_tasks(const MeshBatchSelection& sel, const batch::StepProgressFn& progress) {
   batch::TaskList tasks;
   MeshTaskWriter writer(tasks);
+  std::size_t total = 0;
   draw_each(
-      sel, [&](std::size_t n) { tasks.reserve(n); }, [&](const SampleDraw& d) { writer.add(d); });
+      sel,
+      [&](std::size_t n) {
+        tasks.reserve(n);
+        total = n;
+      },
+      [&](const SampleDraw& d) {
+        writer.add(d);
+        if (progress && tasks.size() % 65536 == 0)
+          progress("drawing the samples", static_cast<double>(tasks.size()),
+                   static_cast<double>(total), "samples");
+      });
   return tasks;
 }
 

@@ -65,7 +65,9 @@ int run_mesh_batch(const BatchCommand& c, bool with_metrics, std::ostream& out, 
     out << batch::slurm_written_text(script, c.common, samples, "samples");
     return 0;
   }
-  const batch::TaskList tasks = mesh_tasks(sel);  // checks every option first
+  // Checks every option first.
+  const batch::TaskList tasks =
+      mesh_tasks(sel, batch::cli_step_printer(c.common, err, "papersim batch"));
   const batch::BatchSpec spec =
       mesh_batch_spec(c.out, batch::self_executable(), with_metrics, c.checkpoint_every);
   const batch::BatchSummary s = batch::run_cli_batch(tasks, spec, c.common, err, "papersim batch");

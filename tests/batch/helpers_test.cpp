@@ -232,6 +232,33 @@ TEST(Selection, AShardDrawnDirectlyIsTheSliceOfTheWholeSelection) {
   }
 }
 
+// Drawing the samples tells its progress every 65,536 samples, with the shard's share of the
+// selection as the total, and the tasks are those drawn without it.
+TEST(Selection, DrawingTellsHowManySamplesAreDrawnOfHowMany) {
+  ps::MeshBatchSelection sel;
+  sel.scenarios = {"pull", "fall-gable"};
+  sel.seeds = ps::parse_seeds("0-99999");
+  for (int count : {1, 2}) {
+    sel.shard = {0, count};
+    std::vector<std::pair<double, double>> told;
+    const auto tasks = ps::mesh_tasks(
+        sel, [&told](const std::string& what, double done, double total, const std::string& unit) {
+          EXPECT_EQ(what, "drawing the samples");
+          EXPECT_EQ(unit, "samples");
+          told.emplace_back(done, total);
+        });
+    ASSERT_EQ(tasks.size(), 200000u / count);
+    ASSERT_EQ(told.size(), tasks.size() / 65536);  // 3 of 200,000; 1 of 100,000
+    for (std::size_t i = 0; i < told.size(); ++i) {
+      EXPECT_EQ(told[i].first, 65536.0 * (i + 1));
+      EXPECT_EQ(told[i].second, 200000.0 / count);
+    }
+    const auto quiet = ps::mesh_tasks(sel);
+    ASSERT_EQ(quiet.size(), tasks.size());
+    EXPECT_EQ(quiet.key(tasks.size() - 1), tasks.key(tasks.size() - 1));
+  }
+}
+
 // A batch command draws every sample before the first runs, so a selection of more than
 // MAX_BATCH_SAMPLES is refused before any is drawn: a typo of ten billion seeds, seed ranges whose
 // sum passes the bound, and two scenarios that double a range below it. Each is refused at once.

@@ -14,6 +14,7 @@
 #include <fstream>
 #include <set>
 #include <sstream>
+#include <thread>
 
 #include "batch/cli.hpp"
 #include "batch/slurm.hpp"
@@ -156,6 +157,103 @@ TEST(Runner, ProgressShowsTheShareOfRunningTasks) {
       << line.str();
   EXPECT_NE(line.str().find(" samples/h "), std::string::npos) << line.str();
   fs::remove_all(root);
+}
+
+// The first progress call comes once the tasks are checked, before any runs: how many were done
+// before. With progress_every far off, the calls are that one and the last.
+TEST(Runner, TheFirstProgressTellsWhatWasDoneBeforeAnyTaskRuns) {
+  const fs::path root = fresh_dir("first");
+  auto spec = shell_spec(root, "echo ok > \"$1/value\"");
+  papersim::batch::run_batch(numbered_tasks(1), spec);
+  spec.progress_every = 1e6;
+  std::vector<papersim::batch::Progress> seen;
+  spec.progress = [&seen](const papersim::batch::Progress& p) { seen.push_back(p); };
+  EXPECT_EQ(papersim::batch::run_batch(numbered_tasks(3), spec).done_now, 2);
+  ASSERT_EQ(seen.size(), 2u);
+  EXPECT_EQ(seen[0].total, 3);
+  EXPECT_EQ(seen[0].done, 1);
+  EXPECT_EQ(seen[0].done_now, 0);
+  EXPECT_EQ(seen[0].running, 0);
+  EXPECT_EQ(seen[0].eta, -1.0);  // nothing known yet
+  EXPECT_EQ(seen[1].done, 3);
+  EXPECT_EQ(seen[1].eta, 0.0);  // nothing left
+  fs::remove_all(root);
+}
+
+// Checking the tasks against the dataset tells its progress: the manifest and the failures file
+// read in MB of their sizes every 4,096 lines, the tasks' folders looked for every 65,536 tasks.
+// 70,000 tasks recorded as failed: none runs.
+TEST(Runner, CheckingTheTasksTellsHowFarItHasRead) {
+  const fs::path root = fresh_dir("check");
+  fs::create_directories(root);
+  const int n = 70000;
+  papersim::batch::TaskList tasks;
+  {
+    std::ofstream failures(root / "failures.jsonl"), manifest(root / "manifest.jsonl");
+    for (int i = 0; i < n; ++i) {
+      const std::string key = "t/" + std::to_string(i);
+      tasks.push_back({key, "{}"});
+      failures << json{{"key", key}, {"reason", "x"}}.dump() << '\n';
+      if (i < 5000) manifest << json{{"key", "other/" + std::to_string(i)}}.dump() << '\n';
+    }
+  }
+  auto spec = shell_spec(root, "exit 1");
+  struct Told {
+    std::string what, unit;
+    double done, total;
+  };
+  std::vector<Told> told;
+  spec.step_progress = [&told](const std::string& what, double done, double total,
+                               const std::string& unit) {
+    told.push_back({what, unit, done, total});
+  };
+  const auto s = papersim::batch::run_batch(tasks, spec);
+  EXPECT_EQ(s.failed, n);
+  EXPECT_EQ(s.done_now + s.failed_now, 0);
+  const auto steps = [&told](const std::string& what) {
+    std::vector<Told> out;
+    for (const auto& t : told)
+      if (t.what == what) out.push_back(t);
+    return out;
+  };
+  const auto m = steps("reading " + (root / "manifest.jsonl").string());
+  const auto f = steps("reading " + (root / "failures.jsonl").string());
+  const auto l = steps("looking for the samples' folders");
+  ASSERT_EQ(m.size(), 1u);         // 5,000 lines
+  ASSERT_EQ(f.size(), n / 4096u);  // 17
+  ASSERT_EQ(l.size(), 1u);
+  EXPECT_EQ(m.size() + f.size() + l.size(), told.size());
+  const double f_size = static_cast<double>(fs::file_size(root / "failures.jsonl")) / 1e6;
+  for (std::size_t i = 0; i < f.size(); ++i) {
+    EXPECT_EQ(f[i].unit, "MB");
+    EXPECT_DOUBLE_EQ(f[i].total, f_size);
+    EXPECT_GT(f[i].done, i > 0 ? f[i - 1].done : 0.0);
+    EXPECT_LE(f[i].done, f_size);
+  }
+  // The line that told is a whole number of lines: 4,096 rows of "t/0" ... in bytes.
+  std::size_t first = 0;
+  for (int i = 0; i < 4096; ++i)
+    first += json{{"key", "t/" + std::to_string(i)}, {"reason", "x"}}.dump().size() + 1;
+  EXPECT_DOUBLE_EQ(f[0].done, static_cast<double>(first) / 1e6);
+  EXPECT_DOUBLE_EQ(m[0].total, static_cast<double>(fs::file_size(root / "manifest.jsonl")) / 1e6);
+  EXPECT_EQ(l[0].done, 65535.0);
+  EXPECT_EQ(l[0].total, static_cast<double>(n));
+  EXPECT_EQ(l[0].unit, "samples");
+  fs::remove_all(root);
+}
+
+// The step printer: nothing in a step's first second, then on a terminal the line redrawn.
+TEST(Runner, TheStepPrinterShowsAStepAfterItsFirstSecondWithItsEta) {
+  std::ostringstream out;
+  const auto print = papersim::batch::step_printer(out, true, "papersim batch");
+  print("drawing the samples", 1, 10, "samples");
+  EXPECT_EQ(out.str(), "");
+  std::this_thread::sleep_for(std::chrono::milliseconds(1100));
+  print("drawing the samples", 5, 10, "samples");
+  EXPECT_EQ(out.str(),
+            "\r\033[Kpapersim batch: drawing the samples: 5 of 10 samples, 1 s, ETA 1 s");
+  print("reading m", 1, 2, "MB");  // a new step: its own first second
+  EXPECT_EQ(out.str().find("reading"), std::string::npos);
 }
 
 // Before any task ends, the ETA comes from the running tasks' shares: the rest of each, and the
