@@ -27,13 +27,6 @@ const std::vector<std::string> MESH_FIGURES = {
     "self_intersections", "crease_length", "abs_curvature_integral"};
 const std::vector<std::string> RENDER_FIGURES = {"wall_seconds", "cpu_seconds"};
 
-double quantile(const std::vector<double>& sorted, double q) {
-  const double pos = q * static_cast<double>(sorted.size() - 1);
-  const auto i = static_cast<std::size_t>(std::floor(pos));
-  const std::size_t j = std::min(i + 1, sorted.size() - 1);
-  return sorted[i] + (pos - static_cast<double>(i)) * (sorted[j] - sorted[i]);
-}
-
 /// Bytes read of the files of a dataset, told to a ReadProgress every 4,096 lines.
 struct ReadCount {
   const ReadProgress& progress;
@@ -212,15 +205,38 @@ std::vector<double> FigureValues::to_vector() const {
 Distribution distribution(std::vector<double> v) {
   Distribution d;
   if (v.empty()) return d;
-  std::sort(v.begin(), v.end());
   d.count = v.size();
-  d.min = v.front();
-  d.max = v.back();
-  d.p10 = quantile(v, 0.1);
-  d.median = quantile(v, 0.5);
-  d.p90 = quantile(v, 0.9);
-  for (double x : v) d.sum += x;
+  for (double x : v) d.sum += x;  // in the order read
   d.mean = d.sum / static_cast<double>(v.size());
+  // The order statistics the quantiles interpolate between, selected rather than sorted (a sort
+  // of ten million values took a fifth of a dataset's statistics, perf): in increasing order,
+  // each found in the part not yet placed, which the one before left holding the larger values.
+  const auto [lo, hi] = std::minmax_element(v.begin(), v.end());
+  d.min = *lo;
+  d.max = *hi;
+  std::size_t placed = 0;  // v[0, placed) holds the smallest values, up to the last found
+  const auto order = [&v, &placed](std::size_t k) {
+    if (k >= placed) {
+      if (k == placed)  // the least of the rest
+        std::iter_swap(v.begin() + static_cast<std::ptrdiff_t>(k),
+                       std::min_element(v.begin() + static_cast<std::ptrdiff_t>(k), v.end()));
+      else
+        std::nth_element(v.begin() + static_cast<std::ptrdiff_t>(placed),
+                         v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
+      placed = k + 1;
+    }
+    return v[k];
+  };
+  const auto quantile_of = [&](double q) {
+    const double pos = q * static_cast<double>(v.size() - 1);
+    const auto i = static_cast<std::size_t>(std::floor(pos));
+    const std::size_t j = std::min(i + 1, v.size() - 1);
+    const double a = order(i);
+    return a + (pos - static_cast<double>(i)) * (order(j) - a);
+  };
+  d.p10 = quantile_of(0.1);
+  d.median = quantile_of(0.5);
+  d.p90 = quantile_of(0.9);
   return d;
 }
 

@@ -2,11 +2,14 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdlib>
 #include <fstream>
 #include <limits>
 #include <memory>
+#include <random>
 #include <set>
 #include <sstream>
 #include <tuple>
@@ -344,6 +347,42 @@ TEST(DatasetStats, CountsLatestStatePerSampleAndQuantiles) {
   EXPECT_DOUBLE_EQ(d.p90, 4.6);
   EXPECT_DOUBLE_EQ(d.sum, 15.0);
   fs::remove_all(root);
+}
+
+// The quantiles come from order statistics selected, not sorted: the same values as from the
+// sorted vector (exactly: the same two values interpolated by the same formula), with ties and
+// at every small size; the sum in the order read within rounding of the sorted sum.
+TEST(DatasetStats, DistributionIsThatOfTheSortedValues) {
+  std::mt19937_64 rng(7);
+  for (std::size_t n : {1, 2, 3, 4, 5, 9, 10, 11, 19, 20, 21, 100, 1001, 100000}) {
+    for (int ties : {0, 1}) {
+      std::vector<double> v(n);
+      std::uniform_real_distribution<double> u(-1.0, 1.0);
+      for (double& x : v) x = ties ? std::floor(4 * u(rng)) : std::exp(5 * u(rng));
+      std::vector<double> s = v;
+      std::sort(s.begin(), s.end());
+      const auto q = [&s](double p) {
+        const double pos = p * static_cast<double>(s.size() - 1);
+        const auto i = static_cast<std::size_t>(std::floor(pos));
+        const std::size_t j = std::min(i + 1, s.size() - 1);
+        return s[i] + (pos - static_cast<double>(i)) * (s[j] - s[i]);
+      };
+      const auto d = papersim::batch::distribution(v);
+      EXPECT_EQ(d.count, n);
+      EXPECT_EQ(d.min, s.front()) << n;
+      EXPECT_EQ(d.max, s.back()) << n;
+      EXPECT_EQ(d.p10, q(0.1)) << n << " " << ties;
+      EXPECT_EQ(d.median, q(0.5)) << n << " " << ties;
+      EXPECT_EQ(d.p90, q(0.9)) << n << " " << ties;
+      double sum = 0, size = 0;
+      for (double x : s) {
+        sum += x;
+        size += std::abs(x);
+      }
+      EXPECT_NEAR(d.sum, sum, 1e-15 * static_cast<double>(n) * size) << n;
+      EXPECT_DOUBLE_EQ(d.mean, d.sum / static_cast<double>(n));
+    }
+  }
 }
 
 // The plots appear whole or not at all: with gnuplot at hand every SVG, its data and the script
