@@ -127,7 +127,7 @@ struct BatchSpec {
   std::function<std::string(int exit_status, const std::string& last_line)> failure_reason;
   ProgressFn progress;  ///< called once the tasks are checked, every progress_every, and at the end
   /// Optional: the progress of checking the tasks against the dataset before the first starts
-  /// (reading the manifest and the failures file, looking for the tasks' folders): about 2 s for
+  /// (looking for the tasks' folders, reading the manifest and the failures file): about 2 s for
   /// a million done tasks, so tens of seconds for ten million.
   StepProgressFn step_progress;
   /// Optional: the share of a running task done so far (0-1), negative when unknown; asked for

@@ -180,21 +180,30 @@ TEST(Runner, TheFirstProgressTellsWhatWasDoneBeforeAnyTaskRuns) {
   fs::remove_all(root);
 }
 
-// Checking the tasks against the dataset tells its progress: the manifest and the failures file
-// read in MB of their sizes every 4,096 lines, the tasks' folders looked for every 65,536 tasks.
-// 70,000 tasks recorded as failed: none runs.
-TEST(Runner, CheckingTheTasksTellsHowFarItHasRead) {
+// Checking the tasks against the dataset tells its progress: the tasks' folders looked for every
+// 65,536 tasks, then the manifest (for the done tasks' rows) and the failures file (for the
+// others') read in MB of their sizes every 4,096 lines. 70,000 tasks, 10 done with their rows and
+// the rest recorded as failed: none runs. Then, with nothing done, the manifest is not read.
+TEST(Runner, CheckingTheTasksTellsHowFarItHasReadAndReadsOnlyWhatItNeeds) {
   const fs::path root = fresh_dir("check");
   fs::create_directories(root);
-  const int n = 70000;
+  const int n = 70000, n_done = 10;
   papersim::batch::TaskList tasks;
+  std::size_t first_failures = 0;  // bytes of the first 4,096 rows of the failures file
   {
     std::ofstream failures(root / "failures.jsonl"), manifest(root / "manifest.jsonl");
+    for (int i = 0; i < 5000; ++i) manifest << json{{"key", "other/" + std::to_string(i)}} << '\n';
     for (int i = 0; i < n; ++i) {
       const std::string key = "t/" + std::to_string(i);
       tasks.push_back({key, "{}"});
-      failures << json{{"key", key}, {"reason", "x"}}.dump() << '\n';
-      if (i < 5000) manifest << json{{"key", "other/" + std::to_string(i)}}.dump() << '\n';
+      if (i < n_done) {
+        fs::create_directories(root / key);
+        manifest << json{{"key", key}} << '\n';
+        continue;
+      }
+      const std::string row = json{{"key", key}, {"reason", "x"}}.dump();
+      failures << row << '\n';
+      if (i < n_done + 4096) first_failures += row.size() + 1;
     }
   }
   auto spec = shell_spec(root, "exit 1");
@@ -207,38 +216,48 @@ TEST(Runner, CheckingTheTasksTellsHowFarItHasRead) {
                                const std::string& unit) {
     told.push_back({what, unit, done, total});
   };
-  const auto s = papersim::batch::run_batch(tasks, spec);
-  EXPECT_EQ(s.failed, n);
-  EXPECT_EQ(s.done_now + s.failed_now, 0);
   const auto steps = [&told](const std::string& what) {
     std::vector<Told> out;
     for (const auto& t : told)
       if (t.what == what) out.push_back(t);
     return out;
   };
-  const auto m = steps("reading " + (root / "manifest.jsonl").string());
-  const auto f = steps("reading " + (root / "failures.jsonl").string());
+  const std::string reading_manifest = "reading " + (root / "manifest.jsonl").string();
+  const std::string reading_failures = "reading " + (root / "failures.jsonl").string();
+  auto s = papersim::batch::run_batch(tasks, spec);
+  EXPECT_EQ(s.done, n_done);
+  EXPECT_EQ(s.failed, n - n_done);
+  EXPECT_EQ(s.done_now + s.failed_now + s.repaired, 0);
   const auto l = steps("looking for the samples' folders");
-  ASSERT_EQ(m.size(), 1u);         // 5,000 lines
-  ASSERT_EQ(f.size(), n / 4096u);  // 17
+  const auto m = steps(reading_manifest);
+  const auto f = steps(reading_failures);
   ASSERT_EQ(l.size(), 1u);
-  EXPECT_EQ(m.size() + f.size() + l.size(), told.size());
+  ASSERT_EQ(m.size(), 1u);                    // 5,010 lines
+  ASSERT_EQ(f.size(), (n - n_done) / 4096u);  // 17
+  EXPECT_EQ(l.size() + m.size() + f.size(), told.size());
+  EXPECT_EQ(told.front().what, l[0].what);  // the folders first
+  EXPECT_EQ(l[0].done, 65535.0);
+  EXPECT_EQ(l[0].total, static_cast<double>(n));
+  EXPECT_EQ(l[0].unit, "samples");
+  EXPECT_DOUBLE_EQ(m[0].total, static_cast<double>(fs::file_size(root / "manifest.jsonl")) / 1e6);
   const double f_size = static_cast<double>(fs::file_size(root / "failures.jsonl")) / 1e6;
+  EXPECT_DOUBLE_EQ(f[0].done, static_cast<double>(first_failures) / 1e6);
   for (std::size_t i = 0; i < f.size(); ++i) {
     EXPECT_EQ(f[i].unit, "MB");
     EXPECT_DOUBLE_EQ(f[i].total, f_size);
     EXPECT_GT(f[i].done, i > 0 ? f[i - 1].done : 0.0);
     EXPECT_LE(f[i].done, f_size);
   }
-  // The line that told is a whole number of lines: 4,096 rows of "t/0" ... in bytes.
-  std::size_t first = 0;
-  for (int i = 0; i < 4096; ++i)
-    first += json{{"key", "t/" + std::to_string(i)}, {"reason", "x"}}.dump().size() + 1;
-  EXPECT_DOUBLE_EQ(f[0].done, static_cast<double>(first) / 1e6);
-  EXPECT_DOUBLE_EQ(m[0].total, static_cast<double>(fs::file_size(root / "manifest.jsonl")) / 1e6);
-  EXPECT_EQ(l[0].done, 65535.0);
-  EXPECT_EQ(l[0].total, static_cast<double>(n));
-  EXPECT_EQ(l[0].unit, "samples");
+
+  // Nothing done: the manifest is not read; the 10 tasks without a failure run (and fail).
+  fs::remove_all(root / "t");
+  told.clear();
+  s = papersim::batch::run_batch(tasks, spec);
+  EXPECT_EQ(s.done, 0);
+  EXPECT_EQ(s.failed_now, n_done);
+  EXPECT_EQ(s.failed, n);
+  EXPECT_TRUE(steps(reading_manifest).empty());
+  EXPECT_EQ(steps(reading_failures).size(), (n - n_done) / 4096u);
   fs::remove_all(root);
 }
 
