@@ -219,10 +219,13 @@ bool has_bytes(const fs::path& file) {
 }
 
 /// fs::exists(root / path) for many paths of few parent folders, as a dataset's sample folders
-/// are (meshes/<scenario>/<bucket>/<seed>): each parent is listed once, and only when its own
-/// parent lists it, so a path whose parent is missing or does not list its name costs no system
-/// call (a fresh batch of ten million samples made ten million failing `stat`s, 19 s). A listed
-/// symbolic link is looked up as fs::exists would.
+/// are (meshes/<scenario>/<bucket>/<seed>): a parent asked for by many paths is listed once, and
+/// only when its own parent lists it, so a path whose parent is missing or does not list its name
+/// costs no system call (a fresh batch of ten million samples made ten million failing `stat`s,
+/// 19 s). A parent asked for by few paths is not listed: each of them costs one `stat`, and none
+/// when the parent is missing. A Slurm array task's shard has one sample in each bucket folder of
+/// a thousand, and it listed every one of them to look for that sample. A listed symbolic link
+/// is looked up as fs::exists would.
 class FolderCheck {
  public:
   explicit FolderCheck(fs::path root) : m_root(std::move(root)) {}
@@ -230,6 +233,14 @@ class FolderCheck {
   bool exists(std::string_view path) {
     const std::size_t slash = path.rfind('/');
     const std::string parent(slash == std::string::npos ? "" : path.substr(0, slash));
+    if (m_parents.find(parent) == m_parents.end()) {
+      if (m_asked.size() >= kAsked) m_asked.clear();
+      if (++m_asked[parent] <= kStatFirst) {
+        if (!parent.empty() && !exists(parent)) return false;
+        std::error_code ec;
+        return fs::exists(m_root / std::string(path), ec);
+      }
+    }
     const std::string name(slash == std::string::npos ? path : path.substr(slash + 1));
     const auto& names = listing(parent);
     const auto entry = names.find(name);
@@ -239,6 +250,8 @@ class FolderCheck {
 
  private:
   static constexpr std::size_t kParents = 256;  ///< parents listed at once (a mix interleaves some)
+  static constexpr int kStatFirst = 8;  ///< paths of a parent looked up by `stat` before listing it
+  static constexpr std::size_t kAsked = 65536;  ///< parents counted at once
 
   /// The listing of `parent` (relative to the root; "" is the root), made when first asked for:
   /// none when the parent is missing by its own parent's listing, so a missing bucket costs one
@@ -266,6 +279,7 @@ class FolderCheck {
 
   fs::path m_root;
   std::unordered_map<std::string, std::unordered_map<std::string, bool>> m_parents;
+  std::unordered_map<std::string, int> m_asked;  ///< paths asked for per parent not listed
 };
 
 }  // namespace

@@ -335,10 +335,10 @@ TEST(Runner, RestoresTheManifestRowOfATaskFinishedBeforeACrash) {
   fs::remove_all(root);
 }
 
-// The scan lists each parent folder once instead of looking up every task's folder: a task is
-// finished exactly when fs::exists says its folder is there, whether that is a folder, a file,
-// a link to a folder, in a parent of many (more than the scan keeps listed at once); not when only
-// another name is there or a parent is missing.
+// The scan looks up the tasks of a parent folder of few by `stat` and lists a parent of many
+// once: either way a task is finished exactly when fs::exists says its folder is there, whether
+// that is a folder, a file, a link to a folder, in one of many parents (more than the scan keeps
+// listed at once); not when only another name is there or a parent is missing.
 TEST(Runner, AFinishedTaskIsOneWhoseFolderExists) {
   const fs::path root = fresh_dir("exists");
   papersim::batch::TaskList tasks;
@@ -349,8 +349,22 @@ TEST(Runner, AFinishedTaskIsOneWhoseFolderExists) {
   for (int q = 0; q < 10; ++q)  // two levels down: q0-q4 hold x/0, q5-q9 are missing
     tasks.push_back(papersim::batch::Task::in_folder("q" + std::to_string(q) + "/x/0",
                                                      json{{"index", 600 + q}}));
+  for (int r = 0; r < 6; ++r)  // 6 parents of 20 tasks, listed: r0-r4 hold 15 each, r5 is missing
+    for (int i = 0; i < 20; ++i)
+      tasks.push_back(papersim::batch::Task::in_folder(
+          "r" + std::to_string(r) + "/" + std::to_string(i), json{{"index", 610 + 20 * r + i}}));
   fs::create_directories(root / "elsewhere");
   std::set<std::string> made;  // the indices of the tasks whose folder is made here
+  for (int r = 0; r < 5; ++r)
+    for (int i = 0; i < 20; ++i) {
+      const fs::path dir = root / ("r" + std::to_string(r)) / std::to_string(i);
+      if (i % 4 == 3) continue;
+      fs::create_directories(dir.parent_path());
+      if (i % 4 == 0) fs::create_directories(dir);
+      if (i % 4 == 1) std::ofstream(dir) << "a file\n";
+      if (i % 4 == 2) fs::create_directory_symlink(root / "elsewhere", dir);
+      made.insert(std::to_string(610 + 20 * r + i));
+    }
   for (int q = 0; q < 5; ++q) {
     fs::create_directories(root / ("q" + std::to_string(q)) / "x" / "0");
     made.insert(std::to_string(600 + q));
@@ -373,9 +387,10 @@ TEST(Runner, AFinishedTaskIsOneWhoseFolderExists) {
   papersim::batch::BatchSpec quick = spec;
   quick.jobs = 8;
   const auto s = papersim::batch::run_batch(tasks, quick);
-  EXPECT_EQ(s.done, 610);
+  EXPECT_EQ(s.done, 730);
+  EXPECT_EQ(made.size(), 662u);  // 294 + 288 of the p parents, 5 of q, 75 of r
   EXPECT_EQ(s.repaired, static_cast<long long>(made.size()));
-  EXPECT_EQ(s.done_now, 610 - static_cast<long long>(made.size()));
+  EXPECT_EQ(s.done_now, 730 - static_cast<long long>(made.size()));
   for (const auto& ran : lines(root / "runs.txt"))
     EXPECT_EQ(made.count(ran), 0u) << "task " << ran << " was finished and ran";
   fs::remove_all(root);
