@@ -217,12 +217,8 @@ Distribution distribution(std::vector<double> v) {
   std::size_t placed = 0;  // v[0, placed) holds the smallest values, up to the last found
   const auto order = [&v, &placed](std::size_t k) {
     if (k >= placed) {
-      if (k == placed)  // the least of the rest
-        std::iter_swap(v.begin() + static_cast<std::ptrdiff_t>(k),
-                       std::min_element(v.begin() + static_cast<std::ptrdiff_t>(k), v.end()));
-      else
-        std::nth_element(v.begin() + static_cast<std::ptrdiff_t>(placed),
-                         v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
+      std::nth_element(v.begin() + static_cast<std::ptrdiff_t>(placed),
+                       v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
       placed = k + 1;
     }
     return v[k];

@@ -1,8 +1,6 @@
 #include "simulation/batch_command.hpp"
 
 #include <CLI/CLI.hpp>
-#include <chrono>
-#include <cmath>
 #include <ostream>
 #include <sstream>
 
@@ -77,20 +75,12 @@ int run_mesh_batch(const BatchCommand& c, bool with_metrics, std::ostream& out, 
 }
 
 /// A line on `err` every 5 s of reading a dataset's manifests (none for a shorter read): the
-/// megabytes read of all, elapsed time and ETA.
+/// megabytes read of all, elapsed time and ETA (batch::step_printer).
 batch::ReadProgress read_printer(std::ostream& err, bool quiet, const std::string& dataset) {
   if (quiet) return {};
-  const auto start = std::chrono::steady_clock::now();
-  auto last = start;
-  return [&err, dataset, start, last](std::uintmax_t read, std::uintmax_t total) mutable {
-    const auto now = std::chrono::steady_clock::now();
-    if (now - last < std::chrono::seconds(5) || read == 0) return;
-    last = now;
-    const double t = std::chrono::duration<double>(now - start).count();
-    err << "papersim dataset-stats: reading " << dataset << ": " << read / 1000000 << " of "
-        << total / 1000000 << " MB, " << std::lround(t) << " s, ETA "
-        << std::lround(t / static_cast<double>(read) * static_cast<double>(total - read)) << " s"
-        << std::endl;
+  return [step = batch::step_printer(err, false, "papersim dataset-stats"),
+          what = "reading " + dataset](std::uintmax_t read, std::uintmax_t total) {
+    step(what, static_cast<double>(read) / 1e6, static_cast<double>(total) / 1e6, "MB");
   };
 }
 
