@@ -12,12 +12,9 @@
 #include <string>
 #include <vector>
 
-namespace papersim::batch {
+#include "batch/errors.hpp"
 
-/// A dataset that cannot be read: a path that is not a folder. Exit status 2.
-struct DatasetError : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
+namespace papersim::batch {
 
 /// The plots' folder or one of their files cannot be written (full disk, permission, a file in
 /// the way). Exit status 5.

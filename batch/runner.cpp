@@ -168,6 +168,9 @@ struct Slot {
   Clock::time_point share_first_time, share_last_time;
   double cpu_seconds = 0.0;  ///< user + system time of the finished commands [s]
   bool timed_out = false;
+  /// The task's folder is in place and its manifest row not yet appended: the stage is kept
+  /// (also when the batch stops), so the next scan knows to look for the row (Runner::scan).
+  bool placed = false;
 };
 
 class Runner {
@@ -184,6 +187,9 @@ class Runner {
   Clock::time_point m_t0 = Clock::now(), m_last_progress = Clock::now(), m_last_wait_check;
   Clock::time_point m_run_start = Clock::now();  ///< when the tasks were checked (scan)
   unsigned m_attempt = 0;
+  /// The staging folders in ROOT/.staging when the tasks were checked, by their task's
+  /// safe_name (stage_owner).
+  std::unordered_map<std::string, std::vector<fs::path>> m_stages;
 
   fs::path manifest() const { return m_spec.root / m_spec.manifest_name; }
   fs::path failures() const { return m_spec.root / m_spec.failures_name; }
@@ -192,8 +198,11 @@ class Runner {
   }
   bool finished(std::string_view key) const { return fs::exists(m_spec.root / key); }
 
+  /// The progress of reading `file` for the step printer (none without one).
+  std::function<void(std::uintmax_t, std::uintmax_t)> reading(const fs::path& file) const;
   void scan();
-  void repair(const std::vector<std::size_t>& missing_rows);
+  void repair(const std::vector<std::size_t>& tasks);
+  nlohmann::json manifest_row(const Task& t, double wall, double cpu) const;
   void append_manifest_row(const Task& t, double wall, double cpu);
   void record_failure(const Task& t, const std::string& reason, const std::string& detail,
                       double wall);
@@ -210,6 +219,32 @@ class Runner {
 };
 
 namespace {
+
+/// The task (its safe_name) whose staging folder is named `name`, "<safe name>.<pid>.<attempt>"
+/// (Runner::try_start); empty for any other name.
+std::string stage_owner(const std::string& name) {
+  const auto digits_before = [&name](std::size_t end) {  // start of the digits ending at `end`
+    std::size_t b = end;
+    while (b > 0 && name[b - 1] >= '0' && name[b - 1] <= '9') --b;
+    return b;
+  };
+  const std::size_t attempt = digits_before(name.size());
+  if (attempt == name.size() || attempt < 2 || name[attempt - 1] != '.') return "";
+  const std::size_t pid = digits_before(attempt - 1);
+  if (pid == attempt - 1 || pid < 2 || name[pid - 1] != '.') return "";
+  return name.substr(0, pid - 1);
+}
+
+/// The staging folders in `dir` by their task's safe_name (none when `dir` cannot be listed).
+std::unordered_map<std::string, std::vector<fs::path>> stages_by_task(const fs::path& dir) {
+  std::unordered_map<std::string, std::vector<fs::path>> stages;
+  std::error_code ec;
+  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    std::string owner = stage_owner(it->path().filename().string());
+    if (!owner.empty()) stages[std::move(owner)].push_back(it->path());
+  }
+  return stages;
+}
 
 /// Whether a file has a byte (a missing one has none).
 bool has_bytes(const fs::path& file) {
@@ -284,21 +319,26 @@ class FolderCheck {
 
 }  // namespace
 
+std::function<void(std::uintmax_t, std::uintmax_t)> Runner::reading(const fs::path& file) const {
+  std::function<void(std::uintmax_t, std::uintmax_t)> f;
+  if (m_spec.step_progress)
+    f = [&tell = m_spec.step_progress, what = "reading " + file.string()](std::uintmax_t read,
+                                                                          std::uintmax_t size) {
+      tell(what, static_cast<double>(read) / 1e6, static_cast<double>(size) / 1e6, "MB");
+    };
+  return f;
+}
+
 void Runner::scan() {
-  // A task is done when its folder exists, so the folders are looked for first. The manifest is
-  // then searched only for the done tasks' keys (a done task without a row gets it restored), and
-  // the failures file only for the other tasks' keys, when failures are not retried. A file with
-  // no such key to look for is not read: a fresh Slurm array task of a large dataset, whose shard
-  // has nothing done yet, does not read the manifest the other tasks are writing.
+  // A task is done when its folder exists, so the folders are looked for first. A finished
+  // task's stage is removed only after its manifest row is appended (Runner::finish), so a done
+  // task may lack its row only when a stage of it is left in ROOT/.staging (a crash, a kill or a
+  // full disk between the two), or when the manifest is missing or empty (deleted to be rebuilt):
+  // only then is the manifest searched, for those tasks' keys (Runner::repair). The failures file
+  // is searched for the keys of the tasks not done, when failures are not retried. So a resumed
+  // Slurm array task does not read the manifest the other array tasks are writing (gigabytes
+  // for ten million samples) unless a crash left one of its own samples without a row.
   const auto& tell = m_spec.step_progress;
-  const auto reading = [&tell](const fs::path& file) {
-    std::function<void(std::uintmax_t, std::uintmax_t)> f;
-    if (tell)
-      f = [&tell, what = "reading " + file.string()](std::uintmax_t read, std::uintmax_t size) {
-        tell(what, static_cast<double>(read) / 1e6, static_cast<double>(size) / 1e6, "MB");
-      };
-    return f;
-  };
   std::vector<bool> done(m_tasks.size());
   {  // the listings it keeps (16 MB for a million tasks) go before the key sets are made
     FolderCheck folders(m_spec.root);
@@ -314,56 +354,93 @@ void Runner::scan() {
       }
     }
   }
-  const auto keys_where = [&](bool is_done) {
-    KeySet keys;
-    for (std::size_t i = 0; i < m_tasks.size(); ++i)
-      if (done[i] == is_done) keys.insert(m_tasks.key(i));
-    return keys;
-  };
-  std::vector<std::size_t> missing_rows;
+  std::vector<std::size_t> may_lack_row;
   if (m_sum.done > 0) {
-    const KeySet rows = has_bytes(manifest())
-                            ? keys_in_json_lines(manifest(), keys_where(true), reading(manifest()))
-                            : KeySet();
-    for (std::size_t i = 0; i < m_tasks.size(); ++i)
-      if (done[i] && !rows.contains(m_tasks.key(i))) missing_rows.push_back(i);
+    const bool rebuild = !has_bytes(manifest());
+    m_stages = stages_by_task(m_spec.root / ".staging");
+    if (rebuild || !m_stages.empty())
+      for (std::size_t i = 0; i < m_tasks.size(); ++i)
+        if (done[i] && (rebuild || m_stages.count(safe_name(std::string(m_tasks.key(i)))) > 0))
+          may_lack_row.push_back(i);
   }
   if (!m_pending.empty() && !m_spec.retry_failed && has_bytes(failures())) {
-    const KeySet failed = keys_in_json_lines(failures(), keys_where(false), reading(failures()));
+    KeySet keys;
+    for (std::size_t i = 0; i < m_tasks.size(); ++i)
+      if (!done[i]) keys.insert(m_tasks.key(i));
+    const KeySet failed = keys_in_json_lines(failures(), keys, reading(failures()));
     const auto recorded = [&](std::size_t i) { return failed.contains(m_tasks.key(i)); };
     const auto before = m_pending.size();
     m_pending.erase(std::remove_if(m_pending.begin(), m_pending.end(), recorded), m_pending.end());
     m_sum.failed += static_cast<long long>(before - m_pending.size());
   }
-  repair(missing_rows);
+  repair(may_lack_row);
+  m_stages.clear();
 }
 
-/// Rows for tasks finished just before a crash. Locked first, then the manifest is read again,
-/// so a batch that is appending the same row right now is not doubled.
-void Runner::repair(const std::vector<std::size_t>& missing_rows) {
-  if (missing_rows.empty()) return;
-  std::vector<std::pair<std::size_t, TaskLock>> held;
-  for (std::size_t i : missing_rows) {
-    TaskLock lock = TaskLock::try_take(lock_file(m_tasks.key(i)));
-    if (lock.held()) held.emplace_back(i, std::move(lock));
-  }
+/// Rows for done tasks that may lack one (Runner::scan): the manifest is read once for their
+/// keys; then, a few hundred tasks at a time, their locks are taken (a task another process holds
+/// is left to it) and only the rows appended since are read, so a batch appending the same row
+/// right now is not doubled. A task without a row gets one; its stages go.
+void Runner::repair(const std::vector<std::size_t>& tasks) {
+  if (tasks.empty()) return;
+  constexpr std::size_t kLocksAtOnce = 256;  // open files: a shell's limit is often 1,024
   KeySet keys;
-  for (const auto& [i, lock] : held) keys.insert(m_tasks.key(i));
-  const KeySet rows = keys_in_json_lines(manifest(), keys);
-  for (auto& [i, lock] : held) {
-    if (rows.contains(m_tasks.key(i))) continue;
-    append_manifest_row(m_tasks[i], -1.0, -1.0);
-    ++m_sum.repaired;
+  for (std::size_t i : tasks) keys.insert(m_tasks.key(i));
+  std::uintmax_t read = 0;  // the manifest's bytes searched so far
+  const KeySet rows = keys_in_json_lines(manifest(), keys, reading(manifest()), &read);
+  const std::string restoring = "restoring the manifest rows of " + m_spec.items + " found done";
+  for (std::size_t start = 0; start < tasks.size(); start += kLocksAtOnce) {
+    if (m_spec.step_progress && start > 0)
+      m_spec.step_progress(restoring, static_cast<double>(start), static_cast<double>(tasks.size()),
+                           m_spec.items);
+    std::vector<std::pair<std::size_t, TaskLock>> held;
+    for (std::size_t k = start; k < std::min(tasks.size(), start + kLocksAtOnce); ++k) {
+      TaskLock lock = TaskLock::try_take(lock_file(m_tasks.key(tasks[k])));
+      if (lock.held()) held.emplace_back(tasks[k], std::move(lock));
+    }
+    KeySet wanted;
+    for (const auto& [i, lock] : held)
+      if (!rows.contains(m_tasks.key(i))) wanted.insert(m_tasks.key(i));
+    const KeySet appended = keys_in_json_lines(manifest(), wanted, {}, &read);
+    for (const auto& [i, lock] : held) {
+      const std::string_view key = m_tasks.key(i);
+      if (!rows.contains(key) && !appended.contains(key)) {
+        const Task t = m_tasks[i];
+        nlohmann::json row;
+        try {
+          row = manifest_row(t, -1.0, -1.0);
+        } catch (const common::OutputError&) {
+          throw;
+        } catch (const std::exception& e) {
+          throw DatasetError("'" + (m_spec.root / t.key).string() +
+                             "' is finished (the folder exists) but has no row in '" +
+                             manifest().string() + "', and none can be made from it: " + e.what() +
+                             ". Remove the folder to make it again");
+        }
+        append_line(manifest(), row.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
+        ++m_sum.repaired;
+      }
+      const auto stages = m_stages.find(safe_name(std::string(key)));
+      if (stages == m_stages.end()) continue;
+      std::error_code ec;
+      for (const fs::path& stage : stages->second) fs::remove_all(stage, ec);
+    }
   }
 }
 
-void Runner::append_manifest_row(const Task& t, double wall, double cpu) {
+nlohmann::json Runner::manifest_row(const Task& t, double wall, double cpu) const {
   nlohmann::json row = t.info_object();
   row["key"] = t.key;
   row["path"] = t.key;
   row["cpu_seconds"] = cpu >= 0 ? nlohmann::json(cpu) : nlohmann::json(nullptr);
   if (m_spec.manifest_row) row.update(m_spec.manifest_row(t, m_spec.root / t.key, wall));
-  append_line(manifest(), row.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
+  return row;
+}
+
+void Runner::append_manifest_row(const Task& t, double wall, double cpu) {
+  append_line(
+      manifest(),
+      manifest_row(t, wall, cpu).dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
 }
 
 void Runner::record_failure(const Task& t, const std::string& reason, const std::string& detail,
@@ -380,10 +457,10 @@ void Runner::record_failure(const Task& t, const std::string& reason, const std:
 }
 
 void Runner::remove_stages(const Task& t) const {
-  const std::string prefix = safe_name(t.key) + ".";
+  const std::string name = safe_name(t.key);
   std::error_code ec;
   for (const auto& e : fs::directory_iterator(m_spec.root / ".staging", ec))
-    if (e.path().filename().string().rfind(prefix, 0) == 0) fs::remove_all(e.path(), ec);
+    if (stage_owner(e.path().filename().string()) == name) fs::remove_all(e.path(), ec);
 }
 
 bool Runner::try_start(std::size_t task) {
@@ -514,9 +591,10 @@ void Runner::finish(Slot& s) {
   const fs::path target = m_spec.root / t.key;
   fs::create_directories(target.parent_path());
   fs::rename(product, target);  // the one step that makes the sample exist
-  std::error_code ec;
-  fs::remove_all(s.stage, ec);
+  s.placed = true;
   append_manifest_row(t, attempt.wall_seconds, attempt.cpu_seconds);
+  std::error_code ec;
+  fs::remove_all(s.stage, ec);  // only now: a stage left tells the next scan to look for the row
   s.lock.release();
   ++m_sum.done;
   ++m_sum.done_now;
@@ -550,7 +628,7 @@ void Runner::stop_all() {
       }
     }
     std::error_code ec;
-    fs::remove_all(s->stage, ec);
+    if (!s->placed) fs::remove_all(s->stage, ec);
   }
   m_slots.clear();
   m_sum.interrupted = true;
@@ -631,12 +709,17 @@ BatchSummary Runner::run() {
     // The manifest, the failures file or a sample's folder cannot be written (a full disk):
     // stop every running sample and remove this process's staging folders, also one whose
     // failure could not be recorded; the finished samples and whole lines stay, and the same
-    // command later runs the rest.
+    // command later runs the rest. The stage of a sample whose row could not be appended stays,
+    // so that command restores the row.
+    std::vector<fs::path> keep;
+    for (const auto& s : m_slots)
+      if (s->placed) keep.push_back(s->stage);
     stop_all();
     const std::string mine = "." + std::to_string(getpid()) + ".";
     std::error_code ec;
     for (const auto& e : fs::directory_iterator(m_spec.root / ".staging", ec))
-      if (e.path().filename().string().find(mine) != std::string::npos)
+      if (e.path().filename().string().find(mine) != std::string::npos &&
+          std::find(keep.begin(), keep.end(), e.path()) == keep.end())
         fs::remove_all(e.path(), ec);
     throw;
   }
@@ -738,18 +821,22 @@ std::vector<nlohmann::json> read_json_lines(const fs::path& path) {
 }
 
 KeySet keys_in_json_lines(const fs::path& path, const KeySet& wanted,
-                          const std::function<void(std::uintmax_t, std::uintmax_t)>& progress) {
+                          const std::function<void(std::uintmax_t, std::uintmax_t)>& progress,
+                          std::uintmax_t* offset) {
   KeySet found;
   if (wanted.size() == 0) return found;
   const std::vector<std::string> no_figures;
   RowFields row(no_figures);  // the row's own "key", read without building the row
   std::ifstream in(path, std::ios::binary);
+  if (offset && *offset > 0) in.seekg(static_cast<std::streamoff>(*offset));
   std::error_code ec;
   const std::uintmax_t size = progress ? fs::file_size(path, ec) : 0;
-  std::uintmax_t read = 0, lines = 0;
+  std::uintmax_t read = offset ? *offset : 0, lines = 0;
   std::string line;
   while (std::getline(in, line)) {
-    read += line.size() + 1;
+    // A last line without its newline (being appended) is searched but not passed over.
+    if (!in.eof()) read += line.size() + 1;
+    if (offset) *offset = read;
     if (progress && ++lines % 4096 == 0) progress(read, ec ? read : size);
     // Every wanted row holds "key" then a colon and the key as a JSON string. Only a line where
     // such a string, read up to its closing quote, is a wanted key is parsed, so that the row's

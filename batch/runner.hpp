@@ -16,9 +16,11 @@
 #include <filesystem>
 #include <functional>
 #include <nlohmann/json.hpp>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "batch/errors.hpp"
 #include "batch/key_set.hpp"
 #include "batch/task_list.hpp"
 
@@ -118,7 +120,7 @@ struct BatchSpec {
   /// The manifest row of a finished task (its final folder given); the runner adds "key",
   /// "path", "cpu_seconds" (null when unknown) and the task's info. For a task found finished
   /// without a row, wall_seconds is unknown (negative) and the hook should read it from the
-  /// outputs.
+  /// outputs; a throw then stops the batch before any task runs (DatasetError naming the folder).
   std::function<nlohmann::json(const Task&, const std::filesystem::path& final_dir,
                                double wall_seconds)>
       manifest_row;
@@ -153,6 +155,7 @@ struct BatchSummary {
 /// sample, and throws.
 /// @throw common::OutputError when a child or the batch cannot write (the manifest, the failures
 /// file, a lock, a sample's folder)
+/// @throw DatasetError when a finished task's missing row cannot be made from its folder
 BatchSummary run_batch(const TaskList& tasks, const BatchSpec& spec);
 
 /// Append one line (text + '\n') to `path` with a single write on an O_APPEND descriptor under
@@ -170,9 +173,12 @@ std::vector<nlohmann::json> read_json_lines(const std::filesystem::path& path);
 /// and parses only the lines that name a wanted key, so memory holds the matches alone: a batch
 /// (or one shard of it) checks its tasks against a manifest of millions of rows this way.
 /// `progress`, when given, hears every 4,096 lines the bytes read so far and the file's size.
+/// `offset`, when given, is where the search starts (the end of a line, e.g. where an earlier
+/// search of the same growing file ended) and becomes the end of the last whole line searched.
 KeySet keys_in_json_lines(
     const std::filesystem::path& path, const KeySet& wanted,
-    const std::function<void(std::uintmax_t read, std::uintmax_t size)>& progress = {});
+    const std::function<void(std::uintmax_t read, std::uintmax_t size)>& progress = {},
+    std::uintmax_t* offset = nullptr);
 
 /// Write `text` to `path` through a temporary file in the same folder and a rename.
 /// @throw common::OutputError naming the file when it cannot be written

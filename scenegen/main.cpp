@@ -6,6 +6,7 @@
 #include <iostream>
 #include <string>
 
+#include "batch/runner.hpp"
 #include "common/atomic_file.hpp"
 #include "common/cli_checks.hpp"
 #include "common/exit_status.hpp"
@@ -149,6 +150,9 @@ int report(const std::exception_ptr& error) {
   } catch (const sg::RenderError& e) {
     std::cerr << "scenegen: " << e.what() << "\n";
     return common::EXIT_EXTERNAL;
+  } catch (const papersim::batch::DatasetError& e) {
+    std::cerr << "scenegen: bad dataset: " << e.what() << '\n';
+    return common::EXIT_BAD_INPUT;
   } catch (const std::filesystem::filesystem_error& e) {
     std::cerr << "scenegen: cannot write output: " << e.what() << '\n';
     return common::EXIT_OUTPUT;

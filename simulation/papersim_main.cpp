@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "batch/runner.hpp"
 #include "collision/errors.hpp"
 #include "common/atomic_file.hpp"
 #include "common/cli_checks.hpp"
@@ -177,6 +178,9 @@ int report(const std::exception_ptr& error) {
     std::cerr << "papersim: bad mesh: " << e.what() << '\n';
   } catch (const papersim::collision::ColliderError& e) {
     std::cerr << "papersim: bad obstacle: " << e.what() << '\n';
+  } catch (const papersim::batch::DatasetError& e) {
+    std::cerr << "papersim: bad dataset: " << e.what() << '\n';
+    return common::EXIT_BAD_INPUT;
   } catch (const std::filesystem::filesystem_error& e) {
     std::cerr << "papersim: cannot write output: " << e.what() << '\n';
     return common::EXIT_OUTPUT;

@@ -12,6 +12,7 @@
 #include <chrono>
 #include <csignal>
 #include <fstream>
+#include <functional>
 #include <set>
 #include <sstream>
 #include <thread>
@@ -43,6 +44,14 @@ papersim::batch::TaskList numbered_tasks(int n) {
   return tasks;
 }
 
+/// The word in a task folder's file "value".
+std::string value_in(const fs::path& dir) {
+  std::ifstream in(dir / "value");
+  std::string v;
+  in >> v;
+  return v;
+}
+
 /// Each task runs `script` in sh with $1 = its output folder and $2 = its index; a run count
 /// per task is appended to ROOT/runs.txt so a test can tell what ran.
 BatchSpec shell_spec(const fs::path& root, const std::string& script) {
@@ -59,13 +68,34 @@ BatchSpec shell_spec(const fs::path& root, const std::string& script) {
   };
   spec.finalize = [](const Task&, const papersim::batch::Attempt& a) { return a.stage / "out"; };
   spec.manifest_row = [](const Task&, const fs::path& dir, double) {
-    std::ifstream in(dir / "value");
-    std::string v;
-    in >> v;
-    return json{{"value", v}};
+    return json{{"value", value_in(dir)}};
   };
   return spec;
 }
+
+/// The exit status of `f` run in a forked child under a file size limit of `bytes` (SIGXFSZ
+/// ignored, so a write past it is a short write, as on a full disk): 7 when `f` threw
+/// common::OutputError, 0 when it returned, -1 when the child did not exit.
+int status_under_file_size_limit(rlim_t bytes, const std::function<void()>& f) {
+  const pid_t pid = fork();
+  if (pid == 0) {
+    signal(SIGXFSZ, SIG_IGN);
+    const rlimit limit{bytes, bytes};
+    setrlimit(RLIMIT_FSIZE, &limit);
+    try {
+      f();
+    } catch (const papersim::common::OutputError&) {
+      _exit(7);
+    }
+    _exit(0);
+  }
+  int status = 0;
+  waitpid(pid, &status, 0);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+/// Whether a file exists with a byte in it.
+bool has_rows(const fs::path& p) { return fs::exists(p) && fs::file_size(p) > 0; }
 
 std::vector<std::string> lines(const fs::path& p) {
   std::ifstream in(p);
@@ -224,22 +254,30 @@ TEST(Runner, CheckingTheTasksTellsHowFarItHasReadAndReadsOnlyWhatItNeeds) {
   };
   const std::string reading_manifest = "reading " + (root / "manifest.jsonl").string();
   const std::string reading_failures = "reading " + (root / "failures.jsonl").string();
+  // No stage is left, so the done tasks' rows are trusted: the manifest is not read.
   auto s = papersim::batch::run_batch(tasks, spec);
   EXPECT_EQ(s.done, n_done);
   EXPECT_EQ(s.failed, n - n_done);
   EXPECT_EQ(s.done_now + s.failed_now + s.repaired, 0);
   const auto l = steps("looking for the samples' folders");
-  const auto m = steps(reading_manifest);
   const auto f = steps(reading_failures);
   ASSERT_EQ(l.size(), 1u);
-  ASSERT_EQ(m.size(), 1u);                    // 5,010 lines
+  EXPECT_TRUE(steps(reading_manifest).empty());
   ASSERT_EQ(f.size(), (n - n_done) / 4096u);  // 17
-  EXPECT_EQ(l.size() + m.size() + f.size(), told.size());
+  EXPECT_EQ(l.size() + f.size(), told.size());
   EXPECT_EQ(told.front().what, l[0].what);  // the folders first
   EXPECT_EQ(l[0].done, 65535.0);
   EXPECT_EQ(l[0].total, static_cast<double>(n));
   EXPECT_EQ(l[0].unit, "samples");
+  // A stage of a done task left behind: the manifest is read (5,010 lines), for its row.
+  fs::create_directories(root / ".staging" / "t_3.123.0");
+  told.clear();
+  s = papersim::batch::run_batch(tasks, spec);
+  EXPECT_EQ(s.done_now + s.failed_now + s.repaired, 0);
+  const auto m = steps(reading_manifest);
+  ASSERT_EQ(m.size(), 1u);
   EXPECT_DOUBLE_EQ(m[0].total, static_cast<double>(fs::file_size(root / "manifest.jsonl")) / 1e6);
+  EXPECT_FALSE(fs::exists(root / ".staging" / "t_3.123.0"));
   const double f_size = static_cast<double>(fs::file_size(root / "failures.jsonl")) / 1e6;
   EXPECT_DOUBLE_EQ(f[0].done, static_cast<double>(first_failures) / 1e6);
   for (std::size_t i = 0; i < f.size(); ++i) {
@@ -316,22 +354,133 @@ TEST(Runner, ProgressHasAnEtaBeforeAnyTaskEndsWhenTheRunningOnesTellTheirShare) 
   fs::remove_all(root);
 }
 
+// A crash between a task's rename and its row's append leaves the task's stage (removed only
+// after the append): the next run restores the row of a done task with a stage left, and removes
+// the stage. Where no stage is left the manifest is trusted and not read; a missing (or empty)
+// manifest is rebuilt whole.
 TEST(Runner, RestoresTheManifestRowOfATaskFinishedBeforeACrash) {
   const fs::path root = fresh_dir("repair");
   const auto tasks = numbered_tasks(4);
   const auto spec = shell_spec(root, "echo v$2 > \"$1/value\"");
-  papersim::batch::run_batch(tasks, spec);
-  // A crash between the rename and the append: drop two rows.
-  auto rows = lines(root / "manifest.jsonl");
-  std::ofstream(root / "manifest.jsonl") << rows[0] << '\n' << rows[1] << '\n';
-  const auto s = papersim::batch::run_batch(tasks, spec);
+  EXPECT_EQ(papersim::batch::run_batch(tasks, spec).done_now, 4);
+  EXPECT_TRUE(fs::is_empty(root / ".staging"));
+  // Rows of t/0 only; t/2 and t/3 crashed in the window (a stage each, t/3 two from two
+  // attempts); t/1's row was lost otherwise.
+  const auto rows = lines(root / "manifest.jsonl");
+  ASSERT_EQ(rows.size(), 4u);
+  std::ofstream(root / "manifest.jsonl") << rows[0] << '\n';
+  const auto row_of = [&](const std::string& key) {
+    for (const auto& r : papersim::batch::read_json_lines(root / "manifest.jsonl"))
+      if (r["key"] == key) return r;
+    return json();
+  };
+  const std::string t0 = row_of("t/0").dump();
+  for (const char* stage : {"t_2.4242.0", "t_3.4242.1", "t_3.77.0", "t_1x.5.0", "t_1.x.0"}) {
+    fs::create_directories(root / ".staging" / stage);
+    std::ofstream(root / ".staging" / stage / "log.txt") << "log\n";
+  }
+  auto s = papersim::batch::run_batch(tasks, spec);
   EXPECT_EQ(s.repaired, 2);
   EXPECT_EQ(s.done_now, 0);
-  std::set<std::string> keys;
-  for (const auto& r : papersim::batch::read_json_lines(root / "manifest.jsonl"))
-    keys.insert(r["key"]);
-  EXPECT_EQ(keys.size(), 4u);
+  EXPECT_EQ(s.done, 4);
+  EXPECT_EQ(lines(root / "manifest.jsonl").size(), 3u);
+  EXPECT_EQ(row_of("t/0").dump(), t0);
+  for (const char* key : {"t/2", "t/3"}) {
+    const json r = row_of(key);
+    EXPECT_EQ(r["value"], std::string("v") + key[2]) << key;
+    EXPECT_TRUE(r["cpu_seconds"].is_null()) << key;
+  }
+  EXPECT_TRUE(row_of("t/1").is_null());
+  // The stages of t/2 and t/3 went; names of no task's stage stay.
+  std::set<std::string> left;
+  for (const auto& e : fs::directory_iterator(root / ".staging"))
+    left.insert(e.path().filename().string());
+  EXPECT_EQ(left, (std::set<std::string>{"t_1x.5.0", "t_1.x.0"}));
+  // A stage whose row is there already: nothing is added, the stage goes.
+  fs::create_directories(root / ".staging" / "t_0.9.3");
+  s = papersim::batch::run_batch(tasks, spec);
+  EXPECT_EQ(s.repaired, 0);
+  EXPECT_FALSE(fs::exists(root / ".staging" / "t_0.9.3"));
+  EXPECT_EQ(lines(root / "manifest.jsonl").size(), 3u);
+  // The manifest moved away: every done task's row is rebuilt.
+  fs::rename(root / "manifest.jsonl", root / "old.jsonl");
+  s = papersim::batch::run_batch(tasks, spec);
+  EXPECT_EQ(s.repaired, 4);
   EXPECT_EQ(lines(root / "manifest.jsonl").size(), 4u);
+  for (int i = 0; i < 4; ++i)
+    EXPECT_EQ(row_of("t/" + std::to_string(i))["value"], "v" + std::to_string(i));
+  fs::remove_all(root);
+}
+
+// The row of a finished task that cannot be appended (here a file size limit; on a full disk the
+// same short write) stops the batch, and the task's stage stays with its folder in place, so the
+// next run restores the row instead of trusting the manifest.
+TEST(Runner, ARowThatCouldNotBeAppendedIsRestoredByTheNextRun) {
+  const fs::path root = fresh_dir("rowlost");
+  const auto tasks = numbered_tasks(1);
+  auto spec = shell_spec(root, "echo ok > \"$1/value\"");
+  spec.jobs = 1;
+  spec.manifest_row = [](const Task&, const fs::path& dir, double) {
+    return json{{"value", value_in(dir)}, {"pad", std::string(3000, 'x')}};
+  };
+  // 1,000 bytes: the shell's writes fit, the row does not.
+  ASSERT_EQ(status_under_file_size_limit(1000, [&] { papersim::batch::run_batch(tasks, spec); }), 7)
+      << "the row that could not be appended was not reported";
+  EXPECT_TRUE(fs::exists(root / "t" / "0"));
+  EXPECT_EQ(fs::file_size(root / "manifest.jsonl"), 0u);
+  ASSERT_EQ(std::distance(fs::directory_iterator(root / ".staging"), fs::directory_iterator()), 1);
+  std::ofstream(root / "manifest.jsonl") << json{{"key", "other"}} << '\n';  // not empty
+  const auto s = papersim::batch::run_batch(tasks, spec);
+  EXPECT_EQ(s.repaired, 1);
+  EXPECT_EQ(s.done_now, 0);
+  const auto rows = papersim::batch::read_json_lines(root / "manifest.jsonl");
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_EQ(rows[1]["key"], "t/0");
+  EXPECT_EQ(rows[1]["value"], "ok");
+  EXPECT_TRUE(fs::is_empty(root / ".staging"));
+  fs::remove_all(root);
+}
+
+// A finished task's folder without a row, from which no row can be made (its files damaged):
+// the batch stops before any task runs, naming the folder; no row is made up for it.
+TEST(Runner, AFinishedFolderWhoseRowCannotBeMadeStopsTheBatchNamingIt) {
+  const fs::path root = fresh_dir("damaged");
+  const auto tasks = numbered_tasks(3);
+  auto spec = shell_spec(root, "echo ok > \"$1/value\"");
+  spec.manifest_row = [](const Task&, const fs::path& dir, double) {
+    if (!fs::exists(dir / "value")) throw std::runtime_error("no value in it");
+    return json{{"value", value_in(dir)}};
+  };
+  fs::create_directories(root / "t" / "1");  // done, but empty
+  try {
+    papersim::batch::run_batch(tasks, spec);
+    ADD_FAILURE() << "the batch went on";
+  } catch (const papersim::batch::DatasetError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("'" + (root / "t" / "1").string() + "' is finished"), std::string::npos) << m;
+    EXPECT_NE(m.find("no value in it"), std::string::npos) << m;
+  }
+  EXPECT_FALSE(fs::exists(root / "runs.txt"));
+  EXPECT_FALSE(has_rows(root / "manifest.jsonl"));
+  // Removed, as the message says: the task is made again with the others.
+  fs::remove_all(root / "t" / "1");
+  EXPECT_EQ(papersim::batch::run_batch(tasks, spec).done_now, 3);
+  fs::remove_all(root);
+}
+
+// A task's stage is named after its key: starting a task removes its own earlier stages, not
+// the stage of a running task whose name begins with it ("m/a" and "m/a.5").
+TEST(Runner, StartingATaskLeavesTheStagesOfOtherTasksAlone) {
+  const fs::path root = fresh_dir("stagenames");
+  papersim::batch::TaskList tasks;
+  tasks.push_back({"m/a.5", json{{"index", 0}}.dump()});
+  tasks.push_back({"m/a", json{{"index", 1}}.dump()});
+  auto spec = shell_spec(root, "if [ $2 = 0 ]; then sleep 1; fi; echo v$2 > \"$1/value\"");
+  spec.jobs = 2;
+  const auto s = papersim::batch::run_batch(tasks, spec);
+  EXPECT_EQ(s.done_now, 2);
+  EXPECT_EQ(s.failed, 0);
+  EXPECT_TRUE(fs::exists(root / "m" / "a.5" / "value"));
   fs::remove_all(root);
 }
 
@@ -386,7 +535,18 @@ TEST(Runner, AFinishedTaskIsOneWhoseFolderExists) {
   const auto spec = shell_spec(root, "echo ok > \"$1/value\"");
   papersim::batch::BatchSpec quick = spec;
   quick.jobs = 8;
-  const auto s = papersim::batch::run_batch(tasks, quick);
+  // The 662 rows are restored under a limit of 400 open files (a task's lock is an open file).
+  rlimit files{};
+  ASSERT_EQ(getrlimit(RLIMIT_NOFILE, &files), 0);
+  const rlimit low{std::min<rlim_t>(400, files.rlim_cur), files.rlim_max};
+  ASSERT_EQ(setrlimit(RLIMIT_NOFILE, &low), 0);
+  papersim::batch::BatchSummary s;
+  try {
+    s = papersim::batch::run_batch(tasks, quick);
+  } catch (const std::exception& e) {
+    ADD_FAILURE() << e.what();
+  }
+  setrlimit(RLIMIT_NOFILE, &files);
   EXPECT_EQ(s.done, 730);
   EXPECT_EQ(made.size(), 662u);  // 294 + 288 of the p parents, 5 of q, 75 of r
   EXPECT_EQ(s.repaired, static_cast<long long>(made.size()));
@@ -443,6 +603,25 @@ TEST(Runner, ManifestKeysAreFoundByTheRowsOwnKeyOnly) {
   std::sort(all.begin(), all.end());
   std::sort(found_keys.begin(), found_keys.end());
   EXPECT_EQ(found_keys, all);
+  // From an offset: the search starts there and ends at the end of the last whole line, so a
+  // line being appended (no newline yet) is searched again once it is whole.
+  const fs::path grows = root / "grows.jsonl";
+  const std::string first = R"({"key":"g/0"})"
+                            "\n"
+                            R"({"key":"g/1"})"
+                            "\n";
+  std::ofstream(grows) << first << R"({"key":"g/2")";
+  std::uintmax_t offset = 0;
+  EXPECT_EQ(papersim::batch::keys_in_json_lines(grows, set_of({"g/0", "g/2"}), {}, &offset).size(),
+            1u);
+  EXPECT_EQ(offset, first.size());
+  std::ofstream(grows, std::ios::app) << "}\n"
+                                      << R"({"key":"g/3"})" << '\n';
+  const KeySet tail =
+      papersim::batch::keys_in_json_lines(grows, set_of({"g/0", "g/2", "g/3"}), {}, &offset);
+  EXPECT_EQ(tail.size(), 2u);
+  EXPECT_TRUE(tail.contains("g/2") && tail.contains("g/3"));
+  EXPECT_EQ(offset, fs::file_size(grows));
   fs::remove_all(root);
 }
 
@@ -525,22 +704,14 @@ TEST(Runner, AnAppendThatCannotBeWrittenWholeLeavesOnlyWholeLines) {
   const fs::path file = root / "rows.jsonl";
   papersim::batch::append_line(file, json{{"i", 0}}.dump());
   const auto size = fs::file_size(file);
-  const pid_t pid = fork();
-  if (pid == 0) {
-    signal(SIGXFSZ, SIG_IGN);
-    const rlimit limit{size + 100, size + 100};
-    setrlimit(RLIMIT_FSIZE, &limit);
-    try {
-      papersim::batch::append_line(file, json{{"i", 1}, {"pad", std::string(3000, 'x')}}.dump());
-    } catch (const papersim::common::OutputError&) {
-      _exit(7);
-    }
-    _exit(0);
-  }
-  int status = 0;
-  waitpid(pid, &status, 0);
-  ASSERT_TRUE(WIFEXITED(status));
-  EXPECT_EQ(WEXITSTATUS(status), 7) << "the short append was not reported";
+  EXPECT_EQ(status_under_file_size_limit(
+                size + 100,
+                [&] {
+                  papersim::batch::append_line(
+                      file, json{{"i", 1}, {"pad", std::string(3000, 'x')}}.dump());
+                }),
+            7)
+      << "the short append was not reported";
   EXPECT_EQ(fs::file_size(file), size) << "the cut line was left in the file";
   papersim::batch::append_line(file, json{{"i", 2}}.dump());
   const auto rows = papersim::batch::read_json_lines(file);
