@@ -317,29 +317,46 @@ batch::TaskList mesh_tasks(const MeshBatchSelection& sel, const batch::StepProgr
 }
 
 json mesh_manifest_fields(const fs::path& dir) {
-  const json meta = read_json_file(dir / "meta.json");
-  const json& run = meta.at("run");
-  const json& q = meta.at("quality");
+  const fs::path meta_path = dir / "meta.json";
+  const json meta = read_json_file(meta_path);
+  const auto part = [&](const json& j, const fs::path& file, const char* key) -> const json& {
+    if (!j.is_object() || !j.contains(key) || !j[key].is_object())
+      throw std::runtime_error("'" + file.string() + "' has no object \"" + key + "\"");
+    return j[key];
+  };
+  const json& run = part(meta, meta_path, "run");
+  const json& q = part(meta, meta_path, "quality");
+  const json& sheet = part(meta, meta_path, "sheet");
+  const auto count = [](const json& j, const char* key, long long fallback) {
+    return j.contains(key) && j[key].is_number_integer() ? j[key].get<long long>() : fallback;
+  };
   double closest = std::numeric_limits<double>::infinity();
-  if (q.contains("min_obstacle_distance"))
+  if (q.contains("min_obstacle_distance") && q["min_obstacle_distance"].is_array())
     for (const auto& d : q["min_obstacle_distance"])
       if (d.is_number()) closest = std::min(closest, d.get<double>());
-  json row = {{"vertices", meta.at("sheet").value("vertices", 0)},
-              {"steps", run.value("steps", 0)},
-              {"newton_iterations", run.value("newton_iterations", 0)},
+  json row = {{"vertices", count(sheet, "vertices", 0)},
+              {"steps", count(run, "steps", 0)},
+              {"newton_iterations", count(run, "newton_iterations", 0)},
               {"sim_wall_seconds", number_or(run, "wall_seconds", -1)},
               {"max_stretch", number_or(q, "max_principal_stretch", -1)},
               {"closest_obstacle_distance", std::isfinite(closest) ? json(closest) : json(nullptr)},
-              {"self_intersections", q.value("self_intersections", -1)},
+              {"self_intersections", count(q, "self_intersections", -1)},
               {"crease_length", nullptr},
               {"abs_curvature_integral", nullptr}};
-  if (fs::exists(dir / "metrics.json")) {
-    const json m = read_json_file(dir / "metrics.json");
-    const json& entry = m.contains("meshes") && !m["meshes"].empty() ? m["meshes"][0] : m;
-    const json& mesh = entry.contains("metrics") ? entry["metrics"] : entry;
-    if (mesh.contains("creases")) row["crease_length"] = mesh["creases"].value("total_length", 0.0);
+  const fs::path metrics_path = dir / "metrics.json";
+  if (fs::exists(metrics_path)) {
+    const json m = read_json_file(metrics_path);
+    const bool listed =
+        m.is_object() && m.contains("meshes") && m["meshes"].is_array() && !m["meshes"].empty();
+    const json& entry = listed ? m["meshes"][0] : m;
+    const json& mesh = entry.is_object() && entry.contains("metrics") ? entry["metrics"] : entry;
+    if (!mesh.is_object())
+      throw std::runtime_error("'" + metrics_path.string() + "' holds no metrics object");
+    if (mesh.contains("creases"))
+      row["crease_length"] = number_or(part(mesh, metrics_path, "creases"), "total_length", 0.0);
     if (mesh.contains("developability"))
-      row["abs_curvature_integral"] = mesh["developability"].value("angle_defect_integral", 0.0);
+      row["abs_curvature_integral"] =
+          number_or(part(mesh, metrics_path, "developability"), "angle_defect_integral", 0.0);
   }
   return row;
 }

@@ -111,7 +111,8 @@ std::filesystem::path checkpoint_folder(const std::filesystem::path& root, const
 /// The manifest fields of a finished sample folder: vertices, Newton iterations, steps,
 /// simulation wall time, largest stretch, closest obstacle distance, self-intersections and,
 /// from metrics.json, crease length and the integral of |K|.
-/// @throw std::runtime_error when meta.json cannot be read
+/// @throw std::runtime_error naming the file when meta.json cannot be read, is not JSON or lacks
+///        its "run", "quality" or "sheet" object, or metrics.json is not the metrics' JSON
 nlohmann::json mesh_manifest_fields(const std::filesystem::path& sample_dir);
 
 /// Parse "A-B" or "A" into an inclusive seed range; a seed has at most 18 digits.

@@ -336,6 +336,22 @@ def options(p, quick):
         cases.append([p.scenegen, "batch", ds, "--mesh-list", f, "--slurm", "2"])
     for f in [os.path.join(d, "missing.meshes"), ds, mesh]:
         cases.append([p.scenegen, "batch", ds, "--mesh-list", f])
+    # A dataset whose finished sample has no manifest row and a damaged meta.json: the batch must
+    # stop naming the folder (status 2), not report an internal error.
+    for name, meta in [("no meta", None), ("not json", "{"), ("no run", "{}"), ("run a list", '{"run": [], "quality": {}, "sheet": {}}'),
+                       ("sheet a number", '{"run": {"steps": "x"}, "quality": {}, "sheet": 3}'),
+                       ("bad metrics", '{"run": {}, "quality": {}, "sheet": {}}')]:
+        damaged = os.path.join(d, "damaged-" + name.replace(" ", "_"))
+        sample = os.path.join(damaged, "meshes", "pull", "0", "0")
+        os.makedirs(sample)
+        if meta is not None:
+            write(os.path.join(sample, "meta.json"), meta)
+        if name == "bad metrics":
+            write(os.path.join(sample, "metrics.json"), '{"meshes": [{"metrics": {"creases": []}}]}')
+        r = p.run([p.papersim, "batch", "--out", damaged, "--scenarios", "pull", "--seeds", "0", "--quiet"])
+        p.judge("command line", "papersim batch on a dataset whose sample has %s" % name, r, True)
+        if r["status"] not in (2, None) and not r["hang"]:
+            p.count("command line", "badstatus", "damaged dataset (%s): status %s" % (name, r["status"]))
     for argv in cases:
         target = out if os.path.basename(argv[0]) == "papersim" else os.path.join(d, "job")
         shutil.rmtree(out, ignore_errors=True)

@@ -312,6 +312,67 @@ TEST(MeshBatch, ARunningSamplesShareIsItsLastCheckpointsTime) {
   fs::remove_all(root);
 }
 
+// A sample's manifest fields come from its meta.json and metrics.json; a file that is not theirs
+// (missing, not JSON, a part missing or of another type) is named, with what is wrong, so that a
+// batch restoring the row can say which sample folder is damaged.
+TEST(MeshBatch, ManifestFieldsNameTheFileTheyCannotBeMadeFrom) {
+  const fs::path dir = fs::temp_directory_path() / ("papersim_fields_" + std::to_string(getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  std::ofstream(dir / "meta.json") << R"({"run": {"steps": 20, "newton_iterations": 41,
+      "wall_seconds": 0.25}, "quality": {"max_principal_stretch": 1.002, "self_intersections": 0,
+      "min_obstacle_distance": [0.3, 0.1, null]}, "sheet": {"vertices": 682}})";
+  std::ofstream(dir / "metrics.json") << R"({"meshes": [{"metrics": {"creases":
+      {"total_length": 0.12}, "developability": {"angle_defect_integral": 0.5}}}]})";
+  const json f = ps::mesh_manifest_fields(dir);
+  EXPECT_EQ(f["vertices"], 682);
+  EXPECT_EQ(f["steps"], 20);
+  EXPECT_EQ(f["newton_iterations"], 41);
+  EXPECT_EQ(f["sim_wall_seconds"], 0.25);
+  EXPECT_EQ(f["max_stretch"], 1.002);
+  EXPECT_EQ(f["closest_obstacle_distance"], 0.1);
+  EXPECT_EQ(f["self_intersections"], 0);
+  EXPECT_EQ(f["crease_length"], 0.12);
+  EXPECT_EQ(f["abs_curvature_integral"], 0.5);
+  const auto refused = [&dir](const std::string& meta, const std::string& metrics,
+                              const std::string& file, const std::string& what) {
+    if (!meta.empty()) std::ofstream(dir / "meta.json") << meta;
+    if (metrics.empty()) {
+      fs::remove(dir / "metrics.json");
+    } else {
+      std::ofstream(dir / "metrics.json") << metrics;
+    }
+    try {
+      ps::mesh_manifest_fields(dir);
+      ADD_FAILURE() << meta << " " << metrics << " was taken";
+    } catch (const std::runtime_error& e) {
+      const std::string m = e.what();
+      EXPECT_NE(m.find("'" + (dir / file).string() + "'"), std::string::npos) << m;
+      EXPECT_NE(m.find(what), std::string::npos) << m;
+    }
+  };
+  const std::string parts = R"({"run": {}, "quality": {}, "sheet": {}})";
+  refused("{", "", "meta.json", "is not valid JSON");
+  refused("[1]", "", "meta.json", "has no object \"run\"");
+  refused(R"({"run": {}, "quality": [], "sheet": {}})", "", "meta.json",
+          "has no object \"quality\"");
+  refused(R"({"run": {}, "quality": {}, "sheet": 3})", "", "meta.json", "has no object \"sheet\"");
+  refused(parts, "5", "metrics.json", "holds no metrics object");
+  refused(parts, R"({"creases": []})", "metrics.json", "has no object \"creases\"");
+  refused(parts, R"({"meshes": [{"metrics": {"developability": 1}}]})", "metrics.json",
+          "has no object \"developability\"");
+  fs::remove(dir / "meta.json");
+  refused("", "", "meta.json", "cannot read");
+  // Counts of another type are unknown, not a failure: the fields of a partial meta.json.
+  std::ofstream(dir / "meta.json") << R"({"run": {"steps": "x"}, "quality": {}, "sheet": {}})";
+  fs::remove(dir / "metrics.json");
+  const json partial = ps::mesh_manifest_fields(dir);
+  EXPECT_EQ(partial["steps"], 0);
+  EXPECT_EQ(partial["max_stretch"], -1);
+  EXPECT_TRUE(partial["crease_length"].is_null());
+  fs::remove_all(dir);
+}
+
 TEST(DatasetStats, CountsLatestStatePerSampleAndQuantiles) {
   const fs::path root = fs::temp_directory_path() / ("papersim_stats_" + std::to_string(getpid()));
   fs::remove_all(root);
