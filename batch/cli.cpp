@@ -79,12 +79,14 @@ void add_batch_cli_options(CLI::App* app, BatchCliOptions& o, const std::string&
 ProgressFn progress_printer(std::ostream& out, bool tty, const std::string& label,
                             const std::string& items) {
   return [&out, tty, label, items](const Progress& p) {
+    char rate[32] = "?";
+    if (p.per_hour >= 0) std::snprintf(rate, sizeof rate, "%.1f", p.per_hour);
     char line[256];
     std::snprintf(line, sizeof line,
-                  "%s: done %lld/%lld  failed %lld  running %lld%s  %.1f %s/h  ETA %s",
-                  label.c_str(), p.done, p.total, p.failed, p.running,
+                  "%s: done %lld/%lld  failed %lld  running %lld%s  %s %s/h  ETA %s", label.c_str(),
+                  p.done, p.total, p.failed, p.running,
                   p.waiting > 0 ? ("  held elsewhere " + std::to_string(p.waiting)).c_str() : "",
-                  p.per_hour, items.c_str(), duration_text(p.eta).c_str());
+                  rate, items.c_str(), duration_text(p.eta).c_str());
     std::string shares;  // "  running at 41%, 17%": the first four running tasks that tell it
     for (std::size_t i = 0; i < p.running_done.size() && i < 4; ++i)
       shares +=

@@ -83,8 +83,9 @@ struct Progress {
   long long done_now = 0;  ///< finished by this run
   double elapsed = 0.0;    ///< wall seconds since this run started [s]
   /// Tasks finished by this run per hour of wall time since its tasks were checked (checking a
-  /// million done tasks against their dataset takes seconds and runs nothing)
-  double per_hour = 0.0;
+  /// million done tasks against their dataset takes seconds and runs nothing); -1 while no task
+  /// has ended in this run (unknown, not zero).
+  double per_hour = -1.0;
   /// Seconds to finish the rest at that rate; before any task ended in this run, from the
   /// running tasks' shares (eta_from_running); -1 when unknown [s].
   double eta = -1.0;

@@ -185,7 +185,12 @@ TEST(Runner, ProgressShowsTheShareOfRunningTasks) {
   papersim::batch::progress_printer(line, false, "papersim batch")(p);
   EXPECT_NE(line.str().find("  running at 41%, 17%, 100%, 0%, ...\n"), std::string::npos)
       << line.str();
-  EXPECT_NE(line.str().find(" samples/h "), std::string::npos) << line.str();
+  // No task ended in this run: the rate is unknown, not zero.
+  EXPECT_NE(line.str().find("  ? samples/h  ETA ?"), std::string::npos) << line.str();
+  p.per_hour = 0.04;
+  std::ostringstream known;
+  papersim::batch::progress_printer(known, false, "papersim batch")(p);
+  EXPECT_NE(known.str().find("  0.0 samples/h  "), std::string::npos) << known.str();
   fs::remove_all(root);
 }
 
@@ -205,8 +210,10 @@ TEST(Runner, TheFirstProgressTellsWhatWasDoneBeforeAnyTaskRuns) {
   EXPECT_EQ(seen[0].done_now, 0);
   EXPECT_EQ(seen[0].running, 0);
   EXPECT_EQ(seen[0].eta, -1.0);  // nothing known yet
+  EXPECT_EQ(seen[0].per_hour, -1.0);
   EXPECT_EQ(seen[1].done, 3);
   EXPECT_EQ(seen[1].eta, 0.0);  // nothing left
+  EXPECT_GT(seen[1].per_hour, 0.0);
   fs::remove_all(root);
 }
 
