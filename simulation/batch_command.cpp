@@ -116,8 +116,9 @@ void add_batch_subcommands(CLI::App& app, BatchCommand& c) {
       "DATASET/meshes/<scenario>/<seed/1000>/<seed>/, manifest.jsonl and failures.jsonl. Exit "
       "status 1 "
       "when a sample failed (failures.jsonl); a full disk stops the batch with status 5 and "
-      "records "
-      "nothing (docs/batch.md).");
+      "records nothing; a finished sample without its manifest row whose row cannot be made "
+      "from its folder (meta.json missing or damaged) stops it with status 2, naming the folder "
+      "(docs/batch.md).");
   c.batch->add_option("--out", c.out, "dataset folder")->required()->check(common::non_empty());
   c.batch->add_option(
       "--scenarios", c.scenarios, "comma list of scenarios; every one for every seed (" + [] {
