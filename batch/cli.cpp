@@ -227,7 +227,9 @@ std::string summary_line(const BatchSummary& s, const fs::path& root, const Batc
   std::ostringstream out;
   out << (s.interrupted ? "interrupted: " : "") << s.done << " of " << s.total << ' ' << spec.items
       << " done (" << s.done_now << " in this run";
-  if (s.repaired > 0) out << ", " << s.repaired << " manifest rows restored";
+  if (s.repaired > 0)
+    out << ", " << s.repaired << (s.repaired == 1 ? " manifest row" : " manifest rows")
+        << " restored";
   out << "), " << s.failed << " failed";
   if (s.failed > 0) out << " (" << (root / spec.failures_name).string() << ")";
   const long long left = s.total - s.done - s.failed;

@@ -448,6 +448,31 @@ TEST(Runner, ARowThatCouldNotBeAppendedIsRestoredByTheNextRun) {
   fs::remove_all(root);
 }
 
+// The last line of a batch: what is done, restored, failed and left, in words that fit the count.
+TEST(Runner, TheSummaryLineCountsInWords) {
+  papersim::batch::BatchSummary s;
+  s.total = 5;
+  s.done = 3;
+  s.done_now = 1;
+  s.repaired = 1;
+  papersim::batch::BatchSpec spec;
+  const fs::path root = "/data/ds";
+  const std::string one = papersim::batch::summary_line(s, root, spec);
+  EXPECT_EQ(one.rfind("3 of 5 samples done (1 in this run, 1 manifest row restored), 0 failed, 2 "
+                      "left (run the same command again to resume)",
+                      0),
+            0u)
+      << one;
+  s.repaired = 2;
+  s.failed = 1;
+  const std::string two = papersim::batch::summary_line(s, root, spec);
+  EXPECT_NE(
+      two.find("(1 in this run, 2 manifest rows restored), 1 failed (/data/ds/failures.jsonl), "
+               "1 left"),
+      std::string::npos)
+      << two;
+}
+
 // A finished task's folder without a row, from which no row can be made (its files damaged):
 // the batch stops before any task runs, naming the folder; no row is made up for it.
 TEST(Runner, AFinishedFolderWhoseRowCannotBeMadeStopsTheBatchNamingIt) {
