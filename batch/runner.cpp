@@ -203,7 +203,6 @@ class Runner {
   void scan();
   void repair(const std::vector<std::size_t>& tasks);
   nlohmann::json manifest_row(const Task& t, double wall, double cpu) const;
-  void append_manifest_row(const Task& t, double wall, double cpu);
   void record_failure(const Task& t, const std::string& reason, const std::string& detail,
                       double wall);
   void remove_stages(const Task& t) const;
@@ -244,6 +243,11 @@ std::unordered_map<std::string, std::vector<fs::path>> stages_by_task(const fs::
     if (!owner.empty()) stages[std::move(owner)].push_back(it->path());
   }
   return stages;
+}
+
+/// Append `row` as one line of a JSON-lines file (bytes that are not UTF-8 become U+FFFD).
+void append_row(const fs::path& file, const nlohmann::json& row) {
+  append_line(file, row.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
 }
 
 /// Whether a file has a byte (a missing one has none).
@@ -417,7 +421,7 @@ void Runner::repair(const std::vector<std::size_t>& tasks) {
                              manifest().string() + "', and none can be made from it: " + e.what() +
                              ". Remove the folder to make it again");
         }
-        append_line(manifest(), row.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
+        append_row(manifest(), row);
         ++m_sum.repaired;
       }
       const auto stages = m_stages.find(safe_name(std::string(key)));
@@ -437,12 +441,6 @@ nlohmann::json Runner::manifest_row(const Task& t, double wall, double cpu) cons
   return row;
 }
 
-void Runner::append_manifest_row(const Task& t, double wall, double cpu) {
-  append_line(
-      manifest(),
-      manifest_row(t, wall, cpu).dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
-}
-
 void Runner::record_failure(const Task& t, const std::string& reason, const std::string& detail,
                             double wall) {
   nlohmann::json row = t.info_object();
@@ -451,7 +449,7 @@ void Runner::record_failure(const Task& t, const std::string& reason, const std:
   row["detail"] = detail;
   row["wall_seconds"] = wall;
   // The detail is a child's last log line: any bytes. Bytes that are not UTF-8 become U+FFFD.
-  append_line(failures(), row.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
+  append_row(failures(), row);
   ++m_sum.failed;
   ++m_sum.failed_now;
 }
@@ -592,7 +590,7 @@ void Runner::finish(Slot& s) {
   fs::create_directories(target.parent_path());
   fs::rename(product, target);  // the one step that makes the sample exist
   s.placed = true;
-  append_manifest_row(t, attempt.wall_seconds, attempt.cpu_seconds);
+  append_row(manifest(), manifest_row(t, attempt.wall_seconds, attempt.cpu_seconds));
   std::error_code ec;
   fs::remove_all(s.stage, ec);  // only now: a stage left tells the next scan to look for the row
   s.lock.release();

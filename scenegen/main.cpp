@@ -6,7 +6,7 @@
 #include <iostream>
 #include <string>
 
-#include "batch/runner.hpp"
+#include "batch/errors.hpp"
 #include "common/atomic_file.hpp"
 #include "common/cli_checks.hpp"
 #include "common/exit_status.hpp"

@@ -11,7 +11,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
-#include "batch/runner.hpp"
+#include "batch/errors.hpp"
 #include "collision/errors.hpp"
 #include "common/atomic_file.hpp"
 #include "common/cli_checks.hpp"
