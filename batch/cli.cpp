@@ -1,5 +1,6 @@
 #include "batch/cli.hpp"
 
+#include <signal.h>
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
@@ -144,6 +145,13 @@ void check_dataset_folder(const fs::path& root, const std::string& option) {
                                 "': '" + p.string() + "' is not a folder");
     return;
   }
+}
+
+void keep_running_without_readers() {
+  struct sigaction ignore {};
+  ignore.sa_handler = SIG_IGN;
+  sigemptyset(&ignore.sa_mask);
+  sigaction(SIGPIPE, &ignore, nullptr);
 }
 
 Shard cli_shard(const BatchCliOptions& o) {

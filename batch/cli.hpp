@@ -61,6 +61,12 @@ StepProgressFn cli_step_printer(const BatchCliOptions& options, std::ostream& ou
 /// @throw common::OutputError naming the option, the folder and the part that is a file
 void check_dataset_folder(const std::filesystem::path& root, const std::string& option);
 
+/// A batch's work is its dataset, not the lines it prints: from the call on, a write to a pipe
+/// whose reader has ended (`papersim batch ... 2>&1 | tee log`, tee stopped) fails without
+/// stopping the process (SIGPIPE ignored), and the batch goes on without its lines. The samples'
+/// programs get the default action back (run_batch).
+void keep_running_without_readers();
+
 /// The slice of --shard, or the whole list when it was not given.
 /// @throw std::invalid_argument naming --shard when it is malformed
 Shard cli_shard(const BatchCliOptions& options);

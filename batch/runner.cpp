@@ -138,6 +138,7 @@ pid_t spawn(const Command& cmd, const fs::path& log, int lock_fd) {
   if (getppid() != parent) _exit(137);
   signal(SIGINT, SIG_DFL);
   signal(SIGTERM, SIG_DFL);
+  signal(SIGPIPE, SIG_DFL);  // an ignored signal stays ignored across exec
   const int in = open("/dev/null", O_RDONLY);
   const int out = open(out_path.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
   const int err = open(log_path.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);

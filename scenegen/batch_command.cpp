@@ -197,6 +197,7 @@ int run_render_batch(const RenderBatchCommand& c, std::ostream& out, std::ostrea
         << batch::slurm_written_text(script, c.common, views, "views");
     return 0;
   }
+  batch::keep_running_without_readers();
   // Only the shard's tasks are made (an array task holds 1/N of the list in memory).
   const batch::TaskList tasks =
       render_tasks(c.dataset, c.render, batch::cli_shard(c.common), c.mesh_list,

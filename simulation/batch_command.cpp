@@ -63,6 +63,7 @@ int run_mesh_batch(const BatchCommand& c, bool with_metrics, std::ostream& out, 
     out << batch::slurm_written_text(script, c.common, samples, "samples");
     return 0;
   }
+  batch::keep_running_without_readers();
   // Checks every option first.
   const batch::TaskList tasks =
       mesh_tasks(sel, batch::cli_step_printer(c.common, err, "papersim batch"));

@@ -97,6 +97,27 @@ std::pair<int, std::size_t> interrupt_at_half(const std::vector<std::string>& ar
   return {pt::wait_status(pid), rows};
 }
 
+/// Run `argv` with stdout and stderr into a pipe whose reader has ended (every write fails);
+/// its exit status, or 128 + signal.
+int status_with_no_reader(const std::vector<std::string>& argv) {
+  int ends[2];
+  if (pipe(ends) != 0) return -1;
+  close(ends[0]);
+  std::vector<char*> args;
+  for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
+  args.push_back(nullptr);
+  const pid_t pid = fork();
+  if (pid == 0) {
+    signal(SIGPIPE, SIG_DFL);  // as a shell starts a pipeline's commands
+    dup2(ends[1], 1);
+    dup2(ends[1], 2);
+    execv(args[0], args.data());
+    _exit(127);
+  }
+  close(ends[1]);
+  return pt::wait_status(pid);
+}
+
 std::string joined(const std::vector<std::string>& lines) {
   std::string s;
   for (const auto& l : lines) s += l + "\n";
@@ -140,6 +161,16 @@ TEST(PapersimBatch, TwoBatchesOnOneDatasetRunEachSampleOnce) {
   const pid_t b = pt::start(batch_argv(d), work_dir() / "twice_b.log");
   EXPECT_EQ(pt::wait_status(a), 0) << pt::read_text(work_dir() / "twice_a.log");
   EXPECT_EQ(pt::wait_status(b), 0) << pt::read_text(work_dir() / "twice_b.log");
+  const auto diffs = pt::dataset_differences(reference(), d, "meshes", "manifest.jsonl");
+  EXPECT_TRUE(diffs.empty()) << joined(diffs);
+}
+
+// Its output into a pipe no one reads (`papersim batch ... 2>&1 | tee log`, tee ended): every
+// line fails, and the batch still makes every sample and ends with status 0 (it was killed by
+// SIGPIPE at its first progress line).
+TEST(PapersimBatch, FinishesItsSamplesWhenNoOneReadsItsOutput) {
+  const fs::path d = work_dir() / "no_reader";
+  EXPECT_EQ(status_with_no_reader(batch_argv(d)), 0);
   const auto diffs = pt::dataset_differences(reference(), d, "meshes", "manifest.jsonl");
   EXPECT_TRUE(diffs.empty()) << joined(diffs);
 }
@@ -484,6 +515,21 @@ TEST(ScenegenBatch, ResumedAfterSigkillEqualsAnUninterruptedBatch) {
   const auto diffs = pt::dataset_differences(a, b, "renders", "renders.jsonl");
   EXPECT_TRUE(diffs.empty()) << joined(diffs);
 }
+
+// As papersim batch: no reader of its lines, and every view is rendered.
+TEST(ScenegenBatch, FinishesItsViewsWhenNoOneReadsItsOutput) {
+  const fs::path d = work_dir() / "render_no_reader";
+  const fs::path one = fs::directory_iterator(reference() / "meshes" / "pull" / "0")->path();
+  fs::create_directories(d / "meshes" / "pull" / "0");
+  fs::copy(one, d / "meshes" / "pull" / "0" / one.filename(), fs::copy_options::recursive);
+  EXPECT_EQ(status_with_no_reader({SCENEGEN_EXE, "batch", d.string(), "--views", "2", "--size",
+                                   "48x64", "--quality", "draft", "--passes", "image,mask", "--dpi",
+                                   "30", "--jobs", "2"}),
+            0);
+  EXPECT_EQ(pt::line_count(d / "renders.jsonl"), 2u);
+  EXPECT_FALSE(fs::exists(d / "renders_failures.jsonl"));
+}
+
 TEST(ScenegenBatch, SlurmWritesAMeshListAndTheTasksRenderItAlone) {
   // Two meshes of the reference: --slurm lists them once; a third added afterwards is not
   // rendered by the array's command line, which reads the list instead of the dataset's folders.

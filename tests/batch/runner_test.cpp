@@ -448,6 +448,28 @@ TEST(Runner, ARowThatCouldNotBeAppendedIsRestoredByTheNextRun) {
   fs::remove_all(root);
 }
 
+// A batch ignores SIGPIPE (batch::keep_running_without_readers); the programs it starts get the
+// default action back, as an ignored signal would stay ignored across exec.
+TEST(Runner, TheTasksProgramsGetTheDefaultActionOfSigpipe) {
+  const fs::path root = fresh_dir("sigpipe");
+  const auto tasks = numbered_tasks(2);
+  auto spec = shell_spec(root, "awk '/^SigIgn:/ { print $2 }' /proc/self/status > \"$1/value\"");
+  struct sigaction ignore {
+  }, before{};
+  ignore.sa_handler = SIG_IGN;
+  sigemptyset(&ignore.sa_mask);
+  sigaction(SIGPIPE, &ignore, &before);
+  const auto s = papersim::batch::run_batch(tasks, spec);
+  sigaction(SIGPIPE, &before, nullptr);
+  ASSERT_EQ(s.done, 2);
+  for (const char* t : {"0", "1"}) {
+    const std::string mask = value_in(root / "t" / t);
+    ASSERT_EQ(mask.size(), 16u) << mask;  // the ignored signals, in hex
+    EXPECT_EQ(std::stoull(mask, nullptr, 16) & (1ull << (SIGPIPE - 1)), 0u) << mask;
+  }
+  fs::remove_all(root);
+}
+
 // The last line of a batch: what is done, restored, failed and left, in words that fit the count.
 TEST(Runner, TheSummaryLineCountsInWords) {
   papersim::batch::BatchSummary s;
